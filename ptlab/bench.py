@@ -1,0 +1,108 @@
+"""``ptlab bench``: how fast the renderer is, measured, with the share spent in ray queries.
+
+It renders the Cornell box with each backend and with two estimators (the homework's,
+uniform hemisphere sampling with Russian roulette 0.8; and ptlab's default, cosine
+sampling with throughput-based roulette), in one process, and prints seconds, camera
+samples per second, rays per second and the share of the time spent inside the ray
+queries (timed around every ``intersect`` / ``occluded`` call).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from ptlab import accel as accel_module
+from ptlab.render import render_result
+from ptlab.scene import Scene, load_scene
+
+ESTIMATORS = {
+    "homework": dict(sampling="uniform", rr=0.8),
+    "default": dict(sampling="cosine", rr="throughput"),
+}
+
+
+class TimedAccelerator:
+    """Wraps an accelerator and adds up the wall time spent in its queries."""
+
+    def __init__(self, inner):
+        self.inner = inner
+        self.seconds = 0.0
+
+    def intersect(self, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return self.inner.intersect(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - start
+
+    def occluded(self, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return self.inner.occluded(*args, **kwargs)
+        finally:
+            self.seconds += time.perf_counter() - start
+
+
+@dataclass
+class BenchRow:
+    backend: str
+    estimator: str
+    seconds: float
+    samples_per_second: float
+    rays_per_second: float
+    query_share: float
+    mean: np.ndarray
+
+
+def bench_one(scene: Scene, backend: str, estimator: str, res: int, spp: int,
+              seed: int = 0) -> BenchRow:
+    """Render once with one backend and estimator and time it."""
+    timers: list[TimedAccelerator] = []
+    original = accel_module.make_accelerator
+
+    def timed_make(triangles, name="auto"):
+        timers.append(TimedAccelerator(original(triangles, name)))
+        return timers[-1]
+
+    # render_result builds its accelerator through ptlab.render.make_accelerator.
+    import ptlab.render as render_module
+    render_module.make_accelerator = timed_make
+    try:
+        result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend,
+                               **ESTIMATORS[estimator])
+    finally:
+        render_module.make_accelerator = original
+    query_seconds = sum(t.seconds for t in timers)
+    return BenchRow(backend=backend, estimator=estimator, seconds=result.seconds,
+                    samples_per_second=result.samples_per_second,
+                    rays_per_second=result.rays / result.seconds,
+                    query_share=query_seconds / result.seconds,
+                    mean=result.image.mean(axis=(0, 1)))
+
+
+def run_bench(backends: list[str], estimators: list[str], res: int = 512, spp: int = 16,
+              scene: str = "cornell-box", echo=print) -> list[BenchRow]:
+    """Run every backend x estimator, print a table, and return the rows."""
+    loaded = load_scene(scene)
+    # A small warm-up render so that imports and first-call costs are not timed.
+    render_result(loaded, spp=1, res=32, backend=backends[0])
+    echo(f"{loaded.summary()}; {res}x{res}, {spp} spp, one process")
+    echo(f"{'backend':8} {'estimator':9} {'seconds':>8} {'Msamples/s':>10} {'Mrays/s':>8} "
+         f"{'in queries':>10}  mean RGB")
+    rows = []
+    for estimator in estimators:
+        for backend in backends:
+            row = bench_one(loaded, backend, estimator, res, spp)
+            rows.append(row)
+            echo(f"{row.backend:8} {row.estimator:9} {row.seconds:8.2f} "
+                 f"{row.samples_per_second / 1e6:10.3f} {row.rays_per_second / 1e6:8.2f} "
+                 f"{row.query_share:10.0%}  {np.array2string(row.mean, precision=4)}")
+    by_key = {(r.backend, r.estimator): r for r in rows}
+    for estimator in estimators:
+        if ("embree", estimator) in by_key and ("numpy", estimator) in by_key:
+            ratio = by_key["numpy", estimator].seconds / by_key["embree", estimator].seconds
+            echo(f"numpy / embree time, {estimator} estimator: {ratio:.1f}x")
+    return rows

@@ -1,0 +1,116 @@
+"""Images: the float64 film, files through OpenImageIO, sRGB through colour-science.
+
+* ``.exr`` files hold linear float32 RGB, exactly what the renderer computed, with the
+  render's settings in the header (spp, seed, seconds, scene, ptlab version).
+* ``.png`` files hold 8-bit sRGB: linear values clipped to [0, 1] and encoded with the
+  sRGB transfer function (IEC 61966-2-1) from colour-science. (The homework writes
+  ``pow(x, 0.6)``, which is neither sRGB nor a gamma any display expects.)
+
+Files are written atomically: to a temporary file beside the target, then renamed, so a
+crash never leaves a half-written image under the final name.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.errors import PtlabError
+
+FORMATS = (".exr", ".png")
+
+
+def _colour():
+    """colour-science, imported without its warning that matplotlib is not installed."""
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*[Mm]atplotlib.*")
+        import colour
+    return colour
+
+
+def encode_srgb8(linear: np.ndarray) -> np.ndarray:
+    """(H, W, 3) linear RGB -> (H, W, 3) uint8 sRGB (clipped to [0, 1] first)."""
+    colour = _colour()
+    clipped = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64)), 0.0, 1.0)
+    encoded = colour.cctf_encoding(clipped, function="sRGB")
+    return np.round(encoded * 255.0).astype(np.uint8)
+
+
+def check_output_path(path: str | Path) -> Path:
+    """The path, if its extension is a format we write and its folder exists."""
+    path = Path(path)
+    if path.suffix.lower() not in FORMATS:
+        raise PtlabError(f"{path}: unsupported image format {path.suffix!r} "
+                         f"(use {' or '.join(FORMATS)})")
+    if not path.parent.resolve().is_dir():
+        raise PtlabError(f"{path}: folder {path.parent} does not exist")
+    return path
+
+
+def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = None) -> Path:
+    """Write (H, W, 3) linear RGB to ``.exr`` (float32) or ``.png`` (sRGB 8-bit), atomically.
+
+    ``metadata`` entries become header attributes ``ptlab:<key>`` (strings, ints, floats).
+    """
+    import OpenImageIO as oiio
+
+    path = check_output_path(path)
+    image = np.asarray(image)
+    height, width = image.shape[:2]
+    if path.suffix.lower() == ".exr":
+        pixels = np.ascontiguousarray(image, dtype=np.float32)
+        spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
+        spec.attribute("compression", "zip")
+    else:
+        pixels = encode_srgb8(image)
+        spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
+        spec.attribute("oiio:ColorSpace", "sRGB")
+    for key, value in (metadata or {}).items():
+        spec.attribute(f"ptlab:{key}", value if isinstance(value, int | float) else str(value))
+    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix,
+                                             dir=path.parent)
+    os.close(descriptor)
+    umask = os.umask(0)
+    os.umask(umask)
+    os.chmod(temporary, 0o666 & ~umask)  # mkstemp makes it private; give it normal permissions
+    try:
+        out = oiio.ImageOutput.create(temporary)
+        if out is None or not out.open(temporary, spec):
+            raise PtlabError(f"{path}: cannot write image: {oiio.geterror()}")
+        ok = out.write_image(pixels)
+        out.close()
+        if not ok:
+            raise PtlabError(f"{path}: cannot write image: {out.geterror()}")
+        os.replace(temporary, path)
+    finally:
+        if os.path.exists(temporary):
+            os.remove(temporary)
+    return path
+
+
+def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
+    """(H, W, 3) float32 pixels of an image file and its ``ptlab:`` metadata.
+
+    EXR pixels come back as stored (linear); 8-bit files come back as stored values / 255
+    (still sRGB-encoded).
+    """
+    import OpenImageIO as oiio
+
+    path = Path(path)
+    if not path.is_file():
+        raise PtlabError(f"{path}: no such image file")
+    source = oiio.ImageInput.open(str(path))
+    if source is None:
+        raise PtlabError(f"{path}: cannot read image: {oiio.geterror()}")
+    try:
+        spec = source.spec()
+        pixels = source.read_image(0, 0, 0, 3, oiio.FLOAT)
+    finally:
+        source.close()
+    metadata = {a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs
+                if a.name.startswith("ptlab:")}
+    return np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, 3), metadata

@@ -1,0 +1,84 @@
+"""Area lights: every emissive triangle of the scene, sampled by area.
+
+Next-event estimation picks a point ``y`` on the lights and turns the pdf of that choice
+from area into solid angle (GAMES101 lecture 16, "sampling the light"; pbrt-v4 section
+12.2): a triangle is chosen with probability proportional to its area, then a uniform
+point on it, so every point of every light has the same area density
+``pdf_area = 1 / total_area``. (The homework framework picks its two light triangles with
+other probabilities while still dividing by this uniform pdf; that is biased.)
+
+Each light emits from its front face only, the side its winding's normal
+``(v1 - v0) x (v2 - v0)`` points to.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ptlab.sampling import uniform_triangle
+
+
+@dataclass
+class LightSample:
+    """Points sampled on the lights, one per shading point.
+
+    Attributes:
+        points: (N, 3) float32 positions on the lights.
+        normals: (N, 3) float32 unit front-face normals there.
+        radiance: (N, 3) float32 emitted radiance Le.
+        offset: (N, 1) float32 distance that rays aimed at the point stop short of it.
+    """
+
+    points: np.ndarray
+    normals: np.ndarray
+    radiance: np.ndarray
+    offset: np.ndarray
+
+
+class AreaLights:
+    """All emissive triangles of a scene.
+
+    Args:
+        v0, v1, v2: (L, 3) vertices of the emissive triangles.
+        radiance: (L, 3) emitted radiance of each.
+        offset: (L,) how far rays stay off each triangle (``Scene`` computes it).
+    """
+
+    def __init__(self, v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, radiance: np.ndarray,
+                 offset: np.ndarray):
+        v0, v1, v2 = (np.asarray(a, dtype=np.float64) for a in (v0, v1, v2))
+        cross = np.cross(v1 - v0, v2 - v0)
+        double_area = np.linalg.norm(cross, axis=1)
+        self.areas = 0.5 * double_area
+        self.total_area = float(self.areas.sum())
+        self.cdf = np.cumsum(self.areas) / self.total_area
+        self.v0 = v0.astype(np.float32)
+        self.e1 = (v1 - v0).astype(np.float32)
+        self.e2 = (v2 - v0).astype(np.float32)
+        self.normals = (cross / double_area[:, None]).astype(np.float32)
+        self.radiance = np.asarray(radiance, dtype=np.float32)
+        # Everything `sample` gathers per chosen triangle, in one row (one `take`).
+        # Columns: v0 | e1 | e2 | unit normal | radiance | offset.
+        self._packed = np.hstack([self.v0, self.e1, self.e2, self.normals, self.radiance,
+                                  np.asarray(offset, dtype=np.float32)[:, None]])
+
+    def __len__(self) -> int:
+        return len(self.areas)
+
+    @property
+    def pdf_area(self) -> float:
+        """The area density of every sampled point, 1 / total emitting area."""
+        return 1.0 / self.total_area
+
+    def sample(self, u: np.ndarray) -> LightSample:
+        """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""
+        # A triangle with probability area / total_area (inverse-CDF lookup).
+        index = np.searchsorted(self.cdf, u[:, 0], side="right")
+        np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
+        b1, b2 = uniform_triangle(u[:, 1:3])
+        data = self._packed.take(index, axis=0)
+        points = data[:, 0:3] + b1[:, None] * data[:, 3:6] + b2[:, None] * data[:, 6:9]
+        return LightSample(points=points, normals=data[:, 9:12], radiance=data[:, 12:15],
+                           offset=data[:, 15:16])

@@ -1,0 +1,78 @@
+"""The ``Material`` interface: how a surface scatters light.
+
+A material answers three questions about directions at a surface point (pbrt-v4's
+BxDF ``f`` / ``PDF`` / ``Sample_f``; GAMES101 Homework 7's ``eval`` / ``pdf`` / ``sample``):
+
+* ``eval(wo, wi, n)``: the BSDF value f_r, *without* the cosine factor;
+* ``pdf(wo, wi, n)``: the solid-angle density with which ``sample`` picks ``wi``;
+* ``sample(wo, n, u)``: a direction ``wi`` drawn from that density.
+
+Conventions (DESIGN.md): every direction is a unit vector pointing *away* from the
+surface; ``wo`` toward the viewer, ``wi`` toward the light; ``n`` the unit shading normal.
+Arrays are (N, 3), colours (N, 3). (GAMES101 passes the incoming ray direction, which
+points *toward* the surface, as its first argument: its ``wi`` is our ``-wo``.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Row-wise dot product of two (N, 3) arrays -> (N,)."""
+    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+class Material:
+    """Base class: subclasses implement ``eval``, ``pdf`` and ``sample``.
+
+    Attributes:
+        emission: (3,) emitted radiance, or None for a surface that does not glow.
+        is_delta: True for perfect mirrors and glass, whose eval/pdf are Dirac deltas.
+    """
+
+    emission: np.ndarray | None = None
+    is_delta: bool = False
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N, 3) BSDF value f_r(wo, wi), cosine not included."""
+        raise NotImplementedError
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N,) solid-angle density with which ``sample`` picks ``wi``."""
+        raise NotImplementedError
+
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+        """(N, 3) unit directions drawn with density ``pdf``; u: (N, 2) in [0, 1)."""
+        raise NotImplementedError
+
+    def sample_weight(self, wo: np.ndarray, n: np.ndarray,
+                      u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Sample ``wi`` and return it with its Monte Carlo weight f_r cos / pdf.
+
+        This is the factor by which a path's throughput is multiplied at a bounce
+        (pbrt-v4 ``Sample_f``). Where the pdf is 0 the weight is 0, never NaN.
+        """
+        wi = self.sample(wo, n, u)
+        f = self.eval(wo, wi, n)
+        pdf = self.pdf(wo, wi, n)
+        cos_theta_i = np.abs(dot(wi, n))
+        ok = pdf > 0
+        scale = np.where(ok, cos_theta_i / np.where(ok, pdf, 1), 0).astype(f.dtype)
+        return wi, f * scale[:, None]
+
+    # Batching: the renderer shades all hits on materials of one kind with one call.
+    def batch_key(self) -> object:
+        """Materials with equal keys can be ``stack``ed into one; the default is none."""
+        return id(self)
+
+    @classmethod
+    def stack(cls, materials: list[Material]) -> Material:
+        """One material whose parameters are rows, one per input material."""
+        if len(materials) != 1:
+            raise TypeError(f"{cls.__name__} cannot be batched")
+        return materials[0]
+
+    def take(self, index: np.ndarray) -> Material:
+        """The stacked material's parameters for each hit: row ``index[k]`` for hit k."""
+        return self

@@ -1,0 +1,32 @@
+"""Shared fixtures: small scenes built in Python, and the built-in Cornell box."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+import ptlab
+from ptlab.camera import Camera
+from ptlab.materials import Diffuse
+from ptlab.scene import Scene
+
+
+def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
+    """A closed unit-ish box whose every inner face has ``albedo`` and emits ``emission``.
+
+    Its normals point inward, so every face emits into the box. The exact radiance
+    everywhere inside is Le / (1 - albedo) (the "furnace").
+    """
+    box = trimesh.creation.box(extents=(2.0, 3.0, 4.0))
+    box.invert()                                    # outward normals -> inward
+    triangles = box.vertices[box.faces]
+    material = Diffuse(albedo=[albedo] * 3, sampling=sampling, emission=[emission] * 3)
+    camera = Camera.look_at((0.1, -0.2, -1.0), (0.3, 0.1, 1.0), fov_y=100.0)
+    return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
+                 materials=[material], camera=camera, name="furnace")
+
+
+@pytest.fixture(scope="session")
+def cornell() -> Scene:
+    return ptlab.load_scene("cornell-box")
