@@ -1,0 +1,100 @@
+"""The ``ptlab`` command: renders, writes images with metadata, and fails cleanly."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from ptlab.cli import main
+from ptlab.image import read_image
+
+
+def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkeypatch, capsys):
+    monkeypatch.chdir(tmp_path)
+    assert main(["render", "cornell-box", "--spp", "1", "--res", "16"]) == 0
+    out = capsys.readouterr().out
+    assert (tmp_path / "cornell-box.png").is_file()
+    assert str(tmp_path / "cornell-box.png") in out
+    assert "16x16" in out and "1 spp" in out and "samples/s" in out
+
+
+def test_render_exr_is_linear_float_with_metadata(tmp_path):
+    out = tmp_path / "box.exr"
+    assert main(["render", "cornell-box", "--spp", "2", "--res", "24x16", "--seed", "7",
+                 "--out", str(out), "--quiet"]) == 0
+    image, metadata = read_image(out)
+    assert image.shape == (16, 24, 3)
+    assert image.max() > 1.0                       # linear: the light is far above 1
+    assert metadata["spp"] == 2 and metadata["seed"] == 7
+    assert metadata["scene"] == "cornell-box" and "seconds" in metadata and "version" in metadata
+
+
+@pytest.mark.parametrize("args, problem", [
+    (["render", "cornell-box", "--spp", "0"], "spp"),
+    (["render", "cornell-box", "--res", "-5"], "resolution"),
+    (["render", "cornell-box", "--rr", "2"], "roulette"),
+    (["render", "no-such-scene"], "no-such-scene"),
+    (["render", "cornell-box", "--out", "image.jpg"], "format"),
+    (["render", "cornell-box", "--backend", "optix"], "backend"),
+])
+def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsys, args, problem):
+    monkeypatch.chdir(tmp_path)
+    code = exit_code(args)
+    err = capsys.readouterr().err
+    assert code == 2
+    assert err.count("\n") == 1 and problem in err and "Traceback" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+def exit_code(args: list[str]) -> int:
+    """main()'s exit code, whether it returns it or argparse exits with it."""
+    try:
+        return main(args)
+    except SystemExit as exit:
+        return exit.code
+
+
+def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
+    scene = tmp_path / "bad.toml"
+    scene.write_text("[camera\n")
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    result = subprocess.run([sys.executable, "-m", "ptlab.cli", "render", str(scene),
+                             "--out", str(tmp_path / "x.png")], capture_output=True, text=True,
+                            env=env, cwd=tmp_path)
+    assert result.returncode == 2
+    assert "malformed TOML" in result.stderr and "Traceback" not in result.stderr
+    assert not (tmp_path / "x.png").exists()
+
+
+def test_help_describes_every_render_option(capsys):
+    with pytest.raises(SystemExit):
+        main(["render", "--help"])
+    text = capsys.readouterr().out
+    for option in ("--spp", "--res", "--out", "--seed", "--backend", "--sampling", "--rr",
+                   "--max-depth"):
+        assert option in text
+
+
+def test_scenes_lists_cornell_box(capsys):
+    assert main(["scenes"]) == 0
+    assert "cornell-box" in capsys.readouterr().out.split()
+
+
+def test_png_is_srgb_encoded(tmp_path):
+    from ptlab.image import write_image
+    linear = np.zeros((2, 2, 3), dtype=np.float32)
+    linear[0, 0] = 0.5       # sRGB(0.5) = 0.7354 -> 188 (pow(0.5, 0.6) would give 168)
+    linear[0, 1] = 0.0031308 * 0.5   # in the linear toe: 12.92 x -> 5.2%... -> 1
+    linear[1, 0] = 2.0       # clipped to white
+    linear[1, 1] = np.nan    # never reaches the file as garbage
+    write_image(tmp_path / "x.png", linear)
+    stored, _ = read_image(tmp_path / "x.png")
+    values = np.round(stored * 255).astype(int)
+    assert values[0, 0].tolist() == [188] * 3
+    assert values[0, 1].tolist() == [5] * 3
+    assert values[1, 0].tolist() == [255] * 3
+    assert values[1, 1].tolist() == [0] * 3

@@ -1,0 +1,64 @@
+"""Warps: each produces what its pdf claims (fixed seeds, 200k samples)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ptlab.sampling import (cosine_hemisphere, stream, to_world, uniform_hemisphere,
+                            uniform_triangle)
+
+N = 200_000
+
+
+@pytest.fixture
+def u():
+    return np.random.default_rng(0).random((N, 2))
+
+
+def test_uniform_hemisphere_moments(u):
+    w = uniform_hemisphere(u)
+    np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-12)
+    assert (w[:, 2] >= 0).all()
+    # Uniform on the hemisphere: cos(theta) is uniform on [0, 1]: mean 1/2, E[cos^2] = 1/3.
+    # Tolerances are 5 standard errors (sd <= 0.3 / sqrt(N)): false alarm < 1e-6.
+    assert w[:, 2].mean() == pytest.approx(1 / 2, abs=5 * 0.29 / np.sqrt(N))
+    assert (w[:, 2] ** 2).mean() == pytest.approx(1 / 3, abs=5 * 0.3 / np.sqrt(N))
+    assert abs(w[:, 0].mean()) < 5 * 0.5 / np.sqrt(N)
+
+
+def test_cosine_hemisphere_moments(u):
+    w = cosine_hemisphere(u)
+    np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-12)
+    # pdf cos/pi: E[cos] = 2/3, E[cos^2] = 1/2 (a uniform sampler would give 1/2 and 1/3).
+    assert w[:, 2].mean() == pytest.approx(2 / 3, abs=5 * 0.24 / np.sqrt(N))
+    assert (w[:, 2] ** 2).mean() == pytest.approx(1 / 2, abs=5 * 0.29 / np.sqrt(N))
+
+
+def test_to_world_maps_z_to_the_normal_and_keeps_lengths_and_angles():
+    rng = np.random.default_rng(1)
+    n = rng.normal(size=(1000, 3))
+    n[:3] = [[0, 0, 1], [0, 0, -1], [1, 0, 0]]          # the frame's special cases
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    local = cosine_hemisphere(rng.random((1000, 2)))
+    world = to_world(local, n)
+    np.testing.assert_allclose(to_world(np.tile([0.0, 0, 1], (1000, 1)), n), n, atol=1e-12)
+    np.testing.assert_allclose(np.linalg.norm(world, axis=1), 1, atol=1e-12)
+    np.testing.assert_allclose((world * n).sum(axis=1), local[:, 2], atol=1e-12)
+
+
+def test_uniform_triangle_is_uniform(u):
+    b1, b2 = uniform_triangle(u)
+    assert (b1 >= 0).all() and (b2 >= 0).all() and (b1 + b2 <= 1).all()
+    # Uniform on the triangle: each barycentric has mean 1/3; the sub-triangle
+    # b1 + b2 < 1/2 (the corner at v0 cut at half height) holds 1/4 of the area.
+    for b in (b1, b2, 1 - b1 - b2):
+        assert b.mean() == pytest.approx(1 / 3, abs=5 * 0.24 / np.sqrt(N))
+    assert ((b1 + b2) < 0.5).mean() == pytest.approx(0.25, abs=5 * 0.44 / np.sqrt(N))
+
+
+def test_streams_are_reproducible_and_distinct():
+    a = stream(0, 3, 1).random(4)
+    assert np.array_equal(a, stream(0, 3, 1).random(4))
+    for other in (stream(1, 3, 1), stream(0, 4, 1), stream(0, 3, 2)):
+        assert not np.array_equal(a, other.random(4))
