@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 
 from ptlab.errors import PtlabError
 
@@ -74,15 +73,15 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _render(args) -> int:
+    from ptlab import __version__
     from ptlab.image import check_output_path, write_image
     from ptlab.render import parse_resolution, render_result
     from ptlab.scene import load_scene
-    from ptlab import __version__
 
     scene = load_scene(args.scene)
     width, height = parse_resolution(args.res)
     out = check_output_path(args.out or f"{scene.name}.png")
-    progress = _progress_bar(args.quiet)
+    progress = _ProgressLine(args.quiet)
     try:
         result = render_result(scene, spp=args.spp, res=(width, height), seed=args.seed,
                                backend=args.backend, sampling=args.sampling, rr=args.rr,
@@ -99,7 +98,7 @@ def _render(args) -> int:
     return 0
 
 
-class _progress_bar:
+class _ProgressLine:
     """A one-line progress display on stderr when it is a terminal; silent otherwise."""
 
     def __init__(self, quiet: bool):

@@ -56,7 +56,7 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
 
     ``metadata`` entries become header attributes ``ptlab:<key>`` (strings, ints, floats).
     """
-    import OpenImageIO as oiio
+    import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = check_output_path(path)
     image = np.asarray(image)
@@ -98,7 +98,7 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
     EXR pixels come back as stored (linear); 8-bit files come back as stored values / 255
     (still sRGB-encoded).
     """
-    import OpenImageIO as oiio
+    import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = Path(path)
     if not path.is_file():

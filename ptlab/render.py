@@ -12,7 +12,6 @@ overhead vanishes, small enough to stay in cache-friendly sizes (DESIGN.md).
 
 from __future__ import annotations
 
-import math
 import time
 from dataclasses import dataclass, field
 
@@ -23,8 +22,8 @@ from ptlab.camera import generate_rays
 from ptlab.errors import PtlabError
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.materials.diffuse import SAMPLINGS
-from ptlab.scene import Scene, load_scene
 from ptlab.sampling import stream
+from ptlab.scene import Scene, load_scene
 
 INTEGRATORS = ("path",)
 BATCH_PATHS = 1 << 18

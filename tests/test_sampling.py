@@ -5,8 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.sampling import (cosine_hemisphere, stream, to_world, uniform_hemisphere,
-                            uniform_triangle)
+from ptlab.sampling import cosine_hemisphere, stream, to_world, uniform_hemisphere, uniform_triangle
 
 N = 200_000
 
