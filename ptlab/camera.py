@@ -17,6 +17,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ptlab.vectors import dot, vec3
+
 
 def _normalize(v: np.ndarray) -> np.ndarray:
     return v / np.linalg.norm(v)
@@ -71,8 +73,8 @@ def generate_rays(camera: Camera, width: int, height: int, pixel_x: np.ndarray,
     # Image-plane coordinates in [-1, 1], y up (Homework 5's Renderer::Render).
     x = (2.0 * (pixel_x + u[:, 0]) / width - 1.0) * (scale * aspect)
     y = (1.0 - 2.0 * (pixel_y + u[:, 1]) / height) * scale
-    dirs = (camera.forward[None, :] + x[:, None] * camera.right[None, :]
-            + y[:, None] * camera.up[None, :])
-    dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
+    f, r, up = camera.forward, camera.right, camera.up
+    dirs = vec3(*(float(f[k]) + x * float(r[k]) + y * float(up[k]) for k in range(3)))
+    dirs = (dirs / np.sqrt(dot(dirs, dirs))[:, None]).astype(np.float32)
     origins = np.broadcast_to(camera.position.astype(np.float32), dirs.shape)
-    return origins, dirs.astype(np.float32)
+    return origins, dirs

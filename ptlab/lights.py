@@ -59,10 +59,10 @@ class AreaLights:
         self.e2 = (v2 - v0).astype(np.float32)
         self.normals = (cross / double_area[:, None]).astype(np.float32)
         self.radiance = np.asarray(radiance, dtype=np.float32)
-        # Everything `sample` gathers per chosen triangle, in one row (one `take`).
-        # Columns: v0 | e1 | e2 | unit normal | radiance | offset.
-        self._packed = np.hstack([self.v0, self.e1, self.e2, self.normals, self.radiance,
-                                  np.asarray(offset, dtype=np.float32)[:, None]])
+        # Everything `sample` gathers per chosen triangle, in one column (one `take`).
+        # Rows: v0 | e1 | e2 | unit normal | radiance | offset.
+        self._packed = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
+                                  self.radiance.T, np.asarray(offset, dtype=np.float32)[None]])
 
     def __len__(self) -> int:
         return len(self.areas)
@@ -78,7 +78,8 @@ class AreaLights:
         index = np.searchsorted(self.cdf, u[:, 0], side="right")
         np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
         b1, b2 = uniform_triangle(u[:, 1:3])
-        data = self._packed.take(index, axis=0)
-        points = data[:, 0:3] + b1[:, None] * data[:, 3:6] + b2[:, None] * data[:, 6:9]
-        return LightSample(points=points, normals=data[:, 9:12], radiance=data[:, 12:15],
-                           offset=data[:, 15:16])
+        data = self._packed.take(index, axis=1)     # (16, N): rows are contiguous
+        # Transposed slices are (N, 3) arrays in the column-major layout of ptlab.vectors.
+        points = data[0:3].T + b1[:, None] * data[3:6].T + b2[:, None] * data[6:9].T
+        return LightSample(points=points, normals=data[9:12].T, radiance=data[12:15].T,
+                           offset=data[15:16].T)

@@ -22,6 +22,7 @@ from ptlab.camera import generate_rays
 from ptlab.errors import PtlabError
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.materials.diffuse import SAMPLINGS
+from ptlab.memory import keep_freed_memory
 from ptlab.sampling import stream
 from ptlab.scene import Scene, load_scene
 
@@ -133,7 +134,7 @@ def render_tile_pass(scene: Scene, accel, tile: Tile, width: int, height: int, s
     origins, dirs = generate_rays(scene.camera, width, height, pixel_x, pixel_y,
                                   rng.random((len(pixel), 2), dtype=np.float32))
     paths = Paths(origins=origins, dirs=dirs,
-                  throughput=np.ones((len(pixel), 3), dtype=np.float32), pixel=pixel)
+                  throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"), pixel=pixel)
     film = np.zeros((n_pixels, 3))
     rays = trace_paths(film, scene, accel, paths, rng, settings)
     return film, rays
@@ -157,6 +158,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
         raise PtlabError(str(error)) from None
     scene = scene.with_sampling(sampling)
     settings = PathSettings(rr=rr, max_depth=int(max_depth))
+    keep_freed_memory()
 
     start = time.perf_counter()
     accel = make_accelerator(scene.triangles, backend)

@@ -9,7 +9,8 @@ GAMES101 lecture 15/16):
 * ``uniform_triangle``: a uniform point on a triangle, as barycentrics.
 
 Hemisphere samples are made around +z ("local" frame) and rotated around a normal with
-``to_world``. All functions work on whole arrays and keep the input's float dtype.
+``to_world``. All functions work on whole arrays, keep the input's float dtype and return
+(N, 3) arrays in the column-major layout of ``ptlab.vectors``.
 
 Random streams: every (seed, tile, pass) gets its own generator through
 ``numpy.random.SeedSequence``, so an image does not depend on how many processes render
@@ -22,6 +23,8 @@ import math
 
 import numpy as np
 
+from ptlab.vectors import vec3
+
 TWO_PI = 2.0 * math.pi
 
 
@@ -30,7 +33,7 @@ def uniform_hemisphere(u: np.ndarray) -> np.ndarray:
     cos_theta = u[:, 0]
     sin_theta = np.sqrt(np.maximum(0.0, 1.0 - cos_theta * cos_theta))
     phi = TWO_PI * u[:, 1]
-    return np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta], axis=1)
+    return vec3(sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta)
 
 
 def cosine_hemisphere(u: np.ndarray) -> np.ndarray:
@@ -39,7 +42,7 @@ def cosine_hemisphere(u: np.ndarray) -> np.ndarray:
     phi = TWO_PI * u[:, 1]
     # 1 - u can round to exactly 0 only for u = 1, which random() never returns.
     cos_theta = np.sqrt(1.0 - u[:, 0])
-    return np.stack([r * np.cos(phi), r * np.sin(phi), cos_theta], axis=1)
+    return vec3(r * np.cos(phi), r * np.sin(phi), cos_theta)
 
 
 def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -55,11 +58,9 @@ def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
     x, y, z = local[:, 0], local[:, 1], local[:, 2]
     # world = x * t + y * s + z * n with t = (1 + sign nx^2 a, sign b, -sign nx),
     # s = (b, sign + ny^2 a, -ny).
-    return np.stack([
-        x * (1.0 + sign * nx * nx * a) + y * b + z * nx,
-        x * (sign * b) + y * (sign + ny * ny * a) + z * ny,
-        x * (-sign * nx) - y * ny + z * nz,
-    ], axis=1)
+    return vec3(x * (1.0 + sign * nx * nx * a) + y * b + z * nx,
+                x * (sign * b) + y * (sign + ny * ny * a) + z * ny,
+                x * (-sign * nx) - y * ny + z * nz)
 
 
 def uniform_triangle(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -101,10 +101,10 @@ class Scene:
         # stays far below any gap in a sensible scene (the Cornell light hangs 0.1 under the
         # ceiling; its offset there is 0.034).
         offset = OFFSET_SCALE * np.abs(tri).max(axis=(1, 2))
-        # Everything the renderer gathers per hit, packed in one row: one `take` per bounce
-        # instead of five. Columns: v0 | e1 | e2 | unit normal | offset.
-        self.triangle_data = np.hstack([self.v0, self.e1, self.e2, self.normals,
-                                        offset[:, None]]).astype(np.float32)
+        # Everything the renderer gathers per hit, packed in one column: one `take` per
+        # bounce instead of five. Rows: v0 | e1 | e2 | unit normal | offset.
+        self.triangle_data = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
+                                        offset[None]]).astype(np.float32)
         emission = np.zeros((len(self.materials), 3))
         for k, material in enumerate(self.materials):
             if material.emission is not None:

@@ -22,8 +22,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.materials.base import dot
 from ptlab.scene import Scene
+from ptlab.vectors import dot, take_rows
 
 #: A shadow ray stops this fraction short of the (offset) light point (pbrt's ShadowEpsilon).
 SHADOW_EPSILON = 1e-4
@@ -65,7 +65,7 @@ class SurfaceHit:
     n: np.ndarray            # (N, 3) unit shading normal, turned to the side of wo
     wo: np.ndarray           # (N, 3) unit direction back along the ray
     front: np.ndarray        # (N,) bool: the ray hit the triangle's front face
-    offset: np.ndarray       # (N, 1) float32: how far new rays start off the surface
+    offset: np.ndarray       # (N,) float32: how far new rays start off the surface
     throughput: np.ndarray   # (N, 3) float32
     pixel: np.ndarray        # (N,) intp
 
@@ -117,23 +117,23 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     alive = np.flatnonzero(hits.prim >= 0)
     prim = hits.prim.take(alive)
     # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
-    data = scene.triangle_data.take(prim, axis=0)
-    v0, e1, e2, n, offset = data[:, 0:3], data[:, 3:6], data[:, 6:9], data[:, 9:12], data[:, 12:13]
+    data = scene.triangle_data.take(prim, axis=1)   # (13, N); .T gives (N, 3) views
+    v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
     u, v = hits.u.take(alive)[:, None], hits.v.take(alive)[:, None]
     # The point from its barycentrics: more accurate than origin + t * dir (pbrt 6.8.6).
     p = v0 + u * e1 + v * e2
-    wo = -paths.dirs.take(alive, axis=0)
+    wo = -take_rows(paths.dirs, alive)
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
-    n = np.where(front[:, None], n, -n)
+    n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
     return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
-                      throughput=paths.throughput.take(alive, axis=0),
+                      throughput=take_rows(paths.throughput, alive),
                       pixel=paths.pixel.take(alive))
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit) -> None:
     """Add Le of the surfaces the paths see (lights emit from their front face only)."""
-    emitted = scene.emission.take(hit.prim, axis=0) * hit.front[:, None]
+    emitted = take_rows(scene.emission, hit.prim) * hit.front[:, None]
     add_to_film(film, hit.pixel, hit.throughput * emitted)
 
 
@@ -154,13 +154,13 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     # (nearly free in the traversal) and they drop out through `visible`. Masking beats
     # compacting here: most paths face the light.
     facing = (cos_theta > 0) & (cos_theta_light > 0)
-    origin = hit.p + hit.n * hit.offset
-    target = light.points + light.normals * light.offset
-    blocked = accel.occluded(origin, target - origin, np.where(facing, 1.0 - SHADOW_EPSILON, 0.0))
-    visible = facing & ~blocked
+    origin = hit.p + hit.offset[:, None] * hit.n
+    target = light.points + light.offset * light.normals
+    tmax = facing * np.float32(1.0 - SHADOW_EPSILON)
+    visible = facing & ~accel.occluded(origin, target - origin, tmax)
     f = shade(scene, hit.prim, "eval", hit.wo, wi, hit.n)
-    geometry = np.where(visible, cos_theta * cos_theta_light / dist2, 0.0)
-    geometry *= float(scene.lights.total_area)           # divide by pdf_area = 1 / area
+    # Divide by the light's pdf_area = 1 / total area.
+    geometry = visible * cos_theta * cos_theta_light / dist2 * float(scene.lights.total_area)
     radiance = hit.throughput * f
     radiance *= light.radiance
     radiance *= geometry[:, None]
@@ -182,7 +182,7 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
     else:
         survival = np.float32(settings.rr)
     survive = u < survival
-    hit.throughput /= np.where(survive, survival, 1.0).astype(np.float32)[:, None]
+    hit.throughput /= np.where(survive, survival, np.float32(1))[:, None]
     return survive
 
 
@@ -192,11 +192,11 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray) -
     throughput = hit.throughput * weight
     go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
                                       | (throughput[:, 2] > 0)))
-    wi, n, p, offset = (a.take(go_on, axis=0) for a in (wi, hit.n, hit.p, hit.offset))
+    wi, n, p, offset = (take_rows(a, go_on) for a in (wi, hit.n, hit.p, hit.offset))
     # Leave the surface on the side the new direction goes to.
-    side = np.where(dot(wi, n) >= 0, offset[:, 0], -offset[:, 0])
-    return Paths(origins=p + n * side[:, None], dirs=wi,
-                 throughput=throughput.take(go_on, axis=0), pixel=hit.pixel.take(go_on))
+    side = np.where(dot(wi, n) >= 0, offset, -offset)
+    return Paths(origins=p + side[:, None] * n, dirs=wi,
+                 throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on))
 
 
 def shade(scene: Scene, prim: np.ndarray, method: str, *arrays: np.ndarray):
@@ -217,10 +217,10 @@ def shade(scene: Scene, prim: np.ndarray, method: str, *arrays: np.ndarray):
         if len(rows) == 0:
             continue
         material = stacked.take(table.row.take(material_ids.take(rows)))
-        result = getattr(material, method)(*(a.take(rows, axis=0) for a in arrays))
+        result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
         parts = result if isinstance(result, tuple) else (result,)
         if outputs is None:
-            outputs = tuple(np.zeros((len(prim),) + r.shape[1:], r.dtype) for r in parts)
+            outputs = tuple(np.zeros((len(prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
         for out, part in zip(outputs, parts, strict=True):
             out[rows] = part
     return outputs if len(outputs) > 1 else outputs[0]

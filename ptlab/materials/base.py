@@ -17,10 +17,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from ptlab.vectors import dot
 
-def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """Row-wise dot product of two (N, 3) arrays -> (N,)."""
-    return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+__all__ = ["Material", "dot"]
 
 
 class Material:
@@ -59,7 +58,7 @@ class Material:
         cos_theta_i = np.abs(dot(wi, n))
         ok = pdf > 0
         scale = np.where(ok, cos_theta_i / np.where(ok, pdf, 1), 0).astype(f.dtype)
-        return wi, f * scale[:, None]
+        return wi, scale[:, None] * f
 
     # Batching: the renderer shades all hits on materials of one kind with one call.
     def batch_key(self) -> object:

@@ -20,6 +20,7 @@ import numpy as np
 
 from ptlab.materials.base import Material, dot
 from ptlab.sampling import cosine_hemisphere, to_world, uniform_hemisphere
+from ptlab.vectors import columns, take_rows
 
 SAMPLINGS = ("cosine", "uniform")
 
@@ -43,12 +44,10 @@ class Diffuse(Material):
     def __repr__(self) -> str:
         return f"Diffuse(albedo={self.albedo.tolist()}, sampling={self.sampling!r})"
 
-    def _f(self, dtype) -> np.ndarray:
-        return (self.albedo / math.pi).astype(dtype, copy=False)
-
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
-        return np.where(above[:, None], self._f(wi.dtype), 0).astype(wi.dtype, copy=False)
+        # Multiplying by the 0/1 mask is several times faster than np.where here.
+        return (above * (1.0 / math.pi)).astype(wi.dtype)[:, None] * self.albedo.astype(wi.dtype)
 
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         cos_theta_i = dot(wi, n)
@@ -72,12 +71,10 @@ class Diffuse(Material):
         # toward wo; below it the weight is 0 as the contract asks.
         wi = self.sample(wo, n, u)
         albedo = self.albedo.astype(n.dtype, copy=False)
-        above = dot(wo, n) > 0
+        scale = (dot(wo, n) > 0).astype(n.dtype)
         if self.sampling == "uniform":
-            weight = 2.0 * dot(wi, n)[:, None] * albedo
-        else:
-            weight = np.broadcast_to(albedo, wi.shape)
-        return wi, np.where(above[:, None], weight, 0).astype(n.dtype, copy=False)
+            scale *= 2.0 * dot(wi, n)
+        return wi, scale[:, None] * albedo
 
     # Every Diffuse with the same sampling shades in one vectorized call.
     def batch_key(self) -> object:
@@ -85,11 +82,12 @@ class Diffuse(Material):
 
     @classmethod
     def stack(cls, materials: list[Material]) -> Diffuse:
+        # Stacked materials serve the renderer, whose arrays are float32.
         stacked = cls(sampling=materials[0].sampling)
-        stacked.albedo = np.stack([m.albedo for m in materials])
+        stacked.albedo = columns(np.stack([m.albedo for m in materials]).astype(np.float32))
         return stacked
 
     def take(self, index: np.ndarray) -> Diffuse:
         taken = Diffuse(sampling=self.sampling)
-        taken.albedo = self.albedo.take(index, axis=0)
+        taken.albedo = take_rows(self.albedo, index)
         return taken
