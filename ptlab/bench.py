@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ptlab import accel as accel_module
+from ptlab.accel import make_accelerator
 from ptlab.render import render_result
 from ptlab.scene import Scene, load_scene
 
@@ -29,6 +29,7 @@ class TimedAccelerator:
 
     def __init__(self, inner):
         self.inner = inner
+        self.name = inner.name
         self.seconds = 0.0
 
     def intersect(self, *args, **kwargs):
@@ -53,33 +54,22 @@ class BenchRow:
     seconds: float
     samples_per_second: float
     rays_per_second: float
+    rays_per_path: float
     query_share: float
     mean: np.ndarray
 
 
 def bench_one(scene: Scene, backend: str, estimator: str, res: int, spp: int,
               seed: int = 0) -> BenchRow:
-    """Render once with one backend and estimator and time it."""
-    timers: list[TimedAccelerator] = []
-    original = accel_module.make_accelerator
-
-    def timed_make(triangles, name="auto"):
-        timers.append(TimedAccelerator(original(triangles, name)))
-        return timers[-1]
-
-    # render_result builds its accelerator through ptlab.render.make_accelerator.
-    import ptlab.render as render_module
-    render_module.make_accelerator = timed_make
-    try:
-        result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend,
-                               **ESTIMATORS[estimator])
-    finally:
-        render_module.make_accelerator = original
-    query_seconds = sum(t.seconds for t in timers)
+    """Render once with one backend and estimator and time it (the BVH build is not timed)."""
+    timed = TimedAccelerator(make_accelerator(scene.triangles, backend))
+    result = render_result(scene, spp=spp, res=res, seed=seed, accel=timed,
+                           **ESTIMATORS[estimator])
+    paths = res * res * spp
     return BenchRow(backend=backend, estimator=estimator, seconds=result.seconds,
                     samples_per_second=result.samples_per_second,
-                    rays_per_second=result.rays / result.seconds,
-                    query_share=query_seconds / result.seconds,
+                    rays_per_second=result.rays / result.seconds, rays_per_path=result.rays / paths,
+                    query_share=timed.seconds / result.seconds,
                     mean=result.image.mean(axis=(0, 1)))
 
 
@@ -91,7 +81,7 @@ def run_bench(backends: list[str], estimators: list[str], res: int = 512, spp: i
     render_result(loaded, spp=1, res=32, backend=backends[0])
     echo(f"{loaded.summary()}; {res}x{res}, {spp} spp, one process")
     echo(f"{'backend':8} {'estimator':9} {'seconds':>8} {'Msamples/s':>10} {'Mrays/s':>8} "
-         f"{'in queries':>10}  mean RGB")
+         f"{'rays/path':>9} {'in queries':>10}  mean RGB")
     rows = []
     for estimator in estimators:
         for backend in backends:
@@ -99,6 +89,7 @@ def run_bench(backends: list[str], estimators: list[str], res: int = 512, spp: i
             rows.append(row)
             echo(f"{row.backend:8} {row.estimator:9} {row.seconds:8.2f} "
                  f"{row.samples_per_second / 1e6:10.3f} {row.rays_per_second / 1e6:8.2f} "
+                 f"{row.rays_per_path:9.2f} "
                  f"{row.query_share:10.0%}  {np.array2string(row.mean, precision=4)}")
     by_key = {(r.backend, r.estimator): r for r in rows}
     for estimator in estimators:

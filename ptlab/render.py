@@ -17,7 +17,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ptlab.accel import make_accelerator, resolve_backend
+from ptlab.accel import Accelerator, make_accelerator, resolve_backend
 from ptlab.camera import generate_rays
 from ptlab.errors import PtlabError
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
@@ -143,17 +143,20 @@ def render_tile_pass(scene: Scene, accel, tile: Tile, width: int, height: int, s
 def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
                   rr: float | str = "throughput", max_depth: int = 100,
-                  tile_size: int = 128, progress=None) -> RenderResult:
+                  tile_size: int = 128, progress=None,
+                  accel: Accelerator | None = None) -> RenderResult:
     """Render and return the image with its statistics (see ``render``).
 
     ``progress``, if given, is called with the fraction done after every batch.
+    ``accel``, if given, is a ray-query structure already built for ``scene``'s triangles
+    (``backend`` is then ignored).
     """
     if isinstance(scene, str):
         scene = load_scene(scene)
     width, height = parse_resolution(res)
     rr = check_settings(spp, seed, sampling, rr, max_depth, integrator)
     try:
-        backend = resolve_backend(backend)
+        backend = accel.name if accel is not None else resolve_backend(backend)
     except ValueError as error:
         raise PtlabError(str(error)) from None
     scene = scene.with_sampling(sampling)
@@ -161,7 +164,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     keep_freed_memory()
 
     start = time.perf_counter()
-    accel = make_accelerator(scene.triangles, backend)
+    if accel is None:
+        accel = make_accelerator(scene.triangles, backend)
     tiles = make_tiles(width, height, tile_size)
     spp_per_pass = max(1, min(spp, BATCH_PATHS // (tile_size * tile_size)))
     passes = [min(spp_per_pass, spp - s) for s in range(0, spp, spp_per_pass)]

@@ -117,7 +117,7 @@ class Scene:
 
     def with_sampling(self, sampling: str) -> Scene:
         """This scene with every diffuse material sampling directions by ``sampling``."""
-        materials = [Diffuse(m.albedo, sampling, m.emission) if isinstance(m, Diffuse) else m
+        materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m
                      for m in self.materials]
         return Scene(self.triangles, self.material_ids, materials, self.camera, self.name,
                      self.material_names)

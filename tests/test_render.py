@@ -144,3 +144,33 @@ def test_render_accepts_a_scene_name_and_a_resolution_string():
 def test_absurd_settings_raise_a_clear_error(cornell, kwargs):
     with pytest.raises(ptlab.errors.PtlabError):
         ptlab.render(cornell, **{"spp": 1, "res": 8, **kwargs})
+
+
+class BrokenDiffuse(ptlab.materials.Diffuse):
+    """A diffuse material whose value is infinite or NaN for some directions."""
+
+    def batch_key(self):
+        return id(self)
+
+    @classmethod
+    def stack(cls, materials):
+        return materials[0]
+
+    def take(self, index):
+        return self
+
+    def eval(self, wo, wi, n):
+        f = np.array(super().eval(wo, wi, n))
+        cos = (wi * n).sum(axis=1)
+        f[cos < 0.2] = np.nan
+        f[(cos > 0.2) & (cos < 0.3)] = np.inf
+        return f
+
+
+def test_nan_from_a_material_never_reaches_the_image(cornell):
+    broken = [BrokenDiffuse(m.albedo, emission=m.emission) for m in cornell.materials]
+    scene = ptlab.Scene(cornell.triangles, cornell.material_ids, broken, cornell.camera)
+    image = ptlab.render(scene, spp=4, res=24)
+    assert np.isfinite(image).all()
+    # The finite contributions survive: the light and the lit walls still show.
+    assert image.max() > 10 and image.mean() > 0.1

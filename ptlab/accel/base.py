@@ -44,6 +44,8 @@ class Hits:
 class Accelerator(Protocol):
     """Answers ray queries against a fixed set of triangles (see module docstring)."""
 
+    name: str   # the backend's name, e.g. "embree"
+
     def intersect(self, origins: np.ndarray, dirs: np.ndarray,
                   tmin: float | np.ndarray = 0.0,
                   tmax: float | np.ndarray = np.inf) -> Hits:

@@ -106,10 +106,16 @@ def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> No
     """film[pixel[k]] += radiance[k] for every k, in float64.
 
     ``np.bincount`` with weights sums repeated pixels correctly and is about 5x faster
-    than ``np.add.at``.
+    than ``np.add.at``. A NaN or infinite contribution (a material's bug, a pdf of 0) is
+    dropped rather than poisoning its pixel for good; it is checked on the per-pixel sums,
+    which are far fewer than the contributions, so the common case costs nothing extra.
     """
-    for c in range(3):
-        film[:, c] += np.bincount(pixel, weights=radiance[:, c], minlength=len(film))
+    sums = np.stack([np.bincount(pixel, weights=radiance[:, c], minlength=len(film))
+                     for c in range(3)], axis=1)
+    if not np.isfinite(sums).all():
+        finite = np.isfinite(radiance).all(axis=1)
+        return add_to_film(film, pixel[finite], radiance[finite])
+    film += sums
 
 
 def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:

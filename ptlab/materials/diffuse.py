@@ -14,6 +14,7 @@ Two samplings (``sampling=``):
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -40,6 +41,14 @@ class Diffuse(Material):
         self.albedo = np.asarray(albedo, dtype=np.float64)
         self.sampling = sampling
         self.emission = None if emission is None else np.asarray(emission, dtype=np.float64)
+
+    def with_sampling(self, sampling: str) -> Diffuse:
+        """A copy of this material (of the same class) that samples by ``sampling``."""
+        if sampling not in SAMPLINGS:
+            raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
+        twin = copy.copy(self)
+        twin.sampling = sampling
+        return twin
 
     def __repr__(self) -> str:
         return f"Diffuse(albedo={self.albedo.tolist()}, sampling={self.sampling!r})"
