@@ -27,7 +27,9 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(..., 3) cross products of (..., 3) vectors."""
     ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
     bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
-    return np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx], axis=-1)
+    # Stacked along a new first axis and moved last: each component stays contiguous.
+    c = np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
+    return np.moveaxis(c, 0, -1)
 
 
 def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
@@ -39,7 +41,8 @@ def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
         dirs: (N, 3) ray directions ``d`` (any length; ``t`` is in units of ``|d|``).
         v0: (N, 3) first vertex of each ray's triangle.
         e1, e2: (N, 3) triangle edges ``v1 - v0`` and ``v2 - v0``.
-        All five may be any shapes that broadcast to a common (..., 3).
+        Any of the five may instead broadcast to (N, 3): e.g. one triangle for all
+        rays as (3,), or (N, K, 3) rays against (N, K, 3) triangles.
 
     Returns:
         t: (N,) ray parameter of the hit point ``o + t * d``, ``inf`` where the ray's
@@ -58,7 +61,7 @@ def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
         qvec = cross(tvec, e1)
         v = dot(dirs, qvec) * inv_det
         t = dot(e2, qvec) * inv_det
-    inside = (u >= 0) & (v >= 0) & (u + v <= 1) & (det != 0)
+        inside = (u >= 0) & (v >= 0) & (u + v <= 1) & (det != 0)
     # Index assignment, not np.where or t[~inside]: ~4x faster for a random-looking mask.
     t[np.nonzero(~inside)] = np.inf
     return t, u, v
