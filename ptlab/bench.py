@@ -2,13 +2,16 @@
 
 It renders the Cornell box with each backend and with two estimators (the homework's,
 uniform hemisphere sampling with Russian roulette 0.8; and ptlab's default, cosine
-sampling with throughput-based roulette), in one process, and prints seconds, camera
-samples per second, rays per second and the share of the time spent inside the ray
-queries (timed around every ``intersect`` / ``occluded`` call).
+sampling with throughput-based roulette), in one process with one thread and with one
+thread per core, and prints seconds, camera samples per second, rays per second, rays per
+path and the share of the threads' time spent inside the ray queries (timed around every
+``intersect`` / ``occluded`` call, divided by wall time x threads). The speed-up of many
+threads over one is measured in the same run.
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass
 
@@ -25,32 +28,34 @@ ESTIMATORS = {
 
 
 class TimedAccelerator:
-    """Wraps an accelerator and adds up the wall time spent in its queries."""
+    """Wraps an accelerator and adds up the time spent in its queries (over all threads)."""
 
     def __init__(self, inner):
         self.inner = inner
         self.name = inner.name
         self.seconds = 0.0
+        self._lock = threading.Lock()
+
+    def _timed(self, query, *args, **kwargs):
+        start = time.perf_counter()
+        try:
+            return query(*args, **kwargs)
+        finally:
+            with self._lock:
+                self.seconds += time.perf_counter() - start
 
     def intersect(self, *args, **kwargs):
-        start = time.perf_counter()
-        try:
-            return self.inner.intersect(*args, **kwargs)
-        finally:
-            self.seconds += time.perf_counter() - start
+        return self._timed(self.inner.intersect, *args, **kwargs)
 
     def occluded(self, *args, **kwargs):
-        start = time.perf_counter()
-        try:
-            return self.inner.occluded(*args, **kwargs)
-        finally:
-            self.seconds += time.perf_counter() - start
+        return self._timed(self.inner.occluded, *args, **kwargs)
 
 
 @dataclass
 class BenchRow:
     backend: str
     estimator: str
+    workers: int
     seconds: float
     samples_per_second: float
     rays_per_second: float
@@ -59,41 +64,50 @@ class BenchRow:
     mean: np.ndarray
 
 
-def bench_one(scene: Scene, backend: str, estimator: str, res: int, spp: int,
+def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int, spp: int,
               seed: int = 0) -> BenchRow:
     """Render once with one backend and estimator and time it (the BVH build is not timed)."""
     timed = TimedAccelerator(make_accelerator(scene.triangles, backend))
-    result = render_result(scene, spp=spp, res=res, seed=seed, accel=timed,
+    result = render_result(scene, spp=spp, res=res, seed=seed, accel=timed, workers=workers,
                            **ESTIMATORS[estimator])
     paths = res * res * spp
-    return BenchRow(backend=backend, estimator=estimator, seconds=result.seconds,
+    return BenchRow(backend=backend, estimator=estimator, workers=workers, seconds=result.seconds,
                     samples_per_second=result.samples_per_second,
                     rays_per_second=result.rays / result.seconds, rays_per_path=result.rays / paths,
-                    query_share=timed.seconds / result.seconds,
+                    query_share=timed.seconds / (result.seconds * workers),
                     mean=result.image.mean(axis=(0, 1)))
 
 
-def run_bench(backends: list[str], estimators: list[str], res: int = 512, spp: int = 16,
-              scene: str = "cornell-box", echo=print) -> list[BenchRow]:
-    """Run every backend x estimator, print a table, and return the rows."""
+def run_bench(backends: list[str], estimators: list[str], workers: list[int], res: int = 512,
+              spp: int = 16, scene: str = "cornell-box", echo=print) -> list[BenchRow]:
+    """Run every backend x estimator x thread count, print a table, and return the rows."""
     loaded = load_scene(scene)
     # A small warm-up render so that imports and first-call costs are not timed.
     render_result(loaded, spp=1, res=32, backend=backends[0])
     echo(f"{loaded.summary()}; {res}x{res}, {spp} spp, one process")
-    echo(f"{'backend':8} {'estimator':9} {'seconds':>8} {'Msamples/s':>10} {'Mrays/s':>8} "
-         f"{'rays/path':>9} {'in queries':>10}  mean RGB")
+    echo(f"{'backend':8} {'estimator':9} {'threads':>7} {'seconds':>8} {'Msamples/s':>10} "
+         f"{'Mrays/s':>8} {'rays/path':>9} {'in queries':>10}  mean RGB")
     rows = []
     for estimator in estimators:
         for backend in backends:
-            row = bench_one(loaded, backend, estimator, res, spp)
-            rows.append(row)
-            echo(f"{row.backend:8} {row.estimator:9} {row.seconds:8.2f} "
-                 f"{row.samples_per_second / 1e6:10.3f} {row.rays_per_second / 1e6:8.2f} "
-                 f"{row.rays_per_path:9.2f} "
-                 f"{row.query_share:10.0%}  {np.array2string(row.mean, precision=4)}")
-    by_key = {(r.backend, r.estimator): r for r in rows}
+            for count in workers:
+                row = bench_one(loaded, backend, estimator, count, res, spp)
+                rows.append(row)
+                echo(f"{row.backend:8} {row.estimator:9} {row.workers:7d} {row.seconds:8.2f} "
+                     f"{row.samples_per_second / 1e6:10.3f} {row.rays_per_second / 1e6:8.2f} "
+                     f"{row.rays_per_path:9.2f} "
+                     f"{row.query_share:10.0%}  {np.array2string(row.mean, precision=4)}")
+    by_key = {(r.backend, r.estimator, r.workers): r for r in rows}
     for estimator in estimators:
-        if ("embree", estimator) in by_key and ("numpy", estimator) in by_key:
-            ratio = by_key["numpy", estimator].seconds / by_key["embree", estimator].seconds
-            echo(f"numpy / embree time, {estimator} estimator: {ratio:.1f}x")
+        for count in workers:
+            if ("embree", estimator, count) in by_key and ("numpy", estimator, count) in by_key:
+                ratio = (by_key["numpy", estimator, count].seconds
+                         / by_key["embree", estimator, count].seconds)
+                echo(f"numpy / embree time, {estimator} estimator, {count} threads: {ratio:.1f}x")
+        for backend in backends:
+            if len(workers) > 1 and (backend, estimator, 1) in by_key:
+                most = max(workers)
+                speedup = (by_key[backend, estimator, 1].seconds
+                           / by_key[backend, estimator, most].seconds)
+                echo(f"speed-up of {most} threads over 1, {backend}, {estimator}: {speedup:.2f}x")
     return rows

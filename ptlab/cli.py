@@ -55,6 +55,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="Russian roulette: survival probability P (the homework's 0.8) "
                              "or 'throughput' (default)")
     render.add_argument("--max-depth", type=int, default=100, help="most bounces per path")
+    render.add_argument("--workers", type=int, default=None,
+                        help="threads rendering tiles at once (default: one per core); "
+                             "the image does not depend on it")
     render.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
     bench = commands.add_parser(
@@ -67,6 +70,8 @@ def build_parser() -> argparse.ArgumentParser:
                        help="backend to measure (repeatable; default both)")
     bench.add_argument("--estimator", action="append", choices=("homework", "default"),
                        help="estimator to measure (repeatable; default both)")
+    bench.add_argument("--workers", action="append", type=int,
+                       help="threads in the one process (repeatable; default 1 and every core)")
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
@@ -85,7 +90,8 @@ def _render(args) -> int:
     try:
         result = render_result(scene, spp=args.spp, res=(width, height), seed=args.seed,
                                backend=args.backend, sampling=args.sampling, rr=args.rr,
-                               max_depth=args.max_depth, progress=progress)
+                               max_depth=args.max_depth, workers=args.workers,
+                               progress=progress)
     finally:
         progress.close()
     metadata = dict(result.settings, seconds=round(result.seconds, 3), version=__version__)
@@ -93,7 +99,8 @@ def _render(args) -> int:
     if not args.quiet:
         print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
               f"{result.samples_per_second / 1e6:.3f} M samples/s "
-              f"({result.settings['backend']}, {args.sampling} sampling, rr {args.rr})")
+              f"({result.settings['backend']}, {args.sampling} sampling, rr {args.rr}, "
+              f"{result.settings['workers']} workers)")
         print(f"wrote {out.resolve()}")
     return 0
 
@@ -118,8 +125,10 @@ def _bench(args) -> int:
     from ptlab.bench import run_bench
     if args.res <= 0 or args.spp <= 0:
         raise PtlabError("--res and --spp must be positive")
+    from ptlab.render import check_workers, default_workers
+    workers = sorted({check_workers(w) for w in args.workers or [1, default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
-              res=args.res, spp=args.spp)
+              workers, res=args.res, spp=args.spp)
     return 0
 
 

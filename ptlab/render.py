@@ -12,7 +12,10 @@ overhead vanishes, small enough to stay in cache-friendly sizes (DESIGN.md).
 
 from __future__ import annotations
 
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
+from contextlib import nullcontext
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -122,6 +125,23 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
     return probability
 
 
+def default_workers() -> int:
+    """The number of cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def check_workers(workers: int | None) -> int:
+    """``None`` -> every core; otherwise a positive integer, checked."""
+    if workers is None:
+        return default_workers()
+    if not isinstance(workers, int | np.integer) or not 1 <= workers <= 1024:
+        raise PtlabError(f"workers {workers!r}: must be an integer from 1 to 1024")
+    return int(workers)
+
+
 def render_tile_pass(scene: Scene, accel, tile: Tile, width: int, height: int, spp: int,
                      seed: int, pass_index: int, settings: PathSettings) -> tuple[np.ndarray, int]:
     """Radiance sums (P, 3) float64 of one tile's pixels over ``spp`` samples, and rays traced."""
@@ -143,7 +163,7 @@ def render_tile_pass(scene: Scene, accel, tile: Tile, width: int, height: int, s
 def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
                   rr: float | str = "throughput", max_depth: int = 100,
-                  tile_size: int = 128, progress=None,
+                  workers: int | None = None, tile_size: int = 128, progress=None,
                   accel: Accelerator | None = None) -> RenderResult:
     """Render and return the image with its statistics (see ``render``).
 
@@ -155,6 +175,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
         scene = load_scene(scene)
     width, height = parse_resolution(res)
     rr = check_settings(spp, seed, sampling, rr, max_depth, integrator)
+    workers = check_workers(workers)
     try:
         backend = accel.name if accel is not None else resolve_backend(backend)
     except ValueError as error:
@@ -169,42 +190,54 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     tiles = make_tiles(width, height, tile_size)
     spp_per_pass = max(1, min(spp, BATCH_PATHS // (tile_size * tile_size)))
     passes = [min(spp_per_pass, spp - s) for s in range(0, spp, spp_per_pass)]
+    jobs = [(pass_index, pass_spp, tile) for pass_index, pass_spp in enumerate(passes)
+            for tile in tiles]
+
+    def run(job: tuple[int, int, Tile]) -> tuple[np.ndarray, int]:
+        pass_index, pass_spp, tile = job
+        return render_tile_pass(scene, accel, tile, width, height, pass_spp, seed,
+                                pass_index, settings)
+
     film = np.zeros((height, width, 3))
     rays = 0
-    done, total = 0, len(passes) * len(tiles)
-    for pass_index, pass_spp in enumerate(passes):
-        for tile in tiles:
-            sums, tile_rays = render_tile_pass(scene, accel, tile, width, height, pass_spp,
-                                               seed, pass_index, settings)
+    # Threads share the scene and the accelerator; Embree and NumPy's array operations
+    # release the GIL, so two threads ran 1.8x faster than one here. Results are added in
+    # job order whatever order they finish in, so the sums (and the image) are the same
+    # for any number of workers.
+    with ThreadPoolExecutor(workers) if workers > 1 else nullcontext() as pool:
+        results = pool.map(run, jobs) if pool is not None else map(run, jobs)
+        for done, ((_, _, tile), (sums, tile_rays)) in enumerate(zip(jobs, results, strict=True)):
             film[tile.y0:tile.y1, tile.x0:tile.x1] += sums.reshape(tile.y1 - tile.y0,
                                                                   tile.x1 - tile.x0, 3)
             rays += tile_rays
-            done += 1
             if progress is not None:
-                progress(done / total)
+                progress((done + 1) / len(jobs))
     image = (film / spp).astype(np.float32)
     seconds = time.perf_counter() - start
     return RenderResult(image=image, spp=spp, seconds=seconds, rays=rays, settings=dict(
         scene=scene.name, spp=spp, seed=seed, backend=backend, integrator=integrator,
-        sampling=sampling, rr=str(rr), max_depth=int(max_depth), width=width, height=height))
+        sampling=sampling, rr=str(rr), max_depth=int(max_depth), width=width, height=height,
+        workers=workers))
 
 
 def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
-           backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
-           rr: float | str = "throughput", max_depth: int = 100) -> np.ndarray:
+           workers: int | None = None, backend: str = "auto", integrator: str = "path",
+           sampling: str = "cosine", rr: float | str = "throughput",
+           max_depth: int = 100) -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
 
     Args:
         scene: a ``Scene``, a built-in scene name (``"cornell-box"``) or a scene file path.
         spp: samples (camera paths) per pixel.
         res: ``N`` for N x N, ``(width, height)`` or ``"WxH"``.
-        seed: the random seed; the same seed gives the same image.
+        seed: the random seed; the same seed gives the same image, whatever ``workers``.
+        workers: threads rendering tiles at once; None for one per core.
         backend: ray queries by ``"embree"``, ``"numpy"`` or ``"auto"`` (embree if it imports).
         integrator: ``"path"``.
         sampling: diffuse sampling, ``"cosine"`` or ``"uniform"`` (the homework's).
         rr: Russian roulette survival probability (the homework's 0.8) or ``"throughput"``.
         max_depth: the most bounces per path.
     """
-    return render_result(scene, spp=spp, res=res, seed=seed, backend=backend,
+    return render_result(scene, spp=spp, res=res, seed=seed, workers=workers, backend=backend,
                          integrator=integrator, sampling=sampling, rr=rr,
                          max_depth=max_depth).image

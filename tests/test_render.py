@@ -174,3 +174,11 @@ def test_nan_from_a_material_never_reaches_the_image(cornell):
     assert np.isfinite(image).all()
     # The finite contributions survive: the light and the lit walls still show.
     assert image.max() > 10 and image.mean() > 0.1
+
+
+def test_image_is_bit_identical_whatever_the_number_of_workers(cornell):
+    # Small tiles and several passes, so that threads really finish out of order.
+    kwargs = dict(spp=5, res=(40, 24), seed=4, tile_size=16)
+    one = render_result(cornell, workers=1, **kwargs)
+    for workers in (2, 3):
+        assert np.array_equal(render_result(cornell, workers=workers, **kwargs).image, one.image)
