@@ -98,3 +98,16 @@ def test_png_is_srgb_encoded(tmp_path):
     assert values[0, 1].tolist() == [5] * 3
     assert values[1, 0].tolist() == [255] * 3
     assert values[1, 1].tolist() == [0] * 3
+
+
+def test_bench_prints_speed_of_both_backends_and_the_thread_speed_up(capsys):
+    assert main(["bench", "--res", "16", "--spp", "1", "--estimator", "homework",
+                 "--workers", "1", "--workers", "2"]) == 0
+    out = capsys.readouterr().out
+    rows = [line.split() for line in out.splitlines()]
+    rows = [r for r in rows if len(r) > 2 and r[0] in ("embree", "numpy") and r[1] == "homework"]
+    assert {(r[0], r[2]) for r in rows} == {("embree", "1"), ("embree", "2"), ("numpy", "1"),
+                                           ("numpy", "2")}
+    for row in rows:
+        assert float(row[4]) > 0 and row[7].endswith("%")     # Msamples/s, share in queries
+    assert "numpy / embree time" in out and "speed-up of 2 threads over 1" in out

@@ -167,6 +167,7 @@ class BrokenDiffuse(ptlab.materials.Diffuse):
         return f
 
 
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
 def test_nan_from_a_material_never_reaches_the_image(cornell):
     broken = [BrokenDiffuse(m.albedo, emission=m.emission) for m in cornell.materials]
     scene = ptlab.Scene(cornell.triangles, cornell.material_ids, broken, cornell.camera)
