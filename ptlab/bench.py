@@ -2,22 +2,19 @@
 
 It renders the Cornell box with each backend and with two estimators (the homework's,
 uniform hemisphere sampling with Russian roulette 0.8; and ptlab's default, cosine
-sampling with throughput-based roulette), in one process with one thread and with one
-thread per core, and prints seconds, camera samples per second, rays per second, rays per
-path and the share of the threads' time spent inside the ray queries (timed around every
-``intersect`` / ``occluded`` call, divided by wall time x threads). The speed-up of many
-threads over one is measured in the same run.
+sampling with throughput-based roulette), with one worker (this process) and with one
+worker process per core, and prints wall seconds, camera samples per second, rays per
+second, rays per path and the share of the workers' time spent inside the ray queries
+(timed around every ``intersect`` / ``occluded`` call, divided by wall time x workers).
+The parallel speed-up over one worker is measured in the same run.
 """
 
 from __future__ import annotations
 
-import threading
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
-from ptlab.accel import make_accelerator
 from ptlab.render import render_result
 from ptlab.scene import Scene, load_scene
 
@@ -25,30 +22,6 @@ ESTIMATORS = {
     "homework": dict(sampling="uniform", rr=0.8),
     "default": dict(sampling="cosine", rr="throughput"),
 }
-
-
-class TimedAccelerator:
-    """Wraps an accelerator and adds up the time spent in its queries (over all threads)."""
-
-    def __init__(self, inner):
-        self.inner = inner
-        self.name = inner.name
-        self.seconds = 0.0
-        self._lock = threading.Lock()
-
-    def _timed(self, query, *args, **kwargs):
-        start = time.perf_counter()
-        try:
-            return query(*args, **kwargs)
-        finally:
-            with self._lock:
-                self.seconds += time.perf_counter() - start
-
-    def intersect(self, *args, **kwargs):
-        return self._timed(self.inner.intersect, *args, **kwargs)
-
-    def occluded(self, *args, **kwargs):
-        return self._timed(self.inner.occluded, *args, **kwargs)
 
 
 @dataclass
@@ -66,26 +39,25 @@ class BenchRow:
 
 def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int, spp: int,
               seed: int = 0) -> BenchRow:
-    """Render once with one backend and estimator and time it (the BVH build is not timed)."""
-    timed = TimedAccelerator(make_accelerator(scene.triangles, backend))
-    result = render_result(scene, spp=spp, res=res, seed=seed, accel=timed, workers=workers,
+    """Render once and time it: wall time includes starting the worker processes."""
+    result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend, workers=workers,
                            **ESTIMATORS[estimator])
     paths = res * res * spp
     return BenchRow(backend=backend, estimator=estimator, workers=workers, seconds=result.seconds,
                     samples_per_second=result.samples_per_second,
                     rays_per_second=result.rays / result.seconds, rays_per_path=result.rays / paths,
-                    query_share=timed.seconds / (result.seconds * workers),
+                    query_share=result.query_seconds / (result.seconds * workers),
                     mean=result.image.mean(axis=(0, 1)))
 
 
 def run_bench(backends: list[str], estimators: list[str], workers: list[int], res: int = 512,
               spp: int = 16, scene: str = "cornell-box", echo=print) -> list[BenchRow]:
-    """Run every backend x estimator x thread count, print a table, and return the rows."""
+    """Run every backend x estimator x worker count, print a table, and return the rows."""
     loaded = load_scene(scene)
     # A small warm-up render so that imports and first-call costs are not timed.
     render_result(loaded, spp=1, res=32, backend=backends[0])
-    echo(f"{loaded.summary()}; {res}x{res}, {spp} spp, one process")
-    echo(f"{'backend':8} {'estimator':9} {'threads':>7} {'seconds':>8} {'Msamples/s':>10} "
+    echo(f"{loaded.summary()}; {res}x{res}, {spp} spp")
+    echo(f"{'backend':8} {'estimator':9} {'workers':>7} {'seconds':>8} {'Msamples/s':>10} "
          f"{'Mrays/s':>8} {'rays/path':>9} {'in queries':>10}  mean RGB")
     rows = []
     for estimator in estimators:
@@ -103,11 +75,11 @@ def run_bench(backends: list[str], estimators: list[str], workers: list[int], re
             if ("embree", estimator, count) in by_key and ("numpy", estimator, count) in by_key:
                 ratio = (by_key["numpy", estimator, count].seconds
                          / by_key["embree", estimator, count].seconds)
-                echo(f"numpy / embree time, {estimator} estimator, {count} threads: {ratio:.1f}x")
+                echo(f"numpy / embree time, {estimator} estimator, {count} workers: {ratio:.1f}x")
         for backend in backends:
             if len(workers) > 1 and (backend, estimator, 1) in by_key:
                 most = max(workers)
                 speedup = (by_key[backend, estimator, 1].seconds
                            / by_key[backend, estimator, most].seconds)
-                echo(f"speed-up of {most} threads over 1, {backend}, {estimator}: {speedup:.2f}x")
+                echo(f"speed-up of {most} workers over 1, {backend}, {estimator}: {speedup:.2f}x")
     return rows

@@ -10,9 +10,15 @@ User errors (a bad scene, an absurd option) print one line and exit with code 2.
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
+import time
+from pathlib import Path
 
 from ptlab.errors import PtlabError
+from ptlab.progress import ProgressBar
+from ptlab.render import render_result
 
 
 class _Parser(argparse.ArgumentParser):
@@ -56,14 +62,24 @@ def build_parser() -> argparse.ArgumentParser:
                              "or 'throughput' (default)")
     render.add_argument("--max-depth", type=int, default=100, help="most bounces per path")
     render.add_argument("--workers", type=int, default=None,
-                        help="threads rendering tiles at once (default: one per core); "
-                             "the image does not depend on it")
+                        help="processes rendering tiles at once (default: one per core; 1: "
+                             "this process only); the image does not depend on it")
+    render.add_argument("--scheduler", metavar="ADDRESS",
+                        help="render on the Dask cluster whose scheduler is at ADDRESS "
+                             "(needs the dask extra)")
+    render.add_argument("--checkpoint", metavar="FILE",
+                        help="save the render's state to FILE after every pass")
+    render.add_argument("--resume", metavar="FILE",
+                        help="continue the render saved in checkpoint FILE (same options)")
+    render.add_argument("--preview-every", type=float, metavar="SECONDS",
+                        help="after a pass, rewrite the output image if SECONDS have passed")
     render.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
     bench = commands.add_parser(
         "bench", help="measure rendering speed",
-        description="Render the Cornell box in one process with each backend and estimator; "
-                    "print seconds, samples/s, rays/s and the share of time in ray queries.")
+        description="Render the Cornell box with each backend, estimator and worker count; "
+                    "print wall seconds, samples/s, rays/s, the share of time in ray queries "
+                    "and the parallel speed-up.")
     bench.add_argument("--res", type=int, default=512, help="square resolution (default 512)")
     bench.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
     bench.add_argument("--backend", action="append", choices=("embree", "numpy"),
@@ -71,61 +87,127 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--estimator", action="append", choices=("homework", "default"),
                        help="estimator to measure (repeatable; default both)")
     bench.add_argument("--workers", action="append", type=int,
-                       help="threads in the one process (repeatable; default 1 and every core)")
+                       help="worker processes (repeatable; default 1 and one per core)")
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
 
 
 def _render(args) -> int:
-    from ptlab import __version__
-    from ptlab.image import check_output_path, write_image
-    from ptlab.render import parse_resolution, render_result
+    from ptlab.executors import dask_executor
+    from ptlab.image import check_output_path
+    from ptlab.render import BATCH_PATHS
     from ptlab.scene import load_scene
+    from ptlab.settings import check_workers, parse_resolution
 
     scene = load_scene(args.scene)
     width, height = parse_resolution(args.res)
     out = check_output_path(args.out or f"{scene.name}.png")
-    progress = _ProgressLine(args.quiet)
-    try:
-        result = render_result(scene, spp=args.spp, res=(width, height), seed=args.seed,
-                               backend=args.backend, sampling=args.sampling, rr=args.rr,
-                               max_depth=args.max_depth, workers=args.workers,
-                               progress=progress)
-    finally:
-        progress.close()
-    metadata = dict(result.settings, seconds=round(result.seconds, 3), version=__version__)
-    write_image(out, result.image, metadata)
+    checkpoint = args.checkpoint or args.resume
+    if checkpoint is not None and not Path(checkpoint).resolve().parent.is_dir():
+        raise PtlabError(f"{checkpoint}: folder {Path(checkpoint).parent} does not exist")
+    if args.preview_every is not None and args.preview_every < 0:
+        raise PtlabError("--preview-every must be zero or more seconds")
+    workers = check_workers(args.workers)
+    passes = -(-args.spp // max(1, BATCH_PATHS // (128 * 128))) if args.spp > 0 else 1
+    progress = ProgressBar(width * height * max(args.spp, 0), passes, quiet=args.quiet)
+    preview = _Preview(out, args.preview_every, scene.name)
+    options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
+                   sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
+                   workers=workers, checkpoint=checkpoint, resume=args.resume,
+                   progress=progress, on_pass=preview)
+    with _StopOnSignal() as stop:
+        try:
+            if args.scheduler:
+                with dask_executor(args.scheduler) as executor:
+                    result = render_result(scene, executor=executor, stop=stop, **options)
+            else:
+                result = render_result(scene, stop=stop, **options)
+        finally:
+            progress.close()
+    if not result.complete:
+        return _interrupted(result, out, checkpoint, quiet=args.quiet)
+    _write(out, result)
     if not args.quiet:
         print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
               f"{result.samples_per_second / 1e6:.3f} M samples/s "
               f"({result.settings['backend']}, {args.sampling} sampling, rr {args.rr}, "
-              f"{result.settings['workers']} workers)")
+              f"{workers} workers{', dask' if args.scheduler else ''})")
         print(f"wrote {out.resolve()}")
     return 0
 
 
-class _ProgressLine:
-    """A one-line progress display on stderr when it is a terminal; silent otherwise."""
+def _write(out: Path, result) -> None:
+    """Write the image with the render's settings, its spp and whether it is complete."""
+    from ptlab import __version__
+    from ptlab.image import write_image
 
-    def __init__(self, quiet: bool):
-        self.enabled = not quiet and sys.stderr.isatty()
+    metadata = dict(result.settings, seconds=round(result.seconds, 3), version=__version__,
+                    complete=int(result.complete))
+    if result.spp_max != result.spp:
+        metadata["spp_max"] = result.spp_max
+    write_image(out, result.image, metadata)
 
-    def __call__(self, fraction: float) -> None:
-        if self.enabled:
-            sys.stderr.write(f"\rrendering {fraction:6.1%}")
-            sys.stderr.flush()
 
-    def close(self) -> None:
-        if self.enabled:
-            sys.stderr.write("\r" + " " * 20 + "\r")
+def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
+    """Keep what an interrupted render has; exit code 130 (as for Ctrl-C)."""
+    if result.spp_max == 0:
+        print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
+        return 130
+    _write(out, result)
+    spread = f"{result.spp} spp" if result.spp == result.spp_max else (
+        f"{result.spp}-{result.spp_max} spp (tiles differ by a pass)")
+    print(f"ptlab: interrupted: wrote {out.resolve()} with {spread}", file=sys.stderr)
+    if checkpoint is not None:
+        print(f"ptlab: resume with --resume {checkpoint}", file=sys.stderr)
+    return 130
+
+
+class _StopOnSignal:
+    """Turns the first Ctrl-C (SIGINT) or SIGTERM into a polite stop request.
+
+    The render then finishes the jobs in flight and keeps its image; a second Ctrl-C
+    interrupts at once.
+    """
+
+    def __enter__(self):
+        self.requested = threading.Event()
+        self.previous = {}
+        if threading.current_thread() is threading.main_thread():
+            for signum in (signal.SIGINT, signal.SIGTERM):
+                self.previous[signum] = signal.signal(signum, self._handle)
+        return self.requested.is_set
+
+    def _handle(self, signum, frame) -> None:
+        if self.requested.is_set():
+            raise KeyboardInterrupt
+        self.requested.set()
+
+    def __exit__(self, *exc) -> None:
+        for signum, handler in self.previous.items():
+            signal.signal(signum, handler)
+
+
+class _Preview:
+    """After a pass, rewrites the output image if ``every`` seconds have passed."""
+
+    def __init__(self, out: Path, every: float | None, scene_name: str):
+        self.out, self.every = out, every
+        self.last = time.monotonic()
+
+    def __call__(self, film) -> None:
+        if self.every is None or time.monotonic() - self.last < self.every:
+            return
+        from ptlab.image import write_image
+        write_image(self.out, film.image(), dict(spp=film.spp, complete=0, preview=1))
+        self.last = time.monotonic()
 
 
 def _bench(args) -> int:
     from ptlab.bench import run_bench
     if args.res <= 0 or args.spp <= 0:
         raise PtlabError("--res and --spp must be positive")
-    from ptlab.render import check_workers, default_workers
+    from ptlab.settings import check_workers, default_workers
     workers = sorted({check_workers(w) for w in args.workers or [1, default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
               workers, res=args.res, spp=args.spp)

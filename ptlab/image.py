@@ -12,13 +12,12 @@ crash never leaves a half-written image under the final name.
 
 from __future__ import annotations
 
-import os
-import tempfile
 import warnings
 from pathlib import Path
 
 import numpy as np
 
+from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 
 FORMATS = (".exr", ".png")
@@ -71,13 +70,8 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
         spec.attribute("oiio:ColorSpace", "sRGB")
     for key, value in (metadata or {}).items():
         spec.attribute(f"ptlab:{key}", value if isinstance(value, int | float) else str(value))
-    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix,
-                                             dir=path.parent)
-    os.close(descriptor)
-    umask = os.umask(0)
-    os.umask(umask)
-    os.chmod(temporary, 0o666 & ~umask)  # mkstemp makes it private; give it normal permissions
-    try:
+
+    def write(temporary: str) -> None:
         out = oiio.ImageOutput.create(temporary)
         if out is None or not out.open(temporary, spec):
             raise PtlabError(f"{path}: cannot write image: {oiio.geterror()}")
@@ -85,11 +79,8 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
         out.close()
         if not ok:
             raise PtlabError(f"{path}: cannot write image: {out.geterror()}")
-        os.replace(temporary, path)
-    finally:
-        if os.path.exists(temporary):
-            os.remove(temporary)
-    return path
+
+    return write_atomically(path, write)
 
 
 def read_image(path: str | Path) -> tuple[np.ndarray, dict]:

@@ -100,7 +100,7 @@ def test_png_is_srgb_encoded(tmp_path):
     assert values[1, 1].tolist() == [0] * 3
 
 
-def test_bench_prints_speed_of_both_backends_and_the_thread_speed_up(capsys):
+def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     assert main(["bench", "--res", "16", "--spp", "1", "--estimator", "homework",
                  "--workers", "1", "--workers", "2"]) == 0
     out = capsys.readouterr().out
@@ -110,4 +110,4 @@ def test_bench_prints_speed_of_both_backends_and_the_thread_speed_up(capsys):
                                            ("numpy", "2")}
     for row in rows:
         assert float(row[4]) > 0 and row[7].endswith("%")     # Msamples/s, share in queries
-    assert "numpy / embree time" in out and "speed-up of 2 threads over 1" in out
+    assert "numpy / embree time" in out and "speed-up of 2 workers over 1" in out

@@ -1,0 +1,76 @@
+"""Checkpoints: a render's film saved to disk, so that it can be resumed.
+
+A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums, the samples taken
+per tile and the render's settings. Resuming adds the missing passes in the same order an
+uninterrupted render would, so the finished image is bit-identical to one. Settings that
+change the image (scene, resolution, seed, estimator, tiles, backend) must match; a
+resume that asks for more samples per pixel than the checkpoint's render simply goes on.
+
+Files are written atomically (a temporary file, then a rename).
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.atomic import write_atomically
+from ptlab.errors import PtlabError
+from ptlab.film import Film
+
+FORMAT_VERSION = 1
+
+
+def scene_digest(scene) -> str:
+    """A fingerprint of the scene's geometry, materials and camera."""
+    digest = hashlib.sha256()
+    for array in (scene.triangles, scene.material_ids, scene.camera.position,
+                  scene.camera.forward, scene.camera.up):
+        digest.update(np.ascontiguousarray(array).tobytes())
+    digest.update(repr((scene.camera.fov_y, [repr(m) for m in scene.materials])).encode())
+    return digest.hexdigest()[:16]
+
+
+def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
+    """Write the film and the render's identity to ``path``, atomically."""
+    def write(temporary: str) -> None:
+        with open(temporary, "wb") as out:
+            np.savez(out, sums=film.sums, tile_spp=film.tile_spp, passes_done=film.passes_done,
+                     rays=np.int64(film.rays), query_seconds=np.float64(film.query_seconds),
+                     identity=json.dumps(dict(identity, format=FORMAT_VERSION)))
+
+    write_atomically(path, write)
+
+
+def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
+    """Fill ``film`` from the checkpoint at ``path``, which must match ``identity``."""
+    path = Path(path)
+    if not path.is_file():
+        raise PtlabError(f"{path}: no such checkpoint file")
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            saved = json.loads(str(data["identity"]))
+            arrays = {k: data[k] for k in ("sums", "tile_spp", "passes_done", "rays",
+                                           "query_seconds")}
+    except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
+        raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
+    if saved.get("format") != FORMAT_VERSION:
+        raise PtlabError(f"{path}: checkpoint format {saved.get('format')} is not "
+                         f"{FORMAT_VERSION}")
+    for key, value in identity.items():
+        if key != "spp" and saved.get(key) != value:
+            raise PtlabError(f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, "
+                             f"this render has {value!r}")
+    if arrays["sums"].shape != film.sums.shape or len(arrays["tile_spp"]) != len(film.tile_spp):
+        raise PtlabError(f"{path}: the checkpoint's film does not fit this render")
+    if arrays["tile_spp"].max(initial=0) > identity["spp"]:
+        raise PtlabError(f"{path}: the checkpoint already has {arrays['tile_spp'].max()} spp, "
+                         f"more than the {identity['spp']} asked for")
+    film.sums[:] = arrays["sums"]
+    film.tile_spp[:] = arrays["tile_spp"]
+    film.passes_done[:] = arrays["passes_done"]
+    film.rays = int(arrays["rays"])
+    film.query_seconds = float(arrays["query_seconds"])

@@ -1,0 +1,71 @@
+"""The film: per-pixel sums of radiance in float64, and how many samples each tile has.
+
+Jobs finish in any order, but the film adds each tile's passes in pass order (a result
+that arrives early waits in ``pending``), so the float64 sums, and so the image, are the
+same bit for bit whatever the number of workers. Tiles are disjoint, so the order *between*
+tiles does not matter.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ptlab.jobs import JobResult, Tile
+
+
+class Film:
+    """Accumulated radiance of a render in progress.
+
+    Attributes:
+        sums: (H, W, 3) float64 radiance summed over every sample taken so far.
+        tile_spp: (tiles,) samples per pixel taken in each tile.
+        passes_done: (tiles,) passes added for each tile.
+        rays, query_seconds: work done so far (rays traced, seconds inside ray queries).
+    """
+
+    def __init__(self, width: int, height: int, tiles: list[Tile]):
+        self.tiles = tiles
+        self.sums = np.zeros((height, width, 3))
+        self.tile_spp = np.zeros(len(tiles), dtype=np.int64)
+        self.passes_done = np.zeros(len(tiles), dtype=np.int64)
+        self.rays = 0
+        self.query_seconds = 0.0
+        self.pending: dict[tuple[int, int], JobResult] = {}
+
+    def add(self, result: JobResult) -> None:
+        """Add a job's sums once every earlier pass of its tile has been added."""
+        self.pending[result.job.tile.index, result.job.pass_index] = result
+        index = result.job.tile.index
+        while (index, int(self.passes_done[index])) in self.pending:
+            ready = self.pending.pop((index, int(self.passes_done[index])))
+            tile = ready.job.tile
+            self.sums[tile.y0:tile.y1, tile.x0:tile.x1] += ready.sums
+            self.tile_spp[index] += ready.job.spp
+            self.passes_done[index] += 1
+            self.rays += ready.rays
+            self.query_seconds += ready.query_seconds
+
+    @property
+    def samples(self) -> int:
+        """Camera samples (paths) added so far, over the whole image."""
+        return int(sum(int(count) * t.shape[0] * t.shape[1]
+                       for t, count in zip(self.tiles, self.tile_spp, strict=True)))
+
+    @property
+    def spp(self) -> int:
+        """Samples per pixel that every pixel has (the least over tiles)."""
+        return int(self.tile_spp.min()) if len(self.tile_spp) else 0
+
+    @property
+    def spp_max(self) -> int:
+        """Samples per pixel of the tiles that have the most."""
+        return int(self.tile_spp.max()) if len(self.tile_spp) else 0
+
+    def image(self) -> np.ndarray:
+        """(H, W, 3) float32: each pixel's mean radiance (0 where a tile has no sample yet)."""
+        spp = np.zeros(self.sums.shape[:2])
+        for tile, count in zip(self.tiles, self.tile_spp, strict=True):
+            spp[tile.y0:tile.y1, tile.x0:tile.x1] = count
+        with np.errstate(invalid="ignore", divide="ignore"):
+            image = np.where(spp[..., None] > 0, self.sums / spp[..., None], 0.0)
+        return image.astype(np.float32)

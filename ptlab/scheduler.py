@@ -1,0 +1,87 @@
+"""Running a render's jobs: in this process, on a process pool, or on any executor.
+
+Jobs are handed out a few at a time (at most ``2 x workers`` in flight), so memory stays
+bounded whatever the number of samples. A process pool whose worker dies (killed by the
+system, say) is replaced, and the jobs it had not finished run again: every job is
+deterministic, so the image is the same as if nothing had happened.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections import deque
+from collections.abc import Callable, Iterator
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
+from concurrent.futures.process import BrokenProcessPool
+
+from ptlab.accel import Accelerator, make_accelerator
+from ptlab.errors import PtlabError
+from ptlab.executors import process_pool
+from ptlab.jobs import Job, JobResult, RenderSetup, run_job, run_job_in_worker
+
+#: How many times a pool may be replaced after its workers died before giving up.
+MAX_POOL_RESTARTS = 3
+
+#: How often (seconds) a waiting main process checks whether it was asked to stop.
+POLL_SECONDS = 0.1
+
+
+def run_jobs(jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None,
+             accel: Accelerator | None, stop: Callable[[], bool]) -> Iterator[JobResult]:
+    """Yield each job's result as it finishes (in any order) until done or ``stop()``."""
+    if executor is not None:
+        yield from _run_on_executor(
+            jobs, lambda job: executor.submit(run_job_in_worker, setup, job),
+            window=2 * workers, stop=stop)
+    elif workers == 1:
+        accel = accel if accel is not None else make_accelerator(setup.scene.triangles,
+                                                                 setup.backend)
+        for job in jobs:
+            if stop():
+                return
+            yield run_job(setup, job, accel)
+    else:
+        yield from _run_on_process_pool(jobs, setup, workers, stop)
+
+
+def _run_on_executor(jobs: list[Job], submit: Callable[[Job], Future], window: int,
+                     stop: Callable[[], bool]) -> Iterator[JobResult]:
+    pending, in_flight = deque(jobs), {}
+    try:
+        while pending or in_flight:
+            if stop():
+                return
+            while pending and len(in_flight) < window:
+                job = pending.popleft()
+                in_flight[submit(job)] = job
+            done, _ = wait(in_flight, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
+            for future in done:
+                del in_flight[future]
+                yield future.result()
+    finally:
+        for future in in_flight:
+            future.cancel()
+
+
+def _run_on_process_pool(jobs: list[Job], setup: RenderSetup, workers: int,
+                         stop: Callable[[], bool]) -> Iterator[JobResult]:
+    remaining = list(jobs)
+    for restart in range(MAX_POOL_RESTARTS + 1):
+        finished: set[Job] = set()
+        pool = process_pool(workers, setup)
+        try:
+            for result in _run_on_executor(
+                    remaining, lambda job, pool=pool: pool.submit(run_job_in_worker, setup.token, job),
+                    window=2 * workers, stop=stop):
+                finished.add(result.job)
+                yield result
+            return
+        except BrokenProcessPool:
+            remaining = [job for job in remaining if job not in finished]
+            if restart == MAX_POOL_RESTARTS:
+                raise PtlabError(f"worker processes died {MAX_POOL_RESTARTS + 1} times "
+                                 "(out of memory?); giving up") from None
+            warnings.warn(f"a worker process died; starting new workers for the "
+                          f"{len(remaining)} unfinished jobs", RuntimeWarning, stacklevel=2)
+        finally:
+            pool.shutdown(wait=True, cancel_futures=True)

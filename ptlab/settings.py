@@ -1,0 +1,87 @@
+"""Checking render options: every absurd value becomes one clear ``PtlabError``."""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from ptlab.errors import PtlabError
+from ptlab.materials.diffuse import SAMPLINGS
+
+INTEGRATORS = ("path",)
+MAX_SPP = 1 << 20
+MAX_PIXELS = 1 << 28
+MAX_WORKERS = 1024
+
+
+def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
+    """``512``, ``(640, 480)`` or ``"640x480"`` -> (width, height), checked."""
+    if isinstance(res, str):
+        try:
+            numbers = [int(p) for p in res.lower().split("x")]
+        except ValueError:
+            raise PtlabError(f"resolution {res!r}: expected N or WxH, e.g. 512 or 640x480") from None
+        res = numbers[0] if len(numbers) == 1 else tuple(numbers)
+    if isinstance(res, int | np.integer):
+        res = (int(res), int(res))
+    if len(res) != 2 or not all(isinstance(r, int | np.integer) for r in res):
+        raise PtlabError(f"resolution {res!r}: expected N or (width, height)")
+    width, height = int(res[0]), int(res[1])
+    if width <= 0 or height <= 0:
+        raise PtlabError(f"resolution {width}x{height}: width and height must be positive")
+    if width * height > MAX_PIXELS:
+        raise PtlabError(f"resolution {width}x{height}: more than {MAX_PIXELS} pixels")
+    return width, height
+
+
+def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
+                   integrator: str) -> float | str:
+    """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
+    if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
+        raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
+    if not _is_int(seed) or seed < 0:
+        raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
+    if sampling not in SAMPLINGS:
+        raise PtlabError(f"sampling {sampling!r}: choose one of {', '.join(SAMPLINGS)}")
+    if not _is_int(max_depth) or max_depth < 0:
+        raise PtlabError(f"max depth {max_depth!r}: must be a non-negative integer")
+    if integrator not in INTEGRATORS:
+        raise PtlabError(f"integrator {integrator!r}: choose one of {', '.join(INTEGRATORS)}")
+    if rr == "throughput":
+        return rr
+    try:
+        probability = float(rr)
+    except (TypeError, ValueError):
+        raise PtlabError(f"russian roulette {rr!r}: give 'throughput' or a probability") from None
+    if not 0 < probability <= 1:
+        raise PtlabError(f"russian roulette {rr!r}: the survival probability must be in (0, 1]")
+    return probability
+
+
+def default_workers() -> int:
+    """The number of cores this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # not on Linux
+        return os.cpu_count() or 1
+
+
+def check_workers(workers: int | None) -> int:
+    """``None`` -> every core; otherwise a positive integer, checked."""
+    if workers is None:
+        return default_workers()
+    if not _is_int(workers) or not 1 <= workers <= MAX_WORKERS:
+        raise PtlabError(f"workers {workers!r}: must be an integer from 1 to {MAX_WORKERS}")
+    return int(workers)
+
+
+def check_tile_size(tile_size: int) -> int:
+    """A tile edge in pixels, from 8 to 4096."""
+    if not _is_int(tile_size) or not 8 <= tile_size <= 4096:
+        raise PtlabError(f"tile size {tile_size!r}: must be an integer from 8 to 4096")
+    return int(tile_size)
+
+
+def _is_int(value) -> bool:
+    return isinstance(value, int | np.integer) and not isinstance(value, bool)

@@ -1,0 +1,188 @@
+"""Parallel, progressive, resumable rendering: the image never depends on how it was made.
+
+Every test compares bit for bit (``np.array_equal``) against the same render made in one
+process without interruption.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from concurrent.futures import ThreadPoolExecutor
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import ptlab
+from ptlab.image import read_image
+from ptlab.materials import Diffuse
+from ptlab.render import render_result
+
+# Small tiles and several passes: many jobs, finishing out of order.
+SMALL = dict(spp=6, res=(48, 40), seed=11, tile_size=16, spp_per_pass=2)
+
+
+@pytest.fixture(scope="module")
+def reference(cornell):
+    return render_result(cornell, workers=1, **SMALL)
+
+
+@pytest.mark.parametrize("workers", [2, 3])
+def test_process_pool_gives_the_same_image(cornell, reference, workers):
+    result = render_result(cornell, workers=workers, **SMALL)
+    assert result.complete and result.spp == 6
+    assert np.array_equal(result.image, reference.image)
+    assert result.rays == reference.rays
+
+
+def test_any_executor_gives_the_same_image(cornell, reference):
+    with ThreadPoolExecutor(3) as pool:
+        result = render_result(cornell, executor=pool, **SMALL)
+    assert np.array_equal(result.image, reference.image)
+
+
+def test_dask_cluster_gives_the_same_image(cornell, reference):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+                                  dashboard_address=None) as cluster:
+        with distributed.Client(cluster) as client:
+            result = render_result(cornell, executor=client.get_executor(), **SMALL)
+    assert np.array_equal(result.image, reference.image)
+
+
+class StopAfter:
+    """A ``stop`` callback that asks to stop once ``jobs`` jobs have been added."""
+
+    def __init__(self, jobs: int):
+        self.jobs, self.seen = jobs, 0
+
+    def progress(self, film) -> None:
+        self.seen += 1
+
+    def __call__(self) -> bool:
+        return self.seen >= self.jobs
+
+
+@pytest.mark.parametrize("workers", [1, 2])
+def test_stop_keeps_whole_passes_per_tile_and_resume_finishes_identically(
+        cornell, reference, tmp_path, workers):
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=13)                    # 9 tiles x 3 passes: stop in pass 2
+    partial = render_result(cornell, workers=workers, checkpoint=checkpoint,
+                            progress=stopper.progress, stop=stopper, **SMALL)
+    assert not partial.complete and checkpoint.is_file()
+    assert 0 < partial.spp < partial.spp_max <= 6 and partial.spp % 2 == 0
+    resumed = render_result(cornell, workers=workers, resume=checkpoint, **SMALL)
+    assert resumed.complete and resumed.spp == 6
+    assert np.array_equal(resumed.image, reference.image)
+    assert resumed.samples < reference.samples          # only the missing passes ran
+
+
+def test_resume_refuses_a_checkpoint_of_another_render(cornell, tmp_path):
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=3)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
+                  stop=stopper, **SMALL)
+    with pytest.raises(ptlab.errors.PtlabError, match="seed"):
+        render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, seed=12))
+    (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
+    with pytest.raises(ptlab.errors.PtlabError, match="not a ptlab checkpoint"):
+        render_result(cornell, workers=1, resume=tmp_path / "junk.npz", **SMALL)
+
+
+class DieOnceDiffuse(Diffuse):
+    """A diffuse material that kills the process shading it, once per marker file.
+
+    Stands in for a worker the system kills (out of memory, say) in the middle of a job.
+    """
+
+    def __init__(self, albedo, marker: str):
+        super().__init__(albedo)
+        self.marker = marker
+
+    def batch_key(self):
+        return "die-once"
+
+    @classmethod
+    def stack(cls, materials):
+        return materials[0]
+
+    def take(self, index):
+        return self
+
+    def sample_weight(self, wo, n, u):
+        if not os.path.exists(self.marker):
+            Path(self.marker).touch()
+            os.kill(os.getpid(), signal.SIGKILL)
+        return super().sample_weight(wo, n, u)
+
+
+def test_a_killed_worker_has_its_jobs_run_again(cornell, tmp_path):
+    materials = list(cornell.materials)
+    white = cornell.material_names.index("white")
+    marker = str(tmp_path / "died")
+    scene = ptlab.Scene(cornell.triangles, cornell.material_ids, materials, cornell.camera)
+    scene.materials[white] = DieOnceDiffuse(cornell.materials[white].albedo, marker)
+    scene = ptlab.Scene(scene.triangles, scene.material_ids, scene.materials, scene.camera)
+    Path(marker).touch()
+    expected = render_result(scene, workers=1, **SMALL).image
+    os.remove(marker)
+    with pytest.warns(RuntimeWarning, match="worker process died"):
+        result = render_result(scene, workers=2, **SMALL)
+    assert os.path.exists(marker)                   # a worker really died
+    assert np.array_equal(result.image, expected)
+
+
+def run_cli(args: list[str], cwd: Path) -> subprocess.Popen:
+    """`ptlab render ARGS` in a new process (so that signals reach only it)."""
+    env = dict(os.environ, PYTHONWARNINGS="ignore")
+    return subprocess.Popen([sys.executable, "-m", "ptlab.cli", "render", *args], cwd=cwd, env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+
+
+def wait_for(path: Path, process: subprocess.Popen, seconds: float = 60) -> None:
+    deadline = time.monotonic() + seconds
+    while not path.exists():
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, f"{path} never appeared"
+        time.sleep(0.02)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(
+        tmp_path, signum):
+    options = ["cornell-box", "--res", "128", "--spp", "256", "--seed", "5", "--workers", "2"]
+    process = run_cli([*options, "--out", "partial.exr", "--checkpoint", "state.npz"], tmp_path)
+    wait_for(tmp_path / "state.npz", process)       # the first pass is done
+    process.send_signal(signum)
+    _, err = process.communicate(timeout=60)
+    assert process.returncode == 130, err
+    assert "interrupted" in err and "Traceback" not in err
+    partial, metadata = read_image(tmp_path / "partial.exr")
+    assert metadata["complete"] == 0 and 16 <= metadata["spp"] < 256
+    assert np.isfinite(partial).all() and partial.mean() > 0.1
+
+    resumed = run_cli([*options, "--out", "final.exr", "--resume", "state.npz"], tmp_path)
+    out, err = resumed.communicate(timeout=120)
+    assert resumed.returncode == 0, err
+    final, metadata = read_image(tmp_path / "final.exr")
+    assert metadata["spp"] == 256 and metadata["complete"] == 1
+    expected = ptlab.render("cornell-box", spp=256, res=128, seed=5, workers=1)
+    assert np.array_equal(final, expected)
+
+
+def test_preview_rewrites_the_output_after_a_pass(cornell, tmp_path):
+    from ptlab.cli import _Preview
+    out = tmp_path / "preview.exr"
+    previews = []
+
+    def on_pass(film):
+        _Preview(out, 0.0, "cornell")(film)
+        previews.append(read_image(out)[1]["spp"])
+
+    render_result(cornell, workers=1, on_pass=on_pass, **SMALL)
+    assert previews == [2, 4, 6]
