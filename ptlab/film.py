@@ -62,10 +62,13 @@ class Film:
         return int(self.tile_spp.max()) if len(self.tile_spp) else 0
 
     def image(self) -> np.ndarray:
-        """(H, W, 3) float32: each pixel's mean radiance (0 where a tile has no sample yet)."""
-        spp = np.zeros(self.sums.shape[:2])
+        """(H, W, 3) float32: each pixel's mean radiance (0 where a tile has no sample yet).
+
+        Computed tile by tile, so it needs no float64 temporary the size of the image.
+        """
+        image = np.zeros(self.sums.shape, dtype=np.float32)
         for tile, count in zip(self.tiles, self.tile_spp, strict=True):
-            spp[tile.y0:tile.y1, tile.x0:tile.x1] = count
-        with np.errstate(invalid="ignore", divide="ignore"):
-            image = np.where(spp[..., None] > 0, self.sums / spp[..., None], 0.0)
-        return image.astype(np.float32)
+            if count > 0:
+                rows, columns = slice(tile.y0, tile.y1), slice(tile.x0, tile.x1)
+                image[rows, columns] = self.sums[rows, columns] / count
+        return image
