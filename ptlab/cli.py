@@ -87,7 +87,8 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--estimator", action="append", choices=("homework", "default"),
                        help="estimator to measure (repeatable; default both)")
     bench.add_argument("--workers", action="append", type=int,
-                       help="worker processes (repeatable; default 1 and one per core)")
+                       help="worker processes (repeatable; default one per core); one "
+                            "worker is always measured too, as the baseline of the speed-up")
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
@@ -208,7 +209,8 @@ def _bench(args) -> int:
     if args.res <= 0 or args.spp <= 0:
         raise PtlabError("--res and --spp must be positive")
     from ptlab.settings import check_workers, default_workers
-    workers = sorted({check_workers(w) for w in args.workers or [1, default_workers()]})
+    # One worker always runs too: the speed-up is measured against it, in the same run.
+    workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
               workers, res=args.res, spp=args.spp)
     return 0
