@@ -109,7 +109,8 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x,
                                   pixel_y, rng.random((len(pixel), 2), dtype=np.float32))
     paths = Paths(origins=origins, dirs=dirs,
-                  throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"), pixel=pixel)
+                  throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"), pixel=pixel,
+                  sees_emission=np.ones(len(pixel), dtype=bool))
     film = np.zeros((n_pixels, 3))
     timed = TimedAccelerator(accel)
     rays = trace_paths(film, setup.scene, timed, paths, rng, setup.settings)

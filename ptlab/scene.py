@@ -38,9 +38,17 @@ import numpy as np
 from ptlab.camera import Camera
 from ptlab.errors import SceneError
 from ptlab.lights import AreaLights
-from ptlab.materials import Diffuse, Material
+from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
 
 SCENE_FILE_NAME = "scene.toml"
+
+#: The keys each material type takes in a scene file (besides ``type`` and ``emission``).
+MATERIAL_KEYS = {
+    "diffuse": {"albedo"},
+    "microfacet": {"f0", "roughness", "alpha", "kd", "ks", "sampling"},
+    "mirror": {"reflectance", "fresnel"},
+    "dielectric": {"eta", "transmittance"},
+}
 
 #: Rays start this fraction of a triangle's largest coordinate off it (see ``Scene``).
 OFFSET_SCALE = 1e-4
@@ -295,28 +303,84 @@ class _SceneReader:
         if not isinstance(spec, dict):
             raise self.error(key, "must be a table")
         kind = spec.get("type")
+        known = ", ".join(MATERIAL_KEYS)
         if kind is None:
-            raise self.error(f"{key}.type", "missing (known types: diffuse)")
-        if kind != "diffuse":
-            raise self.error(f"{key}.type", f"unknown material type {kind!r} (known types: diffuse)")
-        self.check_keys(spec, key, {"type", "albedo", "emission"})
-        albedo = self.colour(spec, key, "albedo", default=0.8, upper=1.0)
+            raise self.error(f"{key}.type", f"missing (known types: {known})")
+        if kind not in MATERIAL_KEYS:
+            raise self.error(f"{key}.type", f"unknown material type {kind!r} (known types: {known})")
+        self.check_keys(spec, key, {"type", "emission"} | MATERIAL_KEYS[kind])
         emission = self.colour(spec, key, "emission", default=0.0, upper=None)
-        return Diffuse(albedo=albedo, emission=emission if emission.max() > 0 else None)
+        try:
+            material = self.build_material(kind, key, spec)
+        except ValueError as error:
+            raise self.error(key, str(error)) from None
+        material.emission = emission if emission.max() > 0 else None
+        return material
+
+    def build_material(self, kind: str, key: str, spec: dict) -> Material:
+        """The material of one ``[materials.NAME]`` table (its keys already checked)."""
+        if kind == "diffuse":
+            return Diffuse(albedo=self.colour(spec, key, "albedo", default=0.8, upper=1.0))
+        if kind == "mirror":
+            return Mirror(reflectance=self.colour(spec, key, "reflectance", 1.0, upper=1.0),
+                          fresnel=self.flag(spec, key, "fresnel", default=False))
+        if kind == "dielectric":
+            return Dielectric(eta=self.number(spec, key, "eta", default=1.5),
+                              transmittance=self.colour(spec, key, "transmittance", 1.0, 1.0))
+        f0 = spec.get("f0", "gold")
+        if not isinstance(f0, str):
+            f0 = self.colour(spec, key, "f0", default=None, upper=1.0)
+        options = {name: self.number(spec, key, name) for name in ("roughness", "alpha")
+                   if name in spec}
+        sampling = spec.get("sampling", "vndf")
+        if not isinstance(sampling, str):
+            raise self.error(f"{key}.sampling", f"must be a string, got {sampling!r}")
+        return Microfacet(f0=f0, kd=self.colour(spec, key, "kd", 0.0, upper=1.0),
+                          ks=self.colour(spec, key, "ks", 1.0, upper=1.0), sampling=sampling,
+                          **options)
+
+    def flag(self, table: dict, key: str, name: str, default: bool) -> bool:
+        value = table.get(name, default)
+        if not isinstance(value, bool):
+            raise self.error(f"{key}.{name}", f"must be true or false, got {value!r}")
+        return value
 
     def mesh(self, key: str, spec: dict, material_names: list[str]) -> tuple[np.ndarray, int]:
-        self.check_keys(spec, key, {"file", "material"})
-        for name in ("file", "material"):
-            if not isinstance(spec.get(name), str):
-                raise self.error(f"{key}.{name}", "missing, or not a string")
+        self.check_keys(spec, key, {"file", "sphere", "material"})
+        if not isinstance(spec.get("material"), str):
+            raise self.error(f"{key}.material", "missing, or not a string")
         if spec["material"] not in material_names:
             raise self.error(f"{key}.material", f"no material named {spec['material']!r} "
                                                 f"(defined: {', '.join(material_names)})")
-        mesh_path = self.path.parent / spec["file"]
-        if not mesh_path.is_file():
-            raise self.error(f"{key}.file", f"mesh file not found: {mesh_path}")
-        triangles = read_mesh_triangles(mesh_path, f"{self.path}: {key}.file")
+        if ("file" in spec) == ("sphere" in spec):
+            raise self.error(key, "give exactly one of `file` and `sphere`")
+        if "sphere" in spec:
+            triangles = self.sphere(f"{key}.sphere", spec["sphere"])
+        else:
+            if not isinstance(spec["file"], str):
+                raise self.error(f"{key}.file", "must be a string")
+            mesh_path = self.path.parent / spec["file"]
+            if not mesh_path.is_file():
+                raise self.error(f"{key}.file", f"mesh file not found: {mesh_path}")
+            triangles = read_mesh_triangles(mesh_path, f"{self.path}: {key}.file")
         return triangles, material_names.index(spec["material"])
+
+    def sphere(self, key: str, spec: dict) -> np.ndarray:
+        """An icosphere (trimesh) from ``{center = [x, y, z], radius = r, subdivisions = 4}``."""
+        import trimesh
+
+        self.check_keys(spec, key, {"center", "radius", "subdivisions"})
+        center = self.vector(spec, key, "center")
+        radius = self.number(spec, key, "radius")
+        subdivisions = spec.get("subdivisions", 4)
+        if radius <= 0:
+            raise self.error(f"{key}.radius", f"must be positive, got {radius}")
+        if not isinstance(subdivisions, int) or isinstance(subdivisions, bool) or not (
+                0 <= subdivisions <= 7):
+            raise self.error(f"{key}.subdivisions", f"must be an integer from 0 to 7, "
+                                                    f"got {subdivisions!r}")
+        mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
+        return mesh.vertices[mesh.faces] + center
 
 
 def read_mesh_triangles(path: Path, where: str | None = None) -> np.ndarray:

@@ -10,6 +10,11 @@ The homework's ``castRay(ray)``, per path (GAMES101 lecture 16):
    f_r cos(theta) / pdf, and trace the next ray. Light reached by that ray's *emission*
    is not added again: step 2 already counted it (no double counting).
 
+Mirrors and glass (``Material.is_delta``) reflect into one exact direction, which a
+sampled light point never hits: they get no step 2, and the emission seen right after
+them is added instead (pbrt-v4's ``specularBounce``). A camera ray is treated the same way,
+which is why the light itself is not black.
+
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
 (compaction, scatter-adding into the film) live in the small helpers below it.
@@ -54,6 +59,7 @@ class Paths:
     dirs: np.ndarray         # (N, 3) float32 unit
     throughput: np.ndarray   # (N, 3) float32, product of f cos / pdf so far
     pixel: np.ndarray        # (N,) intp, the film row each path adds its radiance to
+    sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
 
 
 @dataclass
@@ -68,7 +74,9 @@ class SurfaceHit:
     offset: np.ndarray       # (N,) float32: how far new rays start off the surface
     throughput: np.ndarray   # (N, 3) float32
     pixel: np.ndarray        # (N,) intp
+    sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
     materials: list          # [(rows, material)]: who shades which rows (``material_groups``)
+    delta: np.ndarray        # (N,) bool: the material here is a mirror or glass
 
 
 def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
@@ -90,7 +98,7 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         hit = surface_hit(scene, paths, hits)            # drops the paths that missed
         if len(hit.prim) == 0:
             break
-        if depth == 0:
+        if hit.sees_emission.any():
             add_emission(film, scene, hit)               # the fix for the black light
         if depth == settings.max_depth:
             break
@@ -133,14 +141,23 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
     n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
+    materials = material_groups(scene, prim)
+    delta = np.zeros(len(prim), dtype=bool)
+    for rows, material in materials:
+        if material.is_delta:
+            delta[slice(None) if rows is None else rows] = True
     return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
                       throughput=take_rows(paths.throughput, alive),
-                      pixel=paths.pixel.take(alive), materials=material_groups(scene, prim))
+                      pixel=paths.pixel.take(alive), sees_emission=paths.sees_emission.take(alive),
+                      materials=materials, delta=delta)
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit) -> None:
-    """Add Le of the surfaces the paths see (lights emit from their front face only)."""
-    emitted = take_rows(scene.emission, hit.prim) * hit.front[:, None]
+    """Add Le of the surfaces the paths see, for the paths that count it.
+
+    Lights emit from their front face only.
+    """
+    emitted = take_rows(scene.emission, hit.prim) * (hit.front & hit.sees_emission)[:, None]
     add_to_film(film, hit.pixel, hit.throughput * emitted)
 
 
@@ -158,8 +175,9 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     cos_theta = dot(hit.n, wi)
     cos_theta_light = -dot(light.normals, wi)
     # Points that do not face each other exchange no light and need no shadow ray (about
-    # 30% in the Cornell box; Embree costs ~100 ns even for a ray of length 0).
-    facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0))
+    # 30% in the Cornell box; Embree costs ~100 ns even for a ray of length 0). Nor do
+    # mirrors and glass, whose f_r is 0 for any direction but the one they choose.
+    facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
     origin = take_rows(hit.p + hit.offset[:, None] * hit.n, facing)
     target = take_rows(light.points + light.offset * light.normals, facing)
     visible = np.zeros(len(hit.prim), dtype=bool)
@@ -194,7 +212,7 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
 
 def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray) -> Paths:
     """The next rays of the surviving paths: directions sampled from their materials."""
-    wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u)
+    wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
     throughput = hit.throughput * weight
     go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
                                       | (throughput[:, 2] > 0)))
@@ -202,7 +220,8 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray) -
     # Leave the surface on the side the new direction goes to.
     side = np.where(dot(wi, n) >= 0, offset, -offset)
     return Paths(origins=p + side[:, None] * n, dirs=wi,
-                 throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on))
+                 throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on),
+                 sees_emission=hit.delta.take(go_on))
 
 
 def material_groups(scene: Scene, prim: np.ndarray) -> list:
