@@ -2,6 +2,7 @@
 
     ptlab render cornell-box --spp 16 --res 512 --out cornell.exr
     ptlab bench
+    ptlab grade my_material.py:MyMaterial
     ptlab scenes
 
 User errors (a bad scene, an absurd option) print one line and exit with code 2.
@@ -89,6 +90,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--workers", action="append", type=int,
                        help="worker processes (repeatable; default one per core); one "
                             "worker is always measured too, as the baseline of the speed-up")
+
+    from ptlab.grading.cli import add_grade_arguments
+    add_grade_arguments(commands.add_parser(
+        "grade", help="check a material's sample / eval / pdf statistically",
+        description="Load a material class from a Python file and run every check of "
+                    "ptlab.grading on it; exit 0 only if all pass (1 if any fails, 2 if the "
+                    "file cannot be loaded)."))
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
@@ -225,7 +233,9 @@ def _scenes(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
-    handler = {"render": _render, "bench": _bench, "scenes": _scenes}[args.command]
+    from ptlab.grading.cli import run_grade
+    handler = {"render": _render, "bench": _bench, "grade": run_grade,
+               "scenes": _scenes}[args.command]
     try:
         return handler(args)
     except PtlabError as error:
