@@ -30,3 +30,18 @@ def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -
 @pytest.fixture(scope="session")
 def cornell() -> Scene:
     return ptlab.load_scene("cornell-box")
+
+
+def furnace_with(inner, albedo: float = 0.5, emission: float = 0.3) -> Scene:
+    """``closed_box_scene`` with a sphere of material ``inner`` in the middle.
+
+    A lossless mirror or glass object in a uniform radiance field leaves it uniform, so the
+    image must still be Le / (1 - albedo) everywhere.
+    """
+    box = closed_box_scene(albedo, emission)
+    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.6)
+    sphere_triangles = sphere.vertices[sphere.faces] + np.array([0.2, 0.1, 0.4])
+    triangles = np.concatenate([box.triangles, sphere_triangles])
+    material_ids = np.concatenate([box.material_ids, np.ones(len(sphere_triangles), dtype=np.intp)])
+    return Scene(triangles=triangles, material_ids=material_ids,
+                 materials=[box.materials[0], inner], camera=box.camera, name="furnace-with")

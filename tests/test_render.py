@@ -183,3 +183,39 @@ def test_image_is_bit_identical_whatever_the_number_of_workers(cornell):
     one = render_result(cornell, workers=1, **kwargs)
     for workers in (2, 3):
         assert np.array_equal(render_result(cornell, workers=workers, **kwargs).image, one.image)
+
+
+@pytest.mark.parametrize("inner", [ptlab.materials.Mirror(), ptlab.materials.Dielectric(eta=1.5),
+                                   ptlab.materials.Microfacet(f0=[1, 1, 1], roughness=0.3)],
+                         ids=["mirror", "glass", "white-metal"])
+def test_furnace_stays_uniform_around_lossless_objects(inner):
+    # The sphere neither absorbs nor emits: the radiance everywhere stays Le / (1 - albedo).
+    # A wrong delta-material rule (light sampled through a mirror, emission after a mirror
+    # dropped, a missing 1 / eta^2) shows the sphere brighter or darker than the walls.
+    from conftest import furnace_with
+    scene = furnace_with(inner)
+    images = np.array([ptlab.render(scene, seed=s, spp=16, res=24, workers=1)[..., 0]
+                       for s in range(8)])
+    per_pixel = images.mean(axis=0)
+    standard_error = images.std(axis=0, ddof=1).mean() / np.sqrt(len(images))
+    centre = per_pixel[8:16, 8:16].mean()         # the sphere fills the middle of the view
+    assert abs(centre - 0.6) < 4 * standard_error + 0.01, (centre, standard_error)
+    assert abs(per_pixel.mean() - 0.6) < 4 * standard_error + 0.01
+
+
+def test_a_mirror_shows_the_light_it_reflects():
+    # Camera looks straight down at a mirror floor; the only light hangs above, facing down.
+    floor = np.array([[[-5, 0, -5], [5, 0, 5], [5, 0, -5]], [[-5, 0, -5], [-5, 0, 5], [5, 0, 5]]],
+                     dtype=float)
+    lamp = np.array([[[-3, 5, -3], [3, 5, -3], [3, 5, 3]], [[-3, 5, -3], [3, 5, 3], [-3, 5, 3]]],
+                    dtype=float)
+    mirror = ptlab.materials.Mirror(reflectance=[0.5, 0.5, 0.5])
+    light = ptlab.materials.Diffuse([0, 0, 0], emission=[2, 2, 2])
+    camera = ptlab.camera.Camera.look_at((0, 2, 0.01), (0, 0, 0), up=(0, 0, 1), fov_y=30)
+    scene = ptlab.Scene(np.concatenate([floor, lamp]), np.array([0, 0, 1, 1]), [mirror, light],
+                        camera)
+    image = ptlab.render(scene, spp=4, res=16, workers=1)
+    # Every pixel sees the mirror, which shows the lamp's emitting underside at half
+    # strength (reflectance 0.5), exactly and without noise: emission after a delta bounce
+    # counts, and no light sample is wasted on the mirror.
+    np.testing.assert_allclose(image, 1.0, rtol=1e-5)

@@ -135,3 +135,69 @@ def test_degenerate_triangles_are_dropped(scene_dir):
 def test_unknown_scene_name_lists_the_built_in_ones():
     with pytest.raises(SceneError, match="cornell-box"):
         ptlab.load_scene("no-such-scene")
+
+
+MATERIALS = """
+[materials.gold]
+type = "microfacet"
+f0 = "gold"
+roughness = 0.3
+
+[materials.tinted]
+type = "microfacet"
+f0 = [0.9, 0.6, 0.3]
+alpha = 0.1
+kd = [0.2, 0.2, 0.2]
+ks = 0.5
+sampling = "hemisphere"
+
+[materials.mirror]
+type = "mirror"
+reflectance = 0.9
+fresnel = true
+
+[materials.glass]
+type = "dielectric"
+eta = 1.33
+"""
+
+
+def test_every_material_type_and_spheres_load(scene_dir):
+    text = GOOD + MATERIALS + """
+[[mesh]]
+sphere = { center = [0.5, 0.5, 0.5], radius = 0.25, subdivisions = 2 }
+material = "glass"
+"""
+    scene = ptlab.load_scene(write_scene(scene_dir, text))
+    kinds = {name: type(m).__name__ for name, m in zip(scene.material_names, scene.materials,
+                                                       strict=True)}
+    assert kinds == {"grey": "Diffuse", "lamp": "Diffuse", "gold": "Microfacet",
+                     "tinted": "Microfacet", "mirror": "Mirror", "glass": "Dielectric"}
+    tinted = scene.materials[scene.material_names.index("tinted")]
+    assert tinted.alpha == 0.1 and tinted.sampling == "hemisphere"
+    assert scene.materials[scene.material_names.index("gold")].alpha == pytest.approx(0.09)
+    assert scene.triangle_count == 3 + 320                   # icosphere, 2 subdivisions
+    assert np.isfinite(ptlab.render(scene, spp=1, res=8, workers=1)).all()
+
+
+@pytest.mark.parametrize("good, bad, key, problem", [
+    ("roughness = 0.3", "roughness = 0", "materials.gold", "alpha"),
+    ('f0 = "gold"', 'f0 = "unobtainium"', "materials.gold", "unknown metal"),
+    ("eta = 1.33", 'eta = "water"', "materials.glass.eta", "number"),
+    ("fresnel = true", "fresnel = 1", "materials.mirror.fresnel", "true or false"),
+])
+def test_bad_material_values_name_the_material(scene_dir, good, bad, key, problem):
+    with pytest.raises(SceneError) as error:
+        ptlab.load_scene(write_scene(scene_dir, GOOD + MATERIALS.replace(good, bad)))
+    assert key in str(error.value) and problem in str(error.value), str(error.value)
+
+
+def test_a_mesh_needs_a_file_or_a_sphere(scene_dir):
+    text = GOOD + '\n[[mesh]]\nmaterial = "grey"\n'
+    with pytest.raises(SceneError, match=r"mesh\[2\]: give exactly one of `file` and `sphere`"):
+        ptlab.load_scene(write_scene(scene_dir, text))
+
+
+def test_the_microfacet_cornell_box_loads():
+    scene = ptlab.load_scene("cornell-box-microfacet")
+    assert {type(m).__name__ for m in scene.materials} == {"Diffuse", "Microfacet"}
