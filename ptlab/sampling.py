@@ -6,7 +6,10 @@ GAMES101 lecture 15/16):
 * ``uniform_hemisphere``: pdf = 1 / (2 pi) per steradian (the homework's sampler);
 * ``cosine_hemisphere``: pdf = cos(theta) / pi (Malley's method: a uniform disk point
   projected up onto the hemisphere);
-* ``uniform_triangle``: a uniform point on a triangle, as barycentrics.
+* ``uniform_triangle``: a uniform point on a triangle, as barycentrics;
+* ``ggx_visible_normals``: GGX microfacet normals seen from a direction, with density
+  D_wo(h) = G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018; the spherical-cap form of
+  Dupuy and Benyoub 2023).
 
 Hemisphere samples are made around +z ("local" frame) and rotated around a normal with
 ``to_world``. All functions work on whole arrays, keep the input's float dtype and return
@@ -23,7 +26,7 @@ import math
 
 import numpy as np
 
-from ptlab.vectors import vec3
+from ptlab.vectors import dot, normalize, vec3
 
 TWO_PI = 2.0 * math.pi
 
@@ -61,6 +64,37 @@ def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
     return vec3(x * (1.0 + sign * nx * nx * a) + y * b + z * nx,
                 x * (sign * b) + y * (sign + ny * ny * a) + z * ny,
                 x * (-sign * nx) - y * ny + z * nz)
+
+
+def ggx_visible_normals(wo: np.ndarray, n: np.ndarray, alpha, u: np.ndarray) -> np.ndarray:
+    """(N, 3) GGX microfacet normals h visible from ``wo``, density D_wo(h) per steradian.
+
+    D_wo(h) = G1(wo) max(0, wo . h) D(h) / cos(theta_o) is the distribution of the normals
+    that ``wo`` sees (Heitz 2018, "Sampling the GGX Distribution of Visible Normals", eq. 2).
+    Dupuy and Benyoub ("Sampling Visible GGX Normals with Spherical Caps", HPG 2023) draw it
+    in three steps: stretch ``wo`` to the configuration where alpha = 1, in which the visible
+    normals are the half vectors between ``wo`` and a point uniform on the spherical cap
+    z > -wo.z; then unstretch. Done here in world space, so no local frame is needed but
+    the one ``to_world`` builds for the cap.
+
+    Args:
+        wo: (N, 3) unit directions with wo . n > 0 (others give some unit vector).
+        n: (N, 3) unit normals.
+        alpha: GGX roughness, a float or (N,) per row.
+        u: (N, 2) uniforms in [0, 1).
+    """
+    alpha = alpha[:, None] if np.ndim(alpha) == 1 else alpha
+    cos_theta_o = dot(wo, n)
+    wo_std = normalize(alpha * (wo - cos_theta_o[:, None] * n) + cos_theta_o[:, None] * n)
+    wo_std_z = dot(wo_std, n)
+    # A uniform point on the spherical cap z in (-wo_std.z, 1].
+    z = (1.0 - u[:, 0]) * (1.0 + wo_std_z) - wo_std_z
+    sin_theta = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = TWO_PI * u[:, 1]
+    cap = to_world(vec3(sin_theta * np.cos(phi), sin_theta * np.sin(phi), z), n)
+    h_std = cap + wo_std
+    h_std_z = dot(h_std, n)[:, None]
+    return normalize(alpha * (h_std - h_std_z * n) + h_std_z * n)
 
 
 def uniform_triangle(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -36,3 +36,17 @@ def columns(a: np.ndarray) -> np.ndarray:
 def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Row-wise dot product of two (N, 3) arrays -> (N,)."""
     return a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1] + a[:, 2] * b[:, 2]
+
+
+def normalize(v: np.ndarray) -> np.ndarray:
+    """(N, 3) vectors scaled to unit length; rows of length 0 stay 0 (never NaN)."""
+    length = np.sqrt(dot(v, v))
+    return v / np.where(length > 0, length, 1)[:, None]
+
+
+def reflect(w: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(N, 3) mirror image of ``w`` about the unit normal ``n``: 2 (w . n) n - w.
+
+    Both ``w`` and the result point away from the surface (pbrt-v4 section 9.3).
+    """
+    return (2 * dot(w, n))[:, None] * n - w

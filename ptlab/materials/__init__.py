@@ -1,6 +1,9 @@
 """Materials (see ``ptlab.materials.base`` for the interface and its conventions)."""
 
 from ptlab.materials.base import Material
+from ptlab.materials.dielectric import Dielectric
 from ptlab.materials.diffuse import Diffuse
+from ptlab.materials.microfacet import METALS, Microfacet
+from ptlab.materials.mirror import Mirror
 
-__all__ = ["Material", "Diffuse"]
+__all__ = ["Material", "Diffuse", "Microfacet", "Mirror", "Dielectric", "METALS"]

@@ -45,12 +45,16 @@ class Material:
         """(N, 3) unit directions drawn with density ``pdf``; u: (N, 2) in [0, 1)."""
         raise NotImplementedError
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray,
-                      u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """Sample ``wi`` and return it with its Monte Carlo weight f_r cos / pdf.
 
         This is the factor by which a path's throughput is multiplied at a bounce
         (pbrt-v4 ``Sample_f``). Where the pdf is 0 the weight is 0, never NaN.
+
+        ``front``, (N,) bool or None, says where ``wo`` is on the side the surface's
+        geometric normal points to (its outside). Only materials that let light through
+        (``Dielectric``) need it; the others ignore it.
         """
         wi = self.sample(wo, n, u)
         f = self.eval(wo, wi, n)

@@ -71,8 +71,8 @@ class Diffuse(Material):
         warp = uniform_hemisphere if self.sampling == "uniform" else cosine_hemisphere
         return to_world(warp(u.astype(n.dtype, copy=False)), n)
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray,
-                      u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         # Closed forms of f cos / pdf, which the generic version reaches in more steps:
         # cosine sampling: (albedo / pi) cos / (cos / pi) = albedo;
         # uniform sampling: (albedo / pi) cos / (1 / 2 pi) = 2 albedo cos.

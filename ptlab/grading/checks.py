@@ -1,0 +1,674 @@
+"""The checks of a (non-delta) material's ``eval``, ``pdf``, ``sample`` and ``sample_weight``.
+
+Every check is deterministic for a given seed. The statistical ones are tuned to a
+documented false-alarm rate (the chance that a correct material fails), the others are
+exact up to floating point (rate 0). ``check_material`` in ``ptlab.grading`` runs them all.
+
+For each ``wo`` (by default at 0, 45 and 80 degrees from a random normal ``n``), ``measure``
+draws N = 10^6 directions from ``sample``, evaluates ``pdf`` and ``eval`` at them, and
+integrates ``pdf`` and ``eval`` |cos theta_i| over every cell of an equal-area grid on the
+sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
+
+* **chi-square**: the samples' histogram against the expected counts N integral(pdf) per
+  cell, plus one category for failed samples (where ``pdf`` is 0, or ``sample`` gave NaN)
+  expecting N (1 - integral of pdf over the sphere); cells expecting fewer than 5 are
+  pooled. The statistic is computed directly and its p-value is that of ``scipy.stats.chi2.sf``;
+  the Sidak correction over the K wo's fails the check when a p-value is below
+  1 - (1 - 1e-3)^(1/K). False-alarm rate 1e-3.
+* **pdf normalisation**: the integral of ``pdf`` over the sphere equals the fraction of
+  samples that did not fail (so it is 1 for a sampler that never fails, at most 1 always),
+  within 4.1 binomial standard errors (Sidak over the wo's at 1e-4) plus the quadrature's
+  error. False-alarm rate 1e-4.
+* **energy**: the integral of f_r |cos theta_i| (each colour channel) is at most
+  1 + 1e-3 + the quadrature's error. Deterministic (rate 0). Give white parameters
+  (albedo 1, F0 1) to test energy conservation at its limit.
+* **estimator agreement**: the importance-sampled estimate mean(f cos / pdf) over the
+  samples equals the integral of f |cos| computed by the quadrature (a stratified
+  uniform-sphere estimate without noise), within 4.4 standard errors (Sidak over the wo's
+  and channels at 1e-4) plus the quadrature's error. False-alarm rate 1e-4.
+* **sample_weight**: ``sample_weight`` returns the direction ``sample`` returns for the same
+  ``u`` and the weight f cos / pdf (0 where pdf is 0), to a relative 1e-5, on the first
+  10^5 samples of each wo. Deterministic.
+* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-6 on 20 000 random pairs
+  above the surface, grazing ones included. Deterministic.
+* **consistency**: at special directions (grazing, exactly tangent, wi = +-n, wi = +-wo,
+  the mirror direction, below the surface) and edge values of u: nothing NaN or infinite,
+  eval >= 0, pdf >= 0, both 0 below the surface, sample gives unit vectors, sample_weight
+  0 where wo is below. Deterministic. (That pdf > 0 where sample lands is the chi-square's
+  failed-sample category: a sample may fail, as VNDF sampling does, only as often as
+  1 - integral of pdf admits.)
+* **float32**: the renderer passes float32 arrays stored column by column: the results
+  must agree with float64 ones (relative 1e-2) and be finite; a float64 result is a
+  warning (it works, slowly). Deterministic.
+
+All together a correct material fails with probability at most about 1.2e-3 by chance;
+``scripts/false_alarm_rate.py`` measures it over 200 seeds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ptlab.grading.report import Check, verdict
+from ptlab.grading.sphere import SphereGrid, along
+from ptlab.sampling import to_world
+from ptlab.vectors import dot, normalize, vec3
+
+ALPHA_CHI_SQUARE = 1e-3
+ALPHA_NORMALISATION = 1e-4
+ALPHA_ESTIMATOR = 1e-4
+MIN_EXPECTED = 5.0
+ENERGY_SLACK = 1e-3
+RECIPROCITY_RTOL = 1e-6
+SAMPLE_WEIGHT_RTOL = 1e-5
+POINTWISE_ROWS = 100_000
+#: Values above this negative number count as 0: a cosine rounded to -1e-17 is no mistake.
+NEGATIVE_ROUNDING = 1e-12
+#: Quadrature tolerance on the integrals of f |cos|: each region's error at most this times
+#: (its integral + its share of the sphere), so about 2e-4 over the sphere at worst.
+F_TOLERANCE = 1e-4
+
+
+class MaterialError(Exception):
+    """A material's method raised or returned something of the wrong shape."""
+
+
+def call(material, method: str, *arrays: np.ndarray, shapes=None):
+    """``material.<method>(*arrays)``, its result checked against the expected shapes."""
+    try:
+        result = getattr(material, method)(*arrays)
+    except Exception as error:  # a student's bug: reported as a failed check
+        raise MaterialError(f"{method} raised {type(error).__name__}: {error}") from error
+    parts = result if isinstance(result, tuple) else (result,)
+    parts = tuple(np.asarray(p) for p in parts)
+    for part, shape in zip(parts, shapes or (), strict=False):
+        if part.shape != shape:
+            raise MaterialError(f"{method} returned shape {part.shape}, expected {shape}")
+    return parts if isinstance(result, tuple) else parts[0]
+
+
+def batch(v: np.ndarray, rows: int, dtype=np.float64) -> np.ndarray:
+    """(rows, 3) copies of the (3,) vector ``v``, column-major like the renderer's arrays."""
+    return np.asfortranarray(np.broadcast_to(np.asarray(v, dtype=dtype), (rows, 3)))
+
+
+def sidak(alpha: float, tests: int) -> float:
+    """The per-test level that keeps the chance of any false alarm among ``tests`` at ``alpha``."""
+    return 1.0 - (1.0 - alpha) ** (1.0 / tests)
+
+
+def chi2_sf(statistic: float, dof: int) -> float:
+    """P(X >= statistic) for X chi-square with ``dof`` degrees of freedom.
+
+    ``scipy.special.chdtrc`` is the function ``scipy.stats.chi2.sf`` evaluates; calling it
+    directly saves the second that importing ``scipy.stats`` takes.
+    """
+    from scipy.special import chdtrc
+    return float(chdtrc(dof, statistic))
+
+
+def z_two_sided(alpha: float) -> float:
+    """The z with P(|Z| > z) = alpha for a standard normal Z."""
+    from scipy.special import ndtri
+    return float(-ndtri(alpha / 2))
+
+
+def direction_at(n: np.ndarray, degrees: float, azimuth: float) -> np.ndarray:
+    """(3,) the unit vector at ``degrees`` from ``n`` (3,), at ``azimuth`` radians around it."""
+    theta = math.radians(degrees)
+    local = np.array([[math.sin(theta) * math.cos(azimuth), math.sin(theta) * math.sin(azimuth),
+                       math.cos(theta)]])
+    return to_world(local, np.asarray(n, dtype=np.float64)[None, :])[0]
+
+
+# -- measuring one wo ---------------------------------------------------------------------
+
+@dataclass
+class Lobe:
+    """What ``measure`` found for one ``wo``: histogram, integrals, estimates."""
+
+    degrees: float
+    wo: np.ndarray                  # (3,)
+    grid: SphereGrid
+    samples: int
+    observed: np.ndarray            # (cells,) samples with pdf > 0 in each cell
+    failed: int                     # samples with pdf == 0 or non-finite
+    failed_below: int               # ... of which below the surface
+    integrals: np.ndarray           # (cells, 4): integral of pdf, f_rgb |cos| over each cell
+    errors: np.ndarray              # (4,) quadrature error bounds of the totals
+    estimate: np.ndarray            # (3,) mean of f cos / pdf over the samples
+    estimate_sd: np.ndarray         # (3,) standard deviation of f cos / pdf
+    pointwise: dict = field(default_factory=dict)   # sample_weight against f cos / pdf
+
+    @property
+    def pdf_integral(self) -> float:
+        return float(self.integrals[:, 0].sum())
+
+    @property
+    def reflectance(self) -> np.ndarray:
+        """(3,) the integral of f |cos| over the sphere."""
+        return self.integrals[:, 1:].sum(axis=0)
+
+
+def measure(material, grid: SphereGrid, degrees: float, samples: int, rng: np.random.Generator) -> Lobe:
+    """Sample, histogram and integrate one ``wo`` at ``degrees`` from ``grid.n``."""
+    wo = direction_at(grid.n, degrees, rng.uniform(0, 2 * math.pi))
+    wo_batch, n_batch = batch(wo, samples), batch(grid.n, samples)
+    u = rng.random((samples, 2))
+    wi = call(material, "sample", wo_batch, n_batch, u, shapes=[(samples, 3)]).astype(np.float64)
+    pdf = call(material, "pdf", wo_batch, wi, n_batch, shapes=[(samples,)]).astype(np.float64)
+    f = call(material, "eval", wo_batch, wi, n_batch, shapes=[(samples, 3)]).astype(np.float64)
+    with np.errstate(invalid="ignore"):
+        ok = np.isfinite(wi).all(axis=1) & np.isfinite(pdf) & (pdf > 0)
+    cos_theta_i = np.abs(along(wi, grid.n))
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        weight = np.where(ok[:, None], f * (cos_theta_i / np.where(ok, pdf, 1.0))[:, None], 0.0)
+    failed = samples - int(ok.sum())
+    failed_below = int((~ok & (along(wi, grid.n) < 0)).sum())
+
+    def integrand(w: np.ndarray) -> np.ndarray:
+        wo_p, n_p = batch(wo, len(w)), batch(grid.n, len(w))
+        pdf_w = call(material, "pdf", wo_p, w, n_p, shapes=[(len(w),)])
+        f_w = call(material, "eval", wo_p, w, n_p, shapes=[(len(w), 3)])
+        values = np.column_stack([pdf_w, f_w * np.abs(along(w, grid.n))[:, None]])
+        return np.nan_to_num(values, nan=0.0, posinf=0.0, neginf=0.0)
+
+    def tolerance(fine: np.ndarray, area: np.ndarray) -> np.ndarray:
+        tol = np.empty_like(fine)
+        # Expected counts within 0.02 of their standard deviation (+ 0.005 of a sample).
+        tol[:, 0] = (0.02 * np.sqrt(samples * np.maximum(fine[:, 0], 0.0)) + 0.005) / samples
+        tol[:, 1:] = F_TOLERANCE * (np.abs(fine[:, 1:]) + (area / (4 * math.pi))[:, None])
+        return tol
+
+    integrals, errors = grid.integrate(integrand, tolerance)
+    lobe = Lobe(degrees=degrees, wo=wo, grid=grid, samples=samples,
+                observed=grid.histogram(wi[ok]), failed=failed, failed_below=failed_below,
+                integrals=integrals, errors=errors,
+                estimate=weight.mean(axis=0), estimate_sd=weight.std(axis=0))
+    lobe.pointwise = _pointwise(material, wo_batch, n_batch, u, wi, pdf, f, cos_theta_i)
+    return lobe
+
+
+def _pointwise(material, wo, n, u, wi, pdf, f, cos_theta_i) -> dict:
+    """sample_weight on the first rows, next to sample's wi and f cos / pdf there."""
+    k = min(len(u), POINTWISE_ROWS)
+    wi_w, weight = call(material, "sample_weight", wo[:k], n[:k], u[:k], shapes=[(k, 3), (k, 3)])
+    wi_w, weight = wi_w.astype(np.float64), weight.astype(np.float64)
+    # Reference at sample_weight's own direction (equal to sample's when all is well).
+    same = np.isfinite(wi_w).all(axis=1) & (np.abs(wi_w - wi[:k]).max(axis=1) <= 1e-6)
+    pdf_w = np.where(same, pdf[:k], np.nan)
+    f_w = np.where(same[:, None], f[:k], np.nan)
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        ok = np.isfinite(pdf_w) & (pdf_w > 0)
+        reference = np.where(ok[:, None], f_w * (cos_theta_i[:k] / np.where(ok, pdf_w, 1.0))[:, None], 0.0)
+    return dict(same=same, weight=weight, reference=reference, cos_theta_i=cos_theta_i[:k], pdf=pdf_w)
+
+
+# -- chi-square ---------------------------------------------------------------------------
+
+def pooled_chi_square(observed: np.ndarray, expected: np.ndarray,
+                      min_expected: float = MIN_EXPECTED) -> tuple[float, int]:
+    """Pearson's statistic and degrees of freedom after pooling categories expecting < 5.
+
+    Categories expecting nothing and observing nothing are dropped; those expecting fewer
+    than ``min_expected`` are pooled into one, which joins the smallest regular category if
+    it still expects fewer. The sums of ``observed`` and ``expected`` may differ (a pdf that
+    integrates to more than 1): that is part of what is tested.
+    """
+    observed, expected = np.asarray(observed, float), np.asarray(expected, float)
+    keep = (expected > 0) | (observed > 0)
+    small = keep & (expected < min_expected)
+    o, e = list(observed[keep & ~small]), list(expected[keep & ~small])
+    if small.any():
+        pool_o, pool_e = observed[small].sum(), expected[small].sum()
+        if pool_e >= min_expected or not e:
+            o.append(pool_o)
+            e.append(pool_e)
+        else:
+            smallest = int(np.argmin(e))
+            o[smallest] += pool_o
+            e[smallest] += pool_e
+    o, e = np.array(o), np.array(e)
+    if (e <= 0).any():
+        return math.inf, max(len(e) - 1, 1)
+    return float(((o - e) ** 2 / e).sum()), max(len(e) - 1, 1)
+
+
+def chi_square_p(lobe: Lobe) -> tuple[float, int, float]:
+    """The chi-square statistic, dof and p-value of one wo (failed samples a category)."""
+    n = lobe.samples
+    observed = np.append(lobe.observed, lobe.failed)
+    expected = np.append(n * lobe.integrals[:, 0], n * max(0.0, 1.0 - lobe.pdf_integral))
+    statistic, dof = pooled_chi_square(observed, expected)
+    return statistic, dof, chi2_sf(statistic, dof)
+
+
+def check_chi_square(material, lobes: list[Lobe]) -> Check:
+    threshold = sidak(ALPHA_CHI_SQUARE, len(lobes))
+    results = [chi_square_p(lobe) for lobe in lobes]
+    worst = int(np.argmin([p for _, _, p in results]))
+    statistic, dof, p = results[worst]
+    passed = p >= threshold
+    data = dict(lobes=[dict(degrees=lobe.degrees, observed=lobe.observed,
+                            expected=lobe.samples * lobe.integrals[:, 0],
+                            shape=(lobe.grid.n_cos, lobe.grid.n_phi), p=r[2])
+                       for lobe, r in zip(lobes, results, strict=True)])
+    return Check("chi-square", verdict(passed),
+                 f"min p = {p:.3g} (wo {lobes[worst].degrees:g}°: X² = {statistic:.4g}, dof {dof})",
+                 f"p >= {threshold:.2g} (Šidák, 1e-3 over {len(lobes)} wo)",
+                 "" if passed else explain_chi_square(material, lobes, threshold), data=data)
+
+
+#: Mistake models: the samples follow pdf * g(wi) instead of pdf. Each entry: the model's
+#: name and the hint when the samples fit it.
+CANDIDATES = {
+    "constant": "the samples follow the shape of pdf, but pdf is {factor:.3g}x too {size}: a wrong "
+                "constant (1/pi, 1/(2 pi), 1/(4 pi)?)",
+    "cos": "pdf misses a factor cos(theta_i) that the sampling has (the samples are cosine-"
+           "weighted, the pdf is not): pdf is about 2x too small near the normal. Did you use "
+           "1/(2 pi) while sampling cosine-weighted, or forget the cosine in cos(theta)/pi?",
+    "1/cos": "pdf has a factor cos(theta_i) that the sampling lacks: a cosine pdf for uniform "
+             "sampling? (uniform hemisphere sampling has pdf 1/(2 pi))",
+    "jacobian": "pdf is the density of the half vector h, not of wi: it misses the Jacobian "
+                "1 / (4 |wo . h|) of the reflection (pdf(wi) = pdf(h) / (4 |wo . h|))",
+}
+
+
+def explain_chi_square(material, lobes: list[Lobe], threshold: float) -> str:
+    """A hint for a failed chi-square: which mistake the samples' distribution points to.
+
+    In order: most samples failing below the surface (the wrong hemisphere); the samples
+    fitting pdf * g for one of the ``CANDIDATES`` (Pearson's test on the successful samples
+    against pdf * g normalised to their number); more failed samples than pdf admits.
+    """
+    unexplained_failures = []
+    for lobe in lobes:
+        n = lobe.samples
+        expected_failed = n * max(0.0, 1.0 - lobe.pdf_integral)
+        if lobe.failed > expected_failed + 5 * math.sqrt(expected_failed + 1) + 0.001 * n \
+                and lobe.pdf_integral <= 1.01:   # (a pdf too large says nothing of failures)
+            unexplained_failures.append((lobe, expected_failed / n))
+    for lobe, expected in unexplained_failures:
+        if lobe.failed > 0.5 * lobe.samples and lobe.failed_below > 0.9 * lobe.failed:
+            return (f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land below the "
+                    f"surface, where pdf is 0 (expected {expected:.1%}): sample returns directions in the "
+                    "wrong hemisphere (local z not mapped to n, or a flipped sign?)")
+    best, best_p = None, -1.0
+    models = [_candidate_integrals(material, lobe) for lobe in lobes]
+    for name in CANDIDATES:
+        p_min = 1.0
+        for lobe, model in zip(lobes, models, strict=True):
+            m = model[name]
+            successes = lobe.samples - lobe.failed
+            if successes == 0 or not np.isfinite(m).all() or m.sum() <= 0:
+                p_min = 0.0
+                break
+            statistic, dof = pooled_chi_square(lobe.observed, successes * m / m.sum())
+            p_min = min(p_min, chi2_sf(statistic, dof))
+        if p_min > best_p:
+            best, best_p = name, p_min
+    if best_p >= threshold / 10:
+        factor = float(np.mean([lobe.pdf_integral / max(1e-300, 1 - lobe.failed / lobe.samples)
+                                for lobe in lobes]))
+        if best != "constant":
+            return CANDIDATES[best]
+        if abs(factor - 1) > 1e-3:
+            return CANDIDATES[best].format(factor=factor if factor > 1 else 1 / factor,
+                                           size="large" if factor > 1 else "small")
+    if unexplained_failures:
+        lobe, expected = unexplained_failures[0]
+        return (f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land where pdf "
+                f"is 0 "
+                f"(expected {expected:.1%}): pdf returns 0 where sample goes (do pdf's conditions match "
+                "the sampler?)")
+    return ("the samples' histogram does not follow pdf (see --plots): sample and pdf describe "
+            "different distributions (a wrong warp, the pdf of another sampling, a missing Jacobian?)")
+
+
+def _candidate_integrals(material, lobe: Lobe) -> dict[str, np.ndarray]:
+    """(cells,) integrals of pdf * g for each mistake model g."""
+    wo, n = lobe.wo, lobe.grid.n
+
+    def integrand(w: np.ndarray) -> np.ndarray:
+        pdf = call(material, "pdf", batch(wo, len(w)), w, batch(n, len(w)), shapes=[(len(w),)])
+        pdf = np.nan_to_num(pdf.astype(np.float64), nan=0.0, posinf=0.0, neginf=0.0)
+        cos_theta_i = np.maximum(np.abs(along(w, n)), 1e-3)
+        wo_dot_h = np.maximum(np.abs(along(normalize(w + wo), wo)), 1e-3)
+        return np.column_stack([pdf, pdf * cos_theta_i, pdf / cos_theta_i, pdf / (4 * wo_dot_h)])
+
+    def tolerance(fine, area):
+        return (0.05 * np.sqrt(lobe.samples * np.maximum(fine, 0)) + 0.01) / lobe.samples
+
+    integrals, _ = lobe.grid.integrate(integrand, tolerance, max_levels=5)
+    return dict(zip(CANDIDATES, integrals.T, strict=True))
+
+
+# -- normalisation, energy, estimator -----------------------------------------------------
+
+def check_normalisation(lobes: list[Lobe]) -> Check:
+    z = z_two_sided(sidak(ALPHA_NORMALISATION, len(lobes)))
+    worst, worst_ratio, text = None, -1.0, ""
+    for lobe in lobes:
+        success = 1.0 - lobe.failed / lobe.samples
+        allowed = z * math.sqrt(success * (1 - success) / lobe.samples) + 2 * lobe.errors[0] + 1e-6
+        ratio = abs(lobe.pdf_integral - success) / allowed
+        if ratio > worst_ratio:
+            worst, worst_ratio = lobe, ratio
+            text = (f"∫pdf = {lobe.pdf_integral:.5g}, {lobe.failed / lobe.samples:.3%} failed "
+                    f"(wo {lobe.degrees:g}°)")
+    passed = worst_ratio <= 1
+    hint = ""
+    if not passed:
+        integral, success = worst.pdf_integral, 1.0 - worst.failed / worst.samples
+        if integral > 1 + 1e-3:
+            hint = (f"pdf integrates to {integral:.3g} > 1 at wo {worst.degrees:g}°: pdf is too large "
+                    f"(by {integral:.3g}x if by a constant: check its normalisation; a missing Jacobian?)")
+        elif integral < success:
+            hint = (f"pdf integrates to {integral:.3g} but {success:.1%} of the samples succeed: pdf is "
+                    f"about {success / max(integral, 1e-300):.3g}x too small "
+                    "(e.g. 1/(2 pi) where 1/pi belongs)")
+        else:
+            hint = (f"sample fails ({1 - success:.1%}) more often than pdf admits "
+                    f"(1 - ∫pdf = {1 - integral:.1%}): samples land where pdf is 0")
+    return Check("pdf normalisation", verdict(passed), text,
+                 f"|∫pdf - (1 - failed)| <= {z:.1f} σ + quadrature error", hint)
+
+
+def check_energy(lobes: list[Lobe]) -> Check:
+    margins = [lobe.reflectance.max() - 1.0 - ENERGY_SLACK - 2 * lobe.errors[1:].max() for lobe in lobes]
+    worst = lobes[int(np.argmax(margins))]
+    channel = int(np.argmax(worst.reflectance))
+    value = float(worst.reflectance[channel])
+    passed = max(margins) <= 0
+    hint = ""
+    if not passed:
+        hint = (f"∫ f cos = {value:.3g} > 1 at wo {worst.degrees:g}°: the material reflects more light "
+                "than it receives: an albedo or F0 above 1, or a factor missing from f_r")
+        if value / math.pi <= 1 + ENERGY_SLACK:
+            hint += f" (if the albedo is {value / math.pi:.3g}: f_r = albedo without the 1/pi)"
+        elif len(lobes) > 1 and worst.degrees == max(lobe.degrees for lobe in lobes):
+            hint += (" (it grows toward grazing wo: a missing masking term G, or a wrong "
+                     "4 cos cos denominator?)")
+    return Check("energy", verdict(passed),
+                 f"max ∫ f cos = {value:.4f} (wo {worst.degrees:g}°, {'rgb'[channel]})",
+                 f"<= 1 + {ENERGY_SLACK:g} + quadrature error", hint)
+
+
+def check_estimator(lobes: list[Lobe]) -> Check:
+    z = z_two_sided(sidak(ALPHA_ESTIMATOR, 3 * len(lobes)))
+    worst_ratio, worst = -1.0, None
+    for lobe in lobes:
+        reference = lobe.reflectance
+        allowed = (z * lobe.estimate_sd / math.sqrt(lobe.samples) + 2 * lobe.errors[1:]
+                   + 1e-9 * (1 + np.abs(reference)))
+        with np.errstate(invalid="ignore"):
+            ratio = np.abs(lobe.estimate - reference) / allowed
+        ratio = np.where(np.isfinite(ratio), ratio, np.inf)
+        c = int(np.argmax(ratio))
+        if ratio[c] > worst_ratio:
+            worst_ratio, worst = float(ratio[c]), (lobe, c)
+    lobe, c = worst
+    passed = worst_ratio <= 1
+    hint = ""
+    if not passed:
+        estimate, reference = lobe.estimate[c], lobe.reflectance[c]
+        unreached = float(lobe.integrals[lobe.integrals[:, 0] <= 0, 1 + c].sum())
+        if unreached > 0.01 * max(reference, 1e-12):
+            hint = (f"eval is nonzero where pdf is 0 ({unreached / reference:.1%} of ∫ f cos at wo "
+                    f"{lobe.degrees:g}°): sample never goes there, so the estimate misses that light")
+        else:
+            ratio = estimate / reference if reference else math.inf
+            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.4g} but ∫ f cos = "
+                    f"{reference:.4g} at wo {lobe.degrees:g}° (ratio {ratio:.3g}): "
+                    "sample and pdf disagree (see chi-square)")
+    return Check("estimator agreement", verdict(passed),
+                 f"max |IS - ∫| / allowed = {worst_ratio:.3g} (wo {lobe.degrees:g}°, {'rgb'[c]})",
+                 f"<= 1 (allowed {z:.1f} σ + quadrature error)", hint)
+
+
+# -- sample_weight ------------------------------------------------------------------------
+
+def check_sample_weight(lobes: list[Lobe]) -> Check:
+    same = np.concatenate([lobe.pointwise["same"] for lobe in lobes])
+    weight = np.concatenate([lobe.pointwise["weight"] for lobe in lobes])
+    reference = np.concatenate([lobe.pointwise["reference"] for lobe in lobes])
+    cos_theta_i = np.concatenate([lobe.pointwise["cos_theta_i"] for lobe in lobes])
+    rows = len(same)
+    finite = np.isfinite(weight).all(axis=1)
+    scale = np.abs(reference[same]).max(initial=0.0) if same.any() else 0.0
+    with np.errstate(invalid="ignore"):
+        bad = same & ~(np.abs(weight - reference) <= SAMPLE_WEIGHT_RTOL * np.abs(reference)
+                       + 1e-12 * (1 + scale)).all(axis=1)
+    problems = int((~same).sum() + (~finite).sum() + bad.sum())
+    passed = problems == 0
+    hint = ""
+    if not passed:
+        if (~finite).any():
+            hint = (f"sample_weight returns NaN or inf in {(~finite).sum()} rows: where pdf is 0 the weight "
+                    "must be 0")
+        elif (~same).any():
+            hint = (f"sample_weight's direction differs from sample's for the same u in {(~same).sum()} "
+                    "of {rows} rows: it must return the wi that sample returns").replace("{rows}", str(rows))
+        else:
+            hint = _explain_weight(weight[bad], reference[bad], cos_theta_i[bad])
+    return Check("sample_weight", verdict(passed),
+                 f"{problems} of {rows} rows differ from (sample, f cos / pdf)",
+                 f"0 (relative {SAMPLE_WEIGHT_RTOL:g})", hint)
+
+
+def _explain_weight(weight: np.ndarray, reference: np.ndarray, cos_theta_i: np.ndarray) -> str:
+    """Name the factor by which sample_weight's weight differs from f cos / pdf."""
+    w, r = weight.sum(axis=1), reference.sum(axis=1)
+    if ((w > 0) & (r == 0)).mean() > 0.5:
+        return "sample_weight is nonzero where pdf is 0: a failed sample must weigh 0"
+    if ((w == 0) & (r > 0)).mean() > 0.5:
+        return "sample_weight returns 0 where f cos / pdf is positive"
+    both = (w > 0) & (r > 0) & (cos_theta_i > 0)
+    if both.sum() >= 2:
+        log_ratio = np.log(w[both] / r[both])
+        log_cos = np.log(cos_theta_i[both])
+        spreads = {k: np.ptp(log_ratio - k * log_cos) for k in (0, -1, 1)}
+        k = min(spreads, key=spreads.get)
+        if spreads[k] < 1e-3:
+            if k == -1:
+                return ("sample_weight misses the factor cos(theta_i): it returns f / pdf instead of "
+                        "f cos / pdf")
+            if k == 1:
+                return "sample_weight multiplies by cos(theta_i) twice (f cos^2 / pdf)"
+            factor = math.exp(float(np.median(log_ratio)))
+            return f"sample_weight is {factor:.3g}x f cos / pdf (a constant factor: 1/pi or 2 pi somewhere?)"
+    return "sample_weight differs from eval(wo, wi) cos(theta_i) / pdf(wo, wi): it must equal it"
+
+
+# -- reciprocity --------------------------------------------------------------------------
+
+def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) -> Check:
+    n = normalize(rng.normal(size=(rows, 3)))
+    cosines = rng.random((rows, 2))
+    cosines[: rows // 10] = rng.choice([1e-6, 1e-3, 0.01, 1.0], size=(rows // 10, 2))
+    frames = []
+    for k in range(2):
+        phi = rng.uniform(0, 2 * math.pi, rows)
+        sin = np.sqrt(1 - cosines[:, k] ** 2)
+        frames.append(to_world(vec3(sin * np.cos(phi), sin * np.sin(phi), cosines[:, k]), n))
+    wo, wi = frames
+    forward = call(material, "eval", wo, wi, n, shapes=[(rows, 3)]).astype(np.float64)
+    backward = call(material, "eval", wi, wo, n, shapes=[(rows, 3)]).astype(np.float64)
+    finite = np.isfinite(forward).all(axis=1) & np.isfinite(backward).all(axis=1)
+    scale = max(np.abs(forward[finite]).max(initial=0), np.abs(backward[finite]).max(initial=0))
+    larger = np.maximum(np.maximum(np.abs(forward), np.abs(backward)), 1e-12 * (1 + scale))
+    with np.errstate(invalid="ignore"):
+        relative = (np.abs(forward - backward) / larger).max(axis=1)
+    worst = float(relative[finite].max(initial=0.0))
+    passed = bool(finite.all()) and worst <= RECIPROCITY_RTOL
+    hint = ""
+    if not finite.all():
+        hint = "eval returns NaN or inf for directions above the surface (see consistency)"
+    elif not passed:
+        hint = _explain_reciprocity(forward, backward, dot(wo, n), dot(wi, n))
+    return Check("reciprocity", verdict(passed),
+                 f"max |f(wo,wi) - f(wi,wo)| / f = {worst:.2g} ({rows} pairs)",
+                 f"<= {RECIPROCITY_RTOL:g}", hint)
+
+
+def _explain_reciprocity(forward, backward, cos_theta_o, cos_theta_i) -> str:
+    f, b = forward.sum(axis=1), backward.sum(axis=1)
+    both = (f > 0) & (b > 0)
+    if both.sum() >= 2:
+        log_ratio = np.log(f[both] / b[both])
+        log_cos = np.log(cos_theta_i[both] / cos_theta_o[both])
+        for k, text in ((1, "eval includes cos(theta_i), and the renderer multiplies by it again "
+                            "(the cosine counted twice); a microfacet denominator 4 cos(theta_o) "
+                            "without cos(theta_i) does the same"),
+                        (-1, "eval is divided by cos(theta_i) (or multiplied by cos(theta_o)): "
+                             "a cosine missing from the 4 cos(theta_o) cos(theta_i) denominator?")):
+            if np.abs(log_ratio - k * log_cos).max() < 1e-6:
+                return text
+    return ("eval(wo, wi) != eval(wi, wo): a term depends on wo or wi alone (Fresnel at n . wo instead "
+            "of h . wo? G1(wo) instead of G2(wo, wi)?)")
+
+
+# -- consistency --------------------------------------------------------------------------
+
+#: Directions (local frame, +z = n) at which consistency probes eval and pdf, by name.
+def _probe_directions(wo_local: np.ndarray) -> dict[str, np.ndarray]:
+    mirror = np.array([-wo_local[0], -wo_local[1], wo_local[2]])
+    return {"n": np.array([0.0, 0, 1]), "-n": np.array([0.0, 0, -1]),
+            "tangent": np.array([1.0, 0, 0]), "tangent (other)": np.array([0.0, 1, 0]),
+            "1e-8 above": np.array([math.sqrt(1 - 1e-16), 0, 1e-8]),
+            "1e-8 below": np.array([0.0, math.sqrt(1 - 1e-16), -1e-8]),
+            "wo": wo_local, "-wo": -wo_local, "mirror of wo": mirror}
+
+
+_WO_PROBES = {"0°": 0.0, "30°": 30.0, "60°": 60.0, "85°": 85.0, "89.9°": 89.9, "90° (grazing)": 90.0,
+              "95° (below)": 95.0, "180° (below)": 180.0}
+
+
+def check_consistency(material, rng: np.random.Generator) -> Check:
+    """Nothing NaN, eval and pdf >= 0 and 0 below the surface, unit samples, at edge cases."""
+    problems: list[str] = []
+    normals = [np.array([0.0, 0, 1]), np.array([0.0, 0, -1]), normalize(rng.normal(size=(1, 3)))[0]]
+    random_wi = normalize(rng.normal(size=(64, 3)))
+    u_edges = np.array([0.0, 0.5, 1 - 2**-24, 1 - 2**-53])
+    u = np.concatenate([np.array(np.meshgrid(u_edges, u_edges)).reshape(2, -1).T, rng.random((48, 2))])
+    for n in normals:
+        for wo_name, degrees in _WO_PROBES.items():
+            wo_local = np.array([math.sin(math.radians(degrees)), 0.0, math.cos(math.radians(degrees))])
+            if degrees == 90.0:
+                wo_local = np.array([1.0, 0.0, 0.0])
+            probes = _probe_directions(wo_local)
+            names = list(probes) + ["random"] * len(random_wi)
+            local = np.vstack(list(probes.values()))
+            rows = len(names)
+            wi = np.vstack([to_world(local, batch(n, len(local))), random_wi])
+            wo = batch(to_world(wo_local[None, :], n[None, :])[0], rows)
+            nb = batch(n, rows)
+            f = call(material, "eval", wo, wi, nb, shapes=[(rows, 3)]).astype(np.float64)
+            pdf = call(material, "pdf", wo, wi, nb, shapes=[(rows,)]).astype(np.float64)
+            below = (wi @ n < -1e-6) | (wo[0] @ n < -1e-6)
+            for method, values in (("eval", f), ("pdf", pdf[:, None])):
+                _look(problems, method, values, names, wo_name, below)
+            samples = len(u)
+            wo_s, n_s = batch(wo[0], samples), batch(n, samples)
+            wi_s = call(material, "sample", wo_s, n_s, u, shapes=[(samples, 3)]).astype(np.float64)
+            length = np.linalg.norm(wi_s, axis=1)
+            if not np.isfinite(wi_s).all():
+                problems.append(f"sample returns NaN or inf for wo at {wo_name}")
+            elif (np.abs(length - 1) > 1e-6).any():
+                worst = length[np.argmax(np.abs(length - 1))]
+                problems.append(f"sample returns vectors of length {worst:.6g} for wo at {wo_name}: "
+                                "normalise them")
+            else:
+                pdf_s = call(material, "pdf", wo_s, wi_s, n_s, shapes=[(samples,)])
+                if not np.isfinite(pdf_s).all():
+                    problems.append(f"pdf is NaN or inf at a sampled direction for wo at {wo_name}")
+            _, weight = call(material, "sample_weight", wo_s, n_s, u, shapes=[(samples, 3), (samples, 3)])
+            if not np.isfinite(weight).all():
+                problems.append(f"sample_weight returns NaN or inf for wo at {wo_name}")
+            elif (weight < -NEGATIVE_ROUNDING).any():
+                problems.append(f"sample_weight is negative for wo at {wo_name}")
+            elif wo[0] @ n < -1e-6 and (weight != 0).any():
+                problems.append(f"sample_weight is not 0 for wo at {wo_name}: a reflective material "
+                                "scatters nothing from below")
+    unique = list(dict.fromkeys(problems))
+    hint = ""
+    if unique:
+        hint = unique[0] + (f" (and {len(unique) - 1} more problems)" if len(unique) > 1 else "")
+        hint += _consistency_advice(unique[0])
+    return Check("consistency", verdict(not unique), f"{len(unique)} problems",
+                 "0 (grazing, ±n, below, edge u)", hint)
+
+
+def _look(problems: list[str], method: str, values: np.ndarray, names: list[str], wo_name: str,
+          below: np.ndarray) -> None:
+    """Record where ``values`` (rows, K) are non-finite, negative, or nonzero below the surface."""
+    for test, text in ((~np.isfinite(values).all(axis=1), "NaN or inf"),
+                       ((values < -NEGATIVE_ROUNDING).any(axis=1), "negative"),
+                       (below & (values != 0).any(axis=1), "not 0 below the surface")):
+        with np.errstate(invalid="ignore"):
+            hit = np.flatnonzero(test)
+        if len(hit):
+            problems.append(f"{method} is {text} for wo at {wo_name}, wi = {names[hit[0]]}")
+
+
+def _consistency_advice(problem: str) -> str:
+    if "NaN" in problem:
+        return (": NaN at grazing angles or at wi = ±n? Guard divisions by cos(theta) (and "
+                "tan(theta) = sin / cos) with np.where or a clamp")
+    if "below the surface" in problem:
+        return ": a reflective material returns 0 when wo or wi is below the surface (test cos > 0)"
+    if "negative" in problem:
+        return ": BRDF values and densities are never negative (a cosine not clamped at 0?)"
+    return ""
+
+
+# -- float32 ------------------------------------------------------------------------------
+
+def check_float32(material, rng: np.random.Generator, rows: int = 4096) -> Check:
+    """The renderer's float32, column-major arrays give finite results close to float64's."""
+    n = normalize(rng.normal(size=(rows, 3)))
+    cos_o = rng.uniform(0.05, 1.0, rows)
+    phi = rng.uniform(0, 2 * math.pi, rows)
+    sin_o = np.sqrt(1 - cos_o**2)
+    wo = to_world(vec3(sin_o * np.cos(phi), sin_o * np.sin(phi), cos_o), n)
+    wi = normalize(rng.normal(size=(rows, 3)))
+    u = rng.random((rows, 2))
+    single = [np.asfortranarray(a.astype(np.float32)) for a in (wo, wi, n, u)]
+    results = {}
+    for name, arrays in (("float64", (wo, wi, n, u)), ("float32", single)):
+        wo_, wi_, n_, u_ = arrays
+        results[name] = dict(
+            eval=call(material, "eval", wo_, wi_, n_, shapes=[(rows, 3)]),
+            pdf=call(material, "pdf", wo_, wi_, n_, shapes=[(rows,)]),
+            sample=call(material, "sample", wo_, n_, u_, shapes=[(rows, 3)]))
+    worst, where, promoted = 0.0, "", []
+    for method in ("eval", "pdf", "sample"):
+        a64 = np.asarray(results["float64"][method], dtype=np.float64)
+        a32 = results["float32"][method]
+        if a32.dtype != np.float32:
+            promoted.append(method)
+        a32 = a32.astype(np.float64)
+        if not np.isfinite(a32).all():
+            return Check("float32", "FAIL", f"{method} gives NaN or inf for float32 input", "finite",
+                         f"{method} is not finite with float32 arrays (an overflow, or 1 - x*x < 0 "
+                         "from rounding?)")
+        scale = np.abs(a64).max(initial=0) if method != "sample" else 1.0
+        with np.errstate(invalid="ignore", divide="ignore"):
+            error = np.abs(a32 - a64) / (np.abs(a64) + 1e-3 * scale + 1e-30)
+        if method == "sample":
+            error = np.abs(a32 - a64)
+        if np.nanmax(error, initial=0) > worst:
+            worst, where = float(np.nanmax(error)), method
+    if worst > 1e-2:
+        return Check("float32", "FAIL", f"max relative difference {worst:.2g} ({where})", "<= 0.01",
+                     f"{where} with float32 input differs from float64: precision lost to cancellation "
+                     "(e.g. 1 - cos for small angles) or a float32 parameter?")
+    if promoted:
+        return Check("float32", "warn", f"{', '.join(promoted)} return float64 for float32 input",
+                     "float32 in, float32 out",
+                     "a np.float64 scalar or a float64 parameter array promotes the result: convert "
+                     "constants with float() and parameters with .astype(wi.dtype) (slower, still correct)")
+    return Check("float32", "pass", f"max relative difference {worst:.2g}", "<= 0.01, float32 out")

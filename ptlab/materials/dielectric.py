@@ -1,0 +1,150 @@
+"""Smooth glass: a delta material that reflects or refracts by the Fresnel equations.
+
+At a smooth boundary between air (outside, index 1) and glass (inside, index ``eta``) light
+either reflects, wi = reflect(wo, n), or refracts by Snell's law,
+eta_o sin(theta_o) = eta_i sin(theta_i) (pbrt-v4 sections 9.3 and 9.5; GAMES101 lecture 13,
+Whitted ray tracing). The fraction reflected is the exact Fresnel reflectance of unpolarised
+light, ``fresnel_dielectric`` (pbrt-v4 section 9.3 and ``FrDielectric``); from inside beyond the
+critical angle it is 1: total internal reflection.
+
+Like ``Mirror`` this is a delta material (pbrt-v4's convention for specular BxDFs): ``eval``
+and ``pdf`` return 0 and ``sample_weight`` does the work. It picks reflection with
+probability R = fresnel_dielectric(cos_theta_o) using u[:, 0], so the Fresnel factor and the
+choice's probability cancel: a reflected sample weighs 1, a refracted one
+``transmittance / eta_rel^2``.
+
+**The 1 / eta_rel^2 factor.** eta_rel = eta_t / eta_o is the relative index across the
+boundary, eta entering the glass and 1 / eta leaving it. Radiance is squeezed into a smaller
+solid angle as it enters a denser medium, so the BTDF carries 1 / eta_rel^2 when it transports
+radiance (pbrt-v4 section 9.5, ``TransportMode::Radiance``), as ptlab's camera paths do.
+With the camera and the lights both outside the glass, every path enters as often as it
+leaves and the factors cancel; they matter when a light or the camera is inside.
+
+**Which side is outside.** The glass's outside is the side its geometric normal points to.
+``sample`` and ``sample_weight`` take ``front``, (N,) bool, True where ``wo`` is on that
+side (the renderer's ``SurfaceHit.front``); ``n`` may then face either way (the renderer
+turns it toward ``wo``). Without ``front``, ``n`` must be the outward normal and
+``wo . n > 0`` means ``wo`` is outside (pbrt's convention).
+"""
+
+from __future__ import annotations
+
+import copy
+
+import numpy as np
+
+from ptlab.materials.base import Material, dot
+from ptlab.materials.microfacet import channels
+from ptlab.vectors import columns, take_rows
+
+
+def fresnel_dielectric(cos_theta_i: np.ndarray, eta_rel) -> np.ndarray:
+    """(N,) Fresnel reflectance of unpolarised light arriving at ``cos_theta_i`` in [0, 1].
+
+    ``eta_rel`` = eta_t / eta_i, the index beyond the boundary over the index on the side of
+    the light (a float or (N,)); 1 under total internal reflection (pbrt-v4 ``FrDielectric``).
+    """
+    sin2_theta_t = (1.0 - cos_theta_i * cos_theta_i) / (eta_rel * eta_rel)
+    cos_theta_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_theta_t))
+    # 0 / 0 only at grazing incidence under total internal reflection, replaced below.
+    with np.errstate(invalid="ignore"):
+        r_parallel = (eta_rel * cos_theta_i - cos_theta_t) / (eta_rel * cos_theta_i + cos_theta_t)
+        r_perpendicular = (cos_theta_i - eta_rel * cos_theta_t) / (cos_theta_i + eta_rel * cos_theta_t)
+    reflectance = (r_parallel * r_parallel + r_perpendicular * r_perpendicular) / 2.0
+    return np.where(sin2_theta_t >= 1.0, 1.0, reflectance).astype(np.result_type(cos_theta_i), copy=False)
+
+
+def refract(wo: np.ndarray, n: np.ndarray, eta_rel) -> np.ndarray:
+    """(N, 3) refracted directions, for ``n`` facing ``wo`` (unit except under total internal reflection).
+
+    wi = -wo / eta_rel + (cos_theta_o / eta_rel - cos_theta_i) n with
+    cos_theta_i = sqrt(1 - sin^2(theta_o) / eta_rel^2) (pbrt-v4 section 9.3 and ``Refract``).
+    """
+    cos_theta_o = dot(wo, n)
+    sin2_theta_i = (1.0 - cos_theta_o * cos_theta_o) / (eta_rel * eta_rel)
+    cos_theta_i = np.sqrt(np.maximum(0.0, 1.0 - sin2_theta_i))
+    return -wo / _column(eta_rel) + (cos_theta_o / eta_rel - cos_theta_i)[:, None] * n
+
+
+def _column(value):
+    return value[:, None] if np.ndim(value) == 1 else value
+
+
+class Dielectric(Material):
+    """Smooth glass (or water, diamond...): Fresnel reflection and Snell refraction.
+
+    Args:
+        eta: index of refraction inside over outside (default 1.5, glass in air).
+        transmittance: (3,) colour of refracted light, in [0, 1] (default 1: clear).
+    """
+
+    is_delta = True
+
+    def __init__(self, eta: float = 1.5, transmittance=(1.0, 1.0, 1.0)):
+        if not (np.isfinite(eta) and eta > 0):
+            raise ValueError(f"eta must be a positive index of refraction, got {eta!r}")
+        self.eta = float(eta)
+        self.transmittance = np.asarray(transmittance, dtype=np.float64)
+        if (self.transmittance.shape != (3,) or not np.isfinite(self.transmittance).all()
+                or (self.transmittance < 0).any() or (self.transmittance > 1).any()):
+            raise ValueError(f"transmittance must be three numbers in [0, 1], got {transmittance!r}")
+
+    def __repr__(self) -> str:
+        if np.ndim(self.eta) != 0:
+            return f"Dielectric(stacked, {np.size(self.eta)} rows)"
+        return f"Dielectric(eta={self.eta:g}, transmittance={self.transmittance.tolist()})"
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N, 3) zeros: a delta BSDF has no value at directions chosen apart from it."""
+        return np.zeros(wi.shape, dtype=wi.dtype, order="F")
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N,) zeros (see ``eval``)."""
+        return np.zeros(len(wi), dtype=wi.dtype)
+
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+               front: np.ndarray | None = None) -> np.ndarray:
+        """(N, 3) reflected or refracted directions, chosen by Fresnel with u[:, 0]."""
+        return self.sample_weight(wo, n, u, front)[0]
+
+    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(N, 3) directions and (N, 3) weights: 1 reflected, transmittance / eta_rel^2 refracted.
+
+        Args:
+            wo: (N, 3) unit directions toward the viewer.
+            n: (N, 3) unit normals: outward when ``front`` is None, else either way.
+            u: (N, 2) uniforms in [0, 1); only u[:, 0] is used.
+            front: (N,) bool, True where ``wo`` is outside the glass, or None.
+        """
+        cos_theta_o = dot(wo, n)
+        outside = cos_theta_o > 0 if front is None else np.asarray(front, dtype=bool)
+        # Work with the normal on the side of wo.
+        facing = np.where(cos_theta_o >= 0, 1, -1).astype(n.dtype)
+        n = n * facing[:, None]
+        cos_theta_o = np.abs(cos_theta_o)
+        eta = self.eta if np.ndim(self.eta) == 0 else self.eta.astype(n.dtype, copy=False)
+        eta_rel = np.where(outside, eta, 1.0 / eta).astype(n.dtype, copy=False)
+        R = fresnel_dielectric(cos_theta_o, eta_rel)  # noqa: N806 (pbrt's name)
+        reflected = u[:, 0] < R
+        wi = np.where(reflected[:, None], (2 * cos_theta_o)[:, None] * n - wo, refract(wo, n, eta_rel))
+        transmittance = channels(self.transmittance.astype(n.dtype, copy=False))
+        refracted = ~reflected / (eta_rel * eta_rel)
+        weight = reflected.astype(n.dtype) + transmittance * refracted
+        return wi, weight.T
+
+    def batch_key(self) -> object:
+        return "dielectric"
+
+    @classmethod
+    def stack(cls, materials: list[Material]) -> Dielectric:
+        stacked = copy.copy(materials[0])
+        stacked.eta = np.array([m.eta for m in materials], dtype=np.float32)
+        stacked.transmittance = columns(np.stack([m.transmittance for m in materials]).astype(np.float32))
+        return stacked
+
+    def take(self, index: np.ndarray) -> Dielectric:
+        taken = copy.copy(self)
+        taken.eta = take_rows(self.eta, index)
+        taken.transmittance = take_rows(self.transmittance, index)
+        return taken

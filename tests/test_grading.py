@@ -1,0 +1,175 @@
+"""The grading harness: correct materials pass, each classic mistake fails with its hint.
+
+``check_material`` is deterministic for a seed, so these tests cannot flake; they run with
+fewer samples per wo than the default 10^6 to stay fast (weaker tests, same false-alarm
+rates). ``scripts/false_alarm_rate.py`` measures the false-alarm rate over 200 seeds.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+import wrong_materials as wrong
+
+from ptlab.grading import check_material, write_plots
+from ptlab.grading.checks import chi2_sf, pooled_chi_square, z_two_sided
+from ptlab.grading.cli import grade_main
+from ptlab.grading.sphere import SphereGrid
+from ptlab.materials import Diffuse, Microfacet
+
+SAMPLES = 100_000
+WRONG_FILE = str(Path(wrong.__file__))
+
+
+# -- correct materials pass -----------------------------------------------------------------
+
+BUILT_IN = [Diffuse((0.8, 0.5, 0.2)), Diffuse((1, 1, 1), sampling="uniform")] + [
+    Microfacet((1, 1, 1), alpha=alpha, sampling=sampling)
+    for alpha in (0.05, 0.2, 0.5, 1.0) for sampling in ("vndf", "hemisphere")] + [
+    Microfacet("copper", alpha=0.1, kd=(0.4, 0.4, 0.4), ks=0.6),
+    Microfacet("gold", roughness=0.7, kd=(0.5, 0.2, 0.1), ks=0.5, sampling="hemisphere")]
+
+
+@pytest.mark.parametrize("material", BUILT_IN, ids=repr)
+def test_built_in_materials_pass_up_to_85_degrees(material):
+    report = check_material(material, seed=1, samples=SAMPLES, wo_degrees=(0, 45, 85))
+    assert report.passed, str(report)
+
+
+def test_walter_half_vector_sampling_with_its_jacobian_passes():
+    assert check_material(wrong.WalterSampling(), samples=SAMPLES).passed
+
+
+def test_default_run_is_the_issues_and_reproducible():
+    material = Microfacet("gold", roughness=0.5)
+    a = check_material(material, seed=3, samples=20_000)
+    b = check_material(material, seed=3, samples=20_000)
+    assert [c.statistic for c in a.checks] == [c.statistic for c in b.checks]
+    assert {c.name for c in a.checks} == {"consistency", "chi-square", "pdf normalisation", "energy",
+                                          "estimator agreement", "sample_weight", "reciprocity", "float32"}
+    text = str(a)
+    for column in ("check", "statistic", "threshold", "verdict", "hint"):
+        assert column in text.splitlines()[1]
+    assert text.endswith("PASSED")
+
+
+# -- wrong materials fail with the right hint ---------------------------------------------------
+
+MISTAKES = [
+    ("MissingCosineInPdf", "chi-square", "misses a factor cos"),
+    ("MissingCosineInWeight", "sample_weight", "misses the factor cos"),
+    ("CosineTwice", "reciprocity", "cosine counted twice"),
+    ("PdfOffByConstant", "chi-square", "2x too small"),
+    ("PdfOffByConstant", "pdf normalisation", "2x too small"),
+    ("UniformSamplingCosinePdf", "chi-square", "cosine pdf for uniform sampling"),
+    ("CosineSamplingUniformPdf", "chi-square", "1/(2 pi) while sampling cosine-weighted"),
+    ("WrongHemisphere", "chi-square", "wrong hemisphere"),
+    ("NonReciprocal", "reciprocity", "depends on wo or wi alone"),
+    ("AlbedoAboveOne", "energy", "albedo or F0 above 1"),
+    ("MissingOneOverPi", "energy", "without the 1/pi"),
+    ("NanAtGrazing", "consistency", "NaN at grazing angles"),
+    ("HalfVectorPdfWithoutJacobian", "chi-square", "Jacobian 1 / (4 |wo . h|)"),
+    ("MirrorOfIncomingDirection", "directions", "neither the mirror reflection"),
+    ("MirrorWithEval", "consistency", "both return 0"),
+    ("GlassWithoutInversion", "directions", "inside and outside swapped"),
+    ("GlassWeightedByFresnel", "Fresnel weights", "probability F and weigh it 1"),
+]
+
+
+@pytest.fixture(scope="module")
+def reports():
+    """One report per wrong material, shared by the hint tests."""
+    return {name: check_material(getattr(wrong, name)(), samples=SAMPLES)
+            for name in dict.fromkeys(name for name, _, _ in MISTAKES)}
+
+
+@pytest.mark.parametrize("name, check, phrase", MISTAKES, ids=[f"{m[0]}-{m[1]}" for m in MISTAKES])
+def test_wrong_material_fails_with_the_right_hint(reports, name, check, phrase):
+    report = reports[name]
+    assert not report.passed
+    assert report[check].verdict == "FAIL", str(report)
+    assert phrase in report[check].hint, str(report)
+
+
+def test_each_wrong_material_fails_only_where_it_is_wrong(reports):
+    # The checks that a mistake cannot touch stay green: the hints point at one place.
+    assert reports["CosineTwice"].failed == ["reciprocity"]
+    assert reports["NonReciprocal"].failed == ["reciprocity"]
+    assert reports["MissingCosineInWeight"].failed == ["sample_weight"]
+    assert reports["AlbedoAboveOne"].failed == ["energy"]
+    assert reports["NanAtGrazing"].failed == ["consistency"]
+
+
+def test_a_material_that_raises_fails_instead_of_crashing():
+    class Broken(Diffuse):
+        def pdf(self, wo, wi, n):
+            raise ZeroDivisionError("oops")
+
+    report = check_material(Broken(), samples=5000)
+    assert not report.passed
+    assert "pdf raised ZeroDivisionError: oops" in report["chi-square"].hint
+
+
+def test_plots_of_a_failed_chi_square(tmp_path, reports):
+    written = write_plots(reports["UniformSamplingCosinePdf"], tmp_path)
+    assert len(written) == 9 and all(p.suffix == ".png" and p.stat().st_size > 0 for p in written)
+    assert write_plots(check_material(Diffuse(), samples=5000), tmp_path / "none") == []
+
+
+# -- pieces -------------------------------------------------------------------------------------
+
+def test_chi_square_p_value_is_scipys_and_pooling_keeps_totals():
+    stats = pytest.importorskip("scipy.stats")
+    assert chi2_sf(4200.0, 4095) == pytest.approx(stats.chi2.sf(4200.0, 4095), rel=1e-12)
+    assert z_two_sided(0.05) == pytest.approx(1.959964, abs=1e-6)
+    # Three small cells (expected 1, 2, 1) pool into one of 4, which joins the smallest regular one.
+    statistic, dof = pooled_chi_square([3, 10, 10, 0, 1, 2], [1, 10, 10, 0, 2, 1])
+    assert (statistic, dof) == (pytest.approx(2**2 / 14), 1)
+    statistic, dof = pooled_chi_square([0, 20, 20], [0, 10, 30])
+    assert (statistic, dof) == (pytest.approx(100 / 10 + 100 / 30), 1)
+
+
+def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_functions():
+    grid = SphereGrid(np.array([0.3, -0.4, 0.866]) / np.linalg.norm([0.3, -0.4, 0.866]), 16, 32)
+    totals, errors = grid.integrate(lambda w: np.column_stack([np.ones(len(w)), w[:, 0] ** 2]),
+                                    lambda fine, area: 1e-12 + 0 * fine)
+    np.testing.assert_allclose(totals[:, 0], 4 * math.pi / grid.cells, rtol=1e-12)
+    assert totals[:, 1].sum() == pytest.approx(4 * math.pi / 3, rel=1e-10)
+    rng = np.random.default_rng(0)
+    w = rng.normal(size=(10_000, 3))
+    w /= np.linalg.norm(w, axis=1, keepdims=True)
+    assert grid.histogram(w).sum() == 10_000
+
+
+# -- the command ------------------------------------------------------------------------------
+
+def test_grade_exit_codes(tmp_path, capsys):
+    assert grade_main([f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
+    assert "PASSED" in capsys.readouterr().out
+    assert grade_main([f"{WRONG_FILE}:PdfOffByConstant", "--samples", "20000",
+                       "--plots", str(tmp_path / "plots")]) == 1
+    out = capsys.readouterr().out
+    assert "FAILED" in out and "2x too small" in out
+    assert len(list((tmp_path / "plots").glob("*.png"))) == 9
+    assert grade_main([f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}', "--samples", "20000"]) == 0
+
+
+@pytest.mark.parametrize("target, args, message", [
+    ("missing.py:Material", "{}", "no such file"),
+    ("{wrong}:NoSuchClass", "{}", "no class or object named"),
+    ("{wrong}:WalterSampling", "{not json", "not valid JSON"),
+    ("{wrong}:WalterSampling", '{"colour": 1}', "raised TypeError"),
+    ("{wrong}:ALBEDO", "{}", "is not a material"),
+    ("{wrong}", "{}", "expected FILE.py:Name"),
+    ("{syntax}:Anything", "{}", "syntax error"),
+])
+def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, args, message):
+    syntax = tmp_path / "broken.py"
+    syntax.write_text("def f(:\n")
+    target = target.format(wrong=WRONG_FILE, syntax=syntax)
+    assert grade_main([target, "--args", args]) == 2
+    err = capsys.readouterr().err
+    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
