@@ -114,11 +114,11 @@ class DieOnceDiffuse(Diffuse):
     def take(self, index):
         return self
 
-    def sample_weight(self, wo, n, u):
+    def sample_weight(self, wo, n, u, front=None):
         if not os.path.exists(self.marker):
             Path(self.marker).touch()
             os.kill(os.getpid(), signal.SIGKILL)
-        return super().sample_weight(wo, n, u)
+        return super().sample_weight(wo, n, u, front)
 
 
 def test_a_killed_worker_has_its_jobs_run_again(cornell, tmp_path):
