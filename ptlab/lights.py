@@ -53,7 +53,9 @@ class AreaLights:
         double_area = np.linalg.norm(cross, axis=1)
         self.areas = 0.5 * double_area
         self.total_area = float(self.areas.sum())
-        self.cdf = np.cumsum(self.areas) / self.total_area
+        # float32 like the renderer's random numbers: a search with mixed types converts
+        # every u to float64 first (2x slower).
+        self.cdf = (np.cumsum(self.areas) / self.total_area).astype(np.float32)
         self.v0 = v0.astype(np.float32)
         self.e1 = (v1 - v0).astype(np.float32)
         self.e2 = (v2 - v0).astype(np.float32)
@@ -74,9 +76,17 @@ class AreaLights:
 
     def sample(self, u: np.ndarray) -> LightSample:
         """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""
-        # A triangle with probability area / total_area (inverse-CDF lookup).
-        index = np.searchsorted(self.cdf, u[:, 0], side="right")
-        np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
+        # A triangle with probability area / total_area (inverse-CDF lookup): the number of
+        # cdf entries at or below u. For a handful of lights (the Cornell box has two)
+        # counting them pass by pass is ~10x faster than a binary search.
+        u0 = u[:, 0]
+        if len(self.cdf) <= 16:
+            index = np.zeros(len(u0), dtype=np.intp)
+            for edge in self.cdf[:-1]:
+                index += u0 >= edge
+        else:
+            index = np.searchsorted(self.cdf, u0, side="right")
+            np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
         b1, b2 = uniform_triangle(u[:, 1:3])
         data = self._packed.take(index, axis=1)     # (16, N): rows are contiguous
         # Transposed slices are (N, 3) arrays in the column-major layout of ptlab.vectors.

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy import stats
 
 from ptlab.lights import AreaLights
@@ -36,3 +37,18 @@ def test_triangles_are_chosen_in_proportion_to_their_area():
     # Points are uniform on their triangle: the centroid is the mean.
     np.testing.assert_allclose(sample.points[on_big].mean(axis=0), [16 / 3, 1, 0], atol=0.02)
     np.testing.assert_allclose(sample.points[~on_big].mean(axis=0), [1 / 3, 1 / 3, 0], atol=0.01)
+
+
+@pytest.mark.parametrize("count", [5, 40])      # few lights: counting; many: binary search
+def test_many_lights_are_chosen_in_proportion_to_their_area(count):
+    rng = np.random.default_rng(count)
+    sizes = rng.uniform(0.5, 3.0, count)
+    v0 = np.c_[np.arange(count) * 10.0, np.zeros(count), np.zeros(count)]
+    v1, v2 = v0 + np.c_[sizes, 0 * sizes, 0 * sizes], v0 + np.c_[0 * sizes, sizes, 0 * sizes]
+    radiance = np.repeat(np.arange(count, dtype=float)[:, None], 3, axis=1)
+    lights = AreaLights(v0, v1, v2, radiance=radiance, offset=np.zeros(count))
+    sample = lights.sample(rng.random((N, 3)).astype(np.float32))
+    counts = np.bincount(sample.radiance[:, 0].astype(int), minlength=count)
+    expected = N * lights.areas / lights.total_area
+    statistic = ((counts - expected) ** 2 / expected).sum()
+    assert stats.chi2.sf(statistic, df=count - 1) > 1e-3     # false-alarm rate 0.1%
