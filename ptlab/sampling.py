@@ -6,6 +6,9 @@ GAMES101 lecture 15/16):
 * ``uniform_hemisphere``: pdf = 1 / (2 pi) per steradian (the homework's sampler);
 * ``cosine_hemisphere``: pdf = cos(theta) / pi (Malley's method: a uniform disk point
   projected up onto the hemisphere);
+* ``uniform_sphere``: pdf = 1 / (4 pi);
+* ``uniform_hemisphere_around`` / ``cosine_hemisphere_around``: the same two hemisphere
+  densities around any normal, without a local frame (faster: no frame to build);
 * ``uniform_triangle``: a uniform point on a triangle, as barycentrics;
 * ``ggx_visible_normals``: GGX microfacet normals seen from a direction, with density
   D_wo(h) = G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018; the spherical-cap form of
@@ -46,6 +49,38 @@ def cosine_hemisphere(u: np.ndarray) -> np.ndarray:
     # 1 - u can round to exactly 0 only for u = 1, which random() never returns.
     cos_theta = np.sqrt(1.0 - u[:, 0])
     return vec3(r * np.cos(phi), r * np.sin(phi), cos_theta)
+
+
+def uniform_sphere(u: np.ndarray) -> np.ndarray:
+    """(N, 2) uniforms -> (N, 3) unit vectors uniform on the sphere, pdf 1 / (4 pi)."""
+    z = 1.0 - 2.0 * u[:, 0]
+    r = np.sqrt(np.maximum(0.0, 1.0 - z * z))
+    phi = TWO_PI * u[:, 1]
+    return vec3(r * np.cos(phi), r * np.sin(phi), z)
+
+
+def uniform_hemisphere_around(n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """(N, 3) unit vectors uniform on the hemisphere around unit normals ``n``, pdf 1 / (2 pi).
+
+    The same distribution as ``to_world(uniform_hemisphere(u), n)`` without building a frame:
+    a uniform direction on the sphere, mirrored to n's side when it falls below.
+    """
+    d = uniform_sphere(u)
+    return d * np.where(dot(d, n) < 0, -1, 1).astype(d.dtype)[:, None]
+
+
+def cosine_hemisphere_around(n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """(N, 3) unit vectors around unit normals ``n`` with pdf cos(theta) / pi.
+
+    The same distribution as ``to_world(cosine_hemisphere(u), n)`` without building a
+    frame: the direction to a uniform point on the unit sphere that touches the surface at
+    the shading point (centre n). That sphere's area element is 4 cos(theta) times the solid
+    angle it subtends, so uniform area gives density 4 cos(theta) / (4 pi) (Lambert's
+    sphere; as in Shirley's "Ray Tracing in One Weekend"). The factor 1 + 1e-6 keeps the
+    sum away from zero when the sphere point lands exactly opposite n.
+    """
+    d = n * (1.0 + 1e-6) + uniform_sphere(u)
+    return d / np.sqrt(dot(d, d))[:, None]
 
 
 def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:

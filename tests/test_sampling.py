@@ -61,3 +61,24 @@ def test_streams_are_reproducible_and_distinct():
     assert np.array_equal(a, stream(0, 3, 1).random(4))
     for other in (stream(1, 3, 1), stream(0, 4, 1), stream(0, 3, 2)):
         assert not np.array_equal(a, other.random(4))
+
+
+def test_sampling_around_a_normal_matches_the_local_frame_warps(u):
+    from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around
+    rng = np.random.default_rng(3)
+    n = rng.normal(size=(N, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    for around, expected_mean in ((uniform_hemisphere_around, 1 / 2),
+                                  (cosine_hemisphere_around, 2 / 3)):
+        w = around(n, u)
+        np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-12)
+        cos = (w * n).sum(axis=1)
+        assert (cos >= 0).all()
+        assert cos.mean() == pytest.approx(expected_mean, abs=5 * 0.3 / np.sqrt(N))
+        # The distribution of cos(theta) itself: CDF P(cos < c) = c (uniform), c^2 (cosine).
+        for c in (0.25, 0.5, 0.75):
+            cdf = c if around is uniform_hemisphere_around else c * c
+            assert (cos < c).mean() == pytest.approx(cdf, abs=5 * 0.5 / np.sqrt(N))
+        # Around the normal, the azimuth is uniform: no preferred tangent direction.
+        tangent = np.cross(n, [0.0, 0.0, 1.0])
+        assert abs((w * tangent).sum(axis=1).mean()) < 5 * 0.5 / np.sqrt(N)
