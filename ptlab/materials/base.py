@@ -15,11 +15,13 @@ points *toward* the surface, as its first argument: its ``wi`` is our ``-wo``.)
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ptlab.vectors import dot
 
-__all__ = ["Material", "dot"]
+__all__ = ["DeltaMaterial", "Material", "dot"]
 
 
 class Material:
@@ -32,6 +34,8 @@ class Material:
 
     emission: np.ndarray | None = None
     is_delta: bool = False
+    #: The sampling strategies a subclass offers (its ``sampling`` attribute picks one).
+    samplings: tuple[str, ...] = ()
 
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         """(N, 3) BSDF value f_r(wo, wi), cosine not included."""
@@ -64,6 +68,15 @@ class Material:
         scale = np.where(ok, cos_theta_i / np.where(ok, pdf, 1), 0).astype(f.dtype)
         return wi, scale[:, None] * f
 
+    def with_sampling(self, sampling: str) -> Material:
+        """A copy of this material (of the same class) that samples by ``sampling``."""
+        if sampling not in self.samplings:
+            raise ValueError(f"unknown sampling {sampling!r} for {type(self).__name__}; "
+                             f"choose one of {', '.join(self.samplings) or 'none'}")
+        twin = copy.copy(self)
+        twin.sampling = sampling
+        return twin
+
     # Batching: the renderer shades all hits on materials of one kind with one call.
     def batch_key(self) -> object:
         """Materials with equal keys can be ``stack``ed into one; the default is none."""
@@ -79,3 +92,21 @@ class Material:
     def take(self, index: np.ndarray) -> Material:
         """The stacked material's parameters for each hit: row ``index[k]`` for hit k."""
         return self
+
+
+class DeltaMaterial(Material):
+    """Base of perfect mirrors and glass: they scatter into single directions only.
+
+    Their BSDF is a Dirac delta, which no direction chosen apart from it can hit, so by
+    pbrt-v4's convention ``eval`` and ``pdf`` are 0 and ``sample_weight`` does all the work.
+    """
+
+    is_delta = True
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N, 3) zeros: a delta BSDF has no value at directions chosen apart from it."""
+        return np.zeros(wi.shape, dtype=wi.dtype, order="F")
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N,) zeros (see ``eval``)."""
+        return np.zeros(len(wi), dtype=wi.dtype)

@@ -33,7 +33,7 @@ import copy
 
 import numpy as np
 
-from ptlab.materials.base import Material, dot
+from ptlab.materials.base import DeltaMaterial, Material, dot
 from ptlab.materials.microfacet import channels
 from ptlab.vectors import columns, take_rows
 
@@ -70,7 +70,7 @@ def _column(value):
     return value[:, None] if np.ndim(value) == 1 else value
 
 
-class Dielectric(Material):
+class Dielectric(DeltaMaterial):
     """Smooth glass (or water, diamond...): Fresnel reflection and Snell refraction.
 
     Args:
@@ -78,7 +78,6 @@ class Dielectric(Material):
         transmittance: (3,) colour of refracted light, in [0, 1] (default 1: clear).
     """
 
-    is_delta = True
 
     def __init__(self, eta: float = 1.5, transmittance=(1.0, 1.0, 1.0)):
         if not (np.isfinite(eta) and eta > 0):
@@ -93,14 +92,6 @@ class Dielectric(Material):
         if np.ndim(self.eta) != 0:
             return f"Dielectric(stacked, {np.size(self.eta)} rows)"
         return f"Dielectric(eta={self.eta:g}, transmittance={self.transmittance.tolist()})"
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        """(N, 3) zeros: a delta BSDF has no value at directions chosen apart from it."""
-        return np.zeros(wi.shape, dtype=wi.dtype, order="F")
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        """(N,) zeros (see ``eval``)."""
-        return np.zeros(len(wi), dtype=wi.dtype)
 
     def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
                front: np.ndarray | None = None) -> np.ndarray:

@@ -14,7 +14,6 @@ Two samplings (``sampling=``):
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
@@ -35,20 +34,14 @@ class Diffuse(Material):
         emission: (3,) emitted radiance, or None.
     """
 
+    samplings = SAMPLINGS
+
     def __init__(self, albedo=(0.8, 0.8, 0.8), sampling: str = "cosine", emission=None):
         if sampling not in SAMPLINGS:
             raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
         self.albedo = np.asarray(albedo, dtype=np.float64)
         self.sampling = sampling
         self.emission = None if emission is None else np.asarray(emission, dtype=np.float64)
-
-    def with_sampling(self, sampling: str) -> Diffuse:
-        """A copy of this material (of the same class) that samples by ``sampling``."""
-        if sampling not in SAMPLINGS:
-            raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
-        twin = copy.copy(self)
-        twin.sampling = sampling
-        return twin
 
     def __repr__(self) -> str:
         return f"Diffuse(albedo={self.albedo.tolist()}, sampling={self.sampling!r})"

@@ -136,6 +136,8 @@ class Microfacet(Material):
         sampling: ``"vndf"`` (default) or ``"hemisphere"`` (cosine-weighted).
     """
 
+    samplings = SAMPLINGS
+
     def __init__(self, f0="gold", roughness: float | None = None, alpha: float | None = None,
                  kd=(0.0, 0.0, 0.0), ks=1.0, sampling: str = "vndf"):
         if sampling not in SAMPLINGS:
@@ -171,14 +173,6 @@ class Microfacet(Material):
         if self.kd.any():
             text += f", kd={self.kd.tolist()}, ks={self.ks.tolist()}"
         return text + f", sampling={self.sampling!r})"
-
-    def with_sampling(self, sampling: str) -> Microfacet:
-        """A copy of this material that samples by ``sampling``."""
-        if sampling not in SAMPLINGS:
-            raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
-        twin = copy.copy(self)
-        twin.sampling = sampling
-        return twin
 
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         """(N, 3) f_r(wo, wi), cosine not included; wo, wi, n: (N, 3) unit vectors."""

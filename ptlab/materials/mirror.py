@@ -20,12 +20,12 @@ import copy
 
 import numpy as np
 
-from ptlab.materials.base import Material, dot
+from ptlab.materials.base import DeltaMaterial, Material, dot
 from ptlab.materials.microfacet import F_schlick, channels
 from ptlab.vectors import columns, reflect, take_rows
 
 
-class Mirror(Material):
+class Mirror(DeltaMaterial):
     """Perfect specular reflection.
 
     Args:
@@ -34,7 +34,6 @@ class Mirror(Material):
             grazing angles (default False: the same reflectance at every angle).
     """
 
-    is_delta = True
 
     def __init__(self, reflectance=(1.0, 1.0, 1.0), fresnel: bool = False):
         self.reflectance = np.asarray(reflectance, dtype=np.float64)
@@ -45,14 +44,6 @@ class Mirror(Material):
 
     def __repr__(self) -> str:
         return f"Mirror(reflectance={self.reflectance.tolist()}, fresnel={self.fresnel})"
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        """(N, 3) zeros: a delta BRDF has no value at directions chosen apart from it."""
-        return np.zeros(wi.shape, dtype=wi.dtype, order="F")
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        """(N,) zeros (see ``eval``)."""
-        return np.zeros(len(wi), dtype=wi.dtype)
 
     def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
                front: np.ndarray | None = None) -> np.ndarray:
