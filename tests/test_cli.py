@@ -111,3 +111,19 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     for row in rows:
         assert float(row[4]) > 0 and row[7].endswith("%")     # Msamples/s, share in queries
     assert "numpy / embree time" in out and "speed-up of 2 workers over 1" in out
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
+    from ptlab.atomic import write_atomically
+    target = tmp_path / "image.exr"
+    target.write_text("the previous image")
+
+    def crash(temporary: str) -> None:
+        with open(temporary, "w") as half:
+            half.write("half an ima")
+        raise OSError("disk full")
+
+    with pytest.raises(OSError):
+        write_atomically(target, crash)
+    assert target.read_text() == "the previous image"
+    assert [p.name for p in tmp_path.iterdir()] == ["image.exr"]
