@@ -62,6 +62,9 @@ def build_parser() -> argparse.ArgumentParser:
                         help="Russian roulette: survival probability P (the homework's 0.8) "
                              "or 'throughput' (default)")
     render.add_argument("--max-depth", type=int, default=100, help="most bounces per path")
+    render.add_argument("--strategy", choices=("nee", "bsdf", "mis"), default="nee",
+                        help="direct light by light sampling (nee, the homework's, default), "
+                             "BSDF sampling only, or both with multiple importance sampling")
     render.add_argument("--workers", type=int, default=None,
                         help="processes rendering tiles at once (default: one per core; 1: "
                              "this process only); the image does not depend on it")
@@ -123,6 +126,7 @@ def _render(args) -> int:
     preview = _Preview(out, args.preview_every, scene.name)
     options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
                    sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
+                   strategy=args.strategy,
                    workers=workers, checkpoint=checkpoint, resume=args.resume,
                    progress=progress, on_pass=preview)
     with _StopOnSignal() as stop:

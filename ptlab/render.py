@@ -24,7 +24,7 @@ from ptlab.accel import Accelerator, resolve_backend
 from ptlab.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.errors import PtlabError
 from ptlab.film import Film
-from ptlab.integrators.path import PathSettings
+from ptlab.integrators.path import STRATEGIES, PathSettings
 from ptlab.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.memory import keep_freed_memory
 from ptlab.scene import Scene, load_scene
@@ -69,7 +69,8 @@ class RenderResult:
 def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
                   workers: int | None = None, executor: Executor | None = None,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
-                  rr: float | str = "throughput", max_depth: int = 100, tile_size: int = 128,
+                  rr: float | str = "throughput", max_depth: int = 100, strategy: str = "nee",
+                  tile_size: int = 128,
                   spp_per_pass: int | None = None, accel: Accelerator | None = None,
                   checkpoint: str | Path | None = None, resume: str | Path | None = None,
                   progress: Callable[[Film], None] | None = None,
@@ -104,7 +105,9 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     except ValueError as error:
         raise PtlabError(str(error)) from None
     scene = scene.with_sampling(sampling)
-    settings = PathSettings(rr=rr, max_depth=int(max_depth))
+    if strategy not in STRATEGIES:
+        raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
+    settings = PathSettings(rr=rr, max_depth=int(max_depth), strategy=strategy)
     keep_freed_memory()
 
     tiles = make_tiles(width, height, tile_size)
@@ -117,7 +120,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     film = Film(width, height, tiles)
     identity = dict(scene=scene_digest(scene), width=width, height=height, seed=seed,
                     backend=backend, sampling=sampling, rr=str(rr), max_depth=int(max_depth),
-                    tile_size=tile_size, spp_per_pass=spp_per_pass, spp=spp)
+                    strategy=strategy, tile_size=tile_size, spp_per_pass=spp_per_pass, spp=spp)
     if resume is not None:
         load_checkpoint(resume, film, identity)
         _check_resumable(film, passes, resume)
@@ -151,7 +154,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
         seconds=seconds, samples=film.samples - samples_at_start, rays=film.rays,
         query_seconds=film.query_seconds,
         settings=dict(scene=scene.name, spp=film.spp, seed=seed, backend=backend,
-                      integrator=integrator, sampling=sampling, rr=str(rr),
+                      integrator=integrator, strategy=strategy, sampling=sampling, rr=str(rr),
                       max_depth=int(max_depth), width=width, height=height,
                       workers=workers if executor is None else "executor"))
 
@@ -169,7 +172,8 @@ def _check_resumable(film: Film, passes: list[int], path) -> None:
 def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
            workers: int | None = None, backend: str = "auto", integrator: str = "path",
            sampling: str = "cosine", rr: float | str = "throughput",
-           max_depth: int = 100, executor: Executor | None = None) -> np.ndarray:
+           max_depth: int = 100, executor: Executor | None = None,
+           strategy: str = "nee") -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
 
     Args:
@@ -185,9 +189,11 @@ def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
         sampling: diffuse sampling, ``"cosine"`` or ``"uniform"`` (the homework's).
         rr: Russian roulette survival probability (the homework's 0.8) or ``"throughput"``.
         max_depth: the most bounces per path.
+        strategy: direct light by light sampling (``"nee"``, the homework's), by BSDF
+            sampling only (``"bsdf"``) or both with multiple importance sampling (``"mis"``).
         executor: run on this ``concurrent.futures.Executor`` instead (e.g. a Dask
             client's ``get_executor()``).
     """
     return render_result(scene, spp=spp, res=res, seed=seed, workers=workers, backend=backend,
                          integrator=integrator, sampling=sampling, rr=rr,
-                         max_depth=max_depth, executor=executor).image
+                         max_depth=max_depth, executor=executor, strategy=strategy).image

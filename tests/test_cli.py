@@ -75,7 +75,8 @@ def test_help_describes_every_render_option(capsys):
         main(["render", "--help"])
     text = capsys.readouterr().out
     for option in ("--spp", "--res", "--out", "--seed", "--backend", "--sampling", "--rr",
-                   "--max-depth"):
+                   "--max-depth", "--strategy", "--workers", "--checkpoint", "--resume",
+                   "--preview-every", "--scheduler"):
         assert option in text
 
 

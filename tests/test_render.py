@@ -219,3 +219,24 @@ def test_a_mirror_shows_the_light_it_reflects():
     # strength (reflectance 0.5), exactly and without noise: emission after a delta bounce
     # counts, and no light sample is wasted on the mirror.
     np.testing.assert_allclose(image, 1.0, rtol=1e-5)
+
+
+@pytest.mark.parametrize("strategy", ["bsdf", "mis"])
+def test_every_strategy_renders_the_furnace(strategy):
+    means = image_means(closed_box_scene(0.5, 0.3), seeds=range(10), spp=16, res=(16, 16),
+                        workers=1, strategy=strategy)[:, 0]
+    standard_error = means.std(ddof=1) / np.sqrt(len(means))
+    assert abs(means.mean() - 0.6) < 3 * standard_error + 1e-3, (means.mean(), standard_error)
+
+
+def test_strategies_agree_on_the_microfacet_cornell_box():
+    # Light sampling, BSDF sampling and MIS estimate the same image (4 standard errors,
+    # false-alarm rate about 1e-4 per channel); MIS is at least as good as light sampling.
+    scene = ptlab.load_scene("cornell-box-microfacet")
+    means = {s: image_means(scene, seeds=range(6), spp=16, res=32, workers=1, strategy=s)
+             for s in ("nee", "bsdf", "mis")}
+    errors = {s: m.std(axis=0, ddof=1) / np.sqrt(len(m)) for s, m in means.items()}
+    for strategy in ("bsdf", "mis"):
+        difference = np.abs(means[strategy].mean(axis=0) - means["nee"].mean(axis=0))
+        assert np.all(difference < 4 * np.hypot(errors[strategy], errors["nee"])), strategy
+    assert np.all(errors["mis"] < 1.5 * errors["nee"])

@@ -15,6 +15,15 @@ sampled light point never hits: they get no step 2, and the emission seen right 
 them is added instead (pbrt-v4's ``specularBounce``). A camera ray is treated the same way,
 which is why the light itself is not black.
 
+``strategy`` chooses how direct light is found (pbrt-v4's SimplePathIntegrator switches and
+PathIntegrator; Veach's thesis, chapter 9):
+
+* ``"nee"``: the homework's, as above: light sampling only;
+* ``"bsdf"``: no step 2; every hit adds the emission it sees;
+* ``"mis"``: both, each weighted by the power heuristic w = p^2 / (p_light^2 + p_bsdf^2),
+  so that each light path is counted once in total, mostly by the strategy that finds it
+  more easily (sharp lobes: BSDF sampling; small lights: light sampling).
+
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
 (compaction, scatter-adding into the film) live in the small helpers below it.
@@ -44,11 +53,16 @@ class PathSettings:
             made ``rr_min_depth`` bounces (pbrt-v4's rule).
         rr_min_depth: bounces before throughput-based roulette starts.
         max_depth: the most bounces a path makes (0 = emission only, 1 = direct light).
+        strategy: ``"nee"``, ``"bsdf"`` or ``"mis"`` (module docstring).
     """
 
     rr: float | str = "throughput"
     rr_min_depth: int = 2
     max_depth: int = 100
+    strategy: str = "nee"
+
+
+STRATEGIES = ("nee", "bsdf", "mis")
 
 
 @dataclass
@@ -60,6 +74,7 @@ class Paths:
     throughput: np.ndarray   # (N, 3) float32, product of f cos / pdf so far
     pixel: np.ndarray        # (N,) intp, the film row each path adds its radiance to
     sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
+    pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
 
 
 @dataclass
@@ -77,6 +92,8 @@ class SurfaceHit:
     sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
     materials: list          # [(rows, material)]: who shades which rows (``material_groups``)
     delta: np.ndarray        # (N,) bool: the material here is a mirror or glass
+    t: np.ndarray            # (N,) distance from the previous vertex
+    pdf: np.ndarray | None   # (N,) pdf with which the previous vertex chose this direction
 
 
 def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
@@ -98,14 +115,16 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         hit = surface_hit(scene, paths, hits)            # drops the paths that missed
         if len(hit.prim) == 0:
             break
-        if hit.sees_emission.any():
-            add_emission(film, scene, hit)               # the fix for the black light
+        if settings.strategy != "nee" or hit.sees_emission.any():
+            add_emission(film, scene, hit, settings.strategy)   # the fix for the black light
         if depth == settings.max_depth:
             break
         u = rng.random((6, len(hit.prim)), dtype=np.float32)   # one row per dimension
-        rays += direct_light(film, scene, accel, hit, u[0:3].T)
+        if settings.strategy != "bsdf":
+            rays += direct_light(film, scene, accel, hit, u[0:3].T, settings.strategy)
         survive = russian_roulette(hit, depth, settings, u[3])
-        paths = scatter(scene, hit, u[4:6].T, survive)   # keeps the survivors only
+        paths = scatter(scene, hit, u[4:6].T, survive,   # keeps the survivors only
+                        with_pdf=settings.strategy == "mis")
         if len(paths.pixel) == 0:
             break
     return rays
@@ -149,24 +168,46 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
                       throughput=take_rows(paths.throughput, alive),
                       pixel=paths.pixel.take(alive), sees_emission=paths.sees_emission.take(alive),
-                      materials=materials, delta=delta)
+                      materials=materials, delta=delta, t=hits.t.take(alive),
+                      pdf=None if paths.pdf is None else paths.pdf.take(alive))
 
 
-def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit) -> None:
-    """Add Le of the surfaces the paths see, for the paths that count it.
+def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, strategy: str) -> None:
+    """Add Le of the surfaces the paths see, weighted for the strategy.
 
+    Camera rays and rays after a delta bounce always count it; other rays count it fully
+    with ``"bsdf"``, not at all with ``"nee"`` and with the MIS weight with ``"mis"``.
     Lights emit from their front face only.
     """
-    emitted = take_rows(scene.emission, hit.prim) * (hit.front & hit.sees_emission)[:, None]
+    weight = (hit.front & hit.sees_emission).astype(np.float32)
+    if strategy == "bsdf":
+        weight = hit.front.astype(np.float32)
+    elif strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
+        # The density with which light sampling would have picked this point, per solid
+        # angle: pdf_area |x - x'|^2 / cos(theta').
+        cos_theta_light = dot(hit.n, hit.wo)
+        with np.errstate(divide="ignore"):
+            pdf_light = hit.t * hit.t / (cos_theta_light * float(scene.lights.total_area))
+        weight = np.where(hit.sees_emission, 1.0, power_heuristic(hit.pdf, pdf_light))
+        weight = (weight * hit.front).astype(np.float32)
+    emitted = take_rows(scene.emission, hit.prim) * weight[:, None]
     add_to_film(film, hit.pixel, hit.throughput * emitted)
 
 
+def power_heuristic(pdf: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Veach's power heuristic (beta = 2): the MIS weight of a sample drawn with ``pdf``."""
+    with np.errstate(invalid="ignore", over="ignore"):
+        weight = pdf * pdf / (pdf * pdf + other * other)
+    return np.nan_to_num(weight, nan=0.0)
+
+
 def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
-                 u: np.ndarray) -> int:
+                 u: np.ndarray, strategy: str = "nee") -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
     Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
-    light's area pdf from ``ptlab.lights``; u: (N, 3) uniforms. Returns the shadow rays.
+    light's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
+    u: (N, 3) uniforms. Returns the shadow rays.
     """
     light = scene.lights.sample(u)
     to_light = light.points - hit.p
@@ -185,6 +226,10 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     f = shade(hit, "eval", hit.wo, wi, hit.n)
     # Divide by the light's pdf_area = 1 / total area.
     geometry = visible * cos_theta * cos_theta_light / dist2 * float(scene.lights.total_area)
+    if strategy == "mis":
+        with np.errstate(divide="ignore"):
+            pdf_light = dist2 / (cos_theta_light * float(scene.lights.total_area))
+        geometry *= power_heuristic(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n))
     radiance = hit.throughput * f
     radiance *= light.radiance
     radiance *= geometry[:, None]
@@ -210,9 +255,14 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
     return survive
 
 
-def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray) -> Paths:
-    """The next rays of the surviving paths: directions sampled from their materials."""
+def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
+            with_pdf: bool = False) -> Paths:
+    """The next rays of the surviving paths: directions sampled from their materials.
+
+    ``with_pdf`` keeps the pdf of each sampled direction, which MIS weighs emission with.
+    """
     wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
+    pdf = shade(hit, "pdf", hit.wo, wi, hit.n) if with_pdf else None
     throughput = hit.throughput * weight
     go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
                                       | (throughput[:, 2] > 0)))
@@ -221,7 +271,8 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray) -
     side = np.where(dot(wi, n) >= 0, offset, -offset)
     return Paths(origins=p + side[:, None] * n, dirs=wi,
                  throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on),
-                 sees_emission=hit.delta.take(go_on))
+                 sees_emission=hit.delta.take(go_on),
+                 pdf=None if pdf is None else pdf.take(go_on))
 
 
 def material_groups(scene: Scene, prim: np.ndarray) -> list:
