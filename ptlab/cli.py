@@ -62,6 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="Russian roulette: survival probability P (the homework's 0.8) "
                              "or 'throughput' (default)")
     render.add_argument("--max-depth", type=int, default=100, help="most bounces per path")
+    render.add_argument("--integrator", choices=("path", "normals", "albedo", "depth"),
+                        default="path", help="path tracing (default) or a debug view")
     render.add_argument("--strategy", choices=("nee", "bsdf", "mis"), default="nee",
                         help="direct light by light sampling (nee, the homework's, default), "
                              "BSDF sampling only, or both with multiple importance sampling")
@@ -126,7 +128,7 @@ def _render(args) -> int:
     preview = _Preview(out, args.preview_every, scene.name)
     options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
                    sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
-                   strategy=args.strategy,
+                   strategy=args.strategy, integrator=args.integrator,
                    workers=workers, checkpoint=checkpoint, resume=args.resume,
                    progress=progress, on_pass=preview)
     with _StopOnSignal() as stop:
@@ -159,7 +161,12 @@ def _write(out: Path, result) -> None:
                     complete=int(result.complete))
     if result.spp_max != result.spp:
         metadata["spp_max"] = result.spp_max
-    write_image(out, result.image, metadata)
+    image = result.image
+    if result.settings["integrator"] == "depth" and out.suffix.lower() == ".png":
+        # Distances do not fit in [0, 1]: scale the farthest to white (the EXR keeps them).
+        scale = float(image.max()) or 1.0
+        image, metadata["depth_scale"] = image / scale, scale
+    write_image(out, image, metadata)
 
 
 def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:

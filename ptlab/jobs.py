@@ -26,6 +26,7 @@ import numpy as np
 from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
+from ptlab.integrators.debug import trace_debug
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.sampling import stream
 from ptlab.scene import Scene
@@ -94,6 +95,7 @@ class RenderSetup:
     height: int
     seed: int
     settings: PathSettings
+    integrator: str = "path"
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
 
 
@@ -113,7 +115,10 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
                   sees_emission=np.ones(len(pixel), dtype=bool))
     film = np.zeros((n_pixels, 3))
     timed = TimedAccelerator(accel)
-    rays = trace_paths(film, setup.scene, timed, paths, rng, setup.settings)
+    if setup.integrator == "path":
+        rays = trace_paths(film, setup.scene, timed, paths, rng, setup.settings)
+    else:
+        rays = trace_debug(film, setup.scene, timed, paths, rng, setup.integrator)
     return JobResult(job=job, sums=film.reshape(tile_height, tile_width, 3), rays=rays,
                      query_seconds=timed.seconds)
 

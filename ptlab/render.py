@@ -120,7 +120,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     film = Film(width, height, tiles)
     identity = dict(scene=scene_digest(scene), width=width, height=height, seed=seed,
                     backend=backend, sampling=sampling, rr=str(rr), max_depth=int(max_depth),
-                    strategy=strategy, tile_size=tile_size, spp_per_pass=spp_per_pass, spp=spp)
+                    strategy=strategy, integrator=integrator, tile_size=tile_size,
+                    spp_per_pass=spp_per_pass, spp=spp)
     if resume is not None:
         load_checkpoint(resume, film, identity)
         _check_resumable(film, passes, resume)
@@ -128,7 +129,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
 
     start = time.perf_counter()
     setup = RenderSetup(scene=scene, backend=backend, width=width, height=height, seed=seed,
-                        settings=settings)
+                        settings=settings, integrator=integrator)
     jobs = [Job(tile, k, n) for k, n in enumerate(passes) for tile in tiles
             if k >= film.passes_done[tile.index]]
     if executor is None:
@@ -185,7 +186,8 @@ def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
         workers: processes rendering tiles at once; None for one per core, 1 for this
             process only.
         backend: ray queries by ``"embree"``, ``"numpy"`` or ``"auto"`` (embree if it imports).
-        integrator: ``"path"``.
+        integrator: ``"path"``, or a debug view: ``"normals"``, ``"albedo"``, ``"depth"``
+            (``ptlab.integrators.debug``).
         sampling: diffuse sampling, ``"cosine"`` or ``"uniform"`` (the homework's).
         rr: Russian roulette survival probability (the homework's 0.8) or ``"throughput"``.
         max_depth: the most bounces per path.

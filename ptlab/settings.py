@@ -9,7 +9,7 @@ import numpy as np
 from ptlab.errors import PtlabError
 from ptlab.materials.diffuse import SAMPLINGS
 
-INTEGRATORS = ("path",)
+INTEGRATORS = ("path", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
 MAX_PIXELS = 1 << 28
 MAX_WORKERS = 1024
