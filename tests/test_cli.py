@@ -128,3 +128,11 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
         write_atomically(target, crash)
     assert target.read_text() == "the previous image"
     assert [p.name for p in tmp_path.iterdir()] == ["image.exr"]
+
+
+def test_depth_png_is_scaled_to_fit_and_says_by_how_much(tmp_path):
+    out = tmp_path / "depth.png"
+    assert main(["render", "cornell-box", "--integrator", "depth", "--spp", "1", "--res", "16",
+                 "--out", str(out), "--quiet"]) == 0
+    image, metadata = read_image(out)
+    assert 1000 < metadata["depth_scale"] < 2000 and image.max() == 1.0
