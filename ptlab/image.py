@@ -53,7 +53,8 @@ def check_output_path(path: str | Path) -> Path:
 def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = None) -> Path:
     """Write (H, W, 3) linear RGB to ``.exr`` (float32) or ``.png`` (sRGB 8-bit), atomically.
 
-    ``metadata`` entries become header attributes ``ptlab:<key>`` (strings, ints, floats).
+    ``metadata`` entries become header attributes ``ptlab:<key>`` (ints and floats stay
+    numbers in EXR; PNG stores them as text).
     """
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
@@ -68,8 +69,12 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
         pixels = encode_srgb8(image)
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
+    # EXR headers hold typed numbers; PNG text chunks hold only strings (OpenImageIO drops
+    # other types there), so a PNG gets every value as text.
+    typed = path.suffix.lower() == ".exr"
     for key, value in (metadata or {}).items():
-        spec.attribute(f"ptlab:{key}", value if isinstance(value, int | float) else str(value))
+        keep = typed and isinstance(value, int | float) and not isinstance(value, bool)
+        spec.attribute(f"ptlab:{key}", value if keep else str(value))
 
     def write(temporary: str) -> None:
         out = oiio.ImageOutput.create(temporary)

@@ -135,4 +135,5 @@ def test_depth_png_is_scaled_to_fit_and_says_by_how_much(tmp_path):
     assert main(["render", "cornell-box", "--integrator", "depth", "--spp", "1", "--res", "16",
                  "--out", str(out), "--quiet"]) == 0
     image, metadata = read_image(out)
-    assert 1000 < metadata["depth_scale"] < 2000 and image.max() == 1.0
+    assert 1000 < float(metadata["depth_scale"]) < 2000 and image.max() == 1.0
+    assert metadata["spp"] == "1"                  # PNG keeps metadata as text
