@@ -110,9 +110,9 @@ def build_parser() -> argparse.ArgumentParser:
 def _render(args) -> int:
     from ptlab.executors import dask_executor
     from ptlab.image import check_output_path
-    from ptlab.render import BATCH_PATHS
+    from ptlab.render import pass_schedule
     from ptlab.scene import load_scene
-    from ptlab.settings import check_workers, parse_resolution
+    from ptlab.settings import MAX_SPP, check_workers, parse_resolution
 
     scene = load_scene(args.scene)
     width, height = parse_resolution(args.res)
@@ -123,9 +123,10 @@ def _render(args) -> int:
     if args.preview_every is not None and args.preview_every < 0:
         raise PtlabError("--preview-every must be zero or more seconds")
     workers = check_workers(args.workers)
-    passes = -(-args.spp // max(1, BATCH_PATHS // (128 * 128))) if args.spp > 0 else 1
+    # (render_result reports a bad --spp; the bar just must not choke on one first)
+    passes = len(pass_schedule(args.spp)) if 0 < args.spp <= MAX_SPP else 1
     progress = ProgressBar(width * height * max(args.spp, 0), passes, quiet=args.quiet)
-    preview = _Preview(out, args.preview_every, scene.name)
+    preview = _Preview(out, args.preview_every)
     options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
                    sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
                    strategy=args.strategy, integrator=args.integrator,
@@ -211,7 +212,7 @@ class _StopOnSignal:
 class _Preview:
     """After a pass, rewrites the output image if ``every`` seconds have passed."""
 
-    def __init__(self, out: Path, every: float | None, scene_name: str):
+    def __init__(self, out: Path, every: float | None):
         self.out, self.every = out, every
         self.last = time.monotonic()
 

@@ -17,7 +17,6 @@ finish. A worker process builds the ray-query structure once per render, not per
 from __future__ import annotations
 
 import threading
-import time
 import uuid
 from dataclasses import dataclass, field
 
@@ -146,8 +145,3 @@ def run_job_in_worker(setup: RenderSetup | str, job: Job) -> JobResult:
         setup = setup.token
     installed, accel = _worker_renders[setup]
     return run_job(installed, job, accel)
-
-
-def worker_started() -> float:
-    """A no-op job that returns the time, to check that a pool's workers are up."""
-    return time.time()

@@ -74,6 +74,12 @@ class AreaLights:
         """The area density of every sampled point, 1 / total emitting area."""
         return 1.0 / self.total_area
 
+    def pdf_solid_angle(self, dist2: np.ndarray, cos_theta_light: np.ndarray) -> np.ndarray:
+        """(N,) density per solid angle of sampling a light point seen at squared distance
+        ``dist2`` and angle ``cos_theta_light`` to its normal: pdf_area |x - x'|^2 / cos."""
+        with np.errstate(divide="ignore"):
+            return dist2 / (cos_theta_light * np.float32(self.total_area))
+
     def sample(self, u: np.ndarray) -> LightSample:
         """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""
         # A triangle with probability area / total_area (inverse-CDF lookup): the number of

@@ -20,11 +20,11 @@ from pathlib import Path
 
 import numpy as np
 
-from ptlab.accel import Accelerator, resolve_backend
+from ptlab.accel import resolve_backend
 from ptlab.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.errors import PtlabError
 from ptlab.film import Film
-from ptlab.integrators.path import STRATEGIES, PathSettings
+from ptlab.integrators.path import PathSettings
 from ptlab.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.memory import keep_freed_memory
 from ptlab.scene import Scene, load_scene
@@ -32,6 +32,7 @@ from ptlab.scheduler import run_jobs
 from ptlab.settings import check_settings, check_tile_size, check_workers, parse_resolution
 
 BATCH_PATHS = 1 << 18
+TILE_SIZE = 128
 
 
 @dataclass
@@ -70,8 +71,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
                   workers: int | None = None, executor: Executor | None = None,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
                   rr: float | str = "throughput", max_depth: int = 100, strategy: str = "nee",
-                  tile_size: int = 128,
-                  spp_per_pass: int | None = None, accel: Accelerator | None = None,
+                  tile_size: int = TILE_SIZE, spp_per_pass: int | None = None,
                   checkpoint: str | Path | None = None, resume: str | Path | None = None,
                   progress: Callable[[Film], None] | None = None,
                   on_pass: Callable[[Film], None] | None = None,
@@ -84,7 +84,6 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
         tile_size: tile edge in pixels; part of the image's identity (with the seed).
         spp_per_pass: samples per pixel in each pass; by default as many as make a batch of
             about 2^18 paths per tile. Also part of the image's identity.
-        accel: a ray-query structure already built for the scene (``workers=1`` only).
         checkpoint: save the film here after every pass (and when stopped).
         resume: continue the render saved in this checkpoint.
         progress: called with the film after every job.
@@ -95,28 +94,20 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
     width, height = parse_resolution(res)
-    rr = check_settings(spp, seed, sampling, rr, max_depth, integrator)
-    workers = check_workers(1 if accel is not None and workers is None else workers)
+    rr = check_settings(spp, seed, sampling, rr, max_depth, integrator, strategy)
+    workers = check_workers(workers)
     tile_size = check_tile_size(tile_size)
-    if accel is not None and (workers > 1 or executor is not None):
-        raise PtlabError("a prebuilt accelerator can only be used with workers=1")
     try:
-        backend = accel.name if accel is not None else resolve_backend(backend)
+        backend = resolve_backend(backend)
     except ValueError as error:
         raise PtlabError(str(error)) from None
     scene = scene.with_sampling(sampling)
-    if strategy not in STRATEGIES:
-        raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
     settings = PathSettings(rr=rr, max_depth=int(max_depth), strategy=strategy)
     keep_freed_memory()
 
     tiles = make_tiles(width, height, tile_size)
-    if spp_per_pass is None:
-        spp_per_pass = max(1, BATCH_PATHS // (tile_size * tile_size))
-    elif not isinstance(spp_per_pass, int) or spp_per_pass < 1:
-        raise PtlabError(f"spp per pass {spp_per_pass!r}: must be a positive integer")
-    spp_per_pass = min(spp, spp_per_pass)
-    passes = pass_sizes(spp, spp_per_pass)
+    passes = pass_schedule(spp, tile_size, spp_per_pass)
+    spp_per_pass = passes[0]
     film = Film(width, height, tiles)
     identity = dict(scene=scene_digest(scene), width=width, height=height, seed=seed,
                     backend=backend, sampling=sampling, rr=str(rr), max_depth=int(max_depth),
@@ -135,8 +126,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     if executor is None:
         workers = min(workers, len(jobs))   # a pool for one job would only cost its start-up
     complete_passes = int(film.passes_done.min())
-    for result in run_jobs(jobs, setup, max(workers, 1), executor, accel,
-                           stop or (lambda: False)):
+    for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False)):
         film.add(result)
         if progress is not None:
             progress(film)
@@ -158,6 +148,16 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
                       integrator=integrator, strategy=strategy, sampling=sampling, rr=str(rr),
                       max_depth=int(max_depth), width=width, height=height,
                       workers=workers if executor is None else "executor"))
+
+
+def pass_schedule(spp: int, tile_size: int = TILE_SIZE,
+                  spp_per_pass: int | None = None) -> list[int]:
+    """Samples per pixel of each pass of a render (by default about 2^18 paths per job)."""
+    if spp_per_pass is None:
+        spp_per_pass = max(1, BATCH_PATHS // (tile_size * tile_size))
+    elif not isinstance(spp_per_pass, int) or spp_per_pass < 1:
+        raise PtlabError(f"spp per pass {spp_per_pass!r}: must be a positive integer")
+    return pass_sizes(spp, min(spp, spp_per_pass))
 
 
 def _check_resumable(film: Film, passes: list[int], path) -> None:

@@ -14,7 +14,7 @@ from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
 from concurrent.futures.process import BrokenProcessPool
 
-from ptlab.accel import Accelerator, make_accelerator
+from ptlab.accel import make_accelerator
 from ptlab.errors import PtlabError
 from ptlab.executors import process_pool
 from ptlab.jobs import Job, JobResult, RenderSetup, run_job, run_job_in_worker
@@ -27,15 +27,14 @@ POLL_SECONDS = 0.1
 
 
 def run_jobs(jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None,
-             accel: Accelerator | None, stop: Callable[[], bool]) -> Iterator[JobResult]:
+             stop: Callable[[], bool]) -> Iterator[JobResult]:
     """Yield each job's result as it finishes (in any order) until done or ``stop()``."""
     if executor is not None:
         yield from _run_on_executor(
             jobs, lambda job: executor.submit(run_job_in_worker, setup, job),
             window=2 * workers, stop=stop)
     elif workers == 1:
-        accel = accel if accel is not None else make_accelerator(setup.scene.triangles,
-                                                                 setup.backend)
+        accel = make_accelerator(setup.scene.triangles, setup.backend)
         for job in jobs:
             if stop():
                 return

@@ -7,6 +7,7 @@ import os
 import numpy as np
 
 from ptlab.errors import PtlabError
+from ptlab.integrators.path import STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
 
 INTEGRATORS = ("path", "normals", "albedo", "depth")
@@ -36,7 +37,7 @@ def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
 
 
 def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
-                   integrator: str) -> float | str:
+                   integrator: str, strategy: str = "nee") -> float | str:
     """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
     if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
         raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
@@ -48,6 +49,8 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
         raise PtlabError(f"max depth {max_depth!r}: must be a non-negative integer")
     if integrator not in INTEGRATORS:
         raise PtlabError(f"integrator {integrator!r}: choose one of {', '.join(INTEGRATORS)}")
+    if strategy not in STRATEGIES:
+        raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
     if rr == "throughput":
         return rr
     try:

@@ -181,7 +181,7 @@ def test_preview_rewrites_the_output_after_a_pass(cornell, tmp_path):
     previews = []
 
     def on_pass(film):
-        _Preview(out, 0.0, "cornell")(film)
+        _Preview(out, 0.0)(film)
         previews.append(read_image(out)[1]["spp"])
 
     render_result(cornell, workers=1, on_pass=on_pass, **SMALL)

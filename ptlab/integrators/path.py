@@ -183,11 +183,8 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, strategy: str)
     if strategy == "bsdf":
         weight = hit.front.astype(np.float32)
     elif strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
-        # The density with which light sampling would have picked this point, per solid
-        # angle: pdf_area |x - x'|^2 / cos(theta').
-        cos_theta_light = dot(hit.n, hit.wo)
-        with np.errstate(divide="ignore"):
-            pdf_light = hit.t * hit.t / (cos_theta_light * float(scene.lights.total_area))
+        # The density with which light sampling would have picked this point.
+        pdf_light = scene.lights.pdf_solid_angle(hit.t * hit.t, dot(hit.n, hit.wo))
         weight = np.where(hit.sees_emission, 1.0, power_heuristic(hit.pdf, pdf_light))
         weight = (weight * hit.front).astype(np.float32)
     emitted = take_rows(scene.emission, hit.prim) * weight[:, None]
@@ -227,8 +224,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     # Divide by the light's pdf_area = 1 / total area.
     geometry = visible * cos_theta * cos_theta_light / dist2 * float(scene.lights.total_area)
     if strategy == "mis":
-        with np.errstate(divide="ignore"):
-            pdf_light = dist2 / (cos_theta_light * float(scene.lights.total_area))
+        pdf_light = scene.lights.pdf_solid_angle(dist2, cos_theta_light)
         geometry *= power_heuristic(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n))
     radiance = hit.throughput * f
     radiance *= light.radiance
