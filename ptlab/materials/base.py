@@ -19,7 +19,7 @@ import copy
 
 import numpy as np
 
-from ptlab.vectors import dot
+from ptlab.vectors import columns, dot, take_rows
 
 __all__ = ["DeltaMaterial", "Material", "dot"]
 
@@ -78,20 +78,33 @@ class Material:
         return twin
 
     # Batching: the renderer shades all hits on materials of one kind with one call.
+    #: The parameters that may differ between materials of one kind: ``stack`` makes them
+    #: rows (float32, like the renderer's arrays), ``take`` picks a row per hit.
+    batched: tuple[str, ...] = ()
+
     def batch_key(self) -> object:
         """Materials with equal keys can be ``stack``ed into one; the default is none."""
         return id(self)
 
     @classmethod
     def stack(cls, materials: list[Material]) -> Material:
-        """One material whose parameters are rows, one per input material."""
-        if len(materials) != 1:
-            raise TypeError(f"{cls.__name__} cannot be batched")
-        return materials[0]
+        """One material whose ``batched`` parameters are rows, one per input material."""
+        if not cls.batched:
+            if len(materials) != 1:
+                raise TypeError(f"{cls.__name__} cannot be batched")
+            return materials[0]
+        stacked = copy.copy(materials[0])
+        for name in cls.batched:
+            rows = np.stack([np.asarray(getattr(m, name)) for m in materials]).astype(np.float32)
+            setattr(stacked, name, columns(rows) if rows.ndim == 2 else rows)
+        return stacked
 
     def take(self, index: np.ndarray) -> Material:
         """The stacked material's parameters for each hit: row ``index[k]`` for hit k."""
-        return self
+        taken = copy.copy(self)
+        for name in self.batched:
+            setattr(taken, name, take_rows(getattr(self, name), index))
+        return taken
 
 
 class DeltaMaterial(Material):

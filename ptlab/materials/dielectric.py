@@ -29,13 +29,10 @@ turns it toward ``wo``). Without ``front``, ``n`` must be the outward normal and
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
-from ptlab.materials.base import DeltaMaterial, Material, dot
+from ptlab.materials.base import DeltaMaterial, dot
 from ptlab.materials.microfacet import channels
-from ptlab.vectors import columns, take_rows
 
 
 def fresnel_dielectric(cos_theta_i: np.ndarray, eta_rel) -> np.ndarray:
@@ -78,6 +75,8 @@ class Dielectric(DeltaMaterial):
         transmittance: (3,) colour of refracted light, in [0, 1] (default 1: clear).
     """
 
+
+    batched = ("eta", "transmittance")
 
     def __init__(self, eta: float = 1.5, transmittance=(1.0, 1.0, 1.0)):
         if not (np.isfinite(eta) and eta > 0):
@@ -127,15 +126,3 @@ class Dielectric(DeltaMaterial):
     def batch_key(self) -> object:
         return "dielectric"
 
-    @classmethod
-    def stack(cls, materials: list[Material]) -> Dielectric:
-        stacked = copy.copy(materials[0])
-        stacked.eta = np.array([m.eta for m in materials], dtype=np.float32)
-        stacked.transmittance = columns(np.stack([m.transmittance for m in materials]).astype(np.float32))
-        return stacked
-
-    def take(self, index: np.ndarray) -> Dielectric:
-        taken = copy.copy(self)
-        taken.eta = take_rows(self.eta, index)
-        taken.transmittance = take_rows(self.transmittance, index)
-        return taken

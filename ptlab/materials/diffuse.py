@@ -20,7 +20,6 @@ import numpy as np
 
 from ptlab.materials.base import Material, dot
 from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around
-from ptlab.vectors import columns, take_rows
 
 SAMPLINGS = ("cosine", "uniform")
 
@@ -35,6 +34,7 @@ class Diffuse(Material):
     """
 
     samplings = SAMPLINGS
+    batched = ("albedo",)
 
     def __init__(self, albedo=(0.8, 0.8, 0.8), sampling: str = "cosine", emission=None):
         if sampling not in SAMPLINGS:
@@ -87,14 +87,3 @@ class Diffuse(Material):
     def batch_key(self) -> object:
         return ("diffuse", self.sampling)
 
-    @classmethod
-    def stack(cls, materials: list[Material]) -> Diffuse:
-        # Stacked materials serve the renderer, whose arrays are float32.
-        stacked = cls(sampling=materials[0].sampling)
-        stacked.albedo = columns(np.stack([m.albedo for m in materials]).astype(np.float32))
-        return stacked
-
-    def take(self, index: np.ndarray) -> Diffuse:
-        taken = Diffuse(sampling=self.sampling)
-        taken.albedo = take_rows(self.albedo, index)
-        return taken

@@ -47,14 +47,13 @@ Reflective only: ``eval`` and ``pdf`` are zero when ``wo`` or ``wi`` is below th
 
 from __future__ import annotations
 
-import copy
 import math
 
 import numpy as np
 
 from ptlab.materials.base import Material, dot
 from ptlab.sampling import cosine_hemisphere, ggx_visible_normals, to_world
-from ptlab.vectors import columns, normalize, reflect, take_rows
+from ptlab.vectors import normalize, reflect
 
 SAMPLINGS = ("vndf", "hemisphere")
 
@@ -137,6 +136,7 @@ class Microfacet(Material):
     """
 
     samplings = SAMPLINGS
+    batched = ("f0", "kd", "ks", "alpha", "p_specular")
 
     def __init__(self, f0="gold", roughness: float | None = None, alpha: float | None = None,
                  kd=(0.0, 0.0, 0.0), ks=1.0, sampling: str = "vndf"):
@@ -229,22 +229,6 @@ class Microfacet(Material):
     def batch_key(self) -> object:
         return ("microfacet", self.sampling)
 
-    @classmethod
-    def stack(cls, materials: list[Material]) -> Microfacet:
-        # Stacked materials serve the renderer, whose arrays are float32.
-        stacked = copy.copy(materials[0])
-        for name in ("f0", "kd", "ks"):
-            rows = np.stack([getattr(m, name) for m in materials])
-            setattr(stacked, name, columns(rows.astype(np.float32)))
-        for name in ("alpha", "p_specular"):
-            setattr(stacked, name, np.array([getattr(m, name) for m in materials], dtype=np.float32))
-        return stacked
-
-    def take(self, index: np.ndarray) -> Microfacet:
-        taken = copy.copy(self)
-        for name in ("f0", "kd", "ks", "alpha", "p_specular"):
-            setattr(taken, name, take_rows(getattr(self, name), index))
-        return taken
 
 
 def _at_least(value, floor: float):

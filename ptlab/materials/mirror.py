@@ -16,13 +16,11 @@ the surface.
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
-from ptlab.materials.base import DeltaMaterial, Material, dot
+from ptlab.materials.base import DeltaMaterial, dot
 from ptlab.materials.microfacet import F_schlick, channels
-from ptlab.vectors import columns, reflect, take_rows
+from ptlab.vectors import reflect
 
 
 class Mirror(DeltaMaterial):
@@ -34,6 +32,8 @@ class Mirror(DeltaMaterial):
             grazing angles (default False: the same reflectance at every angle).
     """
 
+
+    batched = ("reflectance",)
 
     def __init__(self, reflectance=(1.0, 1.0, 1.0), fresnel: bool = False):
         self.reflectance = np.asarray(reflectance, dtype=np.float64)
@@ -65,13 +65,3 @@ class Mirror(DeltaMaterial):
     def batch_key(self) -> object:
         return ("mirror", self.fresnel)
 
-    @classmethod
-    def stack(cls, materials: list[Material]) -> Mirror:
-        stacked = copy.copy(materials[0])
-        stacked.reflectance = columns(np.stack([m.reflectance for m in materials]).astype(np.float32))
-        return stacked
-
-    def take(self, index: np.ndarray) -> Mirror:
-        taken = copy.copy(self)
-        taken.reflectance = take_rows(self.reflectance, index)
-        return taken
