@@ -20,6 +20,7 @@ from pathlib import Path
 from ptlab.errors import PtlabError
 from ptlab.progress import ProgressBar
 from ptlab.render import render_result
+from ptlab.settings import INTEGRATORS
 
 
 class _Parser(argparse.ArgumentParser):
@@ -61,12 +62,19 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--rr", type=_rr, default="throughput", metavar="throughput|P",
                         help="Russian roulette: survival probability P (the homework's 0.8) "
                              "or 'throughput' (default)")
-    render.add_argument("--max-depth", type=int, default=100, help="most bounces per path")
-    render.add_argument("--integrator", choices=("path", "normals", "albedo", "depth"),
-                        default="path", help="path tracing (default) or a debug view")
+    render.add_argument("--rr-depth", type=int, metavar="N",
+                        help="bounces before Russian roulette starts (default 0 with a fixed "
+                             "P, like the homework; 2 with throughput)")
+    render.add_argument("--max-depth", type=int,
+                        help="most bounces per path (default 100; 5 for whitted)")
+    render.add_argument("--integrator", choices=INTEGRATORS, default="path",
+                        help="path tracing (default), the Whitted ray tracer (mirrors, glass "
+                             "and direct light only) or a debug view")
     render.add_argument("--strategy", choices=("nee", "bsdf", "mis"), default="nee",
                         help="direct light by light sampling (nee, the homework's, default), "
                              "BSDF sampling only, or both with multiple importance sampling")
+    render.add_argument("--heuristic", choices=("power", "balance"), default="power",
+                        help="MIS weights for --strategy mis (default power)")
     render.add_argument("--workers", type=int, default=None,
                         help="processes rendering tiles at once (default: one per core; 1: "
                              "this process only); the image does not depend on it")
@@ -129,7 +137,8 @@ def _render(args) -> int:
     preview = _Preview(out, args.preview_every)
     options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
                    sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
-                   strategy=args.strategy, integrator=args.integrator,
+                   strategy=args.strategy, heuristic=args.heuristic, rr_depth=args.rr_depth,
+                   integrator=args.integrator,
                    workers=workers, checkpoint=checkpoint, resume=args.resume,
                    progress=progress, on_pass=preview)
     with _StopOnSignal() as stop:

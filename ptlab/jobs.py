@@ -27,6 +27,7 @@ from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
 from ptlab.integrators.debug import trace_debug
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
+from ptlab.integrators.whitted import trace_whitted
 from ptlab.sampling import stream
 from ptlab.scene import Scene
 
@@ -116,6 +117,8 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     timed = TimedAccelerator(accel)
     if setup.integrator == "path":
         rays = trace_paths(film, setup.scene, timed, paths, rng, setup.settings)
+    elif setup.integrator == "whitted":
+        rays = trace_whitted(film, setup.scene, timed, paths, rng, setup.settings)
     else:
         rays = trace_debug(film, setup.scene, timed, paths, rng, setup.integrator)
     return JobResult(job=job, sums=film.reshape(tile_height, tile_width, 3), rays=rays,

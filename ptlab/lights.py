@@ -1,11 +1,18 @@
-"""Area lights: every emissive triangle of the scene, sampled by area.
+"""Area lights: every emissive triangle of the scene, sampled by power.
 
 Next-event estimation picks a point ``y`` on the lights and turns the pdf of that choice
 from area into solid angle (GAMES101 lecture 16, "sampling the light"; pbrt-v4 section
-12.2): a triangle is chosen with probability proportional to its area, then a uniform
-point on it, so every point of every light has the same area density
-``pdf_area = 1 / total_area``. (The homework framework picks its two light triangles with
-other probabilities while still dividing by this uniform pdf; that is biased.)
+12.2). A triangle is chosen with probability proportional to its power, area x mean(Le)
+(pbrt-v4's ``PowerLightSampler``), then a uniform point on it, so a point on triangle i has
+the area density
+
+    pdf_area = mean(Le_i) / sum_j (area_j mean(Le_j)).
+
+When every light has the same Le (the Cornell box) that is the homework's
+``1 / total_area``: picking by area. With lights of different brightness, picking by area
+would spend most samples on big dim lights and few on small bright ones (Veach's test
+scene, ``scenes/veach-mis``). (The homework framework picks its two light triangles with
+other probabilities while still dividing by the uniform pdf; that is biased.)
 
 Each light emits from its front face only, the side its winding's normal
 ``(v1 - v0) x (v2 - v0)`` points to.
@@ -29,12 +36,14 @@ class LightSample:
         normals: (N, 3) float32 unit front-face normals there.
         radiance: (N, 3) float32 emitted radiance Le.
         offset: (N, 1) float32 distance that rays aimed at the point stop short of it.
+        pdf_area: (N,) float32 area density with which the point was chosen.
     """
 
     points: np.ndarray
     normals: np.ndarray
     radiance: np.ndarray
     offset: np.ndarray
+    pdf_area: np.ndarray
 
 
 class AreaLights:
@@ -53,36 +62,42 @@ class AreaLights:
         double_area = np.linalg.norm(cross, axis=1)
         self.areas = 0.5 * double_area
         self.total_area = float(self.areas.sum())
+        radiance = np.asarray(radiance, dtype=np.float64)
+        power = self.areas * radiance.mean(axis=1)
+        self.total_power = float(power.sum())
         # float32 like the renderer's random numbers: a search with mixed types converts
         # every u to float64 first (2x slower).
-        self.cdf = (np.cumsum(self.areas) / self.total_area).astype(np.float32)
+        self.cdf = (np.cumsum(power) / self.total_power).astype(np.float32)
         self.v0 = v0.astype(np.float32)
         self.e1 = (v1 - v0).astype(np.float32)
         self.e2 = (v2 - v0).astype(np.float32)
         self.normals = (cross / double_area[:, None]).astype(np.float32)
-        self.radiance = np.asarray(radiance, dtype=np.float32)
+        self.radiance = radiance.astype(np.float32)
         # Everything `sample` gathers per chosen triangle, in one column (one `take`).
-        # Rows: v0 | e1 | e2 | unit normal | radiance | offset.
+        # Rows: v0 | e1 | e2 | unit normal | radiance | offset | pdf_area.
         self._packed = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
-                                  self.radiance.T, np.asarray(offset, dtype=np.float32)[None]])
+                                  self.radiance.T, np.asarray(offset, dtype=np.float32)[None],
+                                  self.pdf_area(self.radiance)[None]])
 
     def __len__(self) -> int:
         return len(self.areas)
 
-    @property
-    def pdf_area(self) -> float:
-        """The area density of every sampled point, 1 / total emitting area."""
-        return 1.0 / self.total_area
+    def pdf_area(self, radiance: np.ndarray) -> np.ndarray:
+        """(N,) float32 area density of sampling a point on a light of radiance ``radiance``
+        (N, 3): mean(Le) / total power (0 on surfaces that do not emit)."""
+        return (radiance.mean(axis=1) / np.float32(self.total_power)).astype(np.float32)
 
-    def pdf_solid_angle(self, dist2: np.ndarray, cos_theta_light: np.ndarray) -> np.ndarray:
-        """(N,) density per solid angle of sampling a light point seen at squared distance
-        ``dist2`` and angle ``cos_theta_light`` to its normal: pdf_area |x - x'|^2 / cos."""
-        with np.errstate(divide="ignore"):
-            return dist2 / (cos_theta_light * np.float32(self.total_area))
+    def pdf_solid_angle(self, radiance: np.ndarray, dist2: np.ndarray,
+                        cos_theta_light: np.ndarray) -> np.ndarray:
+        """(N,) density per solid angle of sampling a light point of radiance ``radiance``
+        seen at squared distance ``dist2`` and angle ``cos_theta_light`` to its normal:
+        pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.13)."""
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return self.pdf_area(radiance) * dist2 / cos_theta_light
 
     def sample(self, u: np.ndarray) -> LightSample:
         """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""
-        # A triangle with probability area / total_area (inverse-CDF lookup): the number of
+        # A triangle with probability power / total_power (inverse-CDF lookup): the number of
         # cdf entries at or below u. For a handful of lights (the Cornell box has two)
         # counting them pass by pass is ~10x faster than a binary search.
         u0 = u[:, 0]
@@ -94,8 +109,8 @@ class AreaLights:
             index = np.searchsorted(self.cdf, u0, side="right")
             np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
         b1, b2 = uniform_triangle(u[:, 1:3])
-        data = self._packed.take(index, axis=1)     # (16, N): rows are contiguous
+        data = self._packed.take(index, axis=1)     # (17, N): rows are contiguous
         # Transposed slices are (N, 3) arrays in the column-major layout of ptlab.vectors.
         points = data[0:3].T + b1[:, None] * data[3:6].T + b2[:, None] * data[6:9].T
         return LightSample(points=points, normals=data[9:12].T, radiance=data[12:15].T,
-                           offset=data[15:16].T)
+                           offset=data[15:16].T, pdf_area=data[16])

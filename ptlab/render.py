@@ -33,6 +33,9 @@ from ptlab.settings import check_settings, check_tile_size, check_workers, parse
 
 BATCH_PATHS = 1 << 18
 TILE_SIZE = 128
+#: The most bounces by default: the Whitted tracer stops early, like the homework's
+#: ``maxDepth = 5``; a path tracer's paths end by Russian roulette long before 100.
+DEFAULT_MAX_DEPTH = {"whitted": 5}
 
 
 @dataclass
@@ -70,7 +73,8 @@ class RenderResult:
 def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
                   workers: int | None = None, executor: Executor | None = None,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
-                  rr: float | str = "throughput", max_depth: int = 100, strategy: str = "nee",
+                  rr: float | str = "throughput", max_depth: int | None = None,
+                  strategy: str = "nee", heuristic: str = "power", rr_depth: int | None = None,
                   tile_size: int = TILE_SIZE, spp_per_pass: int | None = None,
                   checkpoint: str | Path | None = None, resume: str | Path | None = None,
                   progress: Callable[[Film], None] | None = None,
@@ -94,7 +98,10 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
     width, height = parse_resolution(res)
-    rr = check_settings(spp, seed, sampling, rr, max_depth, integrator, strategy)
+    if max_depth is None:
+        max_depth = DEFAULT_MAX_DEPTH.get(integrator, 100)
+    rr = check_settings(spp, seed, sampling, rr, max_depth, integrator, strategy, heuristic,
+                        rr_depth)
     workers = check_workers(workers)
     tile_size = check_tile_size(tile_size)
     try:
@@ -102,7 +109,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     except ValueError as error:
         raise PtlabError(str(error)) from None
     scene = scene.with_sampling(sampling)
-    settings = PathSettings(rr=rr, max_depth=int(max_depth), strategy=strategy)
+    settings = PathSettings(rr=rr, max_depth=int(max_depth), strategy=strategy,
+                            heuristic=heuristic, rr_min_depth=rr_depth)
     keep_freed_memory()
 
     tiles = make_tiles(width, height, tile_size)
@@ -111,7 +119,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     film = Film(width, height, tiles)
     identity = dict(scene=scene_digest(scene), width=width, height=height, seed=seed,
                     backend=backend, sampling=sampling, rr=str(rr), max_depth=int(max_depth),
-                    strategy=strategy, integrator=integrator, tile_size=tile_size,
+                    strategy=strategy, heuristic=heuristic, rr_depth=str(rr_depth),
+                    integrator=integrator, tile_size=tile_size,
                     spp_per_pass=spp_per_pass, spp=spp)
     if resume is not None:
         load_checkpoint(resume, film, identity)
@@ -145,7 +154,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
         seconds=seconds, samples=film.samples - samples_at_start, rays=film.rays,
         query_seconds=film.query_seconds,
         settings=dict(scene=scene.name, spp=film.spp, seed=seed, backend=backend,
-                      integrator=integrator, strategy=strategy, sampling=sampling, rr=str(rr),
+                      integrator=integrator, strategy=strategy, heuristic=heuristic,
+                      sampling=sampling, rr=str(rr), rr_depth=settings.roulette_starts,
                       max_depth=int(max_depth), width=width, height=height,
                       workers=workers if executor is None else "executor"))
 
@@ -173,8 +183,9 @@ def _check_resumable(film: Film, passes: list[int], path) -> None:
 def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
            workers: int | None = None, backend: str = "auto", integrator: str = "path",
            sampling: str = "cosine", rr: float | str = "throughput",
-           max_depth: int = 100, executor: Executor | None = None,
-           strategy: str = "nee") -> np.ndarray:
+           max_depth: int | None = None, executor: Executor | None = None,
+           strategy: str = "nee", heuristic: str = "power",
+           rr_depth: int | None = None) -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
 
     Args:
@@ -186,16 +197,21 @@ def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
         workers: processes rendering tiles at once; None for one per core, 1 for this
             process only.
         backend: ray queries by ``"embree"``, ``"numpy"`` or ``"auto"`` (embree if it imports).
-        integrator: ``"path"``, or a debug view: ``"normals"``, ``"albedo"``, ``"depth"``
-            (``ptlab.integrators.debug``).
+        integrator: ``"path"``, ``"whitted"`` (Homework 5's ray tracer: mirrors, glass and
+            direct light, no diffuse interreflection), or a debug view: ``"normals"``,
+            ``"albedo"``, ``"depth"`` (``ptlab.integrators.debug``).
         sampling: diffuse sampling, ``"cosine"`` or ``"uniform"`` (the homework's).
         rr: Russian roulette survival probability (the homework's 0.8) or ``"throughput"``.
-        max_depth: the most bounces per path.
+        max_depth: the most bounces per path (default 100; 5 for ``"whitted"``).
         strategy: direct light by light sampling (``"nee"``, the homework's), by BSDF
             sampling only (``"bsdf"``) or both with multiple importance sampling (``"mis"``).
+        heuristic: MIS weights, ``"power"`` (default) or ``"balance"``.
+        rr_depth: bounces before Russian roulette starts (default 0 with a fixed ``rr``,
+            like the homework; 2 with ``"throughput"``, like pbrt-v4).
         executor: run on this ``concurrent.futures.Executor`` instead (e.g. a Dask
             client's ``get_executor()``).
     """
     return render_result(scene, spp=spp, res=res, seed=seed, workers=workers, backend=backend,
                          integrator=integrator, sampling=sampling, rr=rr,
-                         max_depth=max_depth, executor=executor, strategy=strategy).image
+                         max_depth=max_depth, executor=executor, strategy=strategy,
+                         heuristic=heuristic, rr_depth=rr_depth).image

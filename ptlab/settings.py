@@ -7,10 +7,10 @@ import os
 import numpy as np
 
 from ptlab.errors import PtlabError
-from ptlab.integrators.path import STRATEGIES
+from ptlab.integrators.path import HEURISTICS, STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
 
-INTEGRATORS = ("path", "normals", "albedo", "depth")
+INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
 MAX_PIXELS = 1 << 28
 MAX_WORKERS = 1024
@@ -37,7 +37,8 @@ def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
 
 
 def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
-                   integrator: str, strategy: str = "nee") -> float | str:
+                   integrator: str, strategy: str = "nee", heuristic: str = "power",
+                   rr_depth: int | None = None) -> float | str:
     """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
     if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
         raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
@@ -51,6 +52,10 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
         raise PtlabError(f"integrator {integrator!r}: choose one of {', '.join(INTEGRATORS)}")
     if strategy not in STRATEGIES:
         raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
+    if heuristic not in HEURISTICS:
+        raise PtlabError(f"heuristic {heuristic!r}: choose one of {', '.join(HEURISTICS)}")
+    if rr_depth is not None and (not _is_int(rr_depth) or rr_depth < 0):
+        raise PtlabError(f"russian roulette depth {rr_depth!r}: must be a non-negative integer")
     if rr == "throughput":
         return rr
     try:

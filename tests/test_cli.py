@@ -75,8 +75,8 @@ def test_help_describes_every_render_option(capsys):
         main(["render", "--help"])
     text = capsys.readouterr().out
     for option in ("--spp", "--res", "--out", "--seed", "--backend", "--sampling", "--rr",
-                   "--max-depth", "--strategy", "--workers", "--checkpoint", "--resume",
-                   "--preview-every", "--scheduler"):
+                   "--max-depth", "--strategy", "--heuristic", "--rr-depth", "--workers",
+                   "--checkpoint", "--resume", "--preview-every", "--scheduler", "--integrator"):
         assert option in text
 
 

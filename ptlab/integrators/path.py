@@ -20,9 +20,10 @@ PathIntegrator; Veach's thesis, chapter 9):
 
 * ``"nee"``: the homework's, as above: light sampling only;
 * ``"bsdf"``: no step 2; every hit adds the emission it sees;
-* ``"mis"``: both, each weighted by the power heuristic w = p^2 / (p_light^2 + p_bsdf^2),
-  so that each light path is counted once in total, mostly by the strategy that finds it
-  more easily (sharp lobes: BSDF sampling; small lights: light sampling).
+* ``"mis"``: both, each weighted by the power heuristic w = p^2 / (p_light^2 + p_bsdf^2)
+  (or, with ``heuristic="balance"``, w = p / (p_light + p_bsdf)), so that each light path
+  is counted once in total, mostly by the strategy that finds it more easily (sharp lobes:
+  BSDF sampling; small lights: light sampling).
 
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
@@ -49,20 +50,31 @@ class PathSettings:
 
     Attributes:
         rr: Russian roulette: a survival probability in (0, 1] (the homework's 0.8), or
-            ``"throughput"`` to survive with probability max(throughput) once a path has
-            made ``rr_min_depth`` bounces (pbrt-v4's rule).
-        rr_min_depth: bounces before throughput-based roulette starts.
+            ``"throughput"`` to survive with probability max(throughput) (pbrt-v4's rule).
+        rr_min_depth: bounces every path makes before roulette starts; None for the usual
+            choice of each rule: 0 for a fixed probability (the homework's), 2 for
+            ``"throughput"`` (pbrt-v4's).
         max_depth: the most bounces a path makes (0 = emission only, 1 = direct light).
         strategy: ``"nee"``, ``"bsdf"`` or ``"mis"`` (module docstring).
+        heuristic: the MIS weights, ``"power"`` (default) or ``"balance"``.
     """
 
     rr: float | str = "throughput"
-    rr_min_depth: int = 2
+    rr_min_depth: int | None = None
     max_depth: int = 100
     strategy: str = "nee"
+    heuristic: str = "power"
+
+    @property
+    def roulette_starts(self) -> int:
+        """The depth at which Russian roulette starts."""
+        if self.rr_min_depth is not None:
+            return self.rr_min_depth
+        return 2 if self.rr == "throughput" else 0
 
 
 STRATEGIES = ("nee", "bsdf", "mis")
+HEURISTICS = ("power", "balance")
 
 
 @dataclass
@@ -116,12 +128,12 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         if len(hit.prim) == 0:
             break
         if settings.strategy != "nee" or hit.sees_emission.any():
-            add_emission(film, scene, hit, settings.strategy)   # the fix for the black light
+            add_emission(film, scene, hit, settings)   # the fix for the black light
         if depth == settings.max_depth:
             break
         u = rng.random((6, len(hit.prim)), dtype=np.float32)   # one row per dimension
         if settings.strategy != "bsdf":
-            rays += direct_light(film, scene, accel, hit, u[0:3].T, settings.strategy)
+            rays += direct_light(film, scene, accel, hit, u[0:3].T, settings)
         survive = russian_roulette(hit, depth, settings, u[3])
         paths = scatter(scene, hit, u[4:6].T, survive,   # keeps the survivors only
                         with_pdf=settings.strategy == "mis")
@@ -172,38 +184,46 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
                       pdf=None if paths.pdf is None else paths.pdf.take(alive))
 
 
-def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, strategy: str) -> None:
+def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
     """Add Le of the surfaces the paths see, weighted for the strategy.
 
     Camera rays and rays after a delta bounce always count it; other rays count it fully
     with ``"bsdf"``, not at all with ``"nee"`` and with the MIS weight with ``"mis"``.
     Lights emit from their front face only.
     """
+    strategy = settings.strategy
     weight = (hit.front & hit.sees_emission).astype(np.float32)
     if strategy == "bsdf":
         weight = hit.front.astype(np.float32)
-    elif strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
-        # The density with which light sampling would have picked this point.
-        pdf_light = scene.lights.pdf_solid_angle(hit.t * hit.t, dot(hit.n, hit.wo))
-        weight = np.where(hit.sees_emission, 1.0, power_heuristic(hit.pdf, pdf_light))
+    # With "mis", the density with which light sampling would have picked this point
+    # (camera rays have no pdf: weight 1).
+    emitted = take_rows(scene.emission, hit.prim)
+    if strategy == "mis" and hit.pdf is not None:
+        pdf_light = scene.lights.pdf_solid_angle(emitted, hit.t * hit.t, dot(hit.n, hit.wo))
+        weight = np.where(hit.sees_emission, 1.0, mis_weight(hit.pdf, pdf_light, settings.heuristic))
         weight = (weight * hit.front).astype(np.float32)
-    emitted = take_rows(scene.emission, hit.prim) * weight[:, None]
+    emitted *= weight[:, None]
     add_to_film(film, hit.pixel, hit.throughput * emitted)
 
 
-def power_heuristic(pdf: np.ndarray, other: np.ndarray) -> np.ndarray:
-    """Veach's power heuristic (beta = 2): the MIS weight of a sample drawn with ``pdf``."""
-    with np.errstate(invalid="ignore", over="ignore"):
-        weight = pdf * pdf / (pdf * pdf + other * other)
+def mis_weight(pdf: np.ndarray, other: np.ndarray, heuristic: str = "power") -> np.ndarray:
+    """The MIS weight of a sample drawn with density ``pdf`` when the other strategy would
+    have drawn it with density ``other`` (Veach 1997, section 9.2): the power heuristic
+    (beta = 2) p^2 / (p^2 + q^2), or the balance heuristic p / (p + q)."""
+    with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
+        if heuristic == "balance":
+            weight = pdf / (pdf + other)
+        else:
+            weight = pdf * pdf / (pdf * pdf + other * other)
     return np.nan_to_num(weight, nan=0.0)
 
 
 def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
-                 u: np.ndarray, strategy: str = "nee") -> int:
+                 u: np.ndarray, settings: PathSettings) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
     Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
-    light's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
+    point's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
     u: (N, 3) uniforms. Returns the shadow rays.
     """
     light = scene.lights.sample(u)
@@ -221,11 +241,11 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     visible = np.zeros(len(hit.prim), dtype=bool)
     visible[facing] = ~accel.occluded(origin, target - origin, 1.0 - SHADOW_EPSILON)
     f = shade(hit, "eval", hit.wo, wi, hit.n)
-    # Divide by the light's pdf_area = 1 / total area.
-    geometry = visible * cos_theta * cos_theta_light / dist2 * float(scene.lights.total_area)
-    if strategy == "mis":
-        pdf_light = scene.lights.pdf_solid_angle(dist2, cos_theta_light)
-        geometry *= power_heuristic(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n))
+    geometry = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    if settings.strategy == "mis":
+        with np.errstate(divide="ignore", invalid="ignore"):   # (rows not facing add 0)
+            pdf_light = light.pdf_area * dist2 / cos_theta_light
+        geometry *= mis_weight(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n), settings.heuristic)
     radiance = hit.throughput * f
     radiance *= light.radiance
     radiance *= geometry[:, None]
@@ -239,9 +259,9 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
     """
+    if depth < settings.roulette_starts:
+        return np.ones(len(u), dtype=bool)
     if settings.rr == "throughput":
-        if depth < settings.rr_min_depth:
-            return np.ones(len(u), dtype=bool)
         t = hit.throughput
         survival = np.minimum(np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2]), 1.0)
     else:
