@@ -2,6 +2,7 @@
 
     ptlab render cornell-box --spp 16 --res 512 --out cornell.exr
     ptlab bench
+    ptlab converge cornell-box --integrators path:bsdf,path:nee,path:mis --budget 30
     ptlab grade my_material.py:MyMaterial
     ptlab scenes
 
@@ -103,6 +104,39 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--workers", action="append", type=int,
                        help="worker processes (repeatable; default one per core); one "
                             "worker is always measured too, as the baseline of the speed-up")
+
+    converge = commands.add_parser(
+        "converge", help="chart error against time for several estimators",
+        description="Render the scene with each estimator at 1, 2, 4, ... spp until its time "
+                    "budget is spent, compare every render with a reference, and write "
+                    "convergence.csv (integrator, spp, seconds, rmse, relmse), a log-log chart "
+                    "convergence.png, an equal-time strip equal-time.png with error heat maps, "
+                    "and the reference.exr. Prints the time each needs to reach --target.")
+    converge.add_argument("scene", help="built-in scene name or path to a scene .toml")
+    converge.add_argument("--integrators", default="path:bsdf,path:nee,path:mis",
+                          metavar="LIST",
+                          help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
+                               "whitted (default path:bsdf,path:nee,path:mis)")
+    source = converge.add_mutually_exclusive_group()
+    source.add_argument("--reference", metavar="REF.exr",
+                        help="the reference image (linear EXR at the same resolution)")
+    source.add_argument("--reference-spp", type=int, default=1024, metavar="N",
+                        help="without --reference: render one with path:mis at N spp (default "
+                             "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references")
+    converge.add_argument("--budget", type=float, default=30.0, metavar="SECONDS",
+                          help="render time per estimator (default 30)")
+    converge.add_argument("--res", default="256", help="N (square) or WxH (default 256)")
+    converge.add_argument("--out", metavar="DIR", help="output folder (default converge-SCENE)")
+    converge.add_argument("--target", type=float, default=0.01,
+                          help="report the time to reach this relMSE (default 0.01)")
+    converge.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    converge.add_argument("--backend", choices=("auto", "embree", "numpy"), default="auto",
+                          help="ray queries (default auto: embree if available)")
+    converge.add_argument("--workers", type=int, default=None,
+                          help="processes per render (default one per core)")
+    converge.add_argument("--no-cache", action="store_true",
+                          help="render the reference even if a cached one exists")
+    converge.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
     from ptlab.grading.cli import add_grade_arguments
     add_grade_arguments(commands.add_parser(
@@ -233,6 +267,29 @@ class _Preview:
         self.last = time.monotonic()
 
 
+def _converge(args) -> int:
+    from ptlab.converge import default_cache_dir, parse_estimators, run_converge
+    from ptlab.scene import load_scene
+    from ptlab.settings import MAX_SPP, check_workers, parse_resolution
+
+    estimators = parse_estimators(args.integrators)
+    scene = load_scene(args.scene)
+    res = parse_resolution(args.res)
+    if not 1 <= args.reference_spp <= MAX_SPP:
+        raise PtlabError(f"--reference-spp {args.reference_spp}: must be from 1 to {MAX_SPP}")
+    if not 0 < args.target < float("inf"):
+        raise PtlabError(f"--target {args.target}: must be a positive relMSE")
+    out_dir = Path(args.out or f"converge-{scene.name}")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise PtlabError(f"{out_dir}: exists and is not a folder")
+    echo = (lambda text: None) if args.quiet else print
+    run_converge(scene, estimators, out_dir, res, args.budget, seed=args.seed,
+                 reference=args.reference, reference_spp=args.reference_spp,
+                 cache_dir=None if args.no_cache else default_cache_dir(), target=args.target,
+                 echo=echo, workers=check_workers(args.workers), backend=args.backend)
+    return 0
+
+
 def _bench(args) -> int:
     from ptlab.bench import run_bench
     if args.res <= 0 or args.spp <= 0:
@@ -256,7 +313,7 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     from ptlab.grading.cli import run_grade
     handler = {"render": _render, "bench": _bench, "grade": run_grade,
-               "scenes": _scenes}[args.command]
+               "converge": _converge, "scenes": _scenes}[args.command]
     try:
         return handler(args)
     except PtlabError as error:

@@ -1,0 +1,240 @@
+"""``ptlab converge``: what each estimator buys per second of rendering.
+
+Each estimator (``path:nee``, ``path:bsdf``, ``path:mis``, ...) renders the scene at a
+doubling ladder of samples per pixel, 1, 2, 4, ..., until its time budget is spent; every
+render is timed and compared with a reference image (``ptlab.metrics``). The result is a
+table of (estimator, spp, seconds, rmse, relmse) and, from it, the time each estimator needs
+to reach a target error: the honest way to compare methods whose samples cost different
+amounts (an MIS sample traces more rays than a BSDF sample, and is worth more).
+
+The reference is a file the user gives, or a high-spp render with the best estimator,
+``path:mis``, cached on disk by scene, resolution, spp and seed, and rendered with its own
+seed so that its noise is independent of the ladder's.
+"""
+
+from __future__ import annotations
+
+import csv
+import hashlib
+import math
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.checkpoint import scene_digest
+from ptlab.errors import PtlabError
+from ptlab.image import read_image, write_image
+from ptlab.integrators.path import STRATEGIES
+from ptlab.metrics import relmse, rmse
+from ptlab.render import render_result
+from ptlab.scene import Scene
+
+#: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY.
+ESTIMATOR_INTEGRATORS = ("path", "whitted")
+#: The reference's seed is the ladder's plus this, so that their noise is independent.
+REFERENCE_SEED_OFFSET = 1_000_003
+#: The reference is rendered with the estimator that is best on hard scenes.
+REFERENCE_ESTIMATOR = "path:mis"
+
+
+@dataclass(frozen=True)
+class Estimator:
+    """An integrator with its options, named as on the command line (``path:mis``)."""
+
+    label: str
+    integrator: str
+    strategy: str = "nee"
+
+    def options(self) -> dict:
+        """Keyword arguments of ``render_result`` that select this estimator."""
+        return dict(integrator=self.integrator, strategy=self.strategy)
+
+
+def parse_estimators(text: str) -> list[Estimator]:
+    """``"path:bsdf,path:nee,path:mis"`` -> estimators (``path`` alone is ``path:nee``)."""
+    estimators = []
+    for label in (part.strip() for part in text.split(",")):
+        integrator, _, strategy = label.partition(":")
+        if integrator not in ESTIMATOR_INTEGRATORS:
+            raise PtlabError(f"estimator {label!r}: the integrator must be one of "
+                             f"{', '.join(ESTIMATOR_INTEGRATORS)} (e.g. path:mis)")
+        if integrator == "path":
+            strategy = strategy or "nee"
+            if strategy not in STRATEGIES:
+                raise PtlabError(f"estimator {label!r}: the strategy must be one of "
+                                 f"{', '.join(STRATEGIES)}")
+        elif strategy:
+            raise PtlabError(f"estimator {label!r}: {integrator} takes no strategy")
+        estimators.append(Estimator(label, integrator, strategy or "nee"))
+    if len({e.label for e in estimators}) != len(estimators):
+        raise PtlabError(f"estimators {text!r}: each may appear once")
+    return estimators
+
+
+@dataclass
+class Measurement:
+    """One rung of a ladder: a render of ``spp`` samples, its time and its error."""
+
+    estimator: str
+    spp: int
+    seconds: float
+    rmse: float
+    relmse: float
+    image: np.ndarray
+
+
+def measure_ladder(scene: Scene, estimator: Estimator, reference: np.ndarray, budget: float,
+                   max_spp: int = 1 << 16, echo: Callable[[str], None] = print,
+                   **render_options) -> list[Measurement]:
+    """Render at 1, 2, 4, ... spp while the next rung fits in ``budget`` seconds in total.
+
+    Each rung takes about twice as long as the one before, so the ladder stops when the
+    time spent plus twice the last rung's would exceed the budget; the first rung always
+    runs. ``render_options`` go to ``render_result`` (res, seed, workers, backend, ...).
+    """
+    height, width = reference.shape[:2]
+    ladder, spent, spp = [], 0.0, 1
+    while True:
+        result = render_result(scene, spp=spp, res=(width, height), **estimator.options(),
+                               **render_options)
+        rung = Measurement(estimator.label, spp, result.seconds, rmse(result.image, reference),
+                           relmse(result.image, reference), result.image)
+        ladder.append(rung)
+        echo(f"{rung.estimator:12} {rung.spp:7d} spp {rung.seconds:9.2f} s   "
+             f"rmse {rung.rmse:.4g}   relMSE {rung.relmse:.4g}")
+        spent += result.seconds
+        if spp * 2 > max_spp or spent + 2 * result.seconds > budget:
+            return ladder
+        spp *= 2
+
+
+def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool] | None:
+    """Seconds the estimator needs for relMSE ``target``, and whether that is extrapolated.
+
+    Between two rungs that bracket the target, interpolate on the log-log line through
+    them. Past the last rung, extrapolate from it with the slope -1 of an unbiased
+    estimator (error x time is constant). None if even the first rung is below the target
+    (the answer is then below the ladder's resolution) or if the error stops falling.
+    """
+    if not ladder or ladder[0].relmse <= target:
+        return None
+    for before, after in zip(ladder, ladder[1:], strict=False):
+        if after.relmse <= target < before.relmse:
+            slope = math.log(after.seconds / before.seconds) / math.log(after.relmse / before.relmse)
+            return before.seconds * (target / before.relmse) ** slope, False
+    last = ladder[-1]
+    if len(ladder) >= 2 and last.relmse >= ladder[-2].relmse:
+        return None
+    return last.seconds * last.relmse / target, True
+
+
+def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
+                    cache_dir: Path | None, echo: Callable[[str], None] = print,
+                    **render_options) -> np.ndarray:
+    """A ``spp``-sample ``path:mis`` render of the scene, from the cache if it is there."""
+    key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed)).encode()).hexdigest()[:16]
+    cached = None if cache_dir is None else cache_dir / f"{scene.name}-{key}.exr"
+    if cached is not None and cached.is_file():
+        image, _ = read_image(cached)
+        echo(f"reference: {cached} (cached)")
+        return image
+    echo(f"reference: rendering {spp} spp with {REFERENCE_ESTIMATOR} ...")
+    estimator = parse_estimators(REFERENCE_ESTIMATOR)[0]
+    result = render_result(scene, spp=spp, res=res, seed=seed + REFERENCE_SEED_OFFSET,
+                           **estimator.options(), **render_options)
+    echo(f"reference: {result.seconds:.1f} s")
+    if cached is not None:
+        cached.parent.mkdir(parents=True, exist_ok=True)
+        write_image(cached, result.image, dict(result.settings, reference=1))
+    return result.image
+
+
+def load_reference(path: str | Path, res: tuple[int, int]) -> np.ndarray:
+    """A reference image from a linear (EXR) file, checked against the resolution."""
+    path = Path(path)
+    if path.suffix.lower() != ".exr":
+        raise PtlabError(f"{path}: the reference must be a linear .exr image")
+    image, _ = read_image(path)
+    width, height = res
+    if image.shape[:2] != (height, width):
+        raise PtlabError(f"{path}: the reference is {image.shape[1]}x{image.shape[0]}, the "
+                         f"renders {width}x{height}: give --res {image.shape[1]}x{image.shape[0]}")
+    if not np.isfinite(image).all():
+        raise PtlabError(f"{path}: the reference has NaN or infinite pixels")
+    return image
+
+
+def default_cache_dir() -> Path:
+    """Where references are cached: $PTLAB_CACHE, else ~/.cache/ptlab/references."""
+    if "PTLAB_CACHE" in os.environ:
+        return Path(os.environ["PTLAB_CACHE"])
+    base = os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache"
+    return Path(base) / "ptlab" / "references"
+
+
+def write_csv(path: Path, ladders: list[list[Measurement]]) -> None:
+    """The table: one row per rung, columns integrator, spp, seconds, rmse, relmse."""
+    from ptlab.atomic import write_atomically
+
+    def write(temporary: str) -> None:
+        with open(temporary, "w", newline="") as out:
+            table = csv.writer(out)
+            table.writerow(["integrator", "spp", "seconds", "rmse", "relmse"])
+            for ladder in ladders:
+                for rung in ladder:
+                    table.writerow([rung.estimator, rung.spp, f"{rung.seconds:.4f}",
+                                    f"{rung.rmse:.6g}", f"{rung.relmse:.6g}"])
+
+    write_atomically(path, write)
+
+
+def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
+                 res: tuple[int, int], budget: float, seed: int = 0,
+                 reference: str | Path | None = None, reference_spp: int = 1024,
+                 cache_dir: Path | None = None, target: float = 0.01,
+                 echo: Callable[[str], None] = print, **render_options) -> list[list[Measurement]]:
+    """Measure every estimator's ladder and write the CSV, the chart and the strip.
+
+    Writes ``convergence.csv``, ``convergence.png``, ``equal-time.png`` and
+    ``reference.exr`` into ``out_dir``, and echoes each estimator's time to reach relMSE
+    ``target``. ``render_options`` (workers, backend, ...) go to every render.
+    """
+    from ptlab.charts import convergence_chart, equal_time_strip
+
+    if not budget > 0:
+        raise PtlabError(f"budget {budget!r}: must be a positive number of seconds")
+    if reference is not None:
+        reference_pixels = load_reference(reference, res)
+    else:
+        reference_pixels = reference_image(scene, res, reference_spp, seed, cache_dir, echo,
+                                           **render_options)
+    # Warm up imports and first calls, so that the first rung is not charged for them.
+    render_result(scene, spp=1, res=16, workers=1)
+    ladders = [measure_ladder(scene, estimator, reference_pixels, budget, echo=echo, seed=seed,
+                              **render_options) for estimator in estimators]
+    out_dir.mkdir(parents=True, exist_ok=True)      # only now: no empty folder on an error
+    write_csv(out_dir / "convergence.csv", ladders)
+    width, height = res
+    convergence_chart(ladders, out_dir / "convergence.png",
+                      f"{scene.name}, {width}x{height}", target)
+    common = equal_time_strip(ladders, reference_pixels, out_dir / "equal-time.png")
+    write_image(out_dir / "reference.exr", reference_pixels)
+    echo(f"time to reach relMSE {target:g}:")
+    for ladder in ladders:
+        reached = time_to_reach(ladder, target)
+        if reached is None:
+            text = "n/a (already below it at 1 spp, or the error stopped falling)"
+        else:
+            text = f"{reached[0]:.2f} s" + (" (extrapolated with slope -1)" if reached[1] else "")
+        echo(f"  {ladder[0].estimator:12} {text}")
+    most_spp = max(ladder[-1].spp for ladder in ladders)
+    if reference is None and most_spp * 8 > reference_spp:
+        echo(f"note: the ladder reached {most_spp} spp and the reference has {reference_spp}: "
+             f"its noise inflates the last errors; use --reference-spp {most_spp * 16}")
+    echo(f"equal-time strip at about {common:.1f} s")
+    for name in ("convergence.csv", "convergence.png", "equal-time.png", "reference.exr"):
+        echo(f"wrote {(out_dir / name).resolve()}")
+    return ladders
