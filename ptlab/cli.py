@@ -145,6 +145,12 @@ def build_parser() -> argparse.ArgumentParser:
                     "ptlab.grading on it; exit 0 only if all pass (1 if any fails, 2 if the "
                     "file cannot be loaded)."))
 
+    from ptlab.exercises.cli import add_exercise_arguments
+    add_exercise_arguments(commands.add_parser(
+        "exercise", help="the step-by-step exercises: start, check, list",
+        description="Exercises from Whitted ray tracing to path tracing: `start NN` copies a "
+                    "chapter's file, `check NN FILE` grades it, `list` shows your progress."))
+
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
 
@@ -311,9 +317,10 @@ def _scenes(args) -> int:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    from ptlab.exercises.cli import run_exercise
     from ptlab.grading.cli import run_grade
-    handler = {"render": _render, "bench": _bench, "grade": run_grade,
-               "converge": _converge, "scenes": _scenes}[args.command]
+    handler = {"render": _render, "bench": _bench, "grade": run_grade, "converge": _converge,
+               "exercise": run_exercise, "scenes": _scenes}[args.command]
     try:
         return handler(args)
     except PtlabError as error:

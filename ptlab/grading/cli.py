@@ -85,7 +85,7 @@ def load_material(target: str, arguments: str = "{}"):
         raise GradeLoadError(f"--args is not valid JSON: {error}") from None
     if not isinstance(keywords, dict):
         raise GradeLoadError("--args must be a JSON object, e.g. '{\"roughness\": 0.3}'")
-    module = _import(path)
+    module = import_file(path)
     if not hasattr(module, name):
         raise GradeLoadError(f"{file}: no class or object named {name!r}")
     found = getattr(module, name)
@@ -103,7 +103,7 @@ def load_material(target: str, arguments: str = "{}"):
     return found
 
 
-def _import(path: Path):
+def import_file(path: Path):
     """Import a Python file as a module of its own; its folder is importable while it loads."""
     module_name = f"ptlab_graded_{abs(hash(str(path.resolve())))}"
     spec = importlib.util.spec_from_file_location(module_name, path)

@@ -1,15 +1,156 @@
-"""Whitted-style ray tracing (GAMES101 Homework 5), vectorised. (Stub: to be written.)"""
+"""Whitted-style ray tracing (GAMES101 Homework 5), run over a whole batch of rays at once.
+
+Whitted's ray tracer (T. Whitted 1980, "An Improved Illumination Model for Shaded Display";
+GAMES101 lecture 13) follows light only where it is easy to follow: along the single
+directions in which mirrors reflect and glass reflects and refracts. Homework 5's
+``castRay(ray, depth)``, per ray:
+
+1. find the closest hit; a ray that sees a light adds its emission Le;
+2. at a mirror: trace the reflected ray, times the mirror's reflectance R;
+3. at glass: trace *both* the reflected and the refracted ray and add them, weighted by the
+   Fresnel reflectance kr and by 1 - kr (total internal reflection: kr = 1, the reflected
+   ray only);
+4. at any other surface (diffuse, glossy): add the direct light, Le f_r cos(theta)
+   cos(theta') / |x - x'|^2 / pdf_light if the shadow ray reaches the light, and stop. The
+   light that reaches the surface after bouncing off other diffuse surfaces (indirect
+   light) is missing: that is what the path tracer of Homework 7 adds
+   (``ptlab.integrators.path``).
+
+Rays stop after ``max_depth`` bounces (the homework's ``maxDepth = 5``); rays that escape
+add nothing (the homework adds a background colour).
+
+Two differences from the homework, so that Whitted and the path tracer render the same
+scenes and agree wherever they both apply:
+
+* the lights are the scene's emissive triangles, sampled at one random point per ray with a
+  shadow ray (the path tracer's ``direct_light``), instead of point lights; so the direct
+  light is noisy (soft shadows) where the homework's is exact (hard shadows);
+* surfaces shade with their material's own BSDF (``Material.eval``) instead of the Phong
+  model, and refracted radiance carries the material's 1 / eta_rel^2 factor
+  (``ptlab.materials.dielectric``).
+
+Glass splits each ray in two where the path tracer picks one of the two at random with
+probability kr: the weights below are the Dielectric's ``sample_weight`` averaged over that
+choice, so for light that reaches the camera through mirrors and glass only, the expected
+images are the same, and Whitted's has no noise. Any other delta material (``Mirror``)
+continues along the one direction its ``sample_weight`` gives. Every ray that goes on
+follows a mirror or glass, so every ray counts the emission it sees (the path tracer's
+``sees_emission``), which is also why the lights are not black. A split doubles the glass
+rows: the batch of a glass pixel grows up to 2^max_depth rays.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.integrators.path import Paths, PathSettings
+from ptlab.integrators.path import Paths, PathSettings, SurfaceHit, add_emission, direct_light, surface_hit
+from ptlab.materials.dielectric import Dielectric, fresnel_dielectric, refract
 from ptlab.scene import Scene
+from ptlab.vectors import dot, reflect, take_rows, vec3
+
+#: Direct light by light sampling only, and emission counted where the ray may see it: the
+#: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with).
+LIGHT_SAMPLING = PathSettings(strategy="nee")
 
 
 def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
                   rng: np.random.Generator, settings: PathSettings) -> int:
-    """Add the Whitted estimate of each camera ray into ``film``; return the rays traced."""
-    raise NotImplementedError("whitted")
+    """Trace a batch of camera rays the Whitted way, adding their radiance into ``film``.
+
+    Args:
+        film: (P, 3) float64 sums of radiance per pixel, updated in place.
+        paths: the camera rays, throughput 1.
+        rng: this batch's random stream (light samples only; mirrors and glass use none).
+        settings: only ``max_depth`` is used (no Russian roulette, no strategies).
+
+    Returns:
+        the number of rays traced (closest-hit and shadow rays).
+    """
+    rays = 0
+    for depth in range(settings.max_depth + 1):
+        hits = accel.intersect(paths.origins, paths.dirs)
+        rays += len(hits.prim)
+        hit = surface_hit(scene, paths, hits)            # drops the rays that missed
+        if len(hit.prim) == 0:
+            break
+        add_emission(film, scene, hit, LIGHT_SAMPLING)   # camera rays and mirror/glass rays
+        if depth == settings.max_depth:
+            break
+        u = rng.random((5, len(hit.prim)), dtype=np.float32)   # one row per dimension
+        if scene.lights is not None:                   # diffuse and glossy: direct light only
+            rays += direct_light(film, scene, accel, hit, u[0:3].T, LIGHT_SAMPLING)
+        if not hit.delta.any():                          # no mirror or glass: every ray ends
+            break
+        paths = reflect_and_refract(hit, u[3:5].T)       # glass: two rays for one
+        if len(paths.pixel) == 0:
+            break
+    return rays
+
+
+def reflect_and_refract(hit: SurfaceHit, u: np.ndarray) -> Paths:
+    """The rays leaving the mirrors and glass among ``hit``; the other rows end.
+
+    Glass rows become two rays each (``fresnel_split``); any other delta material gives the
+    one direction and weight of its ``sample_weight`` (deterministic for ``Mirror``; u: (N, 2)
+    uniforms for a material that samples).
+    """
+    rows, wi, weight = [], [], []
+    for group_rows, material in hit.materials:
+        if not material.is_delta:
+            continue
+        index = np.arange(len(hit.prim)) if group_rows is None else group_rows
+        wo, n, front = take_rows(hit.wo, index), take_rows(hit.n, index), hit.front.take(index)
+        if isinstance(material, Dielectric):
+            branches = fresnel_split(material, wo, n, front)
+        else:
+            branches = [material.sample_weight(wo, n, take_rows(u, index), front)]
+        for branch_wi, branch_weight in branches:
+            rows.append(index)
+            wi.append(branch_wi)
+            weight.append(branch_weight)
+    return next_rays(hit, np.concatenate(rows), concatenate_rows(wi), concatenate_rows(weight))
+
+
+def fresnel_split(glass: Dielectric, wo: np.ndarray, n: np.ndarray,
+                  front: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """Homework 5's ``REFLECTION_AND_REFRACTION`` case: both rays, each with its weight.
+
+    Args:
+        glass: the glass of these rows (per-row ``eta`` and ``transmittance``).
+        wo: (N, 3) unit directions back along the rays.
+        n: (N, 3) unit normals on the side of ``wo`` (``SurfaceHit.n``).
+        front: (N,) bool, True where ``wo`` is outside the glass.
+
+    Returns:
+        [(reflected wi, kr), (refracted wi, (1 - kr) transmittance / eta_rel^2)], (N, 3) each.
+        Under total internal reflection kr = 1 and the refracted weight is 0.
+    """
+    eta = np.asarray(glass.eta, dtype=n.dtype)
+    eta_rel = np.where(front, eta, 1 / eta)     # the index beyond the surface over wo's side
+    cos_theta_o = dot(wo, n)
+    kr = fresnel_dielectric(cos_theta_o, eta_rel)
+    transmitted = ((1 - kr) / (eta_rel * eta_rel))[:, None] * glass.transmittance.astype(n.dtype)
+    return [(reflect(wo, n), vec3(kr, kr, kr)), (refract(wo, n, eta_rel), transmitted)]
+
+
+def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndarray) -> Paths:
+    """New rays from the hits ``rows`` (repeats allowed) along ``wi``, throughput times ``weight``.
+
+    Rays whose throughput is 0 (a refraction under total internal reflection, a black
+    mirror) are dropped; the others start off the surface on the side ``wi`` goes to, as
+    the path tracer's do (``scatter``).
+    """
+    throughput = take_rows(hit.throughput, rows) * weight
+    go_on = np.flatnonzero((throughput > 0).any(axis=1))
+    rows, wi, throughput = rows.take(go_on), take_rows(wi, go_on), take_rows(throughput, go_on)
+    n, offset = take_rows(hit.n, rows), hit.offset.take(rows)
+    side = np.where(dot(wi, n) >= 0, offset, -offset)
+    return Paths(origins=take_rows(hit.p, rows) + side[:, None] * n, dirs=wi,
+                 throughput=throughput, pixel=hit.pixel.take(rows),
+                 sees_emission=np.ones(len(rows), dtype=bool))
+
+
+def concatenate_rows(arrays: list[np.ndarray]) -> np.ndarray:
+    """(N, 3) arrays one after the other, in the column-major layout of ``ptlab.vectors``."""
+    return np.concatenate([a.T for a in arrays], axis=1).T

@@ -1,0 +1,138 @@
+"""Chapter 1's checks: cameras and primary rays (``generate_rays``).
+
+Known answers come from the pinhole model itself (the centre ray is ``forward``, the edge of
+the image is fov_y / 2 off it, pixel (0, 0) is top left), then the student's rays render the
+Cornell box's normals, which must match the library's picture.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+
+def _camera():
+    from ptlab.camera import Camera
+    return Camera.look_at((1.0, 2.0, 3.0), (1.5, 1.8, -2.0), up=(0.1, 1.0, 0.0), fov_y=50.0)
+
+
+def _rays(module, camera, width, height, pixel_x, pixel_y, u):
+    """The student's rays, checked for shape, type and length."""
+    (generate_rays,) = require(module, "generate_rays")
+    result = generate_rays(camera, width, height, np.asarray(pixel_x), np.asarray(pixel_y),
+                           np.asarray(u, dtype=np.float32))
+    if not (isinstance(result, tuple) and len(result) == 2):
+        raise CheckFailed("generate_rays must return two arrays: (origins, dirs)")
+    origins, dirs = (np.asarray(a, dtype=np.float64) for a in result)
+    n = len(np.atleast_1d(pixel_x))
+    if origins.shape != (n, 3) or dirs.shape != (n, 3):
+        raise CheckFailed(f"expected origins and dirs of shape ({n}, 3), got {origins.shape} "
+                          f"and {dirs.shape}")
+    if not (np.isfinite(origins).all() and np.isfinite(dirs).all()):
+        raise CheckFailed("the rays contain NaN or infinite numbers")
+    return origins, dirs
+
+
+def check_centre_ray(module) -> str:
+    camera = _camera()
+    origins, dirs = _rays(module, camera, 5, 3, [2], [1], [[0.5, 0.5]])
+    if not np.allclose(origins[0], camera.position, atol=1e-5):
+        raise CheckFailed(f"the ray should start at the eye {camera.position}, not {origins[0]}")
+    if not np.allclose(dirs[0], camera.forward, atol=1e-5):
+        raise CheckFailed(f"the ray through the image's centre should go along forward "
+                          f"{np.round(camera.forward, 4)}, not {np.round(dirs[0], 4)}")
+    return "the centre ray goes along forward"
+
+
+def check_unit_length(module) -> str:
+    rng = np.random.default_rng(1)
+    _, dirs = _rays(module, _camera(), 64, 48, rng.integers(0, 64, 500), rng.integers(0, 48, 500),
+                    rng.random((500, 2)))
+    length = np.linalg.norm(dirs, axis=1)
+    worst = np.argmax(np.abs(length - 1))
+    if abs(length[worst] - 1) > 1e-5:
+        raise CheckFailed(f"directions must have length 1; one has length {length[worst]:.4f} "
+                          "(normalise them)")
+    return "every direction has length 1"
+
+
+def check_field_of_view(module) -> str:
+    camera = _camera()
+    width, height = 40, 20
+    # The middle of the top edge and the middle of the left edge.
+    _, dirs = _rays(module, camera, width, height, [20, 0], [0, 10], [[0.0, 0.0], [0.0, 0.0]])
+    half_fov = math.radians(camera.fov_y) / 2
+    top_angle = math.acos(np.clip(dirs[0] @ camera.forward, -1, 1))
+    if abs(top_angle - half_fov) > 1e-4:
+        raise CheckFailed(f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
+                          f"degrees off forward, yours is {math.degrees(top_angle):.2f}")
+    expected_side = math.atan(math.tan(half_fov) * width / height)
+    side_angle = math.acos(np.clip(dirs[1] @ camera.forward, -1, 1))
+    if abs(side_angle - expected_side) > 1e-4:
+        raise CheckFailed(f"the left edge should be atan(tan(fov_y / 2) * width / height) = "
+                          f"{math.degrees(expected_side):.2f} degrees off forward, yours is "
+                          f"{math.degrees(side_angle):.2f} (the aspect ratio?)")
+    return "the image spans fov_y vertically, times the aspect ratio across"
+
+
+def check_orientation(module) -> str:
+    camera = _camera()
+    _, dirs = _rays(module, camera, 10, 10, [0], [0], [[0.0, 0.0]])
+    if dirs[0] @ camera.up <= 0:
+        raise CheckFailed("pixel (0, 0) should be at the top of the image (rows go down, y up)")
+    if dirs[0] @ camera.right >= 0:
+        raise CheckFailed("pixel (0, 0) should be on the left of the image (x grows to the right)")
+    return "pixel (0, 0) is the top-left corner"
+
+
+def check_known_rays(module) -> str:
+    from ptlab.camera import generate_rays
+    camera = _camera()
+    rng = np.random.default_rng(7)
+    pixel_x, pixel_y, u = rng.integers(0, 32, 200), rng.integers(0, 24, 200), rng.random((200, 2))
+    _, dirs = _rays(module, camera, 32, 24, pixel_x, pixel_y, u)
+    _, expected = generate_rays(camera, 32, 24, pixel_x, pixel_y, u.astype(np.float32))
+    worst = np.abs(dirs - expected).max()
+    if worst > 1e-4:
+        raise CheckFailed(f"rays through jittered points differ from the pinhole model's by up "
+                          f"to {worst:.4f} (is u added to the pixel coordinates?)")
+    return "200 jittered rays match the pinhole model"
+
+
+def check_render(module) -> str:
+    import ptlab
+    import ptlab.jobs
+    from ptlab.exercises.plug import plugged
+
+    def student_rays(camera, width, height, pixel_x, pixel_y, u):
+        origins, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
+        return (np.asfortranarray(origins, dtype=np.float32),
+                np.asfortranarray(dirs, dtype=np.float32))
+
+    options = dict(spp=2, res=(48, 36), integrator="normals", workers=1, seed=3)
+    expected = ptlab.render("cornell-box", **options)
+    with plugged(ptlab.jobs, generate_rays=student_rays):
+        image = ptlab.render("cornell-box", **options)
+    difference = np.abs(image - expected).mean()
+    if difference > 1e-3:
+        raise CheckFailed(f"the Cornell box's normals seen through your rays differ from the "
+                          f"library's by {difference:.4f} on average")
+    return "the Cornell box seen through your rays matches"
+
+
+CHAPTER = Chapter(
+    number=1, slug="cameras", title="Cameras and primary rays",
+    functions=("generate_rays",),
+    checks=(
+        Check("centre ray", 2, check_centre_ray, timeout=30),
+        Check("unit directions", 1, check_unit_length, timeout=30),
+        Check("field of view", 2, check_field_of_view, timeout=30),
+        Check("image orientation", 1, check_orientation, timeout=30),
+        Check("jittered rays", 2, check_known_rays, timeout=30),
+        Check("render", 2, check_render, timeout=60),
+    ),
+)
