@@ -1,0 +1,24 @@
+"""Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
+
+
+def test_there_is_a_tutorial_per_chapter():
+    from ptlab.exercises import all_chapters
+    assert [p.stem for p in TUTORIALS] == [c.stem for c in all_chapters()]
+
+
+@pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
+def test_tutorial_runs_at_reduced_settings(script, tmp_path):
+    run = subprocess.run([sys.executable, str(script), "--res", "32", "--spp", "1",
+                          "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr[-2000:]
+    assert list(tmp_path.glob("*.png")), f"{script.name} wrote no picture"
