@@ -132,7 +132,7 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         if depth == settings.max_depth:
             break
         u = rng.random((6, len(hit.prim)), dtype=np.float32)   # one row per dimension
-        if settings.strategy != "bsdf":
+        if settings.strategy != "bsdf" and scene.lights is not None:
             rays += direct_light(film, scene, accel, hit, u[0:3].T, settings)
         survive = russian_roulette(hit, depth, settings, u[3])
         paths = scatter(scene, hit, u[4:6].T, survive,   # keeps the survivors only
@@ -283,12 +283,18 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
     go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
                                       | (throughput[:, 2] > 0)))
     wi, n, p, offset = (take_rows(a, go_on) for a in (wi, hit.n, hit.p, hit.offset))
-    # Leave the surface on the side the new direction goes to.
-    side = np.where(dot(wi, n) >= 0, offset, -offset)
-    return Paths(origins=p + side[:, None] * n, dirs=wi,
+    return Paths(origins=leave_surface(p, n, offset, wi), dirs=wi,
                  throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on),
                  sees_emission=hit.delta.take(go_on),
                  pdf=None if pdf is None else pdf.take(go_on))
+
+
+def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarray) -> np.ndarray:
+    """(N, 3) origins of new rays from points ``p`` along ``wi``: moved ``offset`` off the
+    surface along ``n``, to the side ``wi`` goes to (so a ray neither hits the surface it
+    leaves nor starts on the wrong side of it; pbrt-v4's ``OffsetRayOrigin``)."""
+    side = np.where(dot(wi, n) >= 0, offset, -offset)
+    return p + side[:, None] * n
 
 
 def material_groups(scene: Scene, prim: np.ndarray) -> list:
