@@ -8,13 +8,20 @@ small enough to be an exercise:
   "On fast Construction of SAH-based Bounding Volume Hierarchies", IEEE RT 2007.
   The tree is built one level at a time: every node of a level is binned and split by
   the same handful of whole-array operations, so Python loops only over the levels.
+  The SAH itself is two small functions: ``split_costs`` (the cost of every candidate
+  split) and ``best_split`` (the cheapest one, or a leaf).
 * **Slab test** (``slab_test``): ray against axis-aligned box, as in A. Williams et al.,
   "An Efficient and Robust Ray-Box Intersection Algorithm", JGT 2005, and pbrt-v4
   section 6.1.2.
 * **Traversal** (``NumpyBVH.intersect`` / ``occluded``): all rays walk the tree at
   once. Each ray has its own stack of nodes still to visit; every step pops one node
   for every unfinished ray, tests it, and either tests the leaf's triangles
-  (``ptlab.accel.triangle.ray_triangle``) or pushes the two children, near one on top.
+  (``ptlab.accel.triangle.ray_triangle``) or pushes the two children, near one on top
+  (``child_order``).
+
+``slab_test``, ``ray_triangle``, ``split_costs``, ``best_split`` and ``child_order`` are
+looked up in this module by name when they are called, so an exercise can swap any of
+them for a student's own (``ptlab.exercises.plug``).
 
 The tree is stored as flat arrays (one row per node), the layout a GPU or a C
 implementation would use too: node ``i`` has bounds ``box_min[i], box_max[i]``; an
@@ -129,6 +136,66 @@ def _running(op: np.ufunc, a: np.ndarray) -> np.ndarray:
     return out
 
 
+def split_costs(bin_count: np.ndarray, bin_lo: np.ndarray, bin_hi: np.ndarray,
+                node_lo: np.ndarray, node_hi: np.ndarray,
+                traversal_cost: float = 1.0) -> np.ndarray:
+    """SAH cost of every candidate split of K nodes binned into B bins along each axis.
+
+    Split plane i (0 <= i < B - 1) of an axis puts bins 0..i on the left and i+1..B-1 on
+    the right; with N_L, N_R triangles in boxes of surface areas S_L, S_R, in a node of
+    area S, it is expected to cost ``traversal_cost + (N_L S_L + N_R S_R) / S`` triangle
+    tests (the SAH: pbrt-v4 7.3.2, Wald 2007). The sweep accumulates counts and bounds
+    from each end, so every plane costs O(1).
+
+    Args:
+        bin_count: (B, K, 3) triangles in bin b of node k along axis a.
+        bin_lo, bin_hi: (B, K, 3, 3) bounds of those triangles (last axis x, y, z);
+            an empty bin has ``bin_lo = inf``, ``bin_hi = -inf``.
+        node_lo, node_hi: (K, 3) bounds of each node.
+        traversal_cost: cost of visiting a node, in units of one triangle test.
+
+    Returns:
+        (B - 1, K, 3) cost of plane i of node k along axis a; ``inf`` where one side
+        would be empty (such a split would not divide the node).
+    """
+    left_n = np.cumsum(bin_count, axis=0)[:-1]
+    right_n = bin_count.sum(axis=0) - left_n
+    left_a = _half_area(_running(np.minimum, bin_lo)[:-1], _running(np.maximum, bin_hi)[:-1])
+    right_a = _half_area(_running(np.minimum, bin_lo[::-1])[-2::-1],
+                         _running(np.maximum, bin_hi[::-1])[-2::-1])
+    # Half areas: the factor 2 cancels in the ratio. `tiny` keeps a degenerate node finite.
+    node_a = np.maximum(_half_area(node_lo, node_hi), np.finfo(float).tiny)
+    cost = traversal_cost + (left_n * left_a + right_n * right_a) / node_a[:, None]
+    cost[(left_n == 0) | (right_n == 0)] = np.inf
+    return cost
+
+
+def best_split(cost: np.ndarray, size: np.ndarray,
+               max_leaf_size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The cheapest split of each node, and whether the node should rather be a leaf.
+
+    A leaf of N triangles costs N triangle tests; a node is made a leaf when it may be
+    one (``N <= max_leaf_size``) and its cheapest split costs no less (pbrt-v4 7.3.2).
+    Ties go to the lowest plane, then the lowest axis.
+
+    Args:
+        cost: (B - 1, K, 3) from ``split_costs``.
+        size: (K,) triangles in each node.
+        max_leaf_size: the most triangles a leaf may hold.
+
+    Returns:
+        split_bin: (K,) the plane (the last bin on the left side) of the cheapest split.
+        split_axis: (K,) its axis, 0, 1 or 2.
+        make_leaf: (K,) bool, True where the node becomes a leaf.
+    """
+    k = cost.shape[1]
+    flat = cost.transpose(1, 0, 2).reshape(k, -1)          # (node, plane * 3 + axis)
+    best = flat.argmin(axis=1)
+    split_bin, split_axis = np.divmod(best, 3)
+    make_leaf = (size <= max_leaf_size) & (flat[np.arange(k), best] >= size)
+    return split_bin, split_axis, make_leaf
+
+
 def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
               traversal_cost: float = 1.0) -> FlatBVH:
     """Top-down binned-SAH BVH (pbrt-v4 7.3.2; Wald 2007), one tree level at a time.
@@ -192,22 +259,9 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
         bin_lo = _scatter(np.minimum, key, tri_lo32[tri], np.inf, (n_bins, k, 3, 3))
         bin_hi = _scatter(np.maximum, key, tri_hi32[tri], -np.inf, (n_bins, k, 3, 3))
 
-        # Sweep: split plane i puts bins 0..i on the left and i+1.. on the right.
-        left_n = np.cumsum(bin_count, axis=0)[:-1]
-        right_n = size[:, None] - left_n
-        left_a = _half_area(_running(np.minimum, bin_lo)[:-1],
-                            _running(np.maximum, bin_hi)[:-1])
-        right_a = _half_area(_running(np.minimum, bin_lo[::-1])[-2::-1],
-                             _running(np.maximum, bin_hi[::-1])[-2::-1])
-        node_a = np.maximum(_half_area(box_lo, box_hi), np.finfo(float).tiny)
-        cost = traversal_cost + (left_n * left_a + right_n * right_a) / node_a[:, None]
-        cost[(left_n == 0) | (right_n == 0)] = np.inf
-        cost = cost.transpose(1, 0, 2).reshape(k, -1)          # (node, plane * 3 + axis)
-        best = cost.argmin(axis=1)
-        best_cost = cost[np.arange(k), best]
-        split_bin, split_axis = np.divmod(best, 3)
-
-        is_leaf = (size <= max_leaf_size) & (best_cost >= size)
+        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo, box_hi, traversal_cost)
+        split_bin, split_axis, is_leaf = best_split(cost, size, max_leaf_size)
+        best_cost = cost[split_bin, np.arange(k), split_axis]
         median = ~is_leaf & np.isinf(best_cost)    # all centroids coincide
         split_axis[median] = 0
 
@@ -371,15 +425,36 @@ class NumpyBVH:
     def _push_children(self, j: np.ndarray, node: np.ndarray, d: np.ndarray,
                        stack: np.ndarray, sp: np.ndarray) -> None:
         """Push the two children of inner ``node`` on the stacks of rays ``j``: the far
-        one first, so the near one (on the side the ray comes from along the split
-        axis) is popped next and its hits can cull the far one."""
+        one first, so the near one (``child_order``) is popped next and its hits can
+        cull the far one."""
         n = d.shape[1]
-        first_child = self.bvh.child.take(node)
-        backwards = d.take(self.bvh.axis.take(node) * n + j) < 0   # meets child 2 first
+        near, far = child_order(self.bvh.child.take(node), self.bvh.axis.take(node),
+                                d.take(j, axis=1).T)
         top = sp.take(j) * n + j
-        stack.put(top + n, first_child + ~backwards)           # far
-        stack.put(top + 2 * n, first_child + backwards)        # near
+        stack.put(top + n, far)
+        stack.put(top + 2 * n, near)
         sp[j] += 2
+
+
+def child_order(first_child: np.ndarray, axis: np.ndarray,
+                dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Which child of each inner node a ray meets first (pbrt-v4 7.3.5's ``dirIsNeg``).
+
+    Child ``first_child`` holds the triangles on the low side of the split plane along
+    ``axis``, child ``first_child + 1`` the high side. A ray going up that axis meets
+    the low child first; a ray going down meets the high child first. Visiting the near
+    child first finds near hits early, and they cull the far child's boxes.
+
+    Args:
+        first_child: (J,) index of the low child of each ray's node.
+        axis: (J,) the node's split axis, 0, 1 or 2.
+        dirs: (J, 3) the rays' directions.
+
+    Returns:
+        near, far: (J,) node indices, the child to visit first and the other one.
+    """
+    backwards = dirs[np.arange(len(axis)), axis] < 0       # meets the high child first
+    return first_child + backwards, first_child + ~backwards
 
 
 def _component_major(vectors: np.ndarray) -> np.ndarray:

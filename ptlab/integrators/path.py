@@ -210,11 +210,11 @@ def mis_weight(pdf: np.ndarray, other: np.ndarray, heuristic: str = "power") -> 
     """The MIS weight of a sample drawn with density ``pdf`` when the other strategy would
     have drawn it with density ``other`` (Veach 1997, section 9.2): the power heuristic
     (beta = 2) p^2 / (p^2 + q^2), or the balance heuristic p / (p + q)."""
+    # Written with the ratio q / p so that huge or tiny pdfs (a sharp lobe's peak, float32)
+    # neither overflow nor underflow: p = 0 gives weight 0, q = 0 weight 1.
     with np.errstate(invalid="ignore", over="ignore", divide="ignore"):
-        if heuristic == "balance":
-            weight = pdf / (pdf + other)
-        else:
-            weight = pdf * pdf / (pdf * pdf + other * other)
+        ratio = other / pdf
+        weight = 1 / (1 + ratio) if heuristic == "balance" else 1 / (1 + ratio * ratio)
     return np.nan_to_num(weight, nan=0.0)
 
 

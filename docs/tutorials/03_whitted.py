@@ -1,0 +1,79 @@
+"""Chapter 3 tutorial: Whitted-style ray tracing with a mirror and a glass sphere.
+
+Prints the laws of a smooth surface at a few angles (the mirror direction, Snell's law, the
+Fresnel reflectance and total internal reflection), then renders the Cornell box's walls
+with a mirror sphere and a glass sphere with the Whitted ray tracer of Homework 5
+(``integrator="whitted"``), and again with the chapter's typical mistake: the index of
+refraction taken the wrong way up (eta_i / eta_t for eta_t / eta_i), so that glass bends
+light the wrong way and reflects it totally on the way in.
+
+    python docs/tutorials/03_whitted.py                  # writes whitted.png, whitted-wrong.png
+    python docs/tutorials/03_whitted.py --res 64 --spp 1 --out /tmp/t
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
+from ptlab.image import write_image
+from ptlab.materials.dielectric import fresnel_dielectric, refract
+from ptlab.vectors import reflect
+
+
+def refract_inverted(wo, n, eta):
+    """The typical mistake: eta used the wrong way up."""
+    return refract(wo, n, 1 / np.asarray(eta, dtype=wo.dtype))
+
+
+def fresnel_inverted(cos_theta_i, eta):
+    return fresnel_dielectric(cos_theta_i, 1 / np.asarray(eta, dtype=np.result_type(cos_theta_i)))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--res", type=int, default=160, help="image size (default 160)")
+    parser.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
+    parser.add_argument("--out", default=".", help="output folder (default here)")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    n = np.array([[0.0, 1.0, 0.0]])
+    print("Rays arriving at a surface with normal n = +y (wo points back along each ray, away "
+          "from the surface):")
+    for degrees, eta, where in [(45, 1.5, "entering glass"), (30, 1 / 1.5, "leaving glass")]:
+        theta = math.radians(degrees)
+        wo = np.array([[math.sin(theta), math.cos(theta), 0.0]])
+        wt = refract(wo, n, eta)[0]
+        print(f"  {where:14} at {degrees} degrees: wo {np.round(wo[0], 4)}, reflect "
+              f"{np.round(reflect(wo, n)[0], 4)}, refract (eta {eta:.3f}) {np.round(wt, 4)}: "
+              f"theta_t {math.degrees(math.acos(-wt[1])):.2f} degrees, F = "
+              f"{fresnel_dielectric(np.array([wo[0, 1]]), eta)[0]:.4f}")
+    print("The Fresnel reflectance of glass (eta 1.5) from normal to grazing incidence:")
+    degrees = np.array([0, 30, 45, 60, 75, 85, 89.9])
+    for eta, where in [(1.5, "entering"), (1 / 1.5, "leaving")]:
+        F = fresnel_dielectric(np.cos(np.radians(degrees)), eta)  # noqa: N806 (the usual name)
+        print(f"  {where:9} " + "  ".join(f"{d:4g} deg {f:.3f}" for d, f in zip(degrees, F, strict=True)))
+    print(f"  normal incidence: ((eta - 1) / (eta + 1))^2 = {(0.5 / 2.5) ** 2:.3f}; leaving glass, "
+          f"everything is reflected beyond the critical angle asin(1 / 1.5) = "
+          f"{math.degrees(math.asin(1 / 1.5)):.1f} degrees")
+
+    scene = spheres_scene()
+    options = dict(spp=args.spp, res=args.res, seed=0)
+    right = whitted_image(scene, **options)
+    wrong = whitted_image(scene, refract=refract_inverted, fresnel=fresnel_inverted, **options)
+    differ = ~np.isclose(right, wrong, rtol=1e-3, atol=1e-4).all(axis=2)
+    print(f"Whitted render, {args.res} x {args.res}, {args.spp} spp: with eta the wrong way up "
+          f"{differ.mean():.0%} of the pixels change (the glass sphere, and its image in the mirror)")
+    write_image(out / "whitted.png", right)
+    write_image(out / "whitted-wrong.png", wrong)
+    print(f"wrote {out / 'whitted.png'} and {out / 'whitted-wrong.png'}")
+
+
+if __name__ == "__main__":
+    main()

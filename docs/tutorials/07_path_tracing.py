@@ -1,0 +1,107 @@
+"""Chapter 7 tutorial: the path tracer, and its three classic mistakes.
+
+Renders the white furnace (a closed sphere that glows Le = 0.3 and reflects albedo 0.5
+everywhere: exactly Le / (1 - albedo) = 0.6 wherever you look) and the Cornell box with the
+library's path tracer, then with each mistake of the homework's castRay put in its place:
+
+* the black light: the emission that camera rays see is never added;
+* double counting: emission added on every hit, although light sampling already counted it;
+* no shadow-ray epsilon: shadow rays start exactly on their surface (shadow acne).
+
+    python docs/tutorials/07_path_tracing.py             # writes path-tracing*.png
+    python docs/tutorials/07_path_tracing.py --res 64 --spp 4 --out /tmp/t
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+import numpy as np
+
+import ptlab
+import ptlab.integrators.path as path
+from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
+from ptlab.exercises.plug import plugged
+from ptlab.image import write_image
+from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, shade
+from ptlab.vectors import dot
+
+library_scatter = path.scatter
+
+
+def no_emission(film, scene, hit, settings) -> None:
+    """The black light: camera rays add nothing for the light they see."""
+
+
+def scatter_seeing_emission(scene, hit, u, survive, with_pdf=False):
+    """Double counting: the rays after a diffuse bounce add the emission they hit, although
+    light sampling at the bounce has already counted that light."""
+    paths = library_scatter(scene, hit, u, survive, with_pdf)
+    paths.sees_emission[:] = True
+    return paths
+
+
+def direct_light_without_epsilon(film, scene, accel, hit, u, settings) -> int:
+    """Light sampling whose shadow rays start exactly on the surface (no offset): in float32
+    most of them hit the surface they start on, "shadow acne"."""
+    light = scene.lights.sample(u)
+    to_light = light.points - hit.p
+    dist2 = dot(to_light, to_light)
+    wi = to_light / np.sqrt(dist2)[:, None]
+    cosines = np.maximum(dot(hit.n, wi), 0) * np.maximum(-dot(light.normals, wi), 0)
+    visible = ~accel.occluded(hit.p, to_light, 1 - SHADOW_EPSILON)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    scale = visible * cosines / (dist2 * light.pdf_area)
+    add_to_film(film, hit.pixel, hit.throughput * f * light.radiance * scale[:, None])
+    return len(wi)
+
+
+MISTAKES = {
+    "black light": dict(add_emission=no_emission),
+    "double counting": dict(scatter=scatter_seeing_emission),
+    "no shadow epsilon": dict(direct_light=direct_light_without_epsilon),
+}
+
+
+def render(scene, mistake: str | None, **options) -> np.ndarray:
+    """The library's render, with one mistake plugged into ``ptlab.integrators.path``
+    (in this process: ``workers=1``, where the plugged functions are seen)."""
+    with plugged(path, **MISTAKES.get(mistake, {})):
+        return ptlab.render(scene, workers=1, **options)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
+    parser.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
+    parser.add_argument("--out", default=".", help="output folder (default here)")
+    args = parser.parse_args()
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    furnace = furnace_scene()
+    print("The white furnace: Le = 0.3, albedo 0.5, so Le / (1 - albedo) = 0.6 everywhere")
+    for mistake in (None, *MISTAKES):
+        image = render(furnace, mistake, spp=8, res=16, rr=0.8, seed=1)
+        print(f"  {mistake or 'library':18} mean {image[..., 0].mean():.4f}")
+
+    cornell = ptlab.load_scene("cornell-box")
+    light = cornell.materials[cornell.material_names.index("light")].emission
+    print(f"The Cornell box, {args.res} x {args.res}, {args.spp} spp, rr 0.8 (the light's Le is "
+          f"{np.round(light, 1)}):")
+    names = {None: "path-tracing.png", "black light": "path-tracing-black-light.png",
+             "double counting": "path-tracing-double-counting.png",
+             "no shadow epsilon": "path-tracing-no-epsilon.png"}
+    right = None
+    for mistake, name in names.items():
+        image = render(cornell, mistake, spp=args.spp, res=args.res, rr=0.8, seed=0)
+        right = image if mistake is None else right
+        print(f"  {mistake or 'library':18} brightest pixel {image.max():7.2f}, mean "
+              f"{image.mean():.4f} ({image.mean() / right.mean():.2f}x the library's)")
+        write_image(out / name, image)
+    print(f"wrote {', '.join(str(out / name) for name in names.values())}")
+
+
+if __name__ == "__main__":
+    main()

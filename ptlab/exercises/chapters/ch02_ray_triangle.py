@@ -1,0 +1,241 @@
+"""Chapter 2's checks: ray-triangle intersection, Möller-Trumbore (``ray_triangle``).
+
+Known answers come from the definition of the hit: ``o + t d = (1 - u - v) v0 + u v1 + v v2``
+(Möller and Trumbore 1997; GAMES101 lecture 13). Rays are aimed at chosen ``(t, u, v)``,
+just inside and just outside each edge, parallel to the triangle, at triangles behind the
+origin and at the back face; 2000 random rays and triangles are compared with a direct
+linear solve. Then the student's function runs inside the NumPy BVH, and a path-traced
+Cornell box (whose hit points are built from ``u, v``) must match the library's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+#: The unit triangle in the plane z = 0, and a triangle in general position, each with a
+#: direction that sees its front face (det > 0; the opposite direction sees its back).
+UNIT = ((0.0, 0.0, 0.0), (1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+UNIT_FRONT = (0.0, 0.0, -1.0)
+SLANTED = ((1.0, 2.0, 3.0), (4.0, 1.0, 2.0), (2.0, 5.0, 1.5))
+SLANTED_FRONT = (-0.3, 0.4, -1.2)
+
+#: The render check: the Cornell box path-traced (direct light and one bounce: the hit
+#: points, built from u and v, start the shadow rays and the bounce) through the NumPy BVH,
+#: cut into passes whose spread gives the standard errors; ``ch06_diffuse.compare_renders``
+#: compares the regions (false-alarm rate at most 1e-3). The library's picture comes from
+#: the fastest backend: the same hits, so the same picture up to rounding.
+RENDER = dict(res=32, passes=8, spp_per_pass=4, seed=5, integrator="path", max_depth=2)
+
+
+def _call(module, origins, dirs, v0, e1, e2):
+    """The student's (t, u, v) as float64 (N,) arrays, or a clear failure."""
+    (ray_triangle,) = require(module, "ray_triangle")
+    n = len(origins)
+    with np.errstate(all="ignore"):       # NaN and inf are judged below, not warned about
+        result = ray_triangle(origins, dirs, v0, e1, e2)
+    if not (isinstance(result, tuple) and len(result) == 3):
+        raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
+    t, u, v = (np.asarray(a, dtype=np.float64) for a in result)
+    if t.shape != (n,) or u.shape != (n,) or v.shape != (n,):
+        raise CheckFailed(f"expected t, u and v of shape ({n},), got {t.shape}, {u.shape} and "
+                          f"{v.shape} (one answer per ray)")
+    if np.isnan(t).any():
+        raise CheckFailed("t is NaN for some rays (a division by det = 0? misses must be inf)")
+    return t, u, v
+
+
+def _aimed(triangle, uv, t, dirs):
+    """Rays that reach the point ``uv`` (barycentrics) of ``triangle`` at parameter ``t``
+    along ``dirs``, and the (N, 3) v0, e1, e2 of that triangle."""
+    uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+    v0, e1, e2 = _edges(triangle, len(uv))
+    dirs = np.broadcast_to(np.asarray(dirs, dtype=np.float64), (len(uv), 3)).copy()
+    origins = v0 + uv[:, :1] * e1 + uv[:, 1:] * e2 - np.reshape(t, (-1, 1)) * dirs
+    return origins, dirs, v0, e1, e2
+
+
+def _edges(triangle, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(n, 3) copies of ``triangle``'s v0 and its edges e1 = v1 - v0, e2 = v2 - v0."""
+    v0, v1, v2 = (np.asarray(p, dtype=np.float64) for p in triangle)
+    return tuple(np.tile(a, (n, 1)) for a in (v0, v1 - v0, v2 - v0))
+
+
+def _expect_hits(module, triangle, uv, t, dirs, what: str) -> int:
+    """The student's hits at known (t, u, v); a failure names the first one off."""
+    t_want = np.broadcast_to(np.asarray(t, dtype=np.float64), len(uv))
+    t_got, u_got, v_got = _call(module, *_aimed(triangle, uv, t_want, dirs))
+    for i, (u_want, v_want) in enumerate(uv):
+        got, want = (t_got[i], u_got[i], v_got[i]), (t_want[i], u_want, v_want)
+        if np.allclose(got, want, rtol=1e-5, atol=1e-6):
+            continue
+        if not np.isfinite(t_got[i]):
+            raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} should hit, yours "
+                              f"misses (t = {t_got[i]}){_miss_hint(triangle, dirs, t_want[i])}")
+        hint = ""
+        if np.allclose((u_got[i], v_got[i]), (v_want, u_want), rtol=1e-5, atol=1e-6):
+            hint = " (u and v swapped: u goes with e1 = v1 - v0)"
+        elif np.isclose(u_got[i] + v_got[i], 1 - u_want - v_want, atol=1e-6):
+            hint = " (u, v should weigh v1 and v2; 1 - u - v weighs v0)"
+        elif np.isclose(t_got[i], -t_want[i], rtol=1e-5):
+            hint = " (t has the wrong sign)"
+        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} gets (t, u, v) = "
+                          f"{_fmt(got)}{hint}")
+    return len(uv)
+
+
+def _miss_hint(triangle, direction, t: float) -> str:
+    """Why a ray that should hit at ``t`` may have been dropped: behind, or the back face."""
+    v0, v1, v2 = (np.asarray(p, dtype=np.float64) for p in triangle)
+    det = np.dot(v1 - v0, np.cross(direction, v2 - v0))
+    if t < 0:
+        return " (the triangle is behind the origin: return its negative t all the same)"
+    if det < 0:
+        return " (the ray sees the triangle's back face, det < 0: do not cull it)"
+    return ""
+
+
+def _fmt(values) -> str:
+    return "(" + ", ".join(f"{x:.4g}" for x in values) + ")"
+
+
+def check_known_hits(module) -> str:
+    n = _expect_hits(module, UNIT, [(0.25, 0.5), (0.1, 0.1), (0.6, 0.3)], 1.0, UNIT_FRONT,
+                     "the unit triangle, rays along -z")
+    n += _expect_hits(module, SLANTED, [(0.2, 0.3), (0.7, 0.1), (0.05, 0.9)], [2.5, 0.5, 7.0],
+                      SLANTED_FRONT, "a slanted triangle")
+    t, _, _ = _call(module, *_aimed(UNIT, [(0.25, 0.5)], 0.5, (0, 0, -2)))
+    if not np.isclose(t[0], 0.5, rtol=1e-5):
+        raise CheckFailed(f"with the direction (0, 0, -2), twice as long, the hit 1 unit away "
+                          f"is at t = 0.5, yours says t = {t[0]:.4g} (t is in units of |d|: "
+                          f"do not normalise d)")
+    return f"{n + 1} rays hit at the expected t, u and v"
+
+
+def check_edges(module) -> str:
+    eps = 0.01
+    # (u, v) just outside and just inside each edge, and two far away.
+    outside = {"the edge v0-v2 (u < 0)": (-eps, 0.5), "the edge v0-v1 (v < 0)": (0.5, -eps),
+               "the edge v1-v2 (u + v > 1)": (0.5, 0.5 + eps), "v1's corner": (1.2, -0.1),
+               "the far side of v1-v2": (1.5, 1.5)}
+    inside = [(eps, 0.5), (0.5, eps), (0.5, 0.5 - eps), (0.3, 0.3)]
+    for triangle, dirs in ((UNIT, UNIT_FRONT), (SLANTED, SLANTED_FRONT)):
+        t, _, _ = _call(module, *_aimed(triangle, list(outside.values()), 2.0, dirs))
+        for (edge, uv), t_i in zip(outside.items(), t, strict=True):
+            if np.isfinite(t_i):
+                test = "u + v <= 1" if "u + v" in edge else "u >= 0 and v >= 0"
+                raise CheckFailed(f"the ray through (u, v) = {uv}, outside {edge}, should miss "
+                                  f"(t = inf); yours hits at t = {t_i:.4g} (is {test} tested?)")
+        n_inside = _expect_hits(module, triangle, inside, 2.0, dirs, "just inside an edge")
+    return (f"rays 0.01 outside each edge miss, {n_inside} just inside hit, for two "
+            f"triangles")
+
+
+def check_parallel(module) -> str:
+    cases = {"above the triangle's plane": ((0.25, 0.5, 1.0), (1.0, 0.0, 0.0)),
+             "in the triangle's plane": ((0.25, 0.5, 0.0), (1.0, 1.0, 0.0)),
+             "in the plane, crossing the triangle": ((-1.0, 0.2, 0.0), (1.0, 0.0, 0.0))}
+    origins, dirs = (np.array(a, dtype=np.float64) for a in zip(*cases.values(), strict=True))
+    t, _, _ = _call(module, origins, dirs, *_edges(UNIT, len(cases)))
+    for what, t_i in zip(cases, t, strict=True):
+        if t_i != np.inf:
+            raise CheckFailed(f"a ray {what} has det = 0 and must miss with t = inf; yours "
+                              f"gives t = {t_i:.4g} (guard the division by det)")
+    return "rays parallel to the triangle, in its plane included, miss with t = inf"
+
+
+def check_behind(module) -> str:
+    t, u, v = _call(module, *_aimed(UNIT, [(0.25, 0.5), (0.6, 0.2)], -1.0, UNIT_FRONT))
+    if not np.all(np.isfinite(t)):
+        raise CheckFailed("a triangle behind the ray's origin must still come back as a hit "
+                          "with negative t (here t = -1); yours returns inf. Keeping only "
+                          "tmin < t < tmax is the BVH's job: it needs tmin to skip the "
+                          "surface a ray starts on")
+    if not np.allclose(t, -1.0, rtol=1e-5):
+        raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours "
+                          f"gives {_fmt(t)}")
+    if not np.allclose([u, v], [[0.25, 0.6], [0.5, 0.2]], atol=1e-6):
+        raise CheckFailed(f"behind the origin, u and v are still the hit point's barycentrics, "
+                          f"(0.25, 0.5) and (0.6, 0.2); yours are {_fmt(u)}, {_fmt(v)}")
+    return "triangles behind the origin come back with t = -1"
+
+
+def check_both_faces(module) -> str:
+    n = _expect_hits(module, UNIT, [(0.25, 0.5), (0.6, 0.2)], 1.0, np.negative(UNIT_FRONT),
+                     "the unit triangle from below (its back face: det < 0)")
+    n += _expect_hits(module, SLANTED, [(0.2, 0.3)], 2.0, np.negative(SLANTED_FRONT),
+                      "the slanted triangle from its back (det < 0)")
+    return f"{n} rays hit the back faces (no culling: det < 0 is a hit too)"
+
+
+def check_many(module) -> str:
+    rng = np.random.default_rng(1)
+    n = 2000
+    o, d, v0, e1, e2 = (rng.normal(size=(n, 3)) for _ in range(5))
+    t, u, v = _call(module, o, d, v0, e1, e2)
+    # o + t d = v0 + u e1 + v e2, solved as a 3x3 linear system per ray.
+    tuv = np.linalg.solve(np.stack([d, -e1, -e2], axis=-1), (v0 - o)[..., None])[..., 0]
+    inside = (tuv[:, 1] >= 0) & (tuv[:, 2] >= 0) & (tuv[:, 1] + tuv[:, 2] <= 1)
+    clear = np.min(np.abs([tuv[:, 1], tuv[:, 2], 1 - tuv[:, 1] - tuv[:, 2]]), axis=0) > 1e-6
+    wrong = clear & (np.isfinite(t) != inside)
+    if wrong.any():
+        i = np.flatnonzero(wrong)[0]
+        hint = ""
+        if inside[i]:
+            hint = _miss_hint((v0[i], v0[i] + e1[i], v0[i] + e2[i]), d[i], tuv[i, 0])
+        raise CheckFailed(f"{wrong.sum()} of {n} random rays {'miss' if inside[i] else 'hit'} "
+                          f"where they should not, e.g. ray {i}, whose (t, u, v) is "
+                          f"{_fmt(tuv[i])}{hint}")
+    for name, got, want in zip("tuv", (t, u, v), tuv.T, strict=True):
+        error = np.abs(got[inside] - want[inside]) / np.maximum(1, np.abs(want[inside]))
+        if error.max() > 1e-6:
+            raise CheckFailed(f"{name} of random rays is off by up to {error.max():.2g} "
+                              f"(computing in float32? keep the dtype you are given)")
+    return f"{n} random rays and triangles agree with a direct linear solve"
+
+
+def check_render(module) -> str:
+    import ptlab
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.plug import plugged
+    from ptlab.exercises.renders import compare_renders, pass_images
+
+    (ray_triangle,) = require(module, "ray_triangle")
+
+    def student_ray_triangle(origins, dirs, v0, e1, e2):
+        with np.errstate(all="ignore"):
+            result = ray_triangle(origins, dirs, v0, e1, e2)
+        if not (isinstance(result, tuple) and len(result) == 3):
+            raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
+        t, u, v = (np.array(a, dtype=np.float32) for a in result)
+        if t.shape != (len(origins),) or u.shape != t.shape or v.shape != t.shape:
+            raise CheckFailed(f"given {len(origins)} rays as float32 (N, 3) arrays, your t, u, "
+                              f"v have shapes {t.shape}, {u.shape}, {v.shape}")
+        return t, u, v
+
+    scene = ptlab.load_scene("cornell-box")
+    with plugged(ptlab.accel.numpy_bvh, ray_triangle=student_ray_triangle):
+        student = pass_images(scene, backend="numpy", **RENDER)
+    library = pass_images(scene, backend="auto", **RENDER)
+    passed, explanation = compare_renders(student, library)
+    if not passed:
+        raise CheckFailed(f"the path-traced Cornell box through your intersections: "
+                          f"{explanation} (wrong hit points from u, v, or missing triangles?)")
+    return f"the path-traced Cornell box matches: {explanation}"
+
+
+CHAPTER = Chapter(
+    number=2, slug="ray_triangle", title="Ray-triangle intersection (Möller–Trumbore)",
+    functions=("ray_triangle",),
+    checks=(
+        Check("known hits", 2, check_known_hits, timeout=30),
+        Check("outside each edge", 2, check_edges, timeout=30),
+        Check("parallel rays", 1, check_parallel, timeout=30),
+        Check("behind the origin", 1, check_behind, timeout=30),
+        Check("both faces", 1, check_both_faces, timeout=30),
+        Check("many rays", 1, check_many, timeout=30),
+        Check("render", 2, check_render, timeout=60),
+    ),
+)

@@ -1,0 +1,326 @@
+"""Chapter 3's checks: reflection, refraction and Fresnel (``reflect``, ``refract``, ``fresnel``).
+
+Known answers come from the laws themselves: the mirror direction makes equal angles with
+the normal, Snell's law eta_i sin(theta_i) = eta_t sin(theta_t) bends the refracted ray
+(GAMES101 lecture 13; pbrt-v4 section 9.3), and the Fresnel reflectance of unpolarised light
+is the mean of the squared amplitude ratios r_parallel and r_perpendicular (pbrt-v4 section
+9.3.6; Hecht, Optics, section 4.6), which is ((eta - 1) / (eta + 1))^2 at normal incidence,
+1 at grazing incidence and 1 beyond the critical angle (total internal reflection). They are
+computed here from first principles, in float64, independently of the library.
+
+Then the student's three functions go into the Whitted ray tracer (``ptlab.integrators.whitted``
+imports them by name with ``from ... import``, so that is where they are plugged in, and
+``ptlab.materials.mirror`` for the mirror's ``reflect``), which renders the Cornell box's
+walls with a mirror sphere and a glass sphere. Whitted's tracer spends no random numbers on
+mirrors and glass, so with the same seed the two images must agree pixel for pixel, up to
+float rounding: a deterministic check.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+if TYPE_CHECKING:
+    from ptlab.scene import Scene
+
+#: The glass of the checks (and of the render's sphere), and diamond.
+GLASS, DIAMOND = 1.5, 2.4
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _directions(theta: np.ndarray, n=(0.0, 0.0, 1.0), phi: float = 0.3) -> np.ndarray:
+    """(N, 3) unit vectors at angles ``theta`` from the unit normal ``n``, azimuth ``phi``."""
+    from ptlab.sampling import to_world
+    theta = np.asarray(theta, dtype=np.float64)
+    local = np.stack([np.sin(theta) * math.cos(phi), np.sin(theta) * math.sin(phi),
+                      np.cos(theta)], axis=1)
+    return np.asarray(to_world(local, np.broadcast_to(np.asarray(n, dtype=np.float64), local.shape)))
+
+
+def _call(function, name: str, *args, shape) -> np.ndarray:
+    """``function(*args)`` as float64, checked for its shape and for NaN."""
+    result = np.asarray(function(*args), dtype=np.float64)
+    if result.shape != shape:
+        raise CheckFailed(f"{name} must return an array of shape {shape} here, not {result.shape}")
+    if not np.isfinite(result).all():
+        raise CheckFailed(f"{name} returned NaN or infinite values (a square root of a negative "
+                          f"number? clamp with np.maximum(0, ...))")
+    return result
+
+
+def _random_cases(seed: int, count: int = 500):
+    """(wo, n): random unit normals, and wo above each at angles up to 89 degrees."""
+    rng = np.random.default_rng(seed)
+    n = _unit(rng.normal(size=(count, 3)))
+    from ptlab.sampling import to_world
+    theta = np.radians(rng.uniform(0, 89, count))
+    phi = rng.uniform(0, 2 * math.pi, count)
+    local = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
+    return np.asarray(to_world(local, n)), n
+
+
+# -- reflect ----------------------------------------------------------------------------------
+
+def check_reflect(module) -> str:
+    (reflect,) = require(module, "reflect")
+    n = np.array([[0.0, 1.0, 0.0]])
+    straight = _call(reflect, "reflect", n.copy(), n.copy(), shape=(1, 3))
+    if np.allclose(straight, -n, atol=1e-6):
+        raise CheckFailed("reflect(n, n) gave -n: the result must point away from the surface, "
+                          "like wo (GAMES101's reflect(I, N) takes the incoming ray I, which "
+                          "points toward the surface; here wo = -I)")
+    if not np.allclose(straight, n, atol=1e-6):
+        raise CheckFailed(f"at normal incidence the mirror sends the ray straight back: "
+                          f"reflect(n, n) must be n = {n[0]}, not {np.round(straight[0], 4)}")
+    wo, n = _random_cases(31)
+    wi = _call(reflect, "reflect", wo, n, shape=wo.shape)
+    expected = 2 * np.sum(wo * n, axis=1, keepdims=True) * n - wo
+    if np.allclose(wi, -expected, atol=1e-5):
+        raise CheckFailed("your reflected directions point into the surface: wo and the result "
+                          "both point away from it (2 (wo . n) n - wo), where GAMES101's "
+                          "reflect(I, N) = I - 2 (I . N) N works with the incoming direction I")
+    if not np.allclose(wi, expected, atol=1e-5):
+        cos_in, cos_out = np.sum(wo * n, axis=1), np.sum(wi * n, axis=1)
+        if not np.allclose(np.linalg.norm(wi, axis=1), 1, atol=1e-5):
+            raise CheckFailed("the reflected directions must be unit vectors")
+        if not np.allclose(cos_in, cos_out, atol=1e-5):
+            raise CheckFailed("the reflected direction must make the same angle with n as wo "
+                              "(wi . n = wo . n)")
+        raise CheckFailed("the reflected direction must lie in the plane of wo and n, on the "
+                          "other side of n: wi = 2 (wo . n) n - wo")
+    return "normal incidence and 500 random directions reflect as 2 (wo . n) n - wo"
+
+
+# -- refract ----------------------------------------------------------------------------------
+
+def snell(wo: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
+    """The refracted direction from Snell's law, built from its two components (float64).
+
+    The tangential part of the transmitted direction is -(tangential part of wo) / eta, and
+    its normal part is -cos(theta_t) n with cos(theta_t) = sqrt(1 - sin^2(theta_t)).
+    """
+    cos_theta_i = np.sum(wo * n, axis=1, keepdims=True)
+    tangent = wo - cos_theta_i * n
+    sin2_theta_t = np.sum(tangent * tangent, axis=1, keepdims=True) / eta ** 2
+    return -tangent / eta - np.sqrt(np.maximum(0, 1 - sin2_theta_t)) * n
+
+
+def check_refract(module) -> str:
+    (refract,) = require(module, "refract")
+    n = np.array([[0.0, 1.0, 0.0]])
+    for eta in (GLASS, 1 / GLASS):
+        straight = _call(refract, "refract", n.copy(), n.copy(), eta, shape=(1, 3))
+        if not np.allclose(straight, -n, atol=1e-6):
+            raise CheckFailed(f"at normal incidence light goes straight through: refract(n, n, "
+                              f"{eta:.3f}) must be -n = {-n[0]}, not {np.round(straight[0], 4)} "
+                              f"(the refracted ray leaves on the *other* side of the surface)")
+    # Leaving glass first: with eta taken the wrong way up, it bends the wrong way there
+    # (entering, it would be totally reflected, which says less).
+    for eta, degrees in [(1 / GLASS, 30.0), (GLASS, 45.0), (DIAMOND, 70.0)]:
+        wo = _directions(np.radians([degrees]), n[0])
+        wt = _call(refract, "refract", wo, n.copy(), eta, shape=(1, 3))
+        if not np.isclose(np.linalg.norm(wt), 1, atol=1e-5):
+            raise CheckFailed(f"the refracted direction must be a unit vector; at {degrees:g} "
+                              f"degrees with eta {eta:.3f} its length is {np.linalg.norm(wt):.4f}")
+        sin_i = math.sin(math.radians(degrees))
+        sin_t = math.sqrt(max(0.0, 1 - (wt[0] @ n[0]) ** 2))
+        if not math.isclose(sin_t, sin_i / eta, abs_tol=1e-5):
+            hint = (" (you used eta the wrong way up: here eta is the index beyond the surface "
+                    "over the index on wo's side, eta_t / eta_i, where the homework's refract "
+                    "works with etai / etat)" if math.isclose(sin_t, min(1.0, sin_i * eta), abs_tol=1e-4)
+                    else "")
+            raise CheckFailed(f"Snell's law: at {degrees:g} degrees with eta = {eta:.3f}, "
+                              f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
+                              f"{sin_t:.4f}{hint}")
+        if wt[0] @ n[0] >= 0:
+            raise CheckFailed("the refracted direction must go through the surface (wt . n < 0): "
+                              "it points away from the surface on the other side")
+    wo, n = _random_cases(32)
+    for eta in (GLASS, 1 / GLASS, np.where(np.arange(len(wo)) % 2, GLASS, 1 / GLASS)):
+        column = eta[:, None] if np.ndim(eta) else eta
+        refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column ** 2)   # not totally reflected
+        wt = _call(refract, "refract", wo, n, eta, shape=wo.shape)
+        ok = np.all(np.abs(wt - snell(wo, n, column)) < 1e-5, axis=1) | ~refracts
+        if not ok.all():
+            per_row = " (eta given as an (N,) array, one per row: use eta[:, None])" if np.ndim(eta) else ""
+            raise CheckFailed(f"{(~ok).sum()} of {ok.size} random directions refract differently "
+                              f"from Snell's law{per_row}: wt = -wo / eta + (cos_i / eta - cos_t) n")
+    return ("normal incidence, Snell's law entering and leaving glass and diamond, and 1500 "
+            "random directions (eta a float or one per row)")
+
+
+# -- Fresnel ---------------------------------------------------------------------------------
+
+def fresnel_reference(cos_theta_i: np.ndarray, eta) -> np.ndarray:
+    """The Fresnel reflectance of unpolarised light from the Fresnel equations (float64).
+
+    r_perpendicular = (cos_i - eta cos_t) / (cos_i + eta cos_t), r_parallel = (eta cos_i -
+    cos_t) / (eta cos_i + cos_t), F = (r_perpendicular^2 + r_parallel^2) / 2, and F = 1 when
+    sin(theta_t) = sin(theta_i) / eta exceeds 1 (Hecht, Optics, 4.6; pbrt-v4 eq. 9.5-9.6).
+    """
+    cos_i = np.asarray(cos_theta_i, dtype=np.float64)
+    sin2_t = (1 - cos_i ** 2) / np.asarray(eta, dtype=np.float64) ** 2
+    cos_t = np.sqrt(np.maximum(0, 1 - sin2_t))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
+        r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
+    return np.where(sin2_t >= 1, 1.0, (r_perpendicular ** 2 + r_parallel ** 2) / 2)
+
+
+def check_fresnel(module) -> str:
+    (fresnel,) = require(module, "fresnel")
+    for eta in (GLASS, 1 / GLASS, DIAMOND):
+        normal = _call(fresnel, "fresnel", np.array([1.0]), eta, shape=(1,))[0]
+        expected = ((eta - 1) / (eta + 1)) ** 2
+        if not math.isclose(normal, expected, abs_tol=1e-6):
+            raise CheckFailed(f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
+                              f"for eta = {eta:.3f}; yours is {normal:.5f}")
+    grazing = _call(fresnel, "fresnel", np.array([1e-4]), GLASS, shape=(1,))[0]
+    if grazing < 0.99:
+        raise CheckFailed(f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
+                          f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4")
+    cos_i = np.linspace(0.02, 1, 200)
+    for eta in (GLASS, 1 / GLASS, DIAMOND, np.linspace(1.1, 2.0, 200)):
+        F = _call(fresnel, "fresnel", cos_i, eta, shape=cos_i.shape)  # noqa: N806 (the usual name)
+        expected = fresnel_reference(cos_i, eta)
+        if np.abs(F - expected).max() > 1e-5:
+            worst = int(np.argmax(np.abs(F - expected)))
+            schlick_r0 = ((eta - 1) / (eta + 1)) ** 2
+            schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
+            hint = ""
+            if np.abs(F - schlick).max() < 1e-4:
+                hint = (" (that is Schlick's approximation; write the Fresnel equations "
+                        "themselves, as the homework's fresnel does)")
+            elif np.abs(F - fresnel_reference(cos_i, 1 / np.asarray(eta))).max() < 1e-5:
+                hint = (" (you used eta the wrong way up: eta here is eta_t / eta_i, the "
+                        "index beyond the surface over the index on the light's side)")
+            elif np.ndim(eta):
+                hint = " (eta given as an (N,) array, one per row)"
+            angle = math.degrees(math.acos(cos_i[worst]))
+            eta_here = eta[worst] if np.ndim(eta) else eta
+            raise CheckFailed(f"F at {angle:.1f} degrees with eta = {eta_here:.3f} must be "
+                              f"{expected[worst]:.5f}, yours is {F[worst]:.5f}{hint}")
+    return "F(0) = ((eta - 1) / (eta + 1))^2, F -> 1 at grazing, the Fresnel equations at 200 angles"
+
+
+def check_total_internal_reflection(module) -> str:
+    fresnel, refract = require(module, "fresnel", "refract")
+    eta = 1 / GLASS
+    critical = math.degrees(math.asin(eta))
+    degrees = np.array([critical + 0.5, 50.0, 60.0, 75.0, 89.0])
+    F = _call(fresnel, "fresnel", np.cos(np.radians(degrees)), eta, shape=degrees.shape)  # noqa: N806
+    if np.abs(F - 1).max() > 1e-6:
+        bad = int(np.argmax(np.abs(F - 1)))
+        raise CheckFailed(f"leaving glass (eta = 1 / {GLASS}) beyond the critical angle "
+                          f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
+                          f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
+                          f"eta > 1 has no solution: return 1 there)")
+    wo = _directions(np.radians(degrees), (0.0, 1.0, 0.0))
+    _call(refract, "refract", wo, np.tile([0.0, 1.0, 0.0], (len(wo), 1)), eta, shape=wo.shape)
+    return (f"beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract "
+            f"returns no NaN")
+
+
+# -- the render ------------------------------------------------------------------------------
+
+def icosphere(subdivisions: int = 2) -> np.ndarray:
+    """(20 * 4^subdivisions, 3, 3) triangles of a unit sphere, wound to face outward.
+
+    An icosahedron whose triangles are each split into 4, the new corners pushed out onto
+    the sphere, ``subdivisions`` times (NumPy only: no trimesh needed).
+    """
+    g = (1 + math.sqrt(5)) / 2
+    vertices = np.array([[-1, g, 0], [1, g, 0], [-1, -g, 0], [1, -g, 0], [0, -1, g], [0, 1, g],
+                         [0, -1, -g], [0, 1, -g], [g, 0, -1], [g, 0, 1], [-g, 0, -1], [-g, 0, 1]])
+    faces = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
+             [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
+             [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+    triangles = vertices[np.array(faces)] / np.linalg.norm(vertices[0])
+    for _ in range(subdivisions):
+        a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+        ab, bc, ca = ((p + q) / np.linalg.norm(p + q, axis=1, keepdims=True)
+                      for p, q in ((a, b), (b, c), (c, a)))
+        triangles = np.concatenate([np.stack(t, axis=1) for t in
+                                    ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    inward = np.sum(normals * triangles.mean(axis=1), axis=1) < 0
+    triangles[inward] = triangles[inward][:, ::-1]
+    return triangles
+
+
+def spheres_scene() -> Scene:
+    """The Cornell box's walls and light (its two boxes left out) with a mirror sphere at the
+    back on the left and a glass sphere (eta 1.5) at the front on the right."""
+    import ptlab
+    from ptlab.materials import Dielectric, Mirror
+    from ptlab.scene import Scene, builtin_scenes_dir, read_mesh_triangles
+
+    cornell = ptlab.load_scene("cornell-box")
+    meshes = builtin_scenes_dir() / "cornell-box" / "meshes"
+    parts = [(read_mesh_triangles(meshes / f"{name}.obj"), cornell.material_names.index(material))
+             for name, material in (("floor", "white"), ("left", "red"), ("right", "green"),
+                                    ("light", "light"))]
+    materials = list(cornell.materials) + [Mirror(), Dielectric(eta=GLASS)]
+    sphere = icosphere(3)
+    parts += [(sphere * 100 + [380, 100, 370], len(materials) - 2),
+              (sphere * 90 + [180, 90, 170], len(materials) - 1)]
+    triangles = np.concatenate([t for t, _ in parts])
+    ids = np.concatenate([np.full(len(t), k) for t, k in parts])
+    names = list(cornell.material_names) + ["mirror", "glass"]
+    return Scene(triangles, ids, materials, cornell.camera, "cornell-spheres", names)
+
+
+def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
+    """The Whitted render of ``scene`` in this process, with the given functions (those not
+    None) plugged in where the tracer and the mirror look them up."""
+    import ptlab
+    import ptlab.integrators.whitted as whitted
+    import ptlab.materials.mirror as mirror
+    from ptlab.exercises.plug import plugged
+
+    in_whitted = {name: f for name, f in (("reflect", reflect), ("refract", refract),
+                                          ("fresnel_dielectric", fresnel)) if f is not None}
+    in_mirror = {"reflect": reflect} if reflect is not None else {}
+    options = dict(dict(spp=2, res=48, seed=3, workers=1), **options)
+    with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
+        return ptlab.render(scene, integrator="whitted", **options)
+
+
+def check_render(module) -> str:
+    reflect, refract, fresnel = require(module, "reflect", "refract", "fresnel")
+    scene = spheres_scene()
+    image = whitted_image(scene, reflect, refract, fresnel)
+    expected = whitted_image(scene)
+    if not np.isfinite(image).all():
+        raise CheckFailed("the render has NaN or infinite pixels")
+    # Float rounding may send a ray that grazes an edge to the other side of it: allow a few
+    # pixels to differ, none of the others by more than 0.1%.
+    close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
+    if close.mean() < 0.98:
+        ratio = image.mean() / expected.mean()
+        raise CheckFailed(f"the Whitted render of the Cornell box with a mirror and a glass sphere "
+                          f"differs from the library's in {(~close).sum()} of {close.size} pixels "
+                          f"(yours is {ratio:.3f}x as bright)")
+    return f"the Whitted render with a mirror and a glass sphere matches ({close.mean():.1%} of pixels)"
+
+
+CHAPTER = Chapter(
+    number=3, slug="whitted", title="Whitted ray tracing: reflection, refraction, Fresnel",
+    functions=("reflect", "refract", "fresnel"),
+    checks=(
+        Check("reflect", 2, check_reflect, timeout=20),
+        Check("refract", 2, check_refract, timeout=20),
+        Check("fresnel", 2, check_fresnel, timeout=20),
+        Check("total internal reflection", 1, check_total_internal_reflection, timeout=20),
+        Check("render", 3, check_render, timeout=60),
+    ),
+)

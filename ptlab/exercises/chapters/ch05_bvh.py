@@ -1,0 +1,473 @@
+"""Chapter 5's checks: the BVH, built with the SAH and traversed front to back.
+
+The student writes three pieces of ``ptlab.accel.numpy_bvh``: ``split_costs`` (the SAH
+cost of every candidate split of a node, from binned counts and bounds), ``best_split``
+(the cheapest split, or a leaf) and ``child_order`` (which child a ray meets first).
+Known answers come from the SAH's definition (pbrt-v4 7.3.2; Wald 2007), computed here
+plane by plane with plain loops. Then the pieces go into the NumPy BVH: its closest hits
+and shadow-ray answers must equal brute force (every ray against every triangle); the
+tree's SAH cost must be close to the library's (a median split or a cost without the
+areas builds a correct tree that is measurably worse); front-to-back traversal must test
+as few boxes as the library's; and the Cornell box must look the same.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+#: Tree quality: the student's tree may cost this much more than the library's (ties
+#: between equally good splits broken another way change the tree a little; on the test
+#: mesh a median split costs 46% more, a cost without the areas 128% more).
+SAH_TOLERANCE = 0.03
+#: Traversal order: the student's traversal may test this many more boxes than the
+#: library's on the row of balls (visiting the far child first enters about 6 times more).
+VISIT_TOLERANCE = 0.05
+PIECES = ("split_costs", "best_split", "child_order")
+
+
+# -- meshes and rays ------------------------------------------------------------------------
+
+def _quad(corner, edge1, edge2) -> np.ndarray:
+    """(2, 3, 3) triangles of the parallelogram corner + a edge1 + b edge2."""
+    c, e1, e2 = (np.asarray(a, dtype=np.float64) for a in (corner, edge1, edge2))
+    return np.array([[c, c + e1, c + e1 + e2], [c, c + e1 + e2, c + e2]])
+
+
+def _block(lo, hi) -> np.ndarray:
+    """(12, 3, 3) triangles of the axis-aligned box [lo, hi]."""
+    lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
+    size = hi - lo
+    x, y, z = np.diag(size)
+    return np.concatenate([_quad(lo, y, x), _quad(lo, x, z), _quad(lo, z, y),
+                           _quad(hi, -x, -y), _quad(hi, -z, -x), _quad(hi, -y, -z)])
+
+
+def _ball(centre, radius: float, rings: int = 8, segments: int = 12) -> np.ndarray:
+    """(2 * rings * segments, 3, 3) triangles of a UV sphere (some degenerate at the poles)."""
+    theta = np.linspace(0, np.pi, rings + 1)
+    phi = np.linspace(0, 2 * np.pi, segments + 1)
+    theta, phi = np.meshgrid(theta, phi, indexing="ij")
+    p = np.stack([np.sin(theta) * np.cos(phi), np.cos(theta), np.sin(theta) * np.sin(phi)], -1)
+    p = np.asarray(centre, dtype=np.float64) + radius * p
+    a, b, c, d = p[:-1, :-1], p[:-1, 1:], p[1:, 1:], p[1:, :-1]
+    return np.concatenate([np.stack([a, b, c], -2).reshape(-1, 3, 3),
+                           np.stack([a, c, d], -2).reshape(-1, 3, 3)])
+
+
+def uneven_mesh() -> np.ndarray:
+    """(756, 3, 3): a room 0..556 with two blocks, a ball in one corner and a cloud of 400
+    small triangles in another: big and small triangles unevenly spread, where the SAH's
+    areas matter."""
+    rng = np.random.default_rng(8)
+    cloud = rng.uniform(380, 520, (400, 1, 3)) + rng.normal(scale=6, size=(400, 3, 3))
+    return np.concatenate([_block([0, 0, 0], [556, 556, 556]), _block([130, 0, 65], [295, 165, 230]),
+                           _block([265, 0, 295], [430, 330, 460]),
+                           _ball([110, 90, 440], 80, rings=10, segments=16), cloud])
+
+
+def row_of_balls() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Eight balls in a row along x, and 4000 rays along the row from both ends:
+    (T, 3, 3) triangles, (N, 3) origins, (N, 3) directions."""
+    tris = np.concatenate([_ball([3.0 * i, 0, 0], 1.0) for i in range(8)])
+    rng = np.random.default_rng(9)
+    n = 4000
+    forward = np.arange(n) % 2 == 0
+    origins = np.column_stack([np.where(forward, -5.0, 26.0), rng.uniform(-0.8, 0.8, (n, 2))])
+    dirs = np.column_stack([np.where(forward, 1.0, -1.0), rng.normal(scale=0.05, size=(n, 2))])
+    return tris, origins.astype(np.float32), dirs.astype(np.float32)
+
+
+def _random_rays(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """(n, 3) float32 origins (most in the room, some outside) and random directions."""
+    rng = np.random.default_rng(10)
+    origins = np.where(rng.random((n, 1)) < 0.8, rng.uniform(1, 555, (n, 3)),
+                       rng.uniform(-300, 856, (n, 3)))
+    return origins.astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32)
+
+
+def _brute_force(tris: np.ndarray, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
+    """Every ray against every triangle, in float32 like the BVH: (N, T) t, inf for misses
+    and for t <= 0. In blocks of 256 rays, to keep the (256, T, 3) temporaries small."""
+    from ptlab.accel.triangle import ray_triangle
+
+    v0 = tris[:, 0].astype(np.float32)
+    e1 = (tris[:, 1] - tris[:, 0]).astype(np.float32)
+    e2 = (tris[:, 2] - tris[:, 0]).astype(np.float32)
+    blocks = []
+    for start in range(0, len(origins), 256):
+        block = slice(start, start + 256)
+        t, _, _ = ray_triangle(origins[block, None], dirs[block, None], v0, e1, e2)
+        t[~(t > 0)] = np.inf
+        blocks.append(t)
+    return np.concatenate(blocks)
+
+
+def sah_cost(bvh, traversal_cost: float = 1.0) -> float:
+    """The SAH cost of a built tree (a ``FlatBVH``): the expected number of triangle tests
+    (a node visit costing ``traversal_cost``) for a random ray through the root's box."""
+    extent = np.maximum(bvh.box_max - bvh.box_min, 0)
+    area = extent[:, 0] * extent[:, 1] + extent[:, 1] * extent[:, 2] + extent[:, 2] * extent[:, 0]
+    leaf = bvh.count > 0
+    return float((traversal_cost * area[~leaf].sum() + (bvh.count * area)[leaf].sum()) / area[0])
+
+
+# -- the student's pieces, checked as the library calls them ---------------------------------
+
+def _pieces(module, *names: str) -> dict:
+    """The student's functions ``names``, wrapped to fail clearly (and never hang the build)
+    when they return something the BVH cannot use."""
+    functions = dict(zip(names, require(module, *names), strict=True))
+    wrappers = {"split_costs": _checked_split_costs, "best_split": _checked_best_split,
+                "child_order": _checked_child_order}
+    return {name: wrappers[name](function) for name, function in functions.items()}
+
+
+def _checked_split_costs(split_costs):
+    def checked(bin_count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost=1.0):
+        with np.errstate(all="ignore"):
+            cost = np.asarray(split_costs(bin_count, bin_lo, bin_hi, node_lo, node_hi,
+                                          traversal_cost), dtype=np.float64)
+        b, k, _ = bin_count.shape
+        if cost.shape != (b - 1, k, 3):
+            raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {(b - 1, k, 3)} costs "
+                              f"(one per split plane, node and axis), not {cost.shape}")
+        if np.isnan(cost).any():
+            raise CheckFailed("split_costs returned NaN: 0 * inf from the box of an empty side "
+                              "(its bounds are inf, -inf)? Such splits must cost inf")
+        left = np.cumsum(bin_count, axis=0)[:-1]
+        empty = (left == 0) | (left == bin_count.sum(axis=0))
+        if not np.isinf(cost[empty]).all():
+            raise CheckFailed("a split with no triangle on one side must cost inf: it does not "
+                              "divide the node (and the build could pick it forever)")
+        return cost
+    return checked
+
+
+def _checked_best_split(best_split):
+    def checked(cost, size, max_leaf_size):
+        result = best_split(cost, size, max_leaf_size)
+        if not (isinstance(result, tuple) and len(result) == 3):
+            raise CheckFailed("best_split must return three arrays: (split_bin, split_axis, "
+                              "make_leaf)")
+        k = cost.shape[1]
+        split_bin, split_axis, make_leaf = (np.asarray(a) for a in result)
+        if not split_bin.shape == split_axis.shape == make_leaf.shape == (k,):
+            raise CheckFailed(f"best_split must return three ({k},) arrays, one entry per node, "
+                              f"not {split_bin.shape}, {split_axis.shape}, {make_leaf.shape}")
+        if split_bin.dtype.kind not in "iu" or split_axis.dtype.kind not in "iu":
+            raise CheckFailed("split_bin and split_axis must be integer arrays")
+        if make_leaf.dtype != bool:
+            raise CheckFailed("make_leaf must be a bool array")
+        if not (np.all((split_bin >= 0) & (split_bin < len(cost)))
+                and np.all((split_axis >= 0) & (split_axis < 3))):
+            raise CheckFailed(f"split_bin must lie in 0..{len(cost) - 1} and split_axis in 0..2")
+        if np.any(make_leaf & (size > max_leaf_size)):
+            raise CheckFailed(f"a node of more than max_leaf_size = {max_leaf_size} triangles "
+                              f"was made a leaf: such nodes must be split")
+        if np.any(~make_leaf & (size < 2)):
+            raise CheckFailed("a node of one triangle must be a leaf: it cannot be split")
+        return split_bin.astype(np.intp), split_axis.astype(np.intp), make_leaf
+    return checked
+
+
+def _checked_child_order(child_order):
+    def checked(first_child, axis, dirs):
+        result = child_order(first_child, axis, dirs)
+        if not (isinstance(result, tuple) and len(result) == 2):
+            raise CheckFailed("child_order must return two arrays: (near, far)")
+        near, far = (np.asarray(a) for a in result)
+        if near.shape != first_child.shape or far.shape != first_child.shape:
+            raise CheckFailed(f"child_order must return near and far of shape "
+                              f"{first_child.shape}, not {near.shape} and {far.shape}")
+        if not np.all(((near == first_child) & (far == first_child + 1))
+                      | ((near == first_child + 1) & (far == first_child))):
+            raise CheckFailed("near and far must be the node's two children, first_child and "
+                              "first_child + 1, one each: a child left out is a part of the "
+                              "scene no ray can hit")
+        return near.astype(np.intp), far.astype(np.intp)
+    return checked
+
+
+# -- unit checks --------------------------------------------------------------------------
+
+def _binned_example(seed: int, flat_node: bool = False):
+    """Two nodes (9 and 12 triangles, given as boxes) binned into 5 bins per axis as
+    ``build_bvh`` bins them: ``(bin_count, bin_lo, bin_hi, node_lo, node_hi)``.
+
+    Node 0's centroids bunch up at both ends of x (the middle bins stay empty). With
+    ``flat_node``, node 1 lies in the plane z = 5, like a wall of the Cornell box: all its
+    centroids fall into bin 0 along z, and no z split divides it.
+    """
+    rng = np.random.default_rng(seed)
+    b = 5
+    count = np.zeros((b, 2, 3), np.intp)
+    bin_lo = np.full((b, 2, 3, 3), np.inf, np.float32)
+    bin_hi = np.full((b, 2, 3, 3), -np.inf, np.float32)
+    node_lo, node_hi = np.zeros((2, 3)), np.zeros((2, 3))
+    for node, n in enumerate((9, 12)):
+        lo = rng.uniform(0, 10, (n, 3))
+        hi = lo + rng.uniform(0.2, 3, (n, 3))
+        if node == 0:
+            lo[:, 0] = rng.choice([0.0, 8.0], n) + rng.uniform(0, 0.5, n)
+            hi[:, 0] = lo[:, 0] + rng.uniform(0.2, 1, n)
+        if node == 1 and flat_node:
+            lo[:, 2] = hi[:, 2] = 5.0
+        node_lo[node], node_hi[node] = lo.min(axis=0), hi.max(axis=0)
+        centroid = (lo + hi) / 2
+        c_lo, extent = centroid.min(axis=0), np.ptp(centroid, axis=0)
+        scale = np.divide(b, extent, out=np.zeros(3), where=extent > 0)
+        bins = np.minimum(((centroid - c_lo) * scale).astype(np.intp), b - 1)
+        for axis in range(3):
+            for i in range(b):
+                inside = bins[:, axis] == i
+                count[i, node, axis] = inside.sum()
+                if inside.any():
+                    bin_lo[i, node, axis] = lo[inside].min(axis=0)
+                    bin_hi[i, node, axis] = hi[inside].max(axis=0)
+    return count, bin_lo, bin_hi, node_lo, node_hi
+
+
+def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi,
+                    traversal_cost: float) -> np.ndarray:
+    """The SAH cost of every split, plane by plane with plain loops (pbrt-v4 7.3.2)."""
+    def area(lo, hi):
+        e = np.maximum(hi - lo, 0)
+        return 2 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
+
+    def side(bins, node, axis):
+        """Triangles and surface area of the union of the boxes of ``bins``."""
+        full = [i for i in bins if count[i, node, axis] > 0]
+        if not full:
+            return 0, 0.0
+        lo = np.min([bin_lo[i, node, axis] for i in full], axis=0).astype(np.float64)
+        hi = np.max([bin_hi[i, node, axis] for i in full], axis=0).astype(np.float64)
+        return sum(count[i, node, axis] for i in full), area(lo, hi)
+
+    b, k, _ = count.shape
+    cost = np.full((b - 1, k, 3), np.inf)
+    for node in range(k):
+        for axis in range(3):
+            for plane in range(b - 1):
+                n_left, s_left = side(range(plane + 1), node, axis)
+                n_right, s_right = side(range(plane + 1, b), node, axis)
+                if n_left and n_right:
+                    cost[plane, node, axis] = traversal_cost + (
+                        n_left * s_left + n_right * s_right) / area(node_lo[node], node_hi[node])
+    return cost
+
+
+def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
+    finite = np.isfinite(want)
+    with np.errstate(invalid="ignore"):
+        bad = finite & ~(np.abs(got - want) < 1e-4 * np.abs(want))
+    if bad.any():
+        plane, node, axis = np.argwhere(bad)[0]
+        hint = ""
+        ratio = got[plane, node, axis] / want[plane, node, axis]
+        if np.isclose(got[plane, node, axis] - want[plane, node, axis], 0.5, rtol=1e-3):
+            hint = " (traversal_cost left out?)"
+        elif abs(ratio - 1) < 0.6:
+            hint = " (are the sides' areas those of the union of their bins' boxes?)"
+        raise CheckFailed(f"{what}: plane {plane} along axis {'xyz'[axis]} of node {node} should "
+                          f"cost {want[plane, node, axis]:.4f}, yours {got[plane, node, axis]:.4f}"
+                          f"{hint}")
+
+
+def check_split_costs(module) -> str:
+    split_costs = _pieces(module, "split_costs")["split_costs"]
+    example = _binned_example(seed=1)
+    got = split_costs(*example, traversal_cost=0.5)
+    _compare_costs(got, _expected_costs(*example, traversal_cost=0.5),
+                   "0.5 + (N_L S_L + N_R S_R) / S")
+    return "the SAH costs of the 24 candidate splits of two nodes are right"
+
+
+def check_empty_sides(module) -> str:
+    (split_costs,) = require(module, "split_costs")
+    example = _binned_example(seed=2, flat_node=True)
+    with np.errstate(all="ignore"):
+        got = np.asarray(split_costs(*example, traversal_cost=1.0), dtype=np.float64)
+    want = _expected_costs(*example, traversal_cost=1.0)
+    if got.shape != want.shape:
+        raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {want.shape} costs, not "
+                          f"{got.shape}")
+    for plane, node, axis in np.argwhere(np.isinf(want)):
+        value = got[plane, node, axis]
+        if value != np.inf:
+            raise CheckFailed(f"plane {plane} along {'xyz'[axis]} of node {node} has no triangle "
+                              f"on one side and must cost inf (it does not divide the node); "
+                              f"yours gives {value}"
+                              + (" (0 * inf: the empty side's box has bounds inf, -inf)"
+                                 if np.isnan(value) else ""))
+    _compare_costs(got, want, "the splits that do divide the nodes")
+    return ("a flat node's splits along its flat axis, with an empty side, cost inf; the "
+            "others are right")
+
+
+def check_best_split(module) -> str:
+    best_split = _pieces(module, "best_split")["best_split"]
+    cost = np.full((3, 5, 3), 50.0)
+    cost[2, 0, 1] = 7.5      # node 0: 10 triangles, must split, cheapest at plane 2 along y
+    cost[0, 0, 2] = 7.6
+    cost[1, 1, 0] = 3.5      # node 1: 3 triangles, cheapest split costs more than 3: a leaf
+    cost[0, 2, 2] = 2.0      # node 2: 3 triangles, splitting is cheaper: split
+    cost[1, 2, 0] = 2.5
+    cost[:, 3] = np.inf      # node 3: 8 triangles, only one split divides it
+    cost[0, 3, 2] = 9.0
+    cost[:, 4] = np.inf      # node 4: 1 triangle, nothing divides it: a leaf
+    size = np.array([10, 3, 3, 8, 1])
+    split_bin, split_axis, make_leaf = best_split(cost, size, 4)
+    want_leaf = [False, True, False, False, True]
+    if list(make_leaf) != want_leaf:
+        node = int(np.flatnonzero(make_leaf != want_leaf)[0])
+        rule = ("a node of at most max_leaf_size triangles becomes a leaf when its cheapest "
+                "split costs at least N, the cost of testing all N")
+        raise CheckFailed(f"node {node} ({size[node]} triangles, cheapest split "
+                          f"{cost[:, node].min()}) should {'' if want_leaf[node] else 'not '}be "
+                          f"a leaf: {rule}")
+    for node, want in [(0, (2, 1)), (2, (0, 2)), (3, (0, 2))]:
+        if (split_bin[node], split_axis[node]) != want:
+            raise CheckFailed(f"node {node}: the cheapest split is plane {want[0]} along "
+                              f"{'xyz'[want[1]]}, yours is plane {split_bin[node]} along "
+                              f"{'xyz'[split_axis[node]] if 0 <= split_axis[node] < 3 else '?'} "
+                              f"(the minimum over planes and axes both)")
+    return "the cheapest split over planes and axes, and leaves where splitting does not pay"
+
+
+def check_child_order(module) -> str:
+    child_order = _pieces(module, "child_order")["child_order"]
+    first_child = np.array([1, 1, 3, 3, 5, 5, 7, 7])
+    axis = np.array([0, 0, 1, 1, 2, 2, 0, 1])
+    dirs = np.array([[1, -1, -1], [-1, 1, 1], [-1, 2, -1], [1, -2, 1], [-1, -1, 0.5],
+                     [1, 1, -0.5], [0.2, -1, -1], [1, -0.3, 1]], dtype=np.float32)
+    near, far = child_order(first_child, axis, dirs)
+    want = first_child + (dirs[np.arange(8), axis] < 0)
+    wrong = np.flatnonzero(near != want)
+    if wrong.size:
+        i = wrong[0]
+        going = "up" if dirs[i, axis[i]] > 0 else "down"
+        raise CheckFailed(f"a ray with direction {dirs[i].tolist()} goes {going} the split axis "
+                          f"{'xyz'[axis[i]]}, so it meets the {'low' if going == 'up' else 'high'} "
+                          f"child {want[i]} first; yours says {near[i]} (the sign of the "
+                          f"direction along the node's split axis decides)")
+    return "the near child is the one on the side the ray comes from"
+
+
+# -- the pieces inside the BVH ------------------------------------------------------------
+
+def check_closest_hits(module) -> str:
+    import ptlab.accel.numpy_bvh as numpy_bvh
+    from ptlab.exercises.plug import plugged
+
+    tris = uneven_mesh()
+    origins, dirs = _random_rays(3000)
+    with plugged(numpy_bvh, **_pieces(module, *PIECES)):
+        bvh = numpy_bvh.NumpyBVH(tris)
+        hits = bvh.intersect(origins, dirs)
+        tmax = np.random.default_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
+        occluded = bvh.occluded(origins, dirs, tmax)
+    t_all = _brute_force(tris, origins, dirs)
+    t_want = t_all.min(axis=1)
+    # Equal up to float32 rounding: where two triangles meet, the one a box test lets
+    # through first may be an ulp farther, whatever the order (pbrt-v4's slab test alike).
+    with np.errstate(invalid="ignore"):
+        wrong = ~(np.abs(hits.t - t_want) <= 1e-5 * t_want) & (hits.t != t_want)
+    if wrong.any():
+        i = np.flatnonzero(wrong)[0]
+        what = ("misses" if not hits.hit[i] else
+                f"finds a farther hit, at t = {hits.t[i]:.4g}" if hits.t[i] > t_want[i] else
+                f"reports t = {hits.t[i]:.4g}")
+        raise CheckFailed(f"{wrong.sum()} of {len(dirs)} rays get another closest hit than brute "
+                          f"force: e.g. a ray that should hit at t = {t_want[i]:.4g} {what} "
+                          f"(is every child visited?)")
+    hit_t = t_all[np.arange(len(dirs)), np.where(hits.hit, hits.prim, 0)]
+    if not np.array_equal(hit_t[hits.hit], hits.t[hits.hit]):
+        raise CheckFailed("some rays report a triangle that their t does not belong to")
+    want_occluded = (t_all < tmax[:, None]).any(axis=1)
+    if not np.array_equal(occluded, want_occluded):
+        raise CheckFailed(f"{np.count_nonzero(occluded != want_occluded)} of {len(dirs)} shadow "
+                          f"rays get another answer than brute force")
+    return (f"{len(dirs)} rays get brute force's closest hit and shadow-ray answer "
+            f"({hits.hit.mean():.0%} hit)")
+
+
+def check_tree_quality(module) -> str:
+    import ptlab.accel.numpy_bvh as numpy_bvh
+    from ptlab.exercises.plug import plugged
+
+    tris = uneven_mesh()
+    library = sah_cost(numpy_bvh.build_bvh(tris))
+    with plugged(numpy_bvh, **_pieces(module, "split_costs", "best_split")):
+        student = sah_cost(numpy_bvh.build_bvh(tris))
+    if student > library * (1 + SAH_TOLERANCE):
+        raise CheckFailed(f"your tree's SAH cost is {student:.2f} expected triangle tests per "
+                          f"ray, the library's {library:.2f} ({student / library - 1:.0%} more): "
+                          f"it finds the right hits, more slowly (do the costs weigh each side's "
+                          f"count by its surface area? a median split ignores the areas)")
+    return f"your tree's SAH cost is {student:.2f}, the library's {library:.2f}"
+
+
+def check_traversal_order(module) -> str:
+    import ptlab.accel.numpy_bvh as numpy_bvh
+    from ptlab.exercises.plug import plugged
+
+    tris, origins, dirs = row_of_balls()
+    library_slab_test = numpy_bvh.slab_test
+    entered = [0]
+
+    def counting_slab_test(*args):
+        hit, t_enter = library_slab_test(*args)
+        entered[0] += int(np.count_nonzero(hit))
+        return hit, t_enter
+
+    bvh = numpy_bvh.NumpyBVH(tris)
+    with plugged(numpy_bvh, slab_test=counting_slab_test):
+        bvh.intersect(origins, dirs)
+        library, entered[0] = entered[0], 0
+        with plugged(numpy_bvh, **_pieces(module, "child_order")):
+            bvh.intersect(origins, dirs)
+    student = entered[0]
+    if student > library * (1 + VISIT_TOLERANCE):
+        raise CheckFailed(f"rays along a row of eight balls enter {student / len(dirs):.0f} boxes "
+                          f"each with your child order, {library / len(dirs):.0f} with the "
+                          f"library's: visit the near child first, so its hit culls the far "
+                          f"child's boxes")
+    return (f"rays along a row of balls enter {student / len(dirs):.0f} boxes each (library: "
+            f"{library / len(dirs):.0f})")
+
+
+def check_render(module) -> str:
+    import ptlab
+    import ptlab.accel.numpy_bvh as numpy_bvh
+    from ptlab.exercises.plug import plugged
+
+    # The normals view is deterministic: the same closest hits give the same picture.
+    options = dict(spp=2, res=(48, 36), integrator="normals", workers=1, seed=3,
+                   backend="numpy")
+    with plugged(numpy_bvh, **_pieces(module, *PIECES)):
+        image = ptlab.render("cornell-box", **options)
+    expected = ptlab.render("cornell-box", **options)
+    difference = np.abs(image - expected).mean()
+    if difference > 1e-3:
+        raise CheckFailed(f"the Cornell box's normals through your BVH differ from the "
+                          f"library's by {difference:.4f} on average")
+    return "the Cornell box seen through your BVH matches"
+
+
+CHAPTER = Chapter(
+    number=5, slug="bvh", title="The BVH: building with the SAH, and traversal",
+    functions=PIECES,
+    checks=(
+        Check("SAH costs", 2, check_split_costs, timeout=30),
+        Check("empty sides", 1, check_empty_sides, timeout=30),
+        Check("best split", 1, check_best_split, timeout=30),
+        Check("near child first", 1, check_child_order, timeout=30),
+        Check("closest hits", 2, check_closest_hits, timeout=60),
+        Check("tree quality", 1, check_tree_quality, timeout=60),
+        Check("traversal order", 1, check_traversal_order, timeout=60),
+        Check("render", 1, check_render, timeout=60),
+    ),
+)

@@ -1,0 +1,224 @@
+"""Chapter 6's checks: Monte Carlo and the diffuse material (``Lambertian``: eval, pdf, sample).
+
+Known answers come from the Lambertian model itself (f_r = albedo / pi above the surface, 0
+below; a pdf integrates to 1 over the sphere; samples lie in the normal's hemisphere), then
+the material harness (``ptlab.grading.check_material``) tests that ``sample`` is drawn from
+``pdf``, and the student's material, in place of every diffuse one, must render the Cornell
+box like the library's.
+
+The render comparison is ``ptlab.exercises.renders``'s, shared with other chapters.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
+
+ALBEDO = (0.8, 0.5, 0.2)
+
+#: Directions per wo in the harness: 2 x 10^5 (the harness's default is 10^6: a weaker test,
+#: with the same false-alarm rates, that still catches a pdf off by any constant at once).
+HARNESS_SAMPLES = 200_000
+
+
+# -- chapter 6 ------------------------------------------------------------------------------
+
+def _material(module, albedo=ALBEDO):
+    (Lambertian,) = require(module, "Lambertian")  # noqa: N806 (a class)
+    return Lambertian(albedo)
+
+
+def probe(material) -> None:
+    """Call ``eval``, ``pdf`` and ``sample`` once on a few directions, so that a method not
+    written yet, or one that raises, is reported as itself before a long check starts."""
+    n = np.array([[0.0, 0.0, 1.0]] * 2)
+    wo = np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96]])
+    material.eval(wo, wo[::-1], n)
+    material.pdf(wo, wo[::-1], n)
+    material.sample(wo, n, np.full((2, 2), 0.5))
+
+
+def _call(material, method: str, *arrays, width: int | None = 3) -> np.ndarray:
+    """``material.<method>(*arrays)`` as float64, checked for shape and finiteness."""
+    result = np.asarray(getattr(material, method)(*arrays), dtype=np.float64)
+    rows = len(arrays[0])
+    shape = (rows, width) if width else (rows,)
+    if result.shape != shape:
+        raise CheckFailed(f"{method} must return an array of shape {shape} for {rows} "
+                          f"directions, yours has shape {result.shape}")
+    if not np.isfinite(result).all():
+        raise CheckFailed(f"{method} returned NaN or infinite values")
+    return result
+
+
+def _unit(v: np.ndarray) -> np.ndarray:
+    return v / np.linalg.norm(v, axis=-1, keepdims=True)
+
+
+def _frame(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """(N, 3) unit directions at angle theta from the unit normal(s) n ((3,) or (N, 3)), azimuth phi."""
+    from ptlab.sampling import to_world
+    local = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
+    return np.asarray(to_world(local, np.broadcast_to(n, local.shape)))
+
+
+def random_pairs(rng, count: int):
+    """count (wo, wi, n): random normals, wo and wi above the surface."""
+    n = _unit(rng.normal(size=(count, 3)))
+    wo = _frame(n, np.arccos(rng.uniform(0.05, 1, count)), rng.uniform(0, 2 * math.pi, count))
+    wi = _frame(n, np.arccos(rng.uniform(0.05, 1, count)), rng.uniform(0, 2 * math.pi, count))
+    return wo, wi, n
+
+
+def check_eval(module) -> str:
+    material = _material(module)
+    rng = np.random.default_rng(61)
+    wo, wi, n = random_pairs(rng, 500)
+    f = _call(material, "eval", wo, wi, n)
+    expected = np.asarray(ALBEDO) / math.pi
+    ratio = f / expected
+    if not np.allclose(f, expected, rtol=1e-4, atol=0):
+        cos_theta_i = np.sum(wi * n, axis=1)
+        if np.allclose(ratio, math.pi, rtol=1e-3):
+            raise CheckFailed("eval returns the albedo; a Lambertian f_r is albedo / pi (else the "
+                              "surface reflects pi times more light than it receives)")
+        if np.allclose(ratio, cos_theta_i[:, None], rtol=1e-3):
+            raise CheckFailed("eval includes cos(theta_i); f_r is albedo / pi alone: the "
+                              "renderer multiplies by the cosine itself")
+        if np.allclose(ratio, ratio[:1], rtol=1e-4):
+            raise CheckFailed(f"eval is a constant, but not albedo / pi: yours is "
+                              f"{np.round(f[0], 4)} for albedo {ALBEDO}, expected "
+                              f"{np.round(expected, 4)}")
+        raise CheckFailed(f"a Lambertian f_r is albedo / pi = {np.round(expected, 4)} for every "
+                          f"pair of directions above the surface; yours varies "
+                          f"(from {np.round(f.min(axis=0), 4)} to {np.round(f.max(axis=0), 4)})")
+    below_i = _call(material, "eval", wo, -wi, n)
+    below_o = _call(material, "eval", -wo, wi, n)
+    if np.abs(below_i).max() > 0:
+        raise CheckFailed("eval must be 0 when wi is below the surface (wi . n < 0): a "
+                          "reflective surface sends no light through itself")
+    if np.abs(below_o).max() > 0:
+        raise CheckFailed("eval must be 0 when wo is below the surface (wo . n < 0)")
+    return "f_r = albedo / pi above the surface, 0 below"
+
+
+def check_sample(module) -> str:
+    material = _material(module)
+    rng = np.random.default_rng(62)
+    normals = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0]], dtype=np.float64)
+    normals = np.concatenate([normals, _unit(rng.normal(size=(4, 3)))])
+    count = 2000
+    for normal in normals:
+        n = np.tile(normal, (count, 1))
+        wo = _frame(normal, np.full(count, 0.7), np.full(count, 1.0))
+        u = rng.random((count, 2))
+        u[:4] = [[0, 0], [0, 0.5], [0.5, 0], [1 - 2**-53, 1 - 2**-53]]
+        wi = _call(material, "sample", wo, n, u)
+        length = np.linalg.norm(wi, axis=1)
+        if np.abs(length - 1).max() > 1e-4:
+            raise CheckFailed(f"sample must return unit vectors; one has length "
+                              f"{length[np.argmax(np.abs(length - 1))]:.4f} (normalise it)")
+        cos_theta = wi @ normal
+        if (cos_theta < -1e-6).any():
+            share = np.mean(cos_theta < 0)
+            raise CheckFailed(f"{share:.0%} of the directions sampled around n = "
+                              f"{np.round(normal, 3)} are below the surface (wi . n < 0): build "
+                              f"the local frame around n (ptlab.sampling.to_world), not around +z")
+        if np.ptp(cos_theta) < 0.1 or np.ptp(wi, axis=0).max() < 0.1:
+            raise CheckFailed("sample returns (almost) the same direction for every u: it must "
+                              "turn the uniform numbers u into directions")
+    return f"unit directions in the normal's hemisphere, for {len(normals)} normals"
+
+
+def _sphere_integral(function, n: np.ndarray, rows: int = 400, cols: int = 64) -> float:
+    """The integral of ``function(w)`` over the unit sphere by the midpoint rule around n."""
+    theta = (np.arange(rows) + 0.5) * math.pi / rows
+    phi = (np.arange(cols) + 0.5) * 2 * math.pi / cols
+    theta, phi = (a.ravel() for a in np.meshgrid(theta, phi, indexing="ij"))
+    w = _frame(n, theta, phi)
+    area = np.sin(theta) * (math.pi / rows) * (2 * math.pi / cols)
+    return float(np.sum(function(w) * area))
+
+
+def check_pdf_normalisation(module) -> str:
+    material = _material(module)
+    n = _unit(np.array([0.3, -0.5, 0.8]))
+    wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
+    rows = 400 * 64
+    ns, wos = np.tile(n, (rows, 1)), np.tile(wo, (rows, 1))
+    total = _sphere_integral(lambda w: _call(material, "pdf", wos, w, ns, width=None), n)
+    below = _call(material, "pdf", wos, -ns, ns, width=None)
+    if np.abs(below).max() > 0:
+        raise CheckFailed("pdf must be 0 below the surface (wi . n < 0): sample never goes there")
+    if abs(total - 1) > 2e-3:
+        hint = ""
+        if abs(total - 0.5) < 0.01:
+            hint = (" (off by 2: 1/(4 pi) is the uniform density of the whole sphere, the "
+                    "hemisphere's is 1/(2 pi); cos/(2 pi) is half the cosine density cos/pi)")
+        elif abs(total - 2) < 0.02:
+            hint = " (2x too big: the hemisphere's uniform density is 1/(2 pi), not 1/pi)"
+        elif abs(total - 1 / math.pi) < 0.01 or abs(total - math.pi) < 0.03:
+            hint = " (a factor pi: the cosine density is cos(theta) / pi)"
+        raise CheckFailed(f"your pdf integrates to {total:.4f} over the sphere; a probability "
+                          f"density must integrate to 1{hint}")
+    return f"the pdf integrates to {total:.4f} over the sphere, 0 below the surface"
+
+
+def check_harness(module) -> str:
+    from ptlab.grading import check_material
+
+    material = _material(module)
+    probe(material)
+    report = check_material(material, seed=6, samples=HARNESS_SAMPLES)
+    if not report.passed:
+        failures = "; ".join(f"{c.name}: {c.hint or c.statistic}" for c in report.checks
+                             if not c.passed)
+        raise CheckFailed(f"the material harness failed {', '.join(report.failed)}. {failures} "
+                          f"(see the whole table with: ptlab grade 06_diffuse.py:Lambertian)")
+    return f"every check of ptlab.grading.check_material passes ({HARNESS_SAMPLES:,} samples per wo)"
+
+
+def render_options() -> dict:
+    """The render both sides of chapter 6's comparison make: 32 x 32, 16 passes of 8 spp.
+
+    max_depth 6: a wrong pdf can make the weights grow at every bounce (so that Russian
+    roulette never ends a path); bounded paths keep that a finite, clearly visible
+    brightening instead of a render that runs out of time.
+    """
+    return dict(res=32, passes=16, spp_per_pass=8, seed=6, max_depth=6)
+
+
+def check_render(module) -> str:
+    import ptlab
+    from ptlab.materials import Diffuse
+
+    probe(_material(module))
+    scene = ptlab.load_scene("cornell-box")
+    student_scene = replace_materials(
+        scene, lambda m: _material(module, m.albedo) if isinstance(m, Diffuse) else None)
+    student = pass_images(student_scene, **render_options())
+    library = pass_images(scene, **render_options())
+    passed, explanation = compare_renders(student, library)
+    if not passed:
+        raise CheckFailed(f"the Cornell box with your material: {explanation} (brighter: each "
+                          f"bounce carries too much light, from a pdf too small or an f_r too "
+                          f"big; darker: too little)")
+    return f"the Cornell box with your material: {explanation}"
+
+
+CHAPTER = Chapter(
+    number=6, slug="diffuse", title="Monte Carlo and the diffuse material",
+    functions=("Lambertian.eval", "Lambertian.pdf", "Lambertian.sample"),
+    checks=(
+        Check("eval", 2, check_eval, timeout=30),
+        Check("sample", 1, check_sample, timeout=30),
+        Check("pdf integrates to 1", 2, check_pdf_normalisation, timeout=30),
+        Check("material harness", 3, check_harness, timeout=60),
+        Check("render", 2, check_render, timeout=60),
+    ),
+)

@@ -1,0 +1,254 @@
+"""Chapter 8's checks: rendering over tiles on several processes (``make_tiles``,
+``render_tile``, ``render_parallel``).
+
+* Tiles must cover every pixel exactly once, at odd image sizes and at the image's edges.
+* A tile's job must give exactly the library's sums (``ptlab.jobs.run_job``: the tile's own
+  random stream ``ptlab.sampling.stream(seed, tile, 0)``), and the same sums again when the
+  same process has rendered other tiles in between (no generator shared between jobs).
+* ``render_parallel`` must really use several processes (each tile's job reports the pid of
+  the process that ran it), give the same image bit for bit with 1 and 2 workers, and that
+  image must be the library's (``ptlab.render_result`` with the same seed and tile size, one
+  pass): all deterministic, so every comparison is exact and no check is statistical.
+
+The scene is chapter 7's furnace (``ch07_path_tracing.furnace_scene``): built without
+reading mesh files, so the checks spend their time on the parallel part.
+
+The checks that run the student's pool end any worker the student's code leaves behind
+(and the grader ends the check's whole process group when it is done or out of time).
+"""
+
+from __future__ import annotations
+
+import importlib
+import multiprocessing
+import os
+import sys
+from pathlib import Path
+from types import ModuleType
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+if TYPE_CHECKING:
+    from ptlab.jobs import RenderSetup
+    from ptlab.scene import Scene
+
+#: What the render checks render: the furnace at 48 x 40 (odd tiles at the right and bottom
+#: edges with TILE = 16), SPP samples per pixel, seed SEED.
+RES, SPP, TILE, SEED = (48, 40), 8, 16, 8
+
+
+def _scene() -> Scene:
+    from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
+    return furnace_scene()
+
+
+def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
+    from ptlab.accel import resolve_backend
+    from ptlab.integrators.path import PathSettings
+    from ptlab.jobs import RenderSetup
+    return RenderSetup(scene=scene, backend=resolve_backend("auto"), width=RES[0],
+                       height=RES[1], seed=seed, settings=PathSettings())
+
+
+# -- tiles -------------------------------------------------------------------------------------
+
+def check_tiles(module) -> str:
+    (make_tiles,) = require(module, "make_tiles")
+    cases = [(37, 23, 8), (64, 64, 16), (5, 3, 8), (100, 1, 7), (16, 48, 16)]
+    for width, height, size in cases:
+        tiles = list(make_tiles(width, height, size))
+        where = f"make_tiles({width}, {height}, {size})"
+        if not tiles:
+            raise CheckFailed(f"{where} returned no tiles")
+        covered = np.zeros((height, width), dtype=int)
+        for position, tile in enumerate(tiles):
+            if not all(hasattr(tile, name) for name in ("index", "x0", "y0", "x1", "y1")):
+                raise CheckFailed(f"{where}: tiles must be ptlab.jobs.Tile(index, x0, y0, x1, y1)")
+            if tile.index != position:
+                raise CheckFailed(f"{where}: tile {position} of the list has index {tile.index}; "
+                                  f"number the tiles 0, 1, 2, ... in list order (a tile's index "
+                                  f"seeds its random stream)")
+            if not (0 <= tile.x0 < tile.x1 <= width and 0 <= tile.y0 < tile.y1 <= height):
+                raise CheckFailed(f"{where}: tile {tile.index} spans columns {tile.x0}..{tile.x1 - 1} "
+                                  f"and rows {tile.y0}..{tile.y1 - 1}, outside the {width} x "
+                                  f"{height} image or empty (x1 and y1 are one past the last "
+                                  f"pixel: clip them with min(x0 + size, width))")
+            if tile.x1 - tile.x0 > size or tile.y1 - tile.y0 > size:
+                raise CheckFailed(f"{where}: tile {tile.index} is larger than {size} x {size}")
+            covered[tile.y0:tile.y1, tile.x0:tile.x1] += 1
+        if (covered == 0).any():
+            y, x = np.argwhere(covered == 0)[0]
+            raise CheckFailed(f"{where}: pixel (x={x}, y={y}) is in no tile (the last, smaller "
+                              f"tiles at the right and bottom edges?)")
+        if (covered > 1).any():
+            y, x = np.argwhere(covered > 1)[0]
+            raise CheckFailed(f"{where}: pixel (x={x}, y={y}) is in {covered[y, x]} tiles: it "
+                              f"would be rendered, and added to the image, more than once")
+    return f"every pixel in exactly one tile, for {len(cases)} image and tile sizes"
+
+
+# -- one tile's job ---------------------------------------------------------------------------
+
+def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
+    result = render_tile(setup, tile, spp)
+    if not (isinstance(result, tuple) and len(result) == 2):
+        raise CheckFailed("render_tile must return two things: (sums, os.getpid())")
+    sums, pid = np.asarray(result[0]), result[1]
+    height, width = tile.y1 - tile.y0, tile.x1 - tile.x0
+    if sums.shape != (height, width, 3):
+        raise CheckFailed(f"render_tile must return the tile's sums as a ({height}, {width}, 3) "
+                          f"array (rows, columns, colour), not {sums.shape}")
+    return sums, pid
+
+
+def check_tile_job(module) -> str:
+    from ptlab.accel import make_accelerator
+    from ptlab.jobs import Job, Tile, run_job
+
+    (render_tile,) = require(module, "render_tile")
+    setup = _setup(_scene())
+    first, second = Tile(5, 16, 16, 32, 32), Tile(8, 32, 32, 48, 40)
+    sums, pid = _tile_result(render_tile, setup, first, 4)
+    if pid != os.getpid():
+        raise CheckFailed(f"render_tile must return the pid of the process that ran it "
+                          f"(os.getpid()); it returned {pid!r}, this process is {os.getpid()}")
+    _tile_result(render_tile, setup, second, 4)
+    again, _ = _tile_result(render_tile, setup, first, 4)
+    if not np.array_equal(again, sums):
+        raise CheckFailed("the same tile rendered again, after another tile in the same "
+                          "process, gives other sums: its random numbers depend on what the "
+                          "process did before (one generator per process, or a global one?). "
+                          "Make a new stream(setup.seed, tile.index, 0) in every job")
+    accel = make_accelerator(setup.scene.triangles, setup.backend)
+    expected = run_job(setup, Job(first, 0, 4), accel).sums
+    if not np.array_equal(sums, expected):
+        if not np.isfinite(sums).all() or np.abs(sums).max() == 0:
+            raise CheckFailed("the tile's sums are empty or not finite: return the film the "
+                              "tile's paths were traced into, reshaped to (h, w, 3)")
+        raise CheckFailed("the tile's sums are not the library's: a tile's job draws every "
+                          "random number from its own stream, rng = stream(setup.seed, "
+                          "tile.index, 0), camera jitter first (rng.random((n, 2), float32) for "
+                          "paths in sample-major order, as ptlab.jobs.run_job does), then "
+                          "trace_paths with the same rng")
+    return "a tile's sums are the library's, and the same whatever the process rendered before"
+
+
+# -- the pool -----------------------------------------------------------------------------------
+
+def _end_leftover_workers() -> None:
+    """End worker processes that the student's code started and left running."""
+    for child in multiprocessing.active_children():
+        child.terminate()
+        child.join(5)
+
+
+def importable(module: ModuleType) -> ModuleType:
+    """The student's module again, imported under its file's name from its folder.
+
+    The grader imports the student's file under a made-up name, which a worker process
+    (started by forkserver or spawn) could not import to find ``render_tile`` by; imported
+    as ``08_parallel`` with its folder on ``sys.path`` (which new processes inherit) it can.
+    """
+    path = Path(module.__file__).resolve()
+    if str(path.parent) not in sys.path:
+        sys.path.insert(0, str(path.parent))
+    try:
+        imported = importlib.import_module(path.stem)
+    except Exception as error:  # the student's module raised on a second import
+        raise CheckFailed(f"importing {path.name} again raised {type(error).__name__}: "
+                          f"{error}") from None
+    if Path(getattr(imported, "__file__", "") or "").resolve() != path:
+        raise CheckFailed(f"another module is called {path.stem!r} too ({imported.__name__} "
+                          f"from {getattr(imported, '__file__', 'Python itself')}): rename your "
+                          f"file, e.g. to 08_parallel.py, so that worker processes import yours")
+    return imported
+
+
+def _render(module, workers: int) -> tuple[np.ndarray, set]:
+    (render_parallel,) = require(module, "render_parallel")
+    try:
+        result = render_parallel(_scene(), SPP, RES, seed=SEED, workers=workers, tile_size=TILE)
+    finally:
+        _end_leftover_workers()
+    if not (isinstance(result, tuple) and len(result) == 2):
+        raise CheckFailed("render_parallel must return two things: (image, pids)")
+    image, pids = np.asarray(result[0]), set(result[1])
+    if image.shape != (RES[1], RES[0], 3):
+        raise CheckFailed(f"the image must have shape (height, width, 3) = ({RES[1]}, {RES[0]}, "
+                          f"3), not {image.shape}")
+    if not np.isfinite(image).all():
+        raise CheckFailed("the image has NaN or infinite pixels")
+    if np.abs(image).max() == 0:
+        raise CheckFailed("the image is black: the tiles' sums never reached it. Each worker "
+                          "has its own copy of anything you pass it, so writing into an "
+                          "image there changes nothing here: return each tile's sums and add "
+                          "them into the image in the main process")
+    empty = image.max(axis=2) == 0
+    if empty.any():
+        y, x = np.argwhere(empty)[0]
+        raise CheckFailed(f"{empty.sum()} pixels are black, e.g. (x={x}, y={y}): some tiles "
+                          f"were never rendered or added (the tiles at the edges?)")
+    return image, pids
+
+
+def check_parallel(module) -> str:
+    image, pids = _render(importable(module), workers=2)
+    workers = pids - {os.getpid()}
+    if len(workers) < 2:
+        where = ("in this process only (threads, or no pool at all? threads share one "
+                 "process, where Python runs one of them at a time)" if not workers
+                 else f"in one process only (pid {min(workers)})")
+        raise CheckFailed(f"with workers=2 every tile was rendered {where}: submit each tile's "
+                          f"job to a pool of 2 processes (concurrent.futures.ProcessPoolExecutor "
+                          f"or multiprocessing.Pool) and collect what each job returns")
+    return f"the tiles were rendered by {len(workers)} worker processes"
+
+
+def check_worker_count(module) -> str:
+    module = importable(module)
+    two, _ = _render(module, workers=2)
+    one, _ = _render(module, workers=1)
+    if not np.array_equal(one, two):
+        differ = np.any(one != two, axis=2)
+        raise CheckFailed(f"the image with 2 workers differs from the one with 1 worker in "
+                          f"{differ.sum()} of {differ.size} pixels: the random numbers depend on "
+                          f"which process renders which tile, or in which order. Seed a stream "
+                          f"per tile, stream(seed, tile.index, 0), never per worker, and share "
+                          f"no generator between jobs")
+    return "the image is the same, bit for bit, with 1 and 2 workers"
+
+
+def check_library(module) -> str:
+    from ptlab.render import render_result
+
+    image, _ = _render(importable(module), workers=2)
+    expected = render_result(_scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE,
+                             spp_per_pass=SPP).image
+    if not np.array_equal(image, expected):
+        ratio = float(image.mean() / expected.mean())
+        differ = np.any(image != expected, axis=2)
+        hint = ("divide the sums by spp once, at the end" if abs(ratio - 1) > 0.05 else
+                "the same seed must give the library's random numbers: stream(seed, "
+                "tile.index, 0) for the tile numbered as ptlab.jobs.make_tiles numbers it, and "
+                "float64 sums divided by spp, then float32")
+        raise CheckFailed(f"your image differs from the library's (same seed, tile size {TILE}, "
+                          f"one pass) in {differ.sum()} of {differ.size} pixels and is "
+                          f"{ratio:.3f}x as bright: {hint}")
+    return f"the image is the library's, bit for bit (seed {SEED}, {TILE} x {TILE} tiles)"
+
+
+CHAPTER = Chapter(
+    number=8, slug="parallel", title="Parallel rendering over tiles",
+    functions=("make_tiles", "render_tile", "render_parallel"),
+    checks=(
+        Check("tiles", 2, check_tiles, timeout=20),
+        Check("tile job", 2, check_tile_job, timeout=30),
+        Check("parallel", 2, check_parallel, timeout=60),
+        Check("any worker count", 2, check_worker_count, timeout=90),
+        Check("matches the library", 2, check_library, timeout=60),
+    ),
+)

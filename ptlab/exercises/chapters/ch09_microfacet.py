@@ -1,0 +1,242 @@
+"""Chapter 9's checks: microfacet materials (GGX ``D``, Smith ``G1``/``G2``, Fresnel-Schlick,
+the ``GGXMetal`` material and its importance sampling).
+
+Known answers come from the formulas (D is normalised: the integral of D(h) cos(theta_h) over
+the hemisphere is 1, and D(n) = 1 / (pi alpha^2); G1(n) = 1 and 0 <= G1 <= 1; F(0 degrees)
+= F0, F(90 degrees) = 1) and from the library's own ``ptlab.materials.microfacet``. Then
+the material harness and a render of ``cornell-box-microfacet`` with the student's metal in
+place of the library's, in two steps: with the cosine hemisphere sampling the exercise file
+already has (it tests ``eval``), then with the student's importance sampling.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.chapters.ch06_diffuse import HARNESS_SAMPLES, probe, random_pairs
+from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
+
+ALPHAS = (0.05, 0.2, 0.5, 1.0)
+GOLD = (1.0, 0.782, 0.344)
+
+
+def _values(function, *arguments, shape) -> np.ndarray:
+    """``function(*arguments)`` as float64, checked for shape and finiteness."""
+    result = np.asarray(function(*(np.asarray(a) for a in arguments)), dtype=np.float64)
+    name = function.__name__
+    if result.shape != shape:
+        raise CheckFailed(f"{name} must return an array of shape {shape}, yours has shape "
+                          f"{result.shape}")
+    if not np.isfinite(result).all():
+        raise CheckFailed(f"{name} returned NaN or infinite values")
+    return result
+
+
+def check_d(module) -> str:
+    (D,) = require(module, "D")  # noqa: N806 (the papers' name)
+    # The integral over the hemisphere of D(h) cos(theta_h) d omega is 2 pi times the one of
+    # D(mu) mu over mu = cos(theta_h) in [0, 1]; D peaks at mu = 1 within about alpha^2, so
+    # the trapezoids are spaced geometrically in 1 - mu.
+    x = np.concatenate([[0.0], np.geomspace(1e-14, 1.0, 20001)])
+    mu = 1.0 - x
+    for alpha in ALPHAS:
+        at_normal = _values(D, np.array([1.0]), alpha, shape=(1,))[0]
+        expected = 1 / (math.pi * alpha * alpha)
+        if not math.isclose(at_normal, expected, rel_tol=1e-4):
+            hint = ""
+            if math.isclose(at_normal, 1 / (math.pi * alpha), rel_tol=1e-3):
+                hint = " (alpha where alpha^2 belongs?)"
+            elif math.isclose(at_normal, 1 / (alpha * alpha), rel_tol=1e-3):
+                hint = " (the pi in the denominator is missing)"
+            raise CheckFailed(f"D(cos_theta_h = 1, alpha = {alpha}) should be 1 / (pi alpha^2) "
+                              f"= {expected:.5g}, yours is {at_normal:.5g}{hint}")
+        total = float(np.trapezoid(_values(D, mu, alpha, shape=mu.shape) * mu * 2 * math.pi, x))
+        if abs(total - 1) > 1e-3:
+            raise CheckFailed(f"with alpha = {alpha} the integral of D(h) cos(theta_h) over the "
+                              f"hemisphere is {total:.4f}, not 1: D is not normalised (compare "
+                              f"your formula with alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2))")
+    return f"D is normalised and D(n) = 1 / (pi alpha^2) for alpha = {', '.join(map(str, ALPHAS))}"
+
+
+def check_g(module) -> str:
+    from ptlab.materials import microfacet as library
+
+    G1, G2 = require(module, "G1", "G2")  # noqa: N806 (the papers' names)
+    cos_theta = np.concatenate([[1.0, 1e-6], np.linspace(0.01, 0.99, 99)])
+    for alpha in (0.1, 0.5, 1.0):
+        g1 = _values(G1, cos_theta, alpha, shape=cos_theta.shape)
+        if not math.isclose(g1[0], 1.0, rel_tol=1e-6):
+            raise CheckFailed(f"G1 at normal incidence (cos_theta = 1) must be 1 (no facet is "
+                              f"hidden), yours is {g1[0]:.5g} for alpha = {alpha}")
+        if (g1 < 0).any() or (g1 > 1 + 1e-9).any():
+            raise CheckFailed(f"G1 is a fraction of the microfacets, in [0, 1]; yours reaches "
+                              f"{g1.max():.4g} / {g1.min():.4g} for alpha = {alpha}")
+        expected = library.G1(cos_theta, alpha)
+        worst = np.argmax(np.abs(g1 - expected) / expected)
+        if abs(g1[worst] - expected[worst]) > 1e-4 * expected[worst]:
+            raise CheckFailed(f"G1(cos_theta = {cos_theta[worst]:.3g}, alpha = {alpha}) is "
+                              f"{g1[worst]:.5g}, Smith's masking for GGX gives "
+                              f"{expected[worst]:.5g}: 1 / (1 + Lambda) with Lambda = "
+                              f"(sqrt(1 + alpha^2 tan^2(theta)) - 1) / 2")
+    rng = np.random.default_rng(91)
+    cos_o, cos_i = rng.uniform(0.02, 1, 200), rng.uniform(0.02, 1, 200)
+    g2 = _values(G2, cos_o, cos_i, 0.4, shape=cos_o.shape)
+    expected = library.G2(cos_o, cos_i, 0.4)
+    if not np.allclose(g2, expected, rtol=1e-4):
+        separable = library.G1(cos_o, 0.4) * library.G1(cos_i, 0.4)
+        if np.allclose(g2, separable, rtol=1e-4):
+            raise CheckFailed("your G2 is G1(wo) G1(wi), the separable form; this chapter uses "
+                              "the height-correlated 1 / (1 + Lambda(wo) + Lambda(wi)) (Heitz 2014, "
+                              "eq. 99), which the render is compared with")
+        worst = np.argmax(np.abs(g2 - expected))
+        raise CheckFailed(f"G2(cos_o = {cos_o[worst]:.3f}, cos_i = {cos_i[worst]:.3f}, alpha = 0.4) "
+                          f"is {g2[worst]:.5g}, the height-correlated Smith G2 gives "
+                          f"{expected[worst]:.5g}")
+    return "G1 is Smith's masking (1 at the normal, in [0, 1]); G2 is height-correlated"
+
+
+def check_fresnel(module) -> str:
+    (fresnel_schlick,) = require(module, "fresnel_schlick")
+    cos_theta = np.array([1.0, 0.0, 0.5, 0.2])
+    f0 = np.array(GOLD)
+    F = _values(fresnel_schlick, cos_theta, f0, shape=(4, 3))  # noqa: N806
+    if not np.allclose(F[0], f0, rtol=1e-6):
+        raise CheckFailed(f"at normal incidence (cos_theta = 1) F must be F0 = {GOLD}, yours is "
+                          f"{np.round(F[0], 4)}")
+    if not np.allclose(F[1], 1.0, rtol=1e-6):
+        raise CheckFailed(f"at grazing incidence (cos_theta = 0) F must be 1 (every material is "
+                          f"a mirror there), yours is {np.round(F[1], 4)}")
+    expected = f0 + (1 - f0) * (1 - cos_theta[2:, None]) ** 5
+    if not np.allclose(F[2:], expected, rtol=1e-6):
+        raise CheckFailed(f"F(cos_theta = 0.5) should be F0 + (1 - F0)(1 - 0.5)^5 = "
+                          f"{np.round(expected[0], 5)}, yours is {np.round(F[2], 5)}")
+    return "F(0 degrees) = F0, F(90 degrees) = 1, F0 + (1 - F0)(1 - cos)^5 between"
+
+
+def _metal(module, f0=GOLD, alpha=0.3, sampling="ggx"):
+    (GGXMetal,) = require(module, "GGXMetal")  # noqa: N806 (a class)
+    return GGXMetal(f0, alpha, sampling)
+
+
+def check_eval(module) -> str:
+    from ptlab.materials import Microfacet
+
+    material = _metal(module)
+    rng = np.random.default_rng(92)
+    wo, wi, n = random_pairs(rng, 2000)
+    f = np.asarray(material.eval(wo, wi, n), dtype=np.float64)
+    if f.shape != wo.shape:
+        raise CheckFailed(f"eval must return shape {wo.shape}, yours has {f.shape}")
+    if not np.isfinite(f).all():
+        raise CheckFailed("eval returned NaN or infinite values")
+    expected = Microfacet(GOLD, alpha=0.3).eval(wo, wi, n)
+    if not np.allclose(f, expected, rtol=1e-4, atol=1e-9):
+        ratio = np.median(f / expected)
+        cos_theta_i = np.sum(wi * n, axis=1)
+        hint = "f_r = D G2 F / (4 cos_theta_o cos_theta_i), with h = normalize(wo + wi)"
+        if np.allclose(f / expected, cos_theta_i[:, None], rtol=1e-3):
+            hint = "eval includes cos(theta_i); the renderer multiplies by it itself"
+        elif math.isclose(ratio, 4, rel_tol=1e-3) or math.isclose(ratio, 0.25, rel_tol=1e-3):
+            hint = f"yours is {ratio:g}x the right value: the 4 of 4 cos_theta_o cos_theta_i"
+        raise CheckFailed(f"eval differs from the GGX BRDF by up to "
+                          f"{np.abs(f - expected).max():.3g} ({hint})")
+    below = np.asarray(material.eval(wo, -wi, n), dtype=np.float64)
+    if np.abs(below).max() > 0:
+        raise CheckFailed("eval must be 0 when wi is below the surface: a metal does not let "
+                          "light through")
+    return "f_r = D G2 F / (4 cos_theta_o cos_theta_i) for 2000 pairs of directions, 0 below"
+
+
+def _harness(module, sampling: str, alpha: float) -> str:
+    from ptlab.grading import check_material
+
+    material = _metal(module, (1.0, 1.0, 1.0), alpha, sampling)
+    probe(material)
+    report = check_material(material, seed=9, samples=HARNESS_SAMPLES)
+    if not report.passed:
+        failures = "; ".join(f"{c.name}: {c.hint or c.statistic}" for c in report.checks
+                             if not c.passed)
+        raise CheckFailed(f"the material harness failed {', '.join(report.failed)} for a white "
+                          f"metal with alpha {alpha} and sampling {sampling!r}. {failures} (see "
+                          f"the whole table with: ptlab grade 09_microfacet.py:GGXMetal --args "
+                          f"'{{\"alpha\": {alpha}, \"sampling\": \"{sampling}\"}}')")
+    return f"every check of ptlab.grading.check_material passes (alpha {alpha}, {sampling!r})"
+
+
+def check_harness_hemisphere(module) -> str:
+    return _harness(module, "hemisphere", 0.3)
+
+
+def check_harness_importance(module) -> str:
+    return _harness(module, "ggx", 0.2)
+
+
+def render_options() -> dict:
+    """The render both sides of chapter 9's comparisons make: 32 x 32, 16 passes of 8 spp."""
+    return dict(res=32, passes=16, spp_per_pass=8, seed=9, max_depth=6)
+
+
+def metals_scene():
+    """``cornell-box-microfacet`` seen from closer, so that its two metal spheres fill the
+    picture (from the whole box's camera they are a few pixels of a 32 x 32 image)."""
+    import ptlab
+    from ptlab.camera import Camera
+
+    scene = ptlab.load_scene("cornell-box-microfacet")
+    scene.camera = Camera.look_at((282, 200, -250), (282, 80, 155), fov_y=42)
+    return scene
+
+
+def _render(module, sampling: str) -> str:
+    from ptlab.materials import Microfacet
+
+    probe(_metal(module, sampling=sampling))
+    scene = metals_scene()
+
+    def theirs(m):
+        return _metal(module, m.f0, m.alpha, sampling) if isinstance(m, Microfacet) else None
+
+    def ours(m):
+        library = {"ggx": "vndf", "hemisphere": "hemisphere"}[sampling]
+        return m.with_sampling(library) if isinstance(m, Microfacet) else None
+
+    student = pass_images(replace_materials(scene, theirs), **render_options())
+    library = pass_images(replace_materials(scene, ours), **render_options())
+    passed, explanation = compare_renders(student, library)
+    what = "hemisphere sampling" if sampling == "hemisphere" else "your importance sampling"
+    if not passed:
+        hint = ("is eval right at every angle?" if sampling == "hemisphere" else
+                "is pdf the density of the directions sample returns, the Jacobian "
+                "1 / (4 |wo . h|) included?")
+        raise CheckFailed(f"the rough metals of cornell-box-microfacet with {what}: "
+                          f"{explanation} ({hint})")
+    return f"cornell-box-microfacet with {what}: {explanation}"
+
+
+def check_render_hemisphere(module) -> str:
+    return _render(module, "hemisphere")
+
+
+def check_render_importance(module) -> str:
+    return _render(module, "ggx")
+
+
+CHAPTER = Chapter(
+    number=9, slug="microfacet", title="Microfacet materials",
+    functions=("D", "G1", "G2", "fresnel_schlick", "GGXMetal.eval", "GGXMetal.sample",
+               "GGXMetal.pdf"),
+    checks=(
+        Check("D normalisation", 2, check_d, timeout=30),
+        Check("Smith G", 1, check_g, timeout=30),
+        Check("Fresnel-Schlick", 1, check_fresnel, timeout=30),
+        Check("eval", 1, check_eval, timeout=30),
+        Check("harness (hemisphere)", 1, check_harness_hemisphere, timeout=60),
+        Check("render (hemisphere)", 1, check_render_hemisphere, timeout=60),
+        Check("harness (importance)", 2, check_harness_importance, timeout=60),
+        Check("render (importance)", 1, check_render_importance, timeout=60),
+    ),
+)

@@ -1,0 +1,165 @@
+"""Chapter 10's checks: multiple importance sampling (``balance_heuristic``,
+``power_heuristic``, ``mis_weight``).
+
+Known answers come from Veach's heuristics themselves (Veach 1997, section 9.2): the weights
+of the two strategies for one sample sum to 1, a strategy that cannot draw a sample (pdf 0,
+as a mirror's BSDF for a light sample) leaves it all to the other, and nothing is NaN. Then
+the student's ``mis_weight`` is plugged into the path tracer (``ptlab.integrators.path``
+calls it for both strategies: light samples in ``direct_light``, BSDF-sampled hits of a
+light in ``add_emission``) and ``veach-mis`` rendered with ``strategy="mis"`` must match
+the library's picture: exactly, up to rounding, since the weights change no path.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ptlab.exercises import Chapter
+from ptlab.exercises.grader import Check, CheckFailed, require
+
+
+def _weights(function, pdf, other, *heuristic) -> np.ndarray:
+    """``function(pdf, other, *heuristic)`` as float64, checked for shape and NaN."""
+    pdf, other = np.asarray(pdf, dtype=np.float32), np.asarray(other, dtype=np.float32)
+    with np.errstate(all="ignore"):
+        weight = np.asarray(function(pdf, other, *heuristic), dtype=np.float64)
+    name = function.__name__ + (f"(..., {heuristic[0]!r})" if heuristic else "")
+    if weight.shape != pdf.shape:
+        raise CheckFailed(f"{name} must return one weight per sample, shape {pdf.shape}; yours "
+                          f"has shape {weight.shape}")
+    if np.isnan(weight).any():
+        bad = np.flatnonzero(np.isnan(weight))[0]
+        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g} "
+                          f"(0 / 0: where both pdfs are 0 the sample cannot happen; give it "
+                          f"weight 0)")
+    return weight
+
+
+def _known_values(function, cases, formula: str) -> str:
+    pdf, other, expected = (np.array(column, dtype=np.float64) for column in zip(*cases, strict=True))
+    weight = _weights(function, pdf, other)
+    wrong = np.flatnonzero(np.abs(weight - expected) > 1e-5)
+    if len(wrong):
+        k = wrong[0]
+        raise CheckFailed(f"{function.__name__}(pdf = {pdf[k]:g}, other = {other[k]:g}) should be "
+                          f"{formula} = {expected[k]:.4g}, yours is {weight[k]:.4g}")
+    return f"{len(cases)} known values, {formula}"
+
+
+def check_balance(module) -> str:
+    (balance_heuristic,) = require(module, "balance_heuristic")
+    cases = [(1, 1, 0.5), (3, 1, 0.75), (1, 3, 0.25), (0.2, 0.6, 0.25), (2, 0, 1.0),
+             (1e4, 1, 1e4 / (1e4 + 1))]
+    return _known_values(balance_heuristic, cases, "pdf / (pdf + other)")
+
+
+def check_power(module) -> str:
+    (power_heuristic,) = require(module, "power_heuristic")
+    cases = [(1, 1, 0.5), (3, 1, 0.9), (1, 3, 0.1), (2, 1, 0.8), (0.5, 1.5, 0.1), (2, 0, 1.0),
+             (100, 1, 1e4 / (1e4 + 1))]
+    return _known_values(power_heuristic, cases, "pdf^2 / (pdf^2 + other^2)")
+
+
+def check_sum_to_one(module) -> str:
+    (mis_weight,) = require(module, "mis_weight")
+    rng = np.random.default_rng(101)
+    pdf_light, pdf_bsdf = 10.0 ** rng.uniform(-3, 4, (2, 1000))
+    for heuristic in ("power", "balance"):
+        light = _weights(mis_weight, pdf_light, pdf_bsdf, heuristic)
+        bsdf = _weights(mis_weight, pdf_bsdf, pdf_light, heuristic)
+        total = light + bsdf
+        worst = np.argmax(np.abs(total - 1))
+        if abs(total[worst] - 1) > 1e-5:
+            hint = ""
+            if np.allclose(total, 2, atol=1e-5):
+                hint = (": both strategies weighted 1, so every light path found by both is "
+                        "counted twice (double counting)")
+            elif np.allclose(total, 0, atol=1e-5):
+                hint = ": both weighted 0, so light found by either is lost"
+            raise CheckFailed(f"with heuristic={heuristic!r}, the weights of the two strategies "
+                              f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
+                              f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}")
+        expected = pdf_light**2 / (pdf_light**2 + pdf_bsdf**2) if heuristic == "power" else \
+            pdf_light / (pdf_light + pdf_bsdf)
+        if not np.allclose(light, expected, rtol=1e-4, atol=1e-6):
+            raise CheckFailed(f"mis_weight(..., {heuristic!r}) should be the {heuristic} "
+                              f"heuristic; yours sums to 1 but gives other values (is the "
+                              f"heuristic argument passed on?)")
+    return "the two strategies' weights add up to 1 for 1000 random pairs, both heuristics"
+
+
+def check_zero_pdfs(module) -> str:
+    (mis_weight,) = require(module, "mis_weight")
+    pdf = np.array([2.0, 0.0, 0.0, 5000.0, 0.0])
+    other = np.array([0.0, 3.0, 0.0, 0.0, 5000.0])
+    expected = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
+    for heuristic in ("power", "balance"):
+        weight = _weights(mis_weight, pdf, other, heuristic)
+        wrong = np.flatnonzero(np.abs(weight - expected) > 1e-6)
+        if len(wrong):
+            k = wrong[0]
+            why = ("the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for "
+                   "a light sample), so this one must count it fully" if other[k] == 0 and pdf[k] > 0
+                   else "this strategy cannot draw the sample, so its weight is 0" if pdf[k] == 0 and
+                   other[k] > 0 else "a sample neither strategy can draw gets weight 0")
+            raise CheckFailed(f"mis_weight(pdf = {pdf[k]:g}, other = {other[k]:g}, {heuristic!r}) "
+                              f"should be {expected[k]:g}, yours is {weight[k]:g}: {why}")
+    return "weight 1 when the other pdf is 0, 0 when this one is, 0 (not NaN) when both are"
+
+
+def render_options() -> dict:
+    """The render both sides of chapter 10's comparison make: 32 x 32, 32 spp, paths of up
+    to 3 bounces (MIS acts on every bounce alike; more bounces only cost time)."""
+    return dict(res=32, spp=32, seed=10, max_depth=3, strategy="mis", workers=1)
+
+
+def veach_scene():
+    """``veach-mis``, the scene MIS was made for (Veach 1997, figure 9.2)."""
+    import ptlab
+    return ptlab.load_scene("veach-mis")
+
+
+#: The MIS weights change what each path adds, never where it goes, so with the same seed
+#: the student's render and the library's trace the very same paths: a right answer differs
+#: by rounding only (measured: below 1e-6). Each region must agree to this relative tolerance
+#: (of its value plus a tenth of the image's mean): a deterministic check, false-alarm rate 0.
+TOLERANCE = 1e-3
+
+
+def check_render(module) -> str:
+    import ptlab
+    import ptlab.integrators.path
+    from ptlab.exercises.plug import plugged
+    from ptlab.exercises.renders import describe_region, regions_of
+
+    (mis_weight,) = require(module, "mis_weight")
+    _weights(mis_weight, np.array([1.0, 2.0]), np.array([1.0, 0.5]), "power")  # fail fast
+    scene = veach_scene()
+    with plugged(ptlab.integrators.path, mis_weight=mis_weight):
+        student = regions_of(ptlab.render(scene, **render_options()).astype(np.float64))
+    library = regions_of(ptlab.render(scene, **render_options()).astype(np.float64))
+    difference = np.abs(student - library)
+    allowed = TOLERANCE * (library + 0.1 * library.mean())
+    overall = student.mean() / library.mean()
+    if (difference > allowed).any():
+        worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
+        ratio = student[worst] / max(library[worst], 1e-12)
+        raise CheckFailed(f"veach-mis with your MIS weights differs from the library's render "
+                          f"along the very same paths: {describe_region(*worst)} is "
+                          f"{ratio:.3f}x the library's, the whole image {overall:.3f}x "
+                          f"(brighter: light counted by both strategies; darker: by neither)")
+    return (f"veach-mis with your MIS weights matches the library's render along the same "
+            f"paths (whole image {overall:.6f}x)")
+
+
+CHAPTER = Chapter(
+    number=10, slug="mis", title="Multiple importance sampling",
+    functions=("balance_heuristic", "power_heuristic", "mis_weight"),
+    checks=(
+        Check("balance heuristic", 2, check_balance, timeout=30),
+        Check("power heuristic", 2, check_power, timeout=30),
+        Check("weights sum to 1", 2, check_sum_to_one, timeout=30),
+        Check("zero and delta pdfs", 2, check_zero_pdfs, timeout=30),
+        Check("render", 2, check_render, timeout=60),
+    ),
+)

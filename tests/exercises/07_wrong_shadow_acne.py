@@ -1,0 +1,50 @@
+"""A typical wrong chapter-7 answer: shadow rays without an epsilon. They start exactly at
+the hit point (and aim exactly at the light point), so in float32 most of them hit the
+surface they start on: shadow acne. Nearly every point looks shadowed, and the image is far
+too dark, speckled where a few shadow rays get through."""
+
+import numpy as np
+
+from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, scatter, shade, surface_hit
+from ptlab.vectors import dot, take_rows
+
+EXPECTED_FAILURES = ("direct light", "white furnace", "Cornell box")
+
+
+def direct_light(film, scene, accel, hit, u):
+    light = scene.lights.sample(u)
+    to_light = light.points - hit.p
+    dist2 = dot(to_light, to_light)
+    wi = to_light / np.sqrt(dist2)[:, None]
+    cos_theta = np.maximum(dot(hit.n, wi), 0)
+    cos_theta_light = np.maximum(-dot(light.normals, wi), 0)
+    visible = ~accel.occluded(hit.p, to_light, 1 - SHADOW_EPSILON)   # the bug: no offsets
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    scale = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    add_to_film(film, hit.pixel, hit.throughput * f * light.radiance * scale[:, None])
+    return len(wi)
+
+
+def russian_roulette(throughput, p_rr, u):
+    return u < p_rr, throughput / np.float32(p_rr)
+
+
+def trace_paths(film, scene, accel, paths, rng, settings):
+    rays = 0
+    for depth in range(settings.max_depth + 1):
+        hits = accel.intersect(paths.origins, paths.dirs)
+        rays += len(hits.prim)
+        hit = surface_hit(scene, paths, hits)
+        if len(hit.prim) == 0:
+            break
+        emitted = take_rows(scene.emission, hit.prim) * (hit.sees_emission & hit.front)[:, None]
+        add_to_film(film, hit.pixel, hit.throughput * emitted)
+        if depth == settings.max_depth:
+            break
+        u = rng.random((6, len(hit.prim)), dtype=np.float32)
+        rays += direct_light(film, scene, accel, hit, u[0:3].T)
+        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u[3])
+        paths = scatter(scene, hit, u[4:6].T, survive)
+        if len(paths.pixel) == 0:
+            break
+    return rays
