@@ -221,12 +221,26 @@ def test_a_mirror_shows_the_light_it_reflects():
     np.testing.assert_allclose(image, 1.0, rtol=1e-5)
 
 
-@pytest.mark.parametrize("strategy", ["bsdf", "mis"])
-def test_every_strategy_renders_the_furnace(strategy):
+@pytest.mark.parametrize("strategy, heuristic", [("bsdf", "power"), ("mis", "power"),
+                                                 ("mis", "balance")])
+def test_every_strategy_renders_the_furnace(strategy, heuristic):
     means = image_means(closed_box_scene(0.5, 0.3), seeds=range(10), spp=16, res=(16, 16),
-                        workers=1, strategy=strategy)[:, 0]
+                        workers=1, strategy=strategy, heuristic=heuristic)[:, 0]
     standard_error = means.std(ddof=1) / np.sqrt(len(means))
     assert abs(means.mean() - 0.6) < 3 * standard_error + 1e-3, (means.mean(), standard_error)
+
+
+def test_roulette_starts_at_the_given_depth():
+    # Fixed roulette with P = 0.5 from depth 0 ends most paths at once; started at depth 4
+    # every path makes 4 bounces first: many more rays, the same expected furnace radiance.
+    scene = closed_box_scene(0.5, 0.3)
+    early, late = (ptlab.render_result(scene, spp=8, res=16, workers=1, rr=0.5, rr_depth=depth)
+                   for depth in (0, 4))
+    assert late.rays > 2 * early.rays
+    assert late.settings["rr_depth"] == 4 and early.settings["rr_depth"] == 0
+    means = image_means(scene, seeds=range(10), spp=16, res=16, workers=1, rr=0.5, rr_depth=4)
+    standard_error = means[:, 0].std(ddof=1) / np.sqrt(len(means))
+    assert abs(means[:, 0].mean() - 0.6) < 3 * standard_error + 1e-3
 
 
 def test_strategies_agree_on_the_microfacet_cornell_box():
