@@ -54,6 +54,9 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
         raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
     if heuristic not in HEURISTICS:
         raise PtlabError(f"heuristic {heuristic!r}: choose one of {', '.join(HEURISTICS)}")
+    if integrator != "path" and (strategy, heuristic) != ("nee", "power"):
+        raise PtlabError(f"strategy {strategy!r} / heuristic {heuristic!r}: these choose how the "
+                         f"path integrator finds light; {integrator!r} has no such choice")
     if rr_depth is not None and (not _is_int(rr_depth) or rr_depth < 0):
         raise PtlabError(f"russian roulette depth {rr_depth!r}: must be a non-negative integer")
     if rr == "throughput":

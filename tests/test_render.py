@@ -140,7 +140,10 @@ def test_render_accepts_a_scene_name_and_a_resolution_string():
 
 @pytest.mark.parametrize("kwargs", [dict(spp=0), dict(spp=-3), dict(res=-5), dict(res="axb"),
                                     dict(rr=1.5), dict(rr="sometimes"), dict(sampling="magic"),
-                                    dict(backend="optix"), dict(seed=-1), dict(max_depth=-1)])
+                                    dict(backend="optix"), dict(seed=-1), dict(max_depth=-1),
+                                    dict(heuristic="magic"), dict(rr_depth=-1),
+                                    dict(integrator="whitted", strategy="mis"),
+                                    dict(integrator="normals", heuristic="balance")])
 def test_absurd_settings_raise_a_clear_error(cornell, kwargs):
     with pytest.raises(ptlab.errors.PtlabError):
         ptlab.render(cornell, **{"spp": 1, "res": 8, **kwargs})

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import json
 import shutil
+import sys
 from pathlib import Path
 
 from ptlab.errors import PtlabError
@@ -79,7 +80,9 @@ def _check(args) -> int:
     path = Path(args.file)
     if path.suffix != ".py":
         raise PtlabError(f"{path}: expected a Python file (.py)")
-    result = grade(found, path, timeout_scale=args.timeout_scale)
+    # A line per check as it finishes, on a terminal (a course's scripts get the table only).
+    echo = (lambda line: print(line, file=sys.stderr)) if sys.stderr.isatty() else None
+    result = grade(found, path, timeout_scale=args.timeout_scale, echo=echo)
     print(result.table())
     if args.json:
         Path(args.json).write_text(json.dumps(result.as_dict(), indent=2) + "\n")
