@@ -21,7 +21,7 @@ from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.film import Film
 
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
 
 
 def scene_digest(scene) -> str:
@@ -38,8 +38,9 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     """Write the film and the render's identity to ``path``, atomically."""
     def write(temporary: str) -> None:
         with open(temporary, "wb") as out:
-            np.savez(out, sums=film.sums, tile_spp=film.tile_spp, passes_done=film.passes_done,
-                     rays=np.int64(film.rays), query_seconds=np.float64(film.query_seconds),
+            np.savez(out, sums=film.sums, passes=np.asarray(film.passes, dtype=np.int64),
+                     passes_done=film.passes_done, rays=np.int64(film.rays),
+                     query_seconds=np.float64(film.query_seconds),
                      identity=json.dumps(dict(identity, format=FORMAT_VERSION)))
 
     write_atomically(path, write)
@@ -53,7 +54,7 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     try:
         with np.load(path, allow_pickle=False) as data:
             saved = json.loads(str(data["identity"]))
-            arrays = {k: data[k] for k in ("sums", "tile_spp", "passes_done", "rays",
+            arrays = {k: data[k] for k in ("sums", "passes", "passes_done", "rays",
                                            "query_seconds")}
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
@@ -64,13 +65,17 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
         if key != "spp" and saved.get(key) != value:
             raise PtlabError(f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, "
                              f"this render has {value!r}")
-    if arrays["sums"].shape != film.sums.shape or len(arrays["tile_spp"]) != len(film.tile_spp):
+    if arrays["sums"].shape != film.sums.shape or len(arrays["passes_done"]) != len(film.tiles):
         raise PtlabError(f"{path}: the checkpoint's film does not fit this render")
-    if arrays["tile_spp"].max(initial=0) > identity["spp"]:
-        raise PtlabError(f"{path}: the checkpoint already has {arrays['tile_spp'].max()} spp, "
-                         f"more than the {identity['spp']} asked for")
+    # The passes done must be the first passes of this render's schedule (a render may be
+    # resumed with more spp than it was started with, never with other passes).
+    done = int(arrays["passes_done"].max(initial=0))
+    saved_passes = [int(n) for n in arrays["passes"]]
+    if done > len(film.passes) or saved_passes[:done] != film.passes[:done]:
+        raise PtlabError(f"{path}: the checkpoint's {done} passes (of {saved_passes[0]} spp) are "
+                         f"not the first passes of a {sum(film.passes)}-spp render: resume "
+                         f"with the --spp it was started with, {sum(saved_passes)}")
     film.sums[:] = arrays["sums"]
-    film.tile_spp[:] = arrays["tile_spp"]
     film.passes_done[:] = arrays["passes_done"]
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])

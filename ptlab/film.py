@@ -1,4 +1,4 @@
-"""The film: per-pixel sums of radiance in float64, and how many samples each tile has.
+"""The film: per-pixel sums of radiance in float64, and how many passes each tile has.
 
 Jobs finish in any order, but the film adds each tile's passes in pass order (a result
 that arrives early waits in ``pending``), so the float64 sums, and so the image, are the
@@ -18,15 +18,15 @@ class Film:
 
     Attributes:
         sums: (H, W, 3) float64 radiance summed over every sample taken so far.
-        tile_spp: (tiles,) samples per pixel taken in each tile.
+        passes: samples per pixel of each pass of the render (``ptlab.render.pass_schedule``).
         passes_done: (tiles,) passes added for each tile.
         rays, query_seconds: work done so far (rays traced, seconds inside ray queries).
     """
 
-    def __init__(self, width: int, height: int, tiles: list[Tile]):
+    def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int]):
         self.tiles = tiles
+        self.passes = list(passes)
         self.sums = np.zeros((height, width, 3))
-        self.tile_spp = np.zeros(len(tiles), dtype=np.int64)
         self.passes_done = np.zeros(len(tiles), dtype=np.int64)
         self.rays = 0
         self.query_seconds = 0.0
@@ -40,10 +40,15 @@ class Film:
             ready = self.pending.pop((index, int(self.passes_done[index])))
             tile = ready.job.tile
             self.sums[tile.y0:tile.y1, tile.x0:tile.x1] += ready.sums
-            self.tile_spp[index] += ready.job.spp
             self.passes_done[index] += 1
             self.rays += ready.rays
             self.query_seconds += ready.query_seconds
+
+    @property
+    def tile_spp(self) -> np.ndarray:
+        """(tiles,) samples per pixel in each tile: the spp of its first passes_done passes."""
+        spp_after = np.concatenate([[0], np.cumsum(self.passes, dtype=np.int64)])
+        return spp_after[self.passes_done]
 
     @property
     def samples(self) -> int:
@@ -60,6 +65,11 @@ class Film:
     def spp_max(self) -> int:
         """Samples per pixel of the tiles that have the most."""
         return int(self.tile_spp.max()) if len(self.tile_spp) else 0
+
+    @property
+    def complete(self) -> bool:
+        """Every tile has every pass."""
+        return bool(np.all(self.passes_done == len(self.passes)))
 
     def image(self) -> np.ndarray:
         """(H, W, 3) float32: each pixel's mean radiance (0 where a tile has no sample yet).

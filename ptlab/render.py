@@ -116,7 +116,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     tiles = make_tiles(width, height, tile_size)
     passes = pass_schedule(spp, tile_size, spp_per_pass)
     spp_per_pass = passes[0]
-    film = Film(width, height, tiles)
+    film = Film(width, height, tiles, passes)
     identity = dict(scene=scene_digest(scene), width=width, height=height, seed=seed,
                     backend=backend, sampling=sampling, rr=str(rr), max_depth=int(max_depth),
                     strategy=strategy, heuristic=heuristic, rr_depth=str(rr_depth),
@@ -124,7 +124,6 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
                     spp_per_pass=spp_per_pass, spp=spp)
     if resume is not None:
         load_checkpoint(resume, film, identity)
-        _check_resumable(film, passes, resume)
     samples_at_start = film.samples
 
     start = time.perf_counter()
@@ -145,7 +144,7 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
                 save_checkpoint(checkpoint, film, identity)
             if on_pass is not None:
                 on_pass(film)
-    complete = bool(film.tile_spp.min() == spp)
+    complete = film.complete
     if checkpoint is not None and not complete:
         save_checkpoint(checkpoint, film, identity)
     seconds = time.perf_counter() - start
@@ -168,16 +167,6 @@ def pass_schedule(spp: int, tile_size: int = TILE_SIZE,
     elif not isinstance(spp_per_pass, int) or spp_per_pass < 1:
         raise PtlabError(f"spp per pass {spp_per_pass!r}: must be a positive integer")
     return pass_sizes(spp, min(spp, spp_per_pass))
-
-
-def _check_resumable(film: Film, passes: list[int], path) -> None:
-    """The checkpoint's passes must be the first passes of this render's schedule."""
-    done_spp = np.concatenate([[0], np.cumsum(passes)])
-    if np.any(film.passes_done > len(passes)) or np.any(
-            done_spp[film.passes_done] != film.tile_spp):
-        raise PtlabError(f"{path}: the checkpoint's passes are not the first passes of a "
-                         f"{sum(passes)}-spp render (passes of {passes[0]} spp): resume with "
-                         f"the --spp it was started with")
 
 
 def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,

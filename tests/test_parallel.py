@@ -94,6 +94,19 @@ def test_resume_refuses_a_checkpoint_of_another_render(cornell, tmp_path):
         render_result(cornell, workers=1, resume=tmp_path / "junk.npz", **SMALL)
 
 
+def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=12)                    # 9 tiles x 3 passes: 3 tiles have 2 passes
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
+                  stop=stopper, **SMALL)
+    with pytest.raises(ptlab.errors.PtlabError, match="started with, 6"):
+        render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=2))
+    longer = render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=8))
+    assert longer.complete and longer.spp == 8
+    straight = render_result(cornell, workers=1, **dict(SMALL, spp=8))
+    assert np.array_equal(longer.image, straight.image)
+
+
 class DieOnceDiffuse(Diffuse):
     """A diffuse material that kills the process shading it, once per marker file.
 
