@@ -292,7 +292,8 @@ def _converge(args) -> int:
     run_converge(scene, estimators, out_dir, res, args.budget, seed=args.seed,
                  reference=args.reference, reference_spp=args.reference_spp,
                  cache_dir=None if args.no_cache else default_cache_dir(), target=args.target,
-                 echo=echo, workers=check_workers(args.workers), backend=args.backend)
+                 echo=echo, quiet=args.quiet, workers=check_workers(args.workers),
+                 backend=args.backend)
     return 0
 
 

@@ -133,8 +133,12 @@ def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool
 
 def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
                     cache_dir: Path | None, echo: Callable[[str], None] = print,
-                    **render_options) -> np.ndarray:
-    """A ``spp``-sample ``path:mis`` render of the scene, from the cache if it is there."""
+                    quiet: bool = False, **render_options) -> np.ndarray:
+    """A ``spp``-sample ``path:mis`` render of the scene, from the cache if it is there
+    (with a progress bar on the terminal while it renders, unless ``quiet``)."""
+    from ptlab.progress import ProgressBar
+    from ptlab.render import pass_schedule
+
     key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed)).encode()).hexdigest()[:16]
     cached = None if cache_dir is None else cache_dir / f"{scene.name}-{key}.exr"
     if cached is not None and cached.is_file():
@@ -143,8 +147,12 @@ def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
         return image
     echo(f"reference: rendering {spp} spp with {REFERENCE_ESTIMATOR} ...")
     estimator = parse_estimators(REFERENCE_ESTIMATOR)[0]
-    result = render_result(scene, spp=spp, res=res, seed=seed + REFERENCE_SEED_OFFSET,
-                           **estimator.options(), **render_options)
+    bar = ProgressBar(res[0] * res[1] * spp, len(pass_schedule(spp)), quiet=quiet)
+    try:
+        result = render_result(scene, spp=spp, res=res, seed=seed + REFERENCE_SEED_OFFSET,
+                               progress=bar, **estimator.options(), **render_options)
+    finally:
+        bar.close()
     echo(f"reference: {result.seconds:.1f} s")
     if cached is not None:
         cached.parent.mkdir(parents=True, exist_ok=True)
@@ -195,7 +203,8 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
                  res: tuple[int, int], budget: float, seed: int = 0,
                  reference: str | Path | None = None, reference_spp: int = 1024,
                  cache_dir: Path | None = None, target: float = 0.01,
-                 echo: Callable[[str], None] = print, **render_options) -> list[list[Measurement]]:
+                 echo: Callable[[str], None] = print, quiet: bool = False,
+                 **render_options) -> list[list[Measurement]]:
     """Measure every estimator's ladder and write the CSV, the chart and the strip.
 
     Writes ``convergence.csv``, ``convergence.png``, ``equal-time.png`` and
@@ -210,7 +219,7 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
         reference_pixels = load_reference(reference, res)
     else:
         reference_pixels = reference_image(scene, res, reference_spp, seed, cache_dir, echo,
-                                           **render_options)
+                                           quiet, **render_options)
     # Warm up imports and first calls, so that the first rung is not charged for them.
     render_result(scene, spp=1, res=16, workers=1)
     ladders = [measure_ladder(scene, estimator, reference_pixels, budget, echo=echo, seed=seed,
