@@ -46,6 +46,15 @@ class LightSample:
     pdf_area: np.ndarray
 
 
+def solid_angle_pdf(pdf_area: np.ndarray, dist2: np.ndarray,
+                    cos_theta_light: np.ndarray) -> np.ndarray:
+    """(N,) density per solid angle of a light point chosen with density ``pdf_area`` per
+    area, seen at squared distance ``dist2`` and angle ``cos_theta_light`` to its normal:
+    pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.13; inf or NaN where cos <= 0)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return pdf_area * dist2 / cos_theta_light
+
+
 class AreaLights:
     """All emissive triangles of a scene.
 
@@ -87,13 +96,6 @@ class AreaLights:
         (N, 3): mean(Le) / total power (0 on surfaces that do not emit)."""
         return (radiance.mean(axis=1) / np.float32(self.total_power)).astype(np.float32)
 
-    def pdf_solid_angle(self, radiance: np.ndarray, dist2: np.ndarray,
-                        cos_theta_light: np.ndarray) -> np.ndarray:
-        """(N,) density per solid angle of sampling a light point of radiance ``radiance``
-        seen at squared distance ``dist2`` and angle ``cos_theta_light`` to its normal:
-        pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.13)."""
-        with np.errstate(divide="ignore", invalid="ignore"):
-            return self.pdf_area(radiance) * dist2 / cos_theta_light
 
     def sample(self, u: np.ndarray) -> LightSample:
         """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""

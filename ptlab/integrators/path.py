@@ -37,6 +37,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ptlab.accel.base import Accelerator
+from ptlab.lights import solid_angle_pdf
 from ptlab.scene import Scene
 from ptlab.vectors import dot, take_rows
 
@@ -195,11 +196,11 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     weight = (hit.front & hit.sees_emission).astype(np.float32)
     if strategy == "bsdf":
         weight = hit.front.astype(np.float32)
-    # With "mis", the density with which light sampling would have picked this point
-    # (camera rays have no pdf: weight 1).
     emitted = take_rows(scene.emission, hit.prim)
-    if strategy == "mis" and hit.pdf is not None:
-        pdf_light = scene.lights.pdf_solid_angle(emitted, hit.t * hit.t, dot(hit.n, hit.wo))
+    if strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
+        # The density with which light sampling would have picked this point.
+        pdf_light = solid_angle_pdf(scene.lights.pdf_area(emitted), hit.t * hit.t,
+                                    dot(hit.n, hit.wo))
         weight = np.where(hit.sees_emission, 1.0, mis_weight(hit.pdf, pdf_light, settings.heuristic))
         weight = (weight * hit.front).astype(np.float32)
     emitted *= weight[:, None]
@@ -243,8 +244,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     f = shade(hit, "eval", hit.wo, wi, hit.n)
     geometry = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
     if settings.strategy == "mis":
-        with np.errstate(divide="ignore", invalid="ignore"):   # (rows not facing add 0)
-            pdf_light = light.pdf_area * dist2 / cos_theta_light
+        pdf_light = solid_angle_pdf(light.pdf_area, dist2, cos_theta_light)  # (rows not facing add 0)
         geometry *= mis_weight(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n), settings.heuristic)
     radiance = hit.throughput * f
     radiance *= light.radiance
