@@ -10,9 +10,7 @@ that gets its rows upside down, the chapter's typical mistake.
 
 from __future__ import annotations
 
-import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 
@@ -20,6 +18,7 @@ import ptlab
 import ptlab.jobs
 from ptlab.camera import generate_rays
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 
 
@@ -29,13 +28,7 @@ def upside_down_rays(camera, width, height, pixel_x, pixel_y, u):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=256, help="image size (default 256)")
-    parser.add_argument("--spp", type=int, default=4, help="samples per pixel (default 4)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=256, spp=4)
 
     scene = ptlab.load_scene("cornell-box")
     camera = scene.camera

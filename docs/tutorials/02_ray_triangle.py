@@ -12,15 +12,13 @@ renderer builds each hit point from u and v, so the points land in the wrong pla
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 
 import ptlab
 import ptlab.accel.numpy_bvh
 from ptlab.accel.triangle import ray_triangle
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 
 
@@ -31,13 +29,7 @@ def swapped_uv_ray_triangle(origins, dirs, v0, e1, e2):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=16)
 
     # The triangle (0,0,0), (1,0,0), (0,1,0) in the plane z = 0, and five rays.
     v0, e1, e2 = np.zeros(3), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])

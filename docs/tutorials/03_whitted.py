@@ -13,13 +13,12 @@ light the wrong way and reflects it totally on the way in.
 
 from __future__ import annotations
 
-import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 
 from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.materials.dielectric import fresnel_dielectric, refract
 from ptlab.vectors import reflect
@@ -35,13 +34,7 @@ def fresnel_inverted(cos_theta_i, eta):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=160, help="image size (default 160)")
-    parser.add_argument("--spp", type=int, default=8, help="samples per pixel (default 8)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=160, spp=8)
 
     n = np.array([[0.0, 1.0, 0.0]])
     print("Rays arriving at a surface with normal n = +y (wo points back along each ray, away "

@@ -12,15 +12,13 @@ inside them vanish.
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 
 import ptlab
 import ptlab.accel.numpy_bvh
 from ptlab.accel.numpy_bvh import build_bvh, slab_test
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 
 
@@ -35,13 +33,7 @@ def strict_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=256, help="image size (default 256)")
-    parser.add_argument("--spp", type=int, default=4, help="samples per pixel (default 4)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=256, spp=4)
 
     rays = {"into the unit box along +x": ([-1, 0.5, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1]),
             "into it along -x": ([2, 0.5, 0.5], [-1, 0, 0], [0, 0, 0], [1, 1, 1]),

@@ -13,9 +13,6 @@ more work).
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 import trimesh
 
@@ -24,6 +21,7 @@ import ptlab.accel.numpy_bvh as numpy_bvh
 from ptlab.camera import generate_rays
 from ptlab.exercises.chapters.ch05_bvh import sah_cost
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 
 #: A ray's tag, carried in its tmin: ray i starts at t = i * TAG (see ``boxes_entered``).
 TAG = 1e-6
@@ -67,13 +65,7 @@ def boxes_entered(bvh: numpy_bvh.NumpyBVH, origins: np.ndarray, dirs: np.ndarray
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=1, help="camera rays per pixel (default 1)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=1, spp_help="camera rays per pixel")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt

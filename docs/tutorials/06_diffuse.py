@@ -12,13 +12,11 @@ and with that mistake in place of every diffuse material.
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 
 import ptlab
 from ptlab.exercises.renders import replace_materials
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Diffuse, Material
 
@@ -51,13 +49,7 @@ def reflectance_estimates(material, samples: int, estimates: int, rng) -> np.nda
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=64)
 
     rng = np.random.default_rng(0)
     white = (1.0, 1.0, 1.0)

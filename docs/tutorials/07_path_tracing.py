@@ -14,15 +14,13 @@ library's path tracer, then with each mistake of the homework's castRay put in i
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 
 import ptlab
 import ptlab.integrators.path as path
 from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, shade
 from ptlab.vectors import dot
@@ -72,13 +70,7 @@ def render(scene, mistake: str | None, **options) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=64)
 
     furnace = furnace_scene()
     print("The white furnace: Le = 0.3, albedo 0.5, so Le / (1 - albedo) = 0.6 everywhere")

@@ -12,12 +12,10 @@ tile by tile; with streams per tile they are the same bit for bit.
 
 from __future__ import annotations
 
-import argparse
 import multiprocessing
 import os
 import time
 from concurrent.futures import ProcessPoolExecutor, as_completed
-from pathlib import Path
 
 import numpy as np
 
@@ -25,6 +23,7 @@ import ptlab
 import ptlab.jobs
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import PathSettings
 from ptlab.jobs import Job, RenderSetup, make_tiles, run_job
@@ -78,13 +77,7 @@ def tiles_picture(image: np.ndarray, pids: dict, res: int) -> np.ndarray:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=16)
     scene = ptlab.load_scene("cornell-box")
     tiles = make_tiles(args.res, args.res, 32)
     print(f"{args.res} x {args.res} pixels in {len(tiles)} tiles of at most 32 x 32, "

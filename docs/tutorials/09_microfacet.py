@@ -13,15 +13,14 @@ with the chapter's typical mistake, Walter's sampling of h whose pdf forgets the
 
 from __future__ import annotations
 
-import argparse
 import math
-from pathlib import Path
 
 import numpy as np
 
 import ptlab
 from ptlab.exercises.chapters.ch09_microfacet import metals_scene
 from ptlab.exercises.renders import replace_materials
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Material, Microfacet
 from ptlab.materials.microfacet import G1, D
@@ -55,13 +54,7 @@ class HalfVectorPdf(Material):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=32, help="samples per pixel (default 32)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=32)
 
     mu = 1 - np.concatenate([[0.0], np.geomspace(1e-14, 1.0, 20001)])
     for alpha in (0.04, 0.25, 1.0):

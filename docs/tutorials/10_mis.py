@@ -12,14 +12,12 @@ typical mistake: both strategies weighted 1, which counts light twice.
 
 from __future__ import annotations
 
-import argparse
-from pathlib import Path
-
 import numpy as np
 
 import ptlab
 import ptlab.integrators.path
 from ptlab.exercises.plug import plugged
+from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import mis_weight
 
@@ -30,13 +28,7 @@ def weight_one(pdf, other, heuristic="power"):
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--res", type=int, default=128, help="image size (default 128)")
-    parser.add_argument("--spp", type=int, default=32, help="samples per pixel (default 32)")
-    parser.add_argument("--out", default=".", help="output folder (default here)")
-    args = parser.parse_args()
-    out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
+    args, out = tutorial_options(__doc__, res=128, spp=32)
 
     pdf_light = np.array([0.1, 1.0, 5.0, 400.0], dtype=np.float32)
     pdf_bsdf = np.array([40.0, 1.0, 1.0, 2.0], dtype=np.float32)
