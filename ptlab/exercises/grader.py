@@ -21,6 +21,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from types import ModuleType
 
+import numpy as np
+
 from ptlab.errors import PtlabError
 
 
@@ -193,6 +195,19 @@ def load_student(path: Path) -> ModuleType:
     """Import the student's file (a ``PtlabError`` names a syntax error or a failed import)."""
     from ptlab.grading.cli import import_file
     return import_file(path)
+
+
+def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndarray:
+    """What a student's function ``name`` returned, as float64; the check fails if it does
+    not have ``shape`` or holds NaN or infinite values (``nan_hint`` says what may cause them)."""
+    result = np.asarray(value, dtype=np.float64)
+    if result.shape != tuple(shape):
+        raise CheckFailed(f"{name} must return an array of shape {tuple(shape)}, yours has "
+                          f"shape {result.shape}")
+    if not np.isfinite(result).all():
+        raise CheckFailed(f"{name} returned NaN or infinite values"
+                          + (f" ({nan_hint})" if nan_hint else ""))
+    return result
 
 
 def require(module: ModuleType, *names: str) -> list[Callable]:

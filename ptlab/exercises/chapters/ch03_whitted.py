@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -48,13 +48,8 @@ def _directions(theta: np.ndarray, n=(0.0, 0.0, 1.0), phi: float = 0.3) -> np.nd
 
 def _call(function, name: str, *args, shape) -> np.ndarray:
     """``function(*args)`` as float64, checked for its shape and for NaN."""
-    result = np.asarray(function(*args), dtype=np.float64)
-    if result.shape != shape:
-        raise CheckFailed(f"{name} must return an array of shape {shape} here, not {result.shape}")
-    if not np.isfinite(result).all():
-        raise CheckFailed(f"{name} returned NaN or infinite values (a square root of a negative "
-                          f"number? clamp with np.maximum(0, ...))")
-    return result
+    return checked_array(function(*args), name, shape, nan_hint="a square root of a negative "
+                         "number? clamp with np.maximum(0, ...)")
 
 
 def _random_cases(seed: int, count: int = 500):

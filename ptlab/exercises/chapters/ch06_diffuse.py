@@ -16,7 +16,7 @@ import math
 import numpy as np
 
 from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 
 ALBEDO = (0.8, 0.5, 0.2)
@@ -45,15 +45,9 @@ def probe(material) -> None:
 
 def _call(material, method: str, *arrays, width: int | None = 3) -> np.ndarray:
     """``material.<method>(*arrays)`` as float64, checked for shape and finiteness."""
-    result = np.asarray(getattr(material, method)(*arrays), dtype=np.float64)
     rows = len(arrays[0])
-    shape = (rows, width) if width else (rows,)
-    if result.shape != shape:
-        raise CheckFailed(f"{method} must return an array of shape {shape} for {rows} "
-                          f"directions, yours has shape {result.shape}")
-    if not np.isfinite(result).all():
-        raise CheckFailed(f"{method} returned NaN or infinite values")
-    return result
+    return checked_array(getattr(material, method)(*arrays), method,
+                         (rows, width) if width else (rows,))
 
 
 def _unit(v: np.ndarray) -> np.ndarray:

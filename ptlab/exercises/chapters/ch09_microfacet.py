@@ -17,7 +17,7 @@ import numpy as np
 
 from ptlab.exercises import Chapter
 from ptlab.exercises.chapters.ch06_diffuse import HARNESS_SAMPLES, probe, random_pairs
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 
 ALPHAS = (0.05, 0.2, 0.5, 1.0)
@@ -26,14 +26,8 @@ GOLD = (1.0, 0.782, 0.344)
 
 def _values(function, *arguments, shape) -> np.ndarray:
     """``function(*arguments)`` as float64, checked for shape and finiteness."""
-    result = np.asarray(function(*(np.asarray(a) for a in arguments)), dtype=np.float64)
-    name = function.__name__
-    if result.shape != shape:
-        raise CheckFailed(f"{name} must return an array of shape {shape}, yours has shape "
-                          f"{result.shape}")
-    if not np.isfinite(result).all():
-        raise CheckFailed(f"{name} returned NaN or infinite values")
-    return result
+    return checked_array(function(*(np.asarray(a) for a in arguments)), function.__name__,
+                         shape)
 
 
 def check_d(module) -> str:
