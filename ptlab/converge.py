@@ -24,6 +24,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ptlab.atomic import write_atomically
 from ptlab.checkpoint import scene_digest
 from ptlab.errors import PtlabError
 from ptlab.image import read_image, write_image
@@ -185,8 +186,6 @@ def default_cache_dir() -> Path:
 
 def write_csv(path: Path, ladders: list[list[Measurement]]) -> None:
     """The table: one row per rung, columns integrator, spp, seconds, rmse, relmse."""
-    from ptlab.atomic import write_atomically
-
     def write(temporary: str) -> None:
         with open(temporary, "w", newline="") as out:
             table = csv.writer(out)
