@@ -19,9 +19,9 @@ import time
 from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.progress import ProgressBar
-from ptlab.render import render_result
-from ptlab.settings import INTEGRATORS
+from ptlab.rendering import render_result
+from ptlab.rendering.progress import ProgressBar
+from ptlab.rendering.settings import INTEGRATORS
 
 
 class _Parser(argparse.ArgumentParser):
@@ -156,11 +156,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _render(args) -> int:
-    from ptlab.executors import dask_executor
     from ptlab.image import check_output_path
-    from ptlab.render import pass_schedule
+    from ptlab.rendering import pass_schedule
+    from ptlab.rendering.executors import dask_executor
+    from ptlab.rendering.settings import MAX_SPP, check_workers, parse_resolution
     from ptlab.scene import load_scene
-    from ptlab.settings import MAX_SPP, check_workers, parse_resolution
 
     scene = load_scene(args.scene)
     width, height = parse_resolution(args.res)
@@ -274,9 +274,9 @@ class _Preview:
 
 
 def _converge(args) -> int:
-    from ptlab.converge import default_cache_dir, parse_estimators, run_converge
+    from ptlab.measure.converge import default_cache_dir, parse_estimators, run_converge
+    from ptlab.rendering.settings import MAX_SPP, check_workers, parse_resolution
     from ptlab.scene import load_scene
-    from ptlab.settings import MAX_SPP, check_workers, parse_resolution
 
     estimators = parse_estimators(args.integrators)
     scene = load_scene(args.scene)
@@ -298,10 +298,10 @@ def _converge(args) -> int:
 
 
 def _bench(args) -> int:
-    from ptlab.bench import run_bench
+    from ptlab.measure.bench import run_bench
     if args.res <= 0 or args.spp <= 0:
         raise PtlabError("--res and --spp must be positive")
-    from ptlab.settings import check_workers, default_workers
+    from ptlab.rendering.settings import check_workers, default_workers
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],

@@ -9,10 +9,10 @@ import pytest
 
 import ptlab
 from ptlab.cli import main
-from ptlab.converge import Measurement, parse_estimators, time_to_reach
 from ptlab.errors import PtlabError
 from ptlab.image import read_image, write_image
-from ptlab.metrics import relative_squared_error, relmse, rmse
+from ptlab.measure.converge import Measurement, parse_estimators, time_to_reach
+from ptlab.measure.metrics import relative_squared_error, relmse, rmse
 
 
 def test_error_measures_match_their_definitions():

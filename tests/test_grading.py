@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 import wrong_materials as wrong
 
+from ptlab.cli import main as ptlab_main
 from ptlab.grading import check_material, write_plots
 from ptlab.grading.checks import chi2_sf, pooled_chi_square, z_two_sided
-from ptlab.grading.cli import grade_main
 from ptlab.grading.sphere import SphereGrid
 from ptlab.materials import Diffuse, Microfacet
 
@@ -147,14 +147,15 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
 # -- the command ------------------------------------------------------------------------------
 
 def test_grade_exit_codes(tmp_path, capsys):
-    assert grade_main([f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
+    assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
     assert "PASSED" in capsys.readouterr().out
-    assert grade_main([f"{WRONG_FILE}:PdfOffByConstant", "--samples", "20000",
+    assert ptlab_main(["grade", f"{WRONG_FILE}:PdfOffByConstant", "--samples", "20000",
                        "--plots", str(tmp_path / "plots")]) == 1
     out = capsys.readouterr().out
     assert "FAILED" in out and "2x too small" in out
     assert len(list((tmp_path / "plots").glob("*.png"))) == 9
-    assert grade_main([f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}', "--samples", "20000"]) == 0
+    assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}',
+                       "--samples", "20000"]) == 0
 
 
 @pytest.mark.parametrize("target, args, message", [
@@ -170,6 +171,6 @@ def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, a
     syntax = tmp_path / "broken.py"
     syntax.write_text("def f(:\n")
     target = target.format(wrong=WRONG_FILE, syntax=syntax)
-    assert grade_main([target, "--args", args]) == 2
+    assert ptlab_main(["grade", target, "--args", args]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err

@@ -20,7 +20,7 @@ import pytest
 import ptlab
 from ptlab.image import read_image
 from ptlab.materials import Diffuse
-from ptlab.render import render_result
+from ptlab.rendering import render_result
 
 # Small tiles and several passes: many jobs, finishing out of order.
 SMALL = dict(spp=6, res=(48, 40), seed=11, tile_size=16, spp_per_pass=2)

@@ -15,7 +15,7 @@ from conftest import closed_box_scene
 import ptlab
 from ptlab.accel import make_accelerator
 from ptlab.camera import generate_rays
-from ptlab.render import render_result
+from ptlab.rendering import render_result
 
 
 def image_means(scene, seeds, **kwargs) -> np.ndarray:

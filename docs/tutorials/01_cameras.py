@@ -15,7 +15,7 @@ import math
 import numpy as np
 
 import ptlab
-import ptlab.jobs
+import ptlab.rendering.jobs
 from ptlab.camera import generate_rays
 from ptlab.exercises.plug import plugged
 from ptlab.exercises.tutorial import tutorial_options
@@ -43,7 +43,7 @@ def main() -> None:
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1)
     write_image(out / "cameras.png", ptlab.render(scene, **options))
-    with plugged(ptlab.jobs, generate_rays=upside_down_rays):
+    with plugged(ptlab.rendering.jobs, generate_rays=upside_down_rays):
         write_image(out / "cameras-wrong.png", ptlab.render(scene, **options))
     print(f"wrote {out / 'cameras.png'} and {out / 'cameras-wrong.png'}")
 

@@ -1,7 +1,7 @@
 """Chapter 8 tutorial: rendering over tiles on several processes, reproducibly.
 
 Renders the Cornell box tile by tile on a pool of 2 worker processes, each tile's job with
-its own random stream ``stream(seed, tile, 0)`` (``ptlab.jobs.run_job``), and shows which
+its own random stream ``stream(seed, tile, 0)`` (``ptlab.rendering.jobs.run_job``), and shows which
 process rendered which tile. Then the chapter's typical mistake: one random generator per
 worker process. With it, the image rendered by 1 worker and the one rendered by 2 differ,
 tile by tile; with streams per tile they are the same bit for bit.
@@ -20,13 +20,13 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 import numpy as np
 
 import ptlab
-import ptlab.jobs
+import ptlab.rendering.jobs
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.exercises.plug import plugged
 from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import PathSettings
-from ptlab.jobs import Job, RenderSetup, make_tiles, run_job
+from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
 
 #: In each worker process: the accelerator (built once), and for the mistake, the one
 #: generator the process draws every tile's random numbers from.
@@ -44,7 +44,7 @@ def render_tile(setup: RenderSetup, tile, spp: int, per_worker_rng: bool):
         return tile, run_job(setup, job, _accelerator[setup.token]).sums, os.getpid()
     # The mistake: whatever tile it is, the numbers come from this process's generator.
     rng = _per_worker.setdefault(setup.token, np.random.default_rng([setup.seed, os.getpid()]))
-    with plugged(ptlab.jobs, stream=lambda seed, tile, pass_index: rng):
+    with plugged(ptlab.rendering.jobs, stream=lambda seed, tile, pass_index: rng):
         return tile, run_job(setup, job, _accelerator[setup.token]).sums, os.getpid()
 
 

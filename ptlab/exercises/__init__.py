@@ -16,50 +16,11 @@ from __future__ import annotations
 
 import importlib
 import pkgutil
-from dataclasses import dataclass
-from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.exercises.grader import Check
+from ptlab.exercises.chapter import HERE, Chapter
 
-HERE = Path(__file__).parent
-
-
-@dataclass(frozen=True)
-class Chapter:
-    """One chapter of the progression.
-
-    Attributes:
-        number: 1, 2, ...
-        slug: the file-name part, e.g. ``"cameras"`` (files ``01_cameras.py``, ``01-cameras.md``).
-        title: the chapter's title.
-        functions: what the student writes (for ``ptlab exercise list`` and the docs).
-        checks: the graded checks, in order.
-    """
-
-    number: int
-    slug: str
-    title: str
-    functions: tuple[str, ...]
-    checks: tuple[Check, ...]
-
-    @property
-    def stem(self) -> str:
-        """``NN_slug``: the exercise file's name without ``.py``."""
-        return f"{self.number:02d}_{self.slug}"
-
-    @property
-    def template(self) -> Path:
-        return HERE / "templates" / f"{self.stem}.py"
-
-    @property
-    def solution(self) -> Path:
-        return HERE / "solutions" / f"{self.stem}.py"
-
-    @property
-    def doc(self) -> str:
-        """The chapter's page, relative to the repository's ``docs/``."""
-        return f"{self.number:02d}-{self.slug.replace('_', '-')}.md"
+__all__ = ["Chapter", "all_chapters", "chapter"]
 
 
 def all_chapters() -> list[Chapter]:

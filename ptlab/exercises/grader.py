@@ -21,30 +21,8 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 from types import ModuleType
 
-import numpy as np
-
 from ptlab.errors import PtlabError
-
-
-class CheckFailed(Exception):  # noqa: N818 (a verdict, not an error of the grader)
-    """A check's verdict that the student's code is wrong; the message says how."""
-
-
-@dataclass(frozen=True)
-class Check:
-    """One graded check of a chapter.
-
-    Attributes:
-        name: what is checked, in a few words ("centre ray", "render").
-        points: what it is worth.
-        run: ``run(student_module) -> note``; raises ``CheckFailed`` when the code is wrong.
-        timeout: seconds it may take before it counts as hanging.
-    """
-
-    name: str
-    points: int
-    run: Callable[[ModuleType], str]
-    timeout: float = 60.0
+from ptlab.exercises.chapter import CheckFailed
 
 
 @dataclass
@@ -126,7 +104,7 @@ def run_check(chapter_number: int, index: int, path: Path, timeout: float) -> Ch
     check = find_chapter(chapter_number).checks[index]
     context = multiprocessing.get_context("forkserver")
     # Imported once in the server, not again in every check's process (~0.5 s each).
-    context.set_forkserver_preload(["numpy", "trimesh", "ptlab.render", "ptlab.exercises"])
+    context.set_forkserver_preload(["numpy", "trimesh", "ptlab.rendering", "ptlab.exercises"])
     receive, send = context.Pipe(duplex=False)
     start = time.perf_counter()
     # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
@@ -193,27 +171,7 @@ def where(error: BaseException, path: str) -> str:
 
 def load_student(path: Path) -> ModuleType:
     """Import the student's file (a ``PtlabError`` names a syntax error or a failed import)."""
-    from ptlab.grading.cli import import_file
+    from ptlab.grading.untrusted import import_file
     return import_file(path)
 
 
-def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndarray:
-    """What a student's function ``name`` returned, as float64; the check fails if it does
-    not have ``shape`` or holds NaN or infinite values (``nan_hint`` says what may cause them)."""
-    result = np.asarray(value, dtype=np.float64)
-    if result.shape != tuple(shape):
-        raise CheckFailed(f"{name} must return an array of shape {tuple(shape)}, yours has "
-                          f"shape {result.shape}")
-    if not np.isfinite(result).all():
-        raise CheckFailed(f"{name} returned NaN or infinite values"
-                          + (f" ({nan_hint})" if nan_hint else ""))
-    return result
-
-
-def require(module: ModuleType, *names: str) -> list[Callable]:
-    """The functions ``names`` of the student's module; a clear failure if one is missing."""
-    missing = [name for name in names if not callable(getattr(module, name, None))]
-    if missing:
-        raise CheckFailed(f"your file has no function {', '.join(missing)} (keep the names of "
-                          f"the exercise file)")
-    return [getattr(module, name) for name in names]

@@ -1,6 +1,6 @@
 """Using a student's functions inside the renderer, in place of the library's own.
 
-The renderer's modules look their pieces up by name at call time (``ptlab.jobs`` calls
+The renderer's modules look their pieces up by name at call time (``ptlab.rendering.jobs`` calls
 ``generate_rays``, the NumPy BVH calls ``ray_triangle`` and ``slab_test``, ...), so setting
 that name in the module swaps the piece for everything that runs afterwards. ``plugged`` does
 it for the duration of a ``with`` block and puts the library's own back afterwards. The

@@ -63,7 +63,7 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
     independent estimates of the same picture: their spread gives the standard error. The
     render runs in this process (``workers=1``), where ``plugged`` functions are seen.
     """
-    from ptlab.render import render_result
+    from ptlab.rendering import render_result
 
     images = []
     done = np.zeros((res, res, 3))

@@ -6,25 +6,19 @@
 ready-made material object in the file. The exit code is 0 when every check passes, 1 when
 one fails, 2 when the file or the name cannot be loaded (one line on stderr, no traceback).
 
-Wiring into the ``ptlab`` command takes ``add_grade_arguments(subparser)`` and a handler
-``run_grade(args)``; ``grade_main(argv)`` is the same as a program of its own.
+``ptlab.cli`` wires it in with ``add_grade_arguments(subparser)`` and the handler
+``run_grade(args)``.
 """
 
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
-import sys
 from pathlib import Path
 
-from ptlab.errors import PtlabError
+from ptlab.grading.untrusted import GradeLoadError, import_file
 
 REQUIRED_METHODS = ("eval", "pdf", "sample", "sample_weight")
-
-
-class GradeLoadError(PtlabError):
-    """The material to grade cannot be loaded: a missing file, a syntax error, no such name."""
 
 
 def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -55,20 +49,6 @@ def run_grade(args: argparse.Namespace) -> int:
         if written:
             print(f"wrote {len(written)} chi-square plots to {Path(args.plots).resolve()}")
     return 0 if report.passed else 1
-
-
-def grade_main(argv: list[str] | None = None) -> int:
-    """``ptlab grade`` as a program: returns the exit code."""
-    from ptlab.cli import _Parser
-
-    parser = add_grade_arguments(_Parser(prog="ptlab grade",
-                                         description="Check a material's sample / eval / pdf."))
-    args = parser.parse_args(argv)
-    try:
-        return run_grade(args)
-    except PtlabError as error:
-        print(f"ptlab grade: error: {error}", file=sys.stderr)
-        return 2
 
 
 def load_material(target: str, arguments: str = "{}"):
@@ -103,28 +83,3 @@ def load_material(target: str, arguments: str = "{}"):
     return found
 
 
-def import_file(path: Path):
-    """Import a Python file as a module of its own; its folder is importable while it loads."""
-    module_name = f"ptlab_graded_{abs(hash(str(path.resolve())))}"
-    spec = importlib.util.spec_from_file_location(module_name, path)
-    if spec is None or spec.loader is None:
-        raise GradeLoadError(f"{path}: not a Python file")
-    module = importlib.util.module_from_spec(spec)
-    folder = str(path.resolve().parent)
-    sys.path.insert(0, folder)
-    sys.modules[module_name] = module   # (dataclasses and pickling look modules up there)
-    try:
-        spec.loader.exec_module(module)
-    except SyntaxError as error:
-        del sys.modules[module_name]
-        raise GradeLoadError(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
-    except (Exception, SystemExit) as error:  # anything the student's module raises on import
-        del sys.modules[module_name]
-        raise GradeLoadError(f"{path}: importing it raised {type(error).__name__}: {error}") from None
-    finally:
-        sys.path.remove(folder)
-    return module
-
-
-if __name__ == "__main__":
-    sys.exit(grade_main())

@@ -13,8 +13,8 @@ import numpy as np
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.camera import generate_rays
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
-from ptlab.jobs import RenderSetup, Tile
-from ptlab.settings import parse_resolution
+from ptlab.rendering.jobs import RenderSetup, Tile
+from ptlab.rendering.settings import parse_resolution
 
 EXPECTED_FAILURES = ("tile job", "any worker count", "matches the library")
 

@@ -11,8 +11,7 @@ import math
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 
 def _camera():
@@ -105,7 +104,7 @@ def check_known_rays(module) -> str:
 
 def check_render(module) -> str:
     import ptlab
-    import ptlab.jobs
+    import ptlab.rendering.jobs
     from ptlab.exercises.plug import plugged
 
     def student_rays(camera, width, height, pixel_x, pixel_y, u):
@@ -115,7 +114,7 @@ def check_render(module) -> str:
 
     options = dict(spp=2, res=(48, 36), integrator="normals", workers=1, seed=3)
     expected = ptlab.render("cornell-box", **options)
-    with plugged(ptlab.jobs, generate_rays=student_rays):
+    with plugged(ptlab.rendering.jobs, generate_rays=student_rays):
         image = ptlab.render("cornell-box", **options)
     difference = np.abs(image - expected).mean()
     if difference > 1e-3:

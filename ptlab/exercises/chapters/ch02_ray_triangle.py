@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
 #: direction that sees its front face (det > 0; the opposite direction sees its back).

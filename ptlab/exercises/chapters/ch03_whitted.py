@@ -23,8 +23,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene

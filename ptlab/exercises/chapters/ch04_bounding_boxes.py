@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))          # the square z = 1, 0 <= x, y <= 1

@@ -15,8 +15,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test

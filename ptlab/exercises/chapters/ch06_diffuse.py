@@ -15,8 +15,7 @@ import math
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 
 ALBEDO = (0.8, 0.5, 0.2)

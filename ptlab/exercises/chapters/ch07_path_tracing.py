@@ -2,7 +2,7 @@
 
 The student writes the pieces of the path loop (``direct_light``, ``russian_roulette``,
 ``scatter``) and the loop itself (``trace_paths``), which the renderer then runs in place
-of ``ptlab.integrators.path.trace_paths`` (looked up by name in ``ptlab.jobs``).
+of ``ptlab.integrators.path.trace_paths`` (looked up by name in ``ptlab.rendering.jobs``).
 
 * The pieces first, each against the library's own on the same hits and the same random
   numbers (deterministic, so the comparisons are exact up to float rounding): light
@@ -26,8 +26,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 if TYPE_CHECKING:
     from ptlab.accel import Accelerator
@@ -334,13 +333,13 @@ def _student_loop(module):
 def _render(scene, trace_paths=None, **options) -> np.ndarray:
     """``ptlab.render`` in this process, with the student's loop plugged in if given."""
     import ptlab
-    import ptlab.jobs
+    import ptlab.rendering.jobs
     from ptlab.exercises.plug import plugged
 
     options.setdefault("workers", 1)
     if trace_paths is None:
         return ptlab.render(scene, **options)
-    with plugged(ptlab.jobs, trace_paths=trace_paths):
+    with plugged(ptlab.rendering.jobs, trace_paths=trace_paths):
         return ptlab.render(scene, **options)
 
 
@@ -392,7 +391,7 @@ def check_light_not_black(module) -> str:
 def furnace_means(trace_paths, passes: int = 8, spp_per_pass: int = 8, **options) -> np.ndarray:
     """(passes,) mean radiance (red) of independent furnace images: independent passes of one
     render (``ch06_diffuse.pass_images``), with ``trace_paths`` plugged in if given."""
-    import ptlab.jobs
+    import ptlab.rendering.jobs
     from ptlab.exercises.plug import plugged
     from ptlab.exercises.renders import pass_images
 
@@ -401,7 +400,7 @@ def furnace_means(trace_paths, passes: int = 8, spp_per_pass: int = 8, **options
     if trace_paths is None:
         images = pass_images(scene, **options)
     else:
-        with plugged(ptlab.jobs, trace_paths=trace_paths):
+        with plugged(ptlab.rendering.jobs, trace_paths=trace_paths):
             images = pass_images(scene, **options)
     return images[..., 0].mean(axis=(1, 2))
 
@@ -463,14 +462,14 @@ def _furnace_with_roulette(russian_roulette) -> tuple[float, float]:
 
 def check_cornell(module) -> str:
     import ptlab
-    import ptlab.jobs
+    import ptlab.rendering.jobs
     from ptlab.exercises.plug import plugged
     from ptlab.exercises.renders import compare_renders, pass_images
 
     trace_paths = _student_loop(module)
     scene = ptlab.load_scene("cornell-box")
     options = dict(res=32, passes=12, spp_per_pass=8, seed=9, rr=0.8)
-    with plugged(ptlab.jobs, trace_paths=trace_paths):
+    with plugged(ptlab.rendering.jobs, trace_paths=trace_paths):
         student = pass_images(scene, **options)
     library = pass_images(scene, **options)
     passed, explanation = compare_renders(student, library)

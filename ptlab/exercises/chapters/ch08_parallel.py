@@ -2,7 +2,7 @@
 ``render_tile``, ``render_parallel``).
 
 * Tiles must cover every pixel exactly once, at odd image sizes and at the image's edges.
-* A tile's job must give exactly the library's sums (``ptlab.jobs.run_job``: the tile's own
+* A tile's job must give exactly the library's sums (``ptlab.rendering.jobs.run_job``: the tile's own
   random stream ``ptlab.sampling.stream(seed, tile, 0)``), and the same sums again when the
   same process has rendered other tiles in between (no generator shared between jobs).
 * ``render_parallel`` must really use several processes (each tile's job reports the pid of
@@ -29,11 +29,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 if TYPE_CHECKING:
-    from ptlab.jobs import RenderSetup
+    from ptlab.rendering.jobs import RenderSetup
     from ptlab.scene import Scene
 
 #: What the render checks render: the furnace at 48 x 40 (odd tiles at the right and bottom
@@ -49,7 +48,7 @@ def _scene() -> Scene:
 def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
     from ptlab.accel import resolve_backend
     from ptlab.integrators.path import PathSettings
-    from ptlab.jobs import RenderSetup
+    from ptlab.rendering.jobs import RenderSetup
     return RenderSetup(scene=scene, backend=resolve_backend("auto"), width=RES[0],
                        height=RES[1], seed=seed, settings=PathSettings())
 
@@ -67,7 +66,7 @@ def check_tiles(module) -> str:
         covered = np.zeros((height, width), dtype=int)
         for position, tile in enumerate(tiles):
             if not all(hasattr(tile, name) for name in ("index", "x0", "y0", "x1", "y1")):
-                raise CheckFailed(f"{where}: tiles must be ptlab.jobs.Tile(index, x0, y0, x1, y1)")
+                raise CheckFailed(f"{where}: tiles must be ptlab.rendering.jobs.Tile(index, x0, y0, x1, y1)")
             if tile.index != position:
                 raise CheckFailed(f"{where}: tile {position} of the list has index {tile.index}; "
                                   f"number the tiles 0, 1, 2, ... in list order (a tile's index "
@@ -107,7 +106,7 @@ def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
 
 def check_tile_job(module) -> str:
     from ptlab.accel import make_accelerator
-    from ptlab.jobs import Job, Tile, run_job
+    from ptlab.rendering.jobs import Job, Tile, run_job
 
     (render_tile,) = require(module, "render_tile")
     setup = _setup(_scene())
@@ -132,7 +131,7 @@ def check_tile_job(module) -> str:
         raise CheckFailed("the tile's sums are not the library's: a tile's job draws every "
                           "random number from its own stream, rng = stream(setup.seed, "
                           "tile.index, 0), camera jitter first (rng.random((n, 2), float32) for "
-                          "paths in sample-major order, as ptlab.jobs.run_job does), then "
+                          "paths in sample-major order, as ptlab.rendering.jobs.run_job does), then "
                           "trace_paths with the same rng")
     return "a tile's sums are the library's, and the same whatever the process rendered before"
 
@@ -223,7 +222,7 @@ def check_worker_count(module) -> str:
 
 
 def check_library(module) -> str:
-    from ptlab.render import render_result
+    from ptlab.rendering import render_result
 
     image, _ = _render(importable(module), workers=2)
     expected = render_result(_scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE,
@@ -233,7 +232,7 @@ def check_library(module) -> str:
         differ = np.any(image != expected, axis=2)
         hint = ("divide the sums by spp once, at the end" if abs(ratio - 1) > 0.05 else
                 "the same seed must give the library's random numbers: stream(seed, "
-                "tile.index, 0) for the tile numbered as ptlab.jobs.make_tiles numbers it, and "
+                "tile.index, 0) for the tile numbered as ptlab.rendering.jobs.make_tiles numbers it, and "
                 "float64 sums divided by spp, then float32")
         raise CheckFailed(f"your image differs from the library's (same seed, tile size {TILE}, "
                           f"one pass) in {differ.sum()} of {differ.size} pixels and is "

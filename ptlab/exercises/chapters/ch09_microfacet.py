@@ -15,9 +15,8 @@ import math
 
 import numpy as np
 
-from ptlab.exercises import Chapter
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require
 from ptlab.exercises.chapters.ch06_diffuse import HARNESS_SAMPLES, probe, random_pairs
-from ptlab.exercises.grader import Check, CheckFailed, checked_array, require
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 
 ALPHAS = (0.05, 0.2, 0.5, 1.0)

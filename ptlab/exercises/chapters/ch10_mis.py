@@ -14,8 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises import Chapter
-from ptlab.exercises.grader import Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
 
 
 def _weights(function, pdf, other, *heuristic) -> np.ndarray:

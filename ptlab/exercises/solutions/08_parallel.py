@@ -1,5 +1,5 @@
-"""Chapter 8, the library's own answer: tiles from ``ptlab.jobs.make_tiles``, a tile's job by
-``ptlab.jobs.run_job`` (whose random stream is ``ptlab.sampling.stream(seed, tile, 0)``), and
+"""Chapter 8, the library's own answer: tiles from ``ptlab.rendering.jobs.make_tiles``, a tile's job by
+``ptlab.rendering.jobs.run_job`` (whose random stream is ``ptlab.sampling.stream(seed, tile, 0)``), and
 a process pool that adds the tiles' sums into the image in the main process."""
 
 import multiprocessing
@@ -10,8 +10,8 @@ import numpy as np
 
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.integrators.path import PathSettings
-from ptlab.jobs import Job, RenderSetup, make_tiles, run_job
-from ptlab.settings import parse_resolution
+from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
+from ptlab.rendering.settings import parse_resolution
 
 __all__ = ["make_tiles", "render_tile", "render_parallel"]
 

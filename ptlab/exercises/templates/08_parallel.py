@@ -7,8 +7,8 @@ bit, whatever the number of workers. Write ``make_tiles``, ``render_tile`` and
 
     ptlab exercise check 8 08_parallel.py
 
-Read ``ptlab/jobs.py`` (``Tile``, ``run_job``), ``ptlab/scheduler.py`` and ``ptlab/film.py``
-first: they are the library's version of this chapter.
+Read ``ptlab/rendering/jobs.py`` (``Tile``, ``run_job``), ``ptlab/rendering/scheduler.py``
+and ``ptlab/rendering/film.py`` first: they are the library's version of this chapter.
 
 Two rules make a parallel render right:
 
@@ -32,9 +32,9 @@ import numpy as np
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.camera import generate_rays
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
-from ptlab.jobs import RenderSetup, Tile
+from ptlab.rendering.jobs import RenderSetup, Tile
+from ptlab.rendering.settings import parse_resolution
 from ptlab.sampling import stream
-from ptlab.settings import parse_resolution
 
 #: Given, nothing to write: in each worker process, the ray-query structure of the render it
 #: works for, built once per process rather than once per tile.
@@ -58,7 +58,7 @@ def make_tiles(width, height, size):
         size: the tile edge in pixels.
 
     Returns:
-        a list of ``ptlab.jobs.Tile(index, x0, y0, x1, y1)``: the tile covers columns x0 .. x1 - 1
+        a list of ``ptlab.rendering.jobs.Tile(index, x0, y0, x1, y1)``: the tile covers columns x0 .. x1 - 1
         and rows y0 .. y1 - 1 (x1 and y1 are one past its last pixel). ``index`` is the tile's
         position in the list (0, 1, 2, ...). The tiles at the right and bottom edges are
         smaller when ``size`` does not divide the image. Every pixel is in exactly one tile.
@@ -75,7 +75,7 @@ def render_tile(setup, tile, spp):
     process gives the same result.
 
     Args:
-        setup: a ``ptlab.jobs.RenderSetup``: ``scene``, ``width``, ``height``, ``seed``,
+        setup: a ``ptlab.rendering.jobs.RenderSetup``: ``scene``, ``width``, ``height``, ``seed``,
             ``settings`` (the path tracer's) and ``backend``.
         tile: a ``Tile``.
         spp: samples per pixel.
@@ -85,7 +85,7 @@ def render_tile(setup, tile, spp):
         radiance summed over its spp paths; pid is ``os.getpid()``, the process that ran
         the job (the checks use it to see that the work was shared out).
 
-    The steps (``ptlab.jobs.run_job`` does the same for ``Job(tile, 0, spp)``):
+    The steps (``ptlab.rendering.jobs.run_job`` does the same for ``Job(tile, 0, spp)``):
 
     1. ``rng = stream(setup.seed, tile.index, 0)``: this tile's own random stream;
        ``accel = accelerator_for(setup)``.

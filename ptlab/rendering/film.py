@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.jobs import JobResult, Tile
+from ptlab.rendering.jobs import JobResult, Tile
 
 
 class Film:
@@ -18,7 +18,7 @@ class Film:
 
     Attributes:
         sums: (H, W, 3) float64 radiance summed over every sample taken so far.
-        passes: samples per pixel of each pass of the render (``ptlab.render.pass_schedule``).
+        passes: samples per pixel of each pass of the render (``ptlab.rendering.pass_schedule``).
         passes_done: (tiles,) passes added for each tile.
         rays, query_seconds: work done so far (rays traced, seconds inside ray queries).
     """

@@ -10,7 +10,7 @@ import sys
 
 from tqdm import tqdm
 
-from ptlab.film import Film
+from ptlab.rendering.film import Film
 
 
 class ProgressBar:

@@ -18,8 +18,8 @@ from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
 
 from ptlab.errors import PtlabError
-from ptlab.jobs import RenderSetup, install_setup
-from ptlab.memory import keep_freed_memory
+from ptlab.rendering.jobs import RenderSetup, install_setup
+from ptlab.rendering.memory import keep_freed_memory
 
 
 def _init_worker(setup: RenderSetup) -> None:
@@ -33,7 +33,7 @@ def process_pool(workers: int, setup: RenderSetup) -> ProcessPoolExecutor:
     try:
         context = multiprocessing.get_context("forkserver")
         # Workers fork from a server that has already imported ptlab: fast to start.
-        context.set_forkserver_preload(["ptlab.jobs"])
+        context.set_forkserver_preload(["ptlab.rendering.jobs"])
     except ValueError:  # no forkserver on this platform (Windows)
         context = multiprocessing.get_context("spawn")
     return ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,

@@ -2,7 +2,7 @@
 
 Each estimator (``path:nee``, ``path:bsdf``, ``path:mis``, ...) renders the scene at a
 doubling ladder of samples per pixel, 1, 2, 4, ..., until its time budget is spent; every
-render is timed and compared with a reference image (``ptlab.metrics``). The result is a
+render is timed and compared with a reference image (``ptlab.measure.metrics``). The result is a
 table of (estimator, spp, seconds, rmse, relmse) and, from it, the time each estimator needs
 to reach a target error: the honest way to compare methods whose samples cost different
 amounts (an MIS sample traces more rays than a BSDF sample, and is worth more).
@@ -25,12 +25,12 @@ from pathlib import Path
 import numpy as np
 
 from ptlab.atomic import write_atomically
-from ptlab.checkpoint import scene_digest
 from ptlab.errors import PtlabError
 from ptlab.image import read_image, write_image
 from ptlab.integrators.path import STRATEGIES
-from ptlab.metrics import relmse, rmse
-from ptlab.render import render_result
+from ptlab.measure.metrics import relmse, rmse
+from ptlab.rendering import render_result
+from ptlab.rendering.checkpoint import scene_digest
 from ptlab.scene import Scene
 
 #: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY.
@@ -137,8 +137,8 @@ def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
                     quiet: bool = False, **render_options) -> np.ndarray:
     """A ``spp``-sample ``path:mis`` render of the scene, from the cache if it is there
     (with a progress bar on the terminal while it renders, unless ``quiet``)."""
-    from ptlab.progress import ProgressBar
-    from ptlab.render import pass_schedule
+    from ptlab.rendering import pass_schedule
+    from ptlab.rendering.progress import ProgressBar
 
     key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed)).encode()).hexdigest()[:16]
     cached = None if cache_dir is None else cache_dir / f"{scene.name}-{key}.exr"
@@ -210,7 +210,7 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
     ``reference.exr`` into ``out_dir``, and echoes each estimator's time to reach relMSE
     ``target``. ``render_options`` (workers, backend, ...) go to every render.
     """
-    from ptlab.charts import convergence_chart, equal_time_strip
+    from ptlab.measure.charts import convergence_chart, equal_time_strip
 
     if not budget > 0:
         raise PtlabError(f"budget {budget!r}: must be a positive number of seconds")

@@ -19,7 +19,7 @@ import numpy as np
 
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
-from ptlab.film import Film
+from ptlab.rendering.film import Film
 
 FORMAT_VERSION = 2
 

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ptlab.render import render_result
+from ptlab.rendering import render_result
 from ptlab.scene import Scene, load_scene
 
 ESTIMATORS = {

@@ -1,9 +1,19 @@
-"""Rendering an image: the render loop over jobs, and the ``ptlab.render`` API.
+"""Running a render: the ``ptlab.render`` API and the machinery behind it.
 
-``render_result`` cuts the image into tiles and the samples into passes
-(``ptlab.jobs``), runs the jobs where they were asked to run (``ptlab.scheduler``), and
-adds their results into the film (``ptlab.film``). Along the way it reports progress,
-saves a checkpoint after every pass, and stops early, keeping what is done, when asked to.
+This package is everything that turns a scene and an integrator into an image, but is not
+itself a concept of light transport:
+
+* ``jobs``: the image cut into tiles and the samples into passes; one job = one tile, one pass;
+* ``scheduler`` and ``executors``: where jobs run (this process, worker processes, Dask);
+* ``film``: the float64 sums the jobs add into, in an order that keeps images bit-identical;
+* ``checkpoint``, ``progress``: saving and resuming a render, the progress bar;
+* ``settings``: every option checked, with one clear error for an absurd value;
+* ``memory``: the allocator tuning that keeps NumPy's temporaries cheap.
+
+``render_result`` below cuts the image into tiles and the samples into passes, runs the jobs
+where they were asked to run, and adds their results into the film. Along the way it reports
+progress, saves a checkpoint after every pass, and stops early, keeping what is done, when
+asked to. ``render`` is the same, returning only the image.
 
 Batches of about 2^18 paths are the fastest here (measured: 10-15% faster than 2^16):
 large enough that NumPy's per-call overhead vanishes, small enough that memory stays
@@ -21,15 +31,15 @@ from pathlib import Path
 import numpy as np
 
 from ptlab.accel import resolve_backend
-from ptlab.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.errors import PtlabError
-from ptlab.film import Film
 from ptlab.integrators.path import PathSettings
-from ptlab.jobs import Job, RenderSetup, make_tiles, pass_sizes
-from ptlab.memory import keep_freed_memory
+from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
+from ptlab.rendering.film import Film
+from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
+from ptlab.rendering.memory import keep_freed_memory
+from ptlab.rendering.scheduler import run_jobs
+from ptlab.rendering.settings import check_settings, check_tile_size, check_workers, parse_resolution
 from ptlab.scene import Scene, load_scene
-from ptlab.scheduler import run_jobs
-from ptlab.settings import check_settings, check_tile_size, check_workers, parse_resolution
 
 BATCH_PATHS = 1 << 18
 TILE_SIZE = 128

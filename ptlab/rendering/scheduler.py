@@ -16,8 +16,8 @@ from concurrent.futures.process import BrokenProcessPool
 
 from ptlab.accel import make_accelerator
 from ptlab.errors import PtlabError
-from ptlab.executors import process_pool
-from ptlab.jobs import Job, JobResult, RenderSetup, run_job, run_job_in_worker
+from ptlab.rendering.executors import process_pool
+from ptlab.rendering.jobs import Job, JobResult, RenderSetup, run_job, run_job_in_worker
 
 #: How many times a pool may be replaced after its workers died before giving up.
 MAX_POOL_RESTARTS = 3

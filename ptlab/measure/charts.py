@@ -17,7 +17,7 @@ import numpy as np
 
 from ptlab.atomic import write_atomically
 from ptlab.image import encode_srgb8
-from ptlab.metrics import relative_squared_error
+from ptlab.measure.metrics import relative_squared_error
 
 
 def _pyplot():
@@ -36,7 +36,7 @@ def _save(figure, path: Path) -> None:
 def convergence_chart(ladders: list, path: Path, title: str,
                       target: float | None = None) -> None:
     """Write the log-log chart of relMSE against seconds (``ladders``: lists of
-    ``ptlab.converge.Measurement``, one list per estimator)."""
+    ``ptlab.measure.converge.Measurement``, one list per estimator)."""
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(6.4, 4.6))
     for ladder in ladders:

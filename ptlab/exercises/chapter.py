@@ -1,0 +1,99 @@
+"""What a chapter of the exercises is: its graded checks, and the helpers checks use.
+
+A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``,
+a list of ``Check``s. A check is a plain function of the student's module: it returns a short
+note of what it measured, or raises ``CheckFailed`` with a message for the student.
+``ptlab.exercises.grader`` runs the checks; this module only describes them.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+
+#: The exercises package: templates/ and solutions/ are beside this file.
+HERE = Path(__file__).parent
+
+
+class CheckFailed(Exception):  # noqa: N818 (a verdict, not an error of the grader)
+    """A check's verdict that the student's code is wrong; the message says how."""
+
+
+@dataclass(frozen=True)
+class Check:
+    """One graded check of a chapter.
+
+    Attributes:
+        name: what is checked, in a few words ("centre ray", "render").
+        points: what it is worth.
+        run: ``run(student_module) -> note``; raises ``CheckFailed`` when the code is wrong.
+        timeout: seconds it may take before it counts as hanging.
+    """
+
+    name: str
+    points: int
+    run: Callable[[ModuleType], str]
+    timeout: float = 60.0
+
+
+@dataclass(frozen=True)
+class Chapter:
+    """One chapter of the progression.
+
+    Attributes:
+        number: 1, 2, ...
+        slug: the file-name part, e.g. ``"cameras"`` (files ``01_cameras.py``, ``01-cameras.md``).
+        title: the chapter's title.
+        functions: what the student writes (for ``ptlab exercise list`` and the docs).
+        checks: the graded checks, in order.
+    """
+
+    number: int
+    slug: str
+    title: str
+    functions: tuple[str, ...]
+    checks: tuple[Check, ...]
+
+    @property
+    def stem(self) -> str:
+        """``NN_slug``: the exercise file's name without ``.py``."""
+        return f"{self.number:02d}_{self.slug}"
+
+    @property
+    def template(self) -> Path:
+        return HERE / "templates" / f"{self.stem}.py"
+
+    @property
+    def solution(self) -> Path:
+        return HERE / "solutions" / f"{self.stem}.py"
+
+    @property
+    def doc(self) -> str:
+        """The chapter's page, relative to the repository's ``docs/``."""
+        return f"{self.number:02d}-{self.slug.replace('_', '-')}.md"
+
+
+def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndarray:
+    """What a student's function ``name`` returned, as float64; the check fails if it does
+    not have ``shape`` or holds NaN or infinite values (``nan_hint`` says what may cause them)."""
+    result = np.asarray(value, dtype=np.float64)
+    if result.shape != tuple(shape):
+        raise CheckFailed(f"{name} must return an array of shape {tuple(shape)}, yours has "
+                          f"shape {result.shape}")
+    if not np.isfinite(result).all():
+        raise CheckFailed(f"{name} returned NaN or infinite values"
+                          + (f" ({nan_hint})" if nan_hint else ""))
+    return result
+
+
+def require(module: ModuleType, *names: str) -> list[Callable]:
+    """The functions ``names`` of the student's module; a clear failure if one is missing."""
+    missing = [name for name in names if not callable(getattr(module, name, None))]
+    if missing:
+        raise CheckFailed(f"your file has no function {', '.join(missing)} (keep the names of "
+                          f"the exercise file)")
+    return [getattr(module, name) for name in names]

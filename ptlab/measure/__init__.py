@@ -1,0 +1,7 @@
+"""Measuring the renderer: its speed, its error against a reference, and the two together.
+
+* ``metrics``: relMSE and RMSE of an image against a reference;
+* ``bench``: ``ptlab bench``, samples and rays per second and the share spent in ray queries;
+* ``converge``: ``ptlab converge``, error against time for several estimators;
+* ``charts``: the convergence chart and the equal-time strip that ``converge`` draws.
+"""
