@@ -22,6 +22,7 @@ from ptlab.errors import PtlabError
 from ptlab.rendering import render_result
 from ptlab.rendering.progress import ProgressBar
 from ptlab.rendering.settings import INTEGRATORS
+from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
 
 class _Parser(argparse.ArgumentParser):
@@ -76,6 +77,9 @@ def build_parser() -> argparse.ArgumentParser:
                              "BSDF sampling only, or both with multiple importance sampling")
     render.add_argument("--heuristic", choices=("power", "balance"), default="power",
                         help="MIS weights for --strategy mis (default power)")
+    render.add_argument("--sampler", choices=SAMPLERS, default=DEFAULT_SAMPLER,
+                        help=f"where the random numbers come from (default {DEFAULT_SAMPLER}; "
+                             "stratified and sobol spread them evenly, independent does not)")
     render.add_argument("--workers", type=int, default=None,
                         help="processes rendering tiles at once (default: one per core; 1: "
                              "this process only); the image does not depend on it")
@@ -91,12 +95,27 @@ def build_parser() -> argparse.ArgumentParser:
     render.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
     bench = commands.add_parser(
-        "bench", help="measure rendering speed",
-        description="Render the Cornell box with each backend, estimator and worker count; "
-                    "print wall seconds, samples/s, rays/s, the share of time in ray queries "
-                    "and the parallel speed-up.")
-    bench.add_argument("--res", type=int, default=512, help="square resolution (default 512)")
-    bench.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
+        "bench", help="measure rendering speed, or accuracy per second",
+        description="Render the Cornell box with each backend, estimator, sampler and worker "
+                    "count; print wall seconds, samples/s, rays/s, the shares of time in ray "
+                    "queries and in the sampler, and the parallel speed-up. With --accuracy: "
+                    "render it with each sampler (alternately, --repeat times with other seeds) "
+                    "and print relMSE against a cached high-spp reference, seconds, their "
+                    "product and the sampler's share.")
+    bench.add_argument("--res", type=int, help="square resolution (default 512; 256 with "
+                                                 "--accuracy)")
+    bench.add_argument("--spp", type=int, help="samples per pixel (default 16; 64 with --accuracy)")
+    bench.add_argument("--sampler", action="append", choices=SAMPLERS,
+                       help=f"sampler to measure (repeatable; default {DEFAULT_SAMPLER}, all "
+                            "three with --accuracy)")
+    bench.add_argument("--accuracy", action="store_true",
+                       help="compare the samplers' error at equal spp and its product with time")
+    bench.add_argument("--repeat", type=int, default=3,
+                       help="--accuracy: renders per sampler, alternating, each with another "
+                            "seed (default 3)")
+    bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
+                       help="--accuracy: spp of the reference (default 4096; cached in "
+                            "$PTLAB_CACHE or ~/.cache/ptlab/references)")
     bench.add_argument("--backend", action="append", choices=("embree", "numpy"),
                        help="backend to measure (repeatable; default both)")
     bench.add_argument("--estimator", action="append", choices=("homework", "default"),
@@ -116,7 +135,11 @@ def build_parser() -> argparse.ArgumentParser:
     converge.add_argument("--integrators", default="path:bsdf,path:nee,path:mis",
                           metavar="LIST",
                           help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
-                               "whitted (default path:bsdf,path:nee,path:mis)")
+                               "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
+                               "(default path:bsdf,path:nee,path:mis)")
+    converge.add_argument("--sampler", choices=SAMPLERS, default=DEFAULT_SAMPLER,
+                          help=f"the sampler of estimators without @SAMPLER (default "
+                               f"{DEFAULT_SAMPLER})")
     source = converge.add_mutually_exclusive_group()
     source.add_argument("--reference", metavar="REF.exr",
                         help="the reference image (linear EXR at the same resolution)")
@@ -178,7 +201,7 @@ def _render(args) -> int:
     options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
                    sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
                    strategy=args.strategy, heuristic=args.heuristic, rr_depth=args.rr_depth,
-                   integrator=args.integrator,
+                   integrator=args.integrator, sampler=args.sampler,
                    workers=workers, checkpoint=checkpoint, resume=args.resume,
                    progress=progress, on_pass=preview)
     with _StopOnSignal() as stop:
@@ -196,7 +219,8 @@ def _render(args) -> int:
     if not args.quiet:
         print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
               f"{result.samples_per_second / 1e6:.3f} M samples/s "
-              f"({result.settings['backend']}, {args.sampling} sampling, rr {args.rr}, "
+              f"({result.settings['backend']}, {args.sampler} sampler, {args.sampling} sampling, "
+              f"rr {args.rr}, "
               f"{workers} workers{', dask' if args.scheduler else ''})")
         print(f"wrote {out.resolve()}")
     return 0
@@ -278,7 +302,7 @@ def _converge(args) -> int:
     from ptlab.rendering.settings import MAX_SPP, check_workers, parse_resolution
     from ptlab.scene import load_scene
 
-    estimators = parse_estimators(args.integrators)
+    estimators = parse_estimators(args.integrators, args.sampler)
     scene = load_scene(args.scene)
     res = parse_resolution(args.res)
     if not 1 <= args.reference_spp <= MAX_SPP:
@@ -298,14 +322,29 @@ def _converge(args) -> int:
 
 
 def _bench(args) -> int:
-    from ptlab.measure.bench import run_bench
-    if args.res <= 0 or args.spp <= 0:
+    from ptlab.measure.bench import ESTIMATORS, run_accuracy, run_bench
+    from ptlab.measure.converge import default_cache_dir
+    from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
+
+    res = args.res or (256 if args.accuracy else 512)
+    spp = args.spp or (64 if args.accuracy else 16)
+    if res <= 0 or spp <= 0:
         raise PtlabError("--res and --spp must be positive")
-    from ptlab.rendering.settings import check_workers, default_workers
+    if args.accuracy:
+        if not 1 <= args.repeat <= 100:
+            raise PtlabError(f"--repeat {args.repeat}: must be from 1 to 100")
+        if not 1 <= args.reference_spp <= MAX_SPP:
+            raise PtlabError(f"--reference-spp {args.reference_spp}: must be from 1 to {MAX_SPP}")
+        workers = check_workers(args.workers[0]) if args.workers else 1
+        run_accuracy(args.sampler or list(SAMPLERS), res=res, spp=spp, repeat=args.repeat,
+                     reference_spp=args.reference_spp, workers=workers,
+                     cache_dir=default_cache_dir(), backend=(args.backend or ["auto"])[0],
+                     **ESTIMATORS[(args.estimator or ["default"])[0]])
+        return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
-              workers, res=args.res, spp=args.spp)
+              workers, res=res, spp=spp, samplers=tuple(args.sampler or [DEFAULT_SAMPLER]))
     return 0
 
 

@@ -83,10 +83,14 @@ class AreaLights:
         self.normals = (cross / double_area[:, None]).astype(np.float32)
         self.radiance = radiance.astype(np.float32)
         # Everything `sample` gathers per chosen triangle, in one column (one `take`).
-        # Rows: v0 | e1 | e2 | unit normal | radiance | offset | pdf_area.
+        # Rows: v0 | e1 | e2 | unit normal | radiance | offset | pdf_area | the cdf below the
+        # triangle's interval | 1 / the interval's width (to stretch u back to [0, 1)).
+        cdf_below = np.concatenate([[0.0], self.cdf[:-1]]).astype(np.float32)
+        width = np.maximum(self.cdf - cdf_below, np.float32(1e-30))
         self._packed = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
                                   self.radiance.T, np.asarray(offset, dtype=np.float32)[None],
-                                  self.pdf_area(self.radiance)[None]])
+                                  self.pdf_area(self.radiance)[None], cdf_below[None],
+                                  (1 / width)[None]]).astype(np.float32)
 
     def __len__(self) -> int:
         return len(self.areas)
@@ -98,7 +102,13 @@ class AreaLights:
 
 
     def sample(self, u: np.ndarray) -> LightSample:
-        """Points on the lights from (N, 3) uniforms: u[:, 0] picks the triangle."""
+        """Points on the lights from (N, 2) uniforms.
+
+        ``u[:, 0]`` picks the triangle and is then stretched back to [0, 1) inside the
+        interval of the cdf that picked it, to serve with ``u[:, 1]`` as the point's
+        coordinates on that triangle. The map from u to points is one-to-one, so a pair of
+        stratified uniforms gives stratified points on the lights (``ptlab.samplers``).
+        """
         # A triangle with probability power / total_power (inverse-CDF lookup): the number of
         # cdf entries at or below u. For a handful of lights (the Cornell box has two)
         # counting them pass by pass is ~10x faster than a binary search.
@@ -110,8 +120,10 @@ class AreaLights:
         else:
             index = np.searchsorted(self.cdf, u0, side="right")
             np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
-        b1, b2 = uniform_triangle(u[:, 1:3])
-        data = self._packed.take(index, axis=1)     # (17, N): rows are contiguous
+        data = self._packed.take(index, axis=1)     # (19, N): rows are contiguous
+        # u0 within [cdf_below, cdf_at), stretched to [0, 1) (and kept below 1 in float32).
+        stretched = np.minimum((u0 - data[17]) * data[18], np.float32(1 - 2.0 ** -24))
+        b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
         # Transposed slices are (N, 3) arrays in the column-major layout of ptlab.vectors.
         points = data[0:3].T + b1[:, None] * data[3:6].T + b2[:, None] * data[6:9].T
         return LightSample(points=points, normals=data[9:12].T, radiance=data[12:15].T,

@@ -1,4 +1,4 @@
-"""Warping uniform random numbers into directions and points, and the random streams.
+"""Warping uniform random numbers into directions and points.
 
 Each warp maps ``u`` in [0, 1)^2 to a sample with a known density (pbrt-v4, chapter A.5;
 GAMES101 lecture 15/16):
@@ -8,7 +8,7 @@ GAMES101 lecture 15/16):
   projected up onto the hemisphere);
 * ``uniform_sphere``: pdf = 1 / (4 pi);
 * ``uniform_hemisphere_around`` / ``cosine_hemisphere_around``: the same two hemisphere
-  densities around any normal, without a local frame (faster: no frame to build);
+  densities around any normal (the cosine one without a local frame: faster);
 * ``uniform_triangle``: a uniform point on a triangle, as barycentrics;
 * ``ggx_visible_normals``: GGX microfacet normals seen from a direction, with density
   D_wo(h) = G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018; the spherical-cap form of
@@ -18,9 +18,10 @@ Hemisphere samples are made around +z ("local" frame) and rotated around a norma
 ``to_world``. All functions work on whole arrays, keep the input's float dtype and return
 (N, 3) arrays in the column-major layout of ``ptlab.vectors``.
 
-Random streams: every (seed, tile, pass) gets its own generator through
-``numpy.random.SeedSequence``, so an image does not depend on how many processes render
-it or in which order tiles finish.
+Every warp is one-to-one: distinct u give distinct samples, so evenly spread u
+(``ptlab.samplers``) give evenly spread samples. (Folding, e.g. mirroring the lower half of
+a uniform sphere up onto the hemisphere, would map two strata of u onto one region and
+undo the stratification.)
 """
 
 from __future__ import annotations
@@ -60,13 +61,9 @@ def uniform_sphere(u: np.ndarray) -> np.ndarray:
 
 
 def uniform_hemisphere_around(n: np.ndarray, u: np.ndarray) -> np.ndarray:
-    """(N, 3) unit vectors uniform on the hemisphere around unit normals ``n``, pdf 1 / (2 pi).
-
-    The same distribution as ``to_world(uniform_hemisphere(u), n)`` without building a frame:
-    a uniform direction on the sphere, mirrored to n's side when it falls below.
-    """
-    d = uniform_sphere(u)
-    return d * np.where(dot(d, n) < 0, -1, 1).astype(d.dtype)[:, None]
+    """(N, 3) unit vectors uniform on the hemisphere around unit normals ``n``, pdf 1 / (2 pi):
+    ``uniform_hemisphere`` rotated to ``n`` (the lecture's recipe)."""
+    return to_world(uniform_hemisphere(u), n)
 
 
 def cosine_hemisphere_around(n: np.ndarray, u: np.ndarray) -> np.ndarray:
@@ -140,8 +137,3 @@ def uniform_triangle(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.sqrt(u[:, 0])
     return u[:, 1] * s, 1.0 - s
-
-
-def stream(seed: int, tile: int, pass_index: int) -> np.random.Generator:
-    """The random generator of one tile in one pass, independent of all the others."""
-    return np.random.Generator(np.random.PCG64(np.random.SeedSequence([seed, tile, pass_index])))

@@ -107,11 +107,27 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     out = capsys.readouterr().out
     rows = [line.split() for line in out.splitlines()]
     rows = [r for r in rows if len(r) > 2 and r[0] in ("embree", "numpy") and r[1] == "homework"]
-    assert {(r[0], r[2]) for r in rows} == {("embree", "1"), ("embree", "2"), ("numpy", "1"),
-                                           ("numpy", "2")}
+    assert {(r[0], r[2], r[3]) for r in rows} == {("embree", "sobol", "1"), ("embree", "sobol", "2"),
+                                                 ("numpy", "sobol", "1"), ("numpy", "sobol", "2")}
     for row in rows:
-        assert float(row[4]) > 0 and row[7].endswith("%")     # Msamples/s, share in queries
+        # Msamples/s; the shares of time in ray queries and in the sampler
+        assert float(row[5]) > 0 and row[8].endswith("%") and row[9].endswith("%")
+        assert 0 < float(row[9].rstrip("%")) < 100
     assert "numpy / embree time" in out and "speed-up of 2 workers over 1" in out
+
+
+def test_bench_accuracy_compares_samplers_against_a_reference(capsys, tmp_path, monkeypatch):
+    monkeypatch.setenv("PTLAB_CACHE", str(tmp_path))
+    assert main(["bench", "--accuracy", "--res", "16", "--spp", "4", "--repeat", "2",
+                 "--reference-spp", "64", "--sampler", "independent", "--sampler", "sobol"]) == 0
+    out = capsys.readouterr().out
+    rows = {line.split()[0]: line.split() for line in out.splitlines()
+            if line.split() and line.split()[0] in ("independent", "sobol", "stratified")}
+    assert set(rows) == {"independent", "sobol"}
+    for row in rows.values():
+        # relMSE (its range), ..., the share in the sampler (its range)
+        assert float(row[1]) > 0 and row[-2].endswith("%") and row[-1].endswith("%)")
+    assert len(list(tmp_path.glob("*.exr"))) == 1            # the cached reference
 
 
 def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):

@@ -1,16 +1,16 @@
 """The path tracer end to end: furnace tests, reproducibility, the Cornell box image.
 
-Statistical tests use fixed seeds; a "3 standard errors" check on a normal mean fails by
-chance with probability 0.27%. (Light sampling near a box's corners has a heavy tail, so
-the means are only roughly normal and the real rate is somewhat higher; the seeds are
-fixed, so a given run either always passes or always fails.)
+Statistical tests use fixed seeds; a "3 standard errors" check on a mean of 16 seeds (a t
+statistic with 15 degrees of freedom) fails by chance with probability 0.9%. The furnaces
+are spheres, where light sampling has a finite variance (``conftest.closed_sphere_scene``);
+the seeds are fixed, so a given run either always passes or always fails.
 """
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import closed_box_scene
+from conftest import closed_box_scene, closed_sphere_scene
 
 import ptlab
 from ptlab.accel import make_accelerator
@@ -23,12 +23,12 @@ def image_means(scene, seeds, **kwargs) -> np.ndarray:
     return np.array([ptlab.render(scene, seed=s, **kwargs).mean(axis=(0, 1)) for s in seeds])
 
 
-def check_furnace(albedo: float, sampling: str, rr) -> None:
+def check_furnace(albedo: float, sampling: str, rr, sampler: str = "sobol") -> None:
     # Every surface emits Le and reflects albedo: the radiance is Le (1 + a + a^2 + ...).
     emission = 0.3
-    scene = closed_box_scene(albedo, emission)
-    means = image_means(scene, seeds=range(12), spp=32, res=(24, 24), sampling=sampling,
-                        rr=rr)[:, 0]
+    scene = closed_sphere_scene(albedo, emission)
+    means = image_means(scene, seeds=range(16), spp=32, res=(24, 24), sampling=sampling,
+                        rr=rr, sampler=sampler)[:, 0]
     expected = emission / (1 - albedo)
     standard_error = means.std(ddof=1) / np.sqrt(len(means))
     assert abs(means.mean() - expected) < 3 * standard_error, (means.mean(), expected)
@@ -38,18 +38,20 @@ def check_furnace(albedo: float, sampling: str, rr) -> None:
     assert 3 * standard_error < emission * albedo ** 3
 
 
+@pytest.mark.parametrize("sampler", ["sobol", "stratified", "independent"])
 @pytest.mark.parametrize("sampling", ["cosine", "uniform"])
 @pytest.mark.parametrize("albedo", [0.5, 0.9])
-def test_furnace_renders_emission_over_one_minus_albedo(albedo, sampling):
-    check_furnace(albedo, sampling, rr="throughput")
+def test_furnace_renders_emission_over_one_minus_albedo(albedo, sampling, sampler):
+    check_furnace(albedo, sampling, rr="throughput", sampler=sampler)
 
 
+@pytest.mark.parametrize("sampler", ["sobol", "stratified", "independent"])
 @pytest.mark.parametrize("sampling", ["cosine", "uniform"])
-def test_furnace_with_the_homeworks_fixed_roulette(sampling):
+def test_furnace_with_the_homeworks_fixed_roulette(sampling, sampler):
     # Only at albedo 0.5: with survival P = 0.8 and albedo 0.9 the throughput grows by
     # 0.9 / 0.8 per bounce and the estimator's variance is infinite (it needs P > albedo^2),
     # so no standard error could judge it. That is the homework's estimator, not a bug.
-    check_furnace(0.5, sampling, rr=0.8)
+    check_furnace(0.5, sampling, rr=0.8, sampler=sampler)
 
 
 def test_furnace_is_exact_per_pixel_without_noise_in_emission_only_mode():
@@ -250,13 +252,18 @@ def test_strategies_agree_on_the_microfacet_cornell_box():
     # Light sampling, BSDF sampling and MIS estimate the same image (4 standard errors,
     # false-alarm rate about 1e-4 per channel); MIS is at least as good as light sampling.
     scene = ptlab.load_scene("cornell-box-microfacet")
-    means = {s: image_means(scene, seeds=range(6), spp=16, res=32, workers=1, strategy=s)
-             for s in ("nee", "bsdf", "mis")}
+    images = {s: np.array([ptlab.render(scene, seed=k, spp=16, res=32, workers=1, strategy=s)
+                           for k in range(6)]) for s in ("nee", "bsdf", "mis")}
+    means = {s: m.mean(axis=(1, 2)) for s, m in images.items()}
     errors = {s: m.std(axis=0, ddof=1) / np.sqrt(len(m)) for s, m in means.items()}
     for strategy in ("bsdf", "mis"):
         difference = np.abs(means[strategy].mean(axis=0) - means["nee"].mean(axis=0))
         assert np.all(difference < 4 * np.hypot(errors[strategy], errors["nee"])), strategy
-    assert np.all(errors["mis"] < 1.5 * errors["nee"])
+    # Per pixel, over the 6 seeds and the 1024 pixels (a steadier measure than the spread
+    # of 6 image means): measured 0.6 of light sampling's variance with sobol, 0.9 with
+    # independent samples.
+    variance = {s: m.var(axis=0, ddof=1).mean() for s, m in images.items()}
+    assert variance["mis"] < variance["nee"], variance
 
 
 def test_debug_views_show_normals_albedo_and_depth(cornell):

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.sampling import cosine_hemisphere, stream, to_world, uniform_hemisphere, uniform_triangle
+from ptlab.sampling import cosine_hemisphere, to_world, uniform_hemisphere, uniform_triangle
 
 N = 200_000
 
@@ -56,11 +56,22 @@ def test_uniform_triangle_is_uniform(u):
     assert ((b1 + b2) < 0.5).mean() == pytest.approx(0.25, abs=5 * 0.44 / np.sqrt(N))
 
 
-def test_streams_are_reproducible_and_distinct():
-    a = stream(0, 3, 1).random(4)
-    assert np.array_equal(a, stream(0, 3, 1).random(4))
-    for other in (stream(1, 3, 1), stream(0, 4, 1), stream(0, 3, 2)):
-        assert not np.array_equal(a, other.random(4))
+@pytest.mark.parametrize("name", ["uniform_hemisphere_around", "cosine_hemisphere_around"])
+def test_hemisphere_warps_are_one_to_one(name):
+    # Stratified uniforms must stay spread out after the warp: no two strata may land on
+    # the same directions. Folding the lower half of the sphere onto the upper (as a
+    # mirror would) maps the centres of cell (i, j) and of its antipodal cell onto the
+    # same direction: their distance is 0.
+    from scipy.spatial import cKDTree
+
+    import ptlab.sampling as sampling
+    k = (np.arange(64) + 0.5) / 64
+    u = np.stack(np.meshgrid(k, k), axis=-1).reshape(-1, 2)
+    n = np.tile(np.array([[0.36, -0.48, 0.8]]), (len(u), 1))
+    w = getattr(sampling, name)(n, u)
+    distances, _ = cKDTree(w).query(w, k=2)
+    # 4096 directions on a hemisphere (2 pi sr) are about sqrt(2 pi / 4096) = 0.04 apart.
+    assert distances[:, 1].min() > 1e-4
 
 
 def test_sampling_around_a_normal_matches_the_local_frame_warps(u):

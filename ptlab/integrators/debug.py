@@ -16,13 +16,14 @@ import numpy as np
 
 from ptlab.accel.base import Accelerator
 from ptlab.integrators.path import Paths, add_to_film, shade, surface_hit
+from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 
 VIEWS = ("normals", "albedo", "depth")
 
 
 def trace_debug(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                rng: np.random.Generator, view: str) -> int:
+                sampler: Sampler, view: str) -> int:
     """Add one debug value per camera ray into ``film``; return the rays traced."""
     hits = accel.intersect(paths.origins, paths.dirs)
     hit = surface_hit(scene, paths, hits)
@@ -33,7 +34,7 @@ def trace_debug(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
     elif view == "depth":
         value = np.repeat(hit.t[:, None], 3, axis=1)
     else:
-        u = rng.random((2, len(hit.prim)), dtype=np.float32).T
+        u = BounceUniforms(sampler, hit.sample, 0).bsdf()
         _, value = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
     add_to_film(film, hit.pixel, value)
     return len(hits.prim)

@@ -38,6 +38,7 @@ import numpy as np
 
 from ptlab.accel.base import Accelerator
 from ptlab.lights import solid_angle_pdf
+from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 from ptlab.vectors import dot, take_rows
 
@@ -87,6 +88,7 @@ class Paths:
     throughput: np.ndarray   # (N, 3) float32, product of f cos / pdf so far
     pixel: np.ndarray        # (N,) intp, the film row each path adds its radiance to
     sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
+    sample: np.ndarray       # (N,) uint64 sampler keys: whose random numbers the path uses
     pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
 
 
@@ -103,6 +105,7 @@ class SurfaceHit:
     throughput: np.ndarray   # (N, 3) float32
     pixel: np.ndarray        # (N,) intp
     sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
+    sample: np.ndarray       # (N,) uint64 sampler keys (``ptlab.samplers``)
     materials: list          # [(rows, material)]: who shades which rows (``material_groups``)
     delta: np.ndarray        # (N,) bool: the material here is a mirror or glass
     t: np.ndarray            # (N,) distance from the previous vertex
@@ -110,13 +113,14 @@ class SurfaceHit:
 
 
 def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                rng: np.random.Generator, settings: PathSettings) -> int:
+                sampler: Sampler, settings: PathSettings) -> int:
     """Trace a batch of camera paths to the end, adding their radiance into ``film``.
 
     Args:
         film: (P, 3) float64 sums of radiance per pixel, updated in place.
         paths: the camera rays, throughput 1.
-        rng: this batch's random stream.
+        sampler: where each path's random numbers come from (``ptlab.samplers``: one
+            dimension layout, ``BounceUniforms``, for every integrator).
 
     Returns:
         the number of rays traced (closest-hit and shadow rays).
@@ -132,11 +136,12 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
             add_emission(film, scene, hit, settings)   # the fix for the black light
         if depth == settings.max_depth:
             break
-        u = rng.random((6, len(hit.prim)), dtype=np.float32)   # one row per dimension
+        u = BounceUniforms(sampler, hit.sample, depth)     # this bounce's random numbers
         if settings.strategy != "bsdf" and scene.lights is not None:
-            rays += direct_light(film, scene, accel, hit, u[0:3].T, settings)
-        survive = russian_roulette(hit, depth, settings, u[3])
-        paths = scatter(scene, hit, u[4:6].T, survive,   # keeps the survivors only
+            rays += direct_light(film, scene, accel, hit, u.light(), settings)
+        u_roulette = u.roulette() if depth >= settings.roulette_starts else None
+        survive = russian_roulette(hit, depth, settings, u_roulette)
+        paths = scatter(scene, hit, u.bsdf(), survive,   # keeps the survivors only
                         with_pdf=settings.strategy == "mis")
         if len(paths.pixel) == 0:
             break
@@ -181,7 +186,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
                       throughput=take_rows(paths.throughput, alive),
                       pixel=paths.pixel.take(alive), sees_emission=paths.sees_emission.take(alive),
-                      materials=materials, delta=delta, t=hits.t.take(alive),
+                      sample=paths.sample.take(alive), materials=materials, delta=delta, t=hits.t.take(alive),
                       pdf=None if paths.pdf is None else paths.pdf.take(alive))
 
 
@@ -225,7 +230,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
 
     Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
     point's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
-    u: (N, 3) uniforms. Returns the shadow rays.
+    u: (N, 2) uniforms (``AreaLights.sample``). Returns the shadow rays.
     """
     light = scene.lights.sample(u)
     to_light = light.points - hit.p
@@ -258,9 +263,10 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
     """(N,) bool: which paths go on. Their throughput is divided by the survival odds.
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
+    u: (N,) uniforms, or None before roulette starts (every path goes on).
     """
     if depth < settings.roulette_starts:
-        return np.ones(len(u), dtype=bool)
+        return np.ones(len(hit.prim), dtype=bool)
     if settings.rr == "throughput":
         t = hit.throughput
         survival = np.minimum(np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2]), 1.0)
@@ -285,7 +291,7 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
     wi, n, p, offset = (take_rows(a, go_on) for a in (wi, hit.n, hit.p, hit.offset))
     return Paths(origins=leave_surface(p, n, offset, wi), dirs=wi,
                  throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on),
-                 sees_emission=hit.delta.take(go_on),
+                 sees_emission=hit.delta.take(go_on), sample=hit.sample.take(go_on),
                  pdf=None if pdf is None else pdf.take(go_on))
 
 

@@ -55,6 +55,7 @@ from ptlab.integrators.path import (
     surface_hit,
 )
 from ptlab.materials.dielectric import Dielectric, fresnel_dielectric, refract
+from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 from ptlab.vectors import dot, reflect, take_rows, vec3
 
@@ -70,14 +71,15 @@ MAX_BATCH = 1 << 18
 
 
 def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                  rng: np.random.Generator, settings: PathSettings, first_depth: int = 0) -> int:
+                  sampler: Sampler, settings: PathSettings, first_depth: int = 0) -> int:
     """Trace a batch of camera rays the Whitted way, adding their radiance into ``film``.
 
     Args:
         film: (P, 3) float64 sums of radiance per pixel, updated in place.
         paths: the camera rays, throughput 1 (or, from ``first_depth`` on, rays that left
             mirrors and glass).
-        rng: this batch's random stream (for the light samples; mirrors and glass need none).
+        sampler: where the random numbers come from (the light samples; mirrors and glass
+            need none), in the path tracer's layout (``ptlab.samplers.BounceUniforms``).
         settings: only ``max_depth`` is used (no Russian roulette, no strategies).
 
     Returns:
@@ -86,7 +88,7 @@ def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Pat
     rays = 0
     for depth in range(first_depth, settings.max_depth + 1):
         if len(paths.pixel) > MAX_BATCH:                 # grown by glass splits: trace it in parts
-            return rays + sum(trace_whitted(film, scene, accel, part, rng, settings, depth)
+            return rays + sum(trace_whitted(film, scene, accel, part, sampler, settings, depth)
                               for part in batches(paths, MAX_BATCH))
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
@@ -96,12 +98,12 @@ def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Pat
         add_emission(film, scene, hit, LIGHT_SAMPLING)   # camera rays and mirror/glass rays
         if depth == settings.max_depth:
             break
-        u = rng.random((5, len(hit.prim)), dtype=np.float32)   # one row per dimension
+        u = BounceUniforms(sampler, hit.sample, depth)
         if scene.lights is not None:                   # diffuse and glossy: direct light only
-            rays += direct_light(film, scene, accel, hit, u[0:3].T, LIGHT_SAMPLING)
+            rays += direct_light(film, scene, accel, hit, u.light(), LIGHT_SAMPLING)
         if not hit.delta.any():                          # no mirror or glass: every ray ends
             break
-        paths = reflect_and_refract(hit, u[3:5].T)       # glass: two rays for one
+        paths = reflect_and_refract(hit, u.bsdf())       # glass: two rays for one
         if len(paths.pixel) == 0:
             break
     return rays
@@ -168,7 +170,7 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
                             hit.offset.take(rows), wi)
     return Paths(origins=origins, dirs=wi,
                  throughput=throughput, pixel=hit.pixel.take(rows),
-                 sees_emission=np.ones(len(rows), dtype=bool))
+                 sees_emission=np.ones(len(rows), dtype=bool), sample=hit.sample.take(rows))
 
 
 def concatenate_rows(arrays: list[np.ndarray]) -> np.ndarray:
@@ -182,4 +184,4 @@ def batches(paths: Paths, size: int):
         rows = slice(start, start + size)
         yield Paths(origins=paths.origins[rows], dirs=paths.dirs[rows],
                     throughput=paths.throughput[rows], pixel=paths.pixel[rows],
-                    sees_emission=paths.sees_emission[rows])
+                    sees_emission=paths.sees_emission[rows], sample=paths.sample[rows])

@@ -31,9 +31,10 @@ from ptlab.integrators.path import STRATEGIES
 from ptlab.measure.metrics import relmse, rmse
 from ptlab.rendering import render_result
 from ptlab.rendering.checkpoint import scene_digest
+from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 from ptlab.scene import Scene
 
-#: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY.
+#: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY, either followed by @SAMPLER.
 ESTIMATOR_INTEGRATORS = ("path", "whitted")
 #: The reference's seed is the ladder's plus this, so that their noise is independent.
 REFERENCE_SEED_OFFSET = 1_000_003
@@ -43,22 +44,30 @@ REFERENCE_ESTIMATOR = "path:mis"
 
 @dataclass(frozen=True)
 class Estimator:
-    """An integrator with its options, named as on the command line (``path:mis``)."""
+    """An integrator with its options, named as on the command line (``path:mis@sobol``)."""
 
     label: str
     integrator: str
     strategy: str = "nee"
+    sampler: str = DEFAULT_SAMPLER
 
     def options(self) -> dict:
         """Keyword arguments of ``render_result`` that select this estimator."""
-        return dict(integrator=self.integrator, strategy=self.strategy)
+        return dict(integrator=self.integrator, strategy=self.strategy, sampler=self.sampler)
 
 
-def parse_estimators(text: str) -> list[Estimator]:
-    """``"path:bsdf,path:nee,path:mis"`` -> estimators (``path`` alone is ``path:nee``)."""
+def parse_estimators(text: str, sampler: str = DEFAULT_SAMPLER) -> list[Estimator]:
+    """``"path:bsdf,path:nee,path:mis@independent"`` -> estimators.
+
+    ``path`` alone is ``path:nee``; an estimator without ``@SAMPLER`` uses ``sampler``.
+    """
     estimators = []
     for label in (part.strip() for part in text.split(",")):
-        integrator, _, strategy = label.partition(":")
+        method, at, chosen = label.partition("@")
+        if at and chosen not in SAMPLERS:
+            raise PtlabError(f"estimator {label!r}: the sampler after @ must be one of "
+                             f"{', '.join(SAMPLERS)}")
+        integrator, _, strategy = method.partition(":")
         if integrator not in ESTIMATOR_INTEGRATORS:
             raise PtlabError(f"estimator {label!r}: the integrator must be one of "
                              f"{', '.join(ESTIMATOR_INTEGRATORS)} (e.g. path:mis)")
@@ -69,7 +78,7 @@ def parse_estimators(text: str) -> list[Estimator]:
                                  f"{', '.join(STRATEGIES)}")
         elif strategy:
             raise PtlabError(f"estimator {label!r}: {integrator} takes no strategy")
-        estimators.append(Estimator(label, integrator, strategy or "nee"))
+        estimators.append(Estimator(label, integrator, strategy or "nee", chosen or sampler))
     if len({e.label for e in estimators}) != len(estimators):
         raise PtlabError(f"estimators {text!r}: each may appear once")
     return estimators
@@ -140,14 +149,15 @@ def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
     from ptlab.rendering import pass_schedule
     from ptlab.rendering.progress import ProgressBar
 
-    key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed)).encode()).hexdigest()[:16]
+    estimator = parse_estimators(REFERENCE_ESTIMATOR)[0]
+    key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed, estimator.sampler))
+                         .encode()).hexdigest()[:16]
     cached = None if cache_dir is None else cache_dir / f"{scene.name}-{key}.exr"
     if cached is not None and cached.is_file():
         image, _ = read_image(cached)
         echo(f"reference: {cached} (cached)")
         return image
-    echo(f"reference: rendering {spp} spp with {REFERENCE_ESTIMATOR} ...")
-    estimator = parse_estimators(REFERENCE_ESTIMATOR)[0]
+    echo(f"reference: rendering {spp} spp with {REFERENCE_ESTIMATOR}@{estimator.sampler} ...")
     bar = ProgressBar(res[0] * res[1] * spp, len(pass_schedule(spp)), quiet=quiet)
     try:
         result = render_result(scene, spp=spp, res=res, seed=seed + REFERENCE_SEED_OFFSET,

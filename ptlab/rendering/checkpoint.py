@@ -3,8 +3,9 @@
 A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums, the samples taken
 per tile and the render's settings. Resuming adds the missing passes in the same order an
 uninterrupted render would, so the finished image is bit-identical to one. Settings that
-change the image (scene, resolution, seed, estimator, tiles, backend) must match; a
-resume that asks for more samples per pixel than the checkpoint's render simply goes on.
+change the image (scene, resolution, seed, estimator, sampler, tiles, backend) must match;
+a resume that asks for more samples per pixel than the checkpoint's render simply goes on
+(the stratified sampler, whose pattern depends on spp, excepted).
 
 Files are written atomically (a temporary file, then a rename).
 """
@@ -21,7 +22,7 @@ from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.rendering.film import Film
 
-FORMAT_VERSION = 2
+FORMAT_VERSION = 3
 
 
 def scene_digest(scene) -> str:
@@ -41,6 +42,7 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
             np.savez(out, sums=film.sums, passes=np.asarray(film.passes, dtype=np.int64),
                      passes_done=film.passes_done, rays=np.int64(film.rays),
                      query_seconds=np.float64(film.query_seconds),
+                     sampler_seconds=np.float64(film.sampler_seconds),
                      identity=json.dumps(dict(identity, format=FORMAT_VERSION)))
 
     write_atomically(path, write)
@@ -55,7 +57,7 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
         with np.load(path, allow_pickle=False) as data:
             saved = json.loads(str(data["identity"]))
             arrays = {k: data[k] for k in ("sums", "passes", "passes_done", "rays",
-                                           "query_seconds")}
+                                           "query_seconds", "sampler_seconds")}
     except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
     if saved.get("format") != FORMAT_VERSION:
@@ -79,3 +81,4 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     film.passes_done[:] = arrays["passes_done"]
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])
+    film.sampler_seconds = float(arrays["sampler_seconds"])

@@ -20,7 +20,8 @@ class Film:
         sums: (H, W, 3) float64 radiance summed over every sample taken so far.
         passes: samples per pixel of each pass of the render (``ptlab.rendering.pass_schedule``).
         passes_done: (tiles,) passes added for each tile.
-        rays, query_seconds: work done so far (rays traced, seconds inside ray queries).
+        rays, query_seconds, sampler_seconds: work done so far (rays traced, seconds inside
+            ray queries and inside the sampler).
     """
 
     def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int]):
@@ -30,6 +31,7 @@ class Film:
         self.passes_done = np.zeros(len(tiles), dtype=np.int64)
         self.rays = 0
         self.query_seconds = 0.0
+        self.sampler_seconds = 0.0
         self.pending: dict[tuple[int, int], JobResult] = {}
 
     def add(self, result: JobResult) -> None:
@@ -43,6 +45,7 @@ class Film:
             self.passes_done[index] += 1
             self.rays += ready.rays
             self.query_seconds += ready.query_seconds
+            self.sampler_seconds += ready.sampler_seconds
 
     @property
     def tile_spp(self) -> np.ndarray:

@@ -5,13 +5,16 @@ can show and save what it has after every pass). One job traces all the camera p
 one tile in one pass, as one wavefront batch; any process can run it, since a job carries
 everything it needs to reproduce its result exactly:
 
-* its random numbers come from its own stream, seeded by ``(seed, tile, pass)``
-  (``ptlab.sampling.stream``), never from a generator shared between jobs;
+* its random numbers are the render's sampler's (``ptlab.samplers``), a pure function of
+  (seed, pixel, sample index, dimension): no generator is shared between jobs, and a pixel
+  gets the same numbers whatever tile or pass it is rendered in;
 * its result is the sum of its paths' radiance per pixel (float64), which the main
   process adds into the film in pass order, tile by tile.
 
-So the image is bit-identical whatever the number of workers and the order in which jobs
-finish. A worker process builds the ray-query structure once per render, not per job.
+So the image is bit-identical whatever the number of workers, the order in which jobs
+finish, or the tile size (passes have a fixed number of samples, ``SPP_PER_PASS``, so every
+pixel's sums are added up in the same order). A worker process builds the ray-query
+structure once per render, not per job.
 """
 
 from __future__ import annotations
@@ -28,7 +31,7 @@ from ptlab.camera import generate_rays
 from ptlab.integrators.debug import trace_debug
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.integrators.whitted import trace_whitted
-from ptlab.sampling import stream
+from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
 
@@ -64,11 +67,13 @@ def pass_sizes(spp: int, spp_per_pass: int) -> list[int]:
 
 @dataclass(frozen=True)
 class Job:
-    """One tile in one pass: ``spp`` samples for each of the tile's pixels."""
+    """One tile in one pass: ``spp`` samples for each of the tile's pixels, the samples
+    ``first_sample``, ..., ``first_sample + spp - 1`` of each."""
 
     tile: Tile
     pass_index: int
     spp: int
+    first_sample: int = 0
 
 
 @dataclass
@@ -79,14 +84,16 @@ class JobResult:
     sums: np.ndarray            # (tile height, tile width, 3) float64
     rays: int
     query_seconds: float
+    sampler_seconds: float = 0.0
 
 
 @dataclass(frozen=True)
 class RenderSetup:
     """Everything that is the same for all jobs of one render.
 
-    ``token`` names the render, so that a worker process keeps one ray-query structure
-    per render however many of its jobs it runs.
+    ``sampler`` gives every random number (by default the ``DEFAULT_SAMPLER`` with this
+    setup's seed). ``token`` names the render, so that a worker process keeps one ray-query
+    structure per render however many of its jobs it runs.
     """
 
     scene: Scene
@@ -96,33 +103,43 @@ class RenderSetup:
     seed: int
     settings: PathSettings
     integrator: str = "path"
+    sampler: Sampler | None = None
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
+
+    def __post_init__(self):
+        if self.sampler is None:
+            object.__setattr__(self, "sampler", make_sampler(DEFAULT_SAMPLER, self.seed))
+        elif self.sampler.seed != self.seed:
+            raise ValueError(f"the sampler's seed {self.sampler.seed} is not the setup's {self.seed}")
 
 
 def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     """Trace one job's camera paths and return their per-pixel radiance sums."""
-    rng = stream(setup.seed, job.tile.index, job.pass_index)
     tile_height, tile_width = job.tile.shape
     n_pixels = tile_width * tile_height
     # Sample-major order: pixel k of the tile is path k, k + n_pixels, k + 2 n_pixels, ...
     pixel = np.tile(np.arange(n_pixels), job.spp)
     pixel_x = job.tile.x0 + pixel % tile_width
     pixel_y = job.tile.y0 + pixel // tile_width
+    index = np.repeat(np.arange(job.first_sample, job.first_sample + job.spp), n_pixels)
+    sampler = TimedSampler(setup.sampler)
+    sample = sampler.keys(pixel_y * setup.width + pixel_x, index)
+    jitter = sampler.get(sample, BounceUniforms.PIXEL, 2)
     origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x,
-                                  pixel_y, rng.random((len(pixel), 2), dtype=np.float32))
+                                  pixel_y, jitter)
     paths = Paths(origins=origins, dirs=dirs,
                   throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"), pixel=pixel,
-                  sees_emission=np.ones(len(pixel), dtype=bool))
+                  sees_emission=np.ones(len(pixel), dtype=bool), sample=sample)
     film = np.zeros((n_pixels, 3))
     timed = TimedAccelerator(accel)
     if setup.integrator == "path":
-        rays = trace_paths(film, setup.scene, timed, paths, rng, setup.settings)
+        rays = trace_paths(film, setup.scene, timed, paths, sampler, setup.settings)
     elif setup.integrator == "whitted":
-        rays = trace_whitted(film, setup.scene, timed, paths, rng, setup.settings)
+        rays = trace_whitted(film, setup.scene, timed, paths, sampler, setup.settings)
     else:
-        rays = trace_debug(film, setup.scene, timed, paths, rng, setup.integrator)
+        rays = trace_debug(film, setup.scene, timed, paths, sampler, setup.integrator)
     return JobResult(job=job, sums=film.reshape(tile_height, tile_width, 3), rays=rays,
-                     query_seconds=timed.seconds)
+                     query_seconds=timed.seconds, sampler_seconds=sampler.seconds)
 
 
 # What a worker process keeps between jobs: the setup and accelerator of recent renders.

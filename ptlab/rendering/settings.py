@@ -9,6 +9,7 @@ import numpy as np
 from ptlab.errors import PtlabError
 from ptlab.integrators.path import HEURISTICS, STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
+from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
 INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
@@ -38,12 +39,14 @@ def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
 
 def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
                    integrator: str, strategy: str = "nee", heuristic: str = "power",
-                   rr_depth: int | None = None) -> float | str:
+                   rr_depth: int | None = None, sampler: str = DEFAULT_SAMPLER) -> float | str:
     """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
     if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
         raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
     if not _is_int(seed) or seed < 0:
         raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
+    if sampler not in SAMPLERS:
+        raise PtlabError(f"sampler {sampler!r}: choose one of {', '.join(SAMPLERS)}")
     if sampling not in SAMPLINGS:
         raise PtlabError(f"sampling {sampling!r}: choose one of {', '.join(SAMPLINGS)}")
     if not _is_int(max_depth) or max_depth < 0:
