@@ -1,4 +1,6 @@
-"""Chapter 3: Whitted-style ray tracing: reflection, refraction and Fresnel (docs/03-whitted.md).
+"""Chapter 3: Whitted-style ray tracing: reflection, refraction and Fresnel.
+
+The chapter's page: ``ptlab exercise docs 3`` (中文: ``--zh``).
 
 Write the three laws of a smooth surface that Homework 5's ``castRay`` follows: the mirror
 direction, the refracted direction (Snell's law) and the share of light that is reflected
