@@ -198,3 +198,13 @@ def test_docs_without_a_chapter_shows_the_list_and_start_points_to_docs(tmp_path
     assert "ptlab exercise docs 6" in chapter(6).template.read_text()
     assert main(["exercise", "docs", "12"]) == 2
     assert "no such chapter" in capsys.readouterr().err
+
+
+def test_docs_piped_into_a_reader_that_stops_early_is_no_error():
+    """``ptlab exercise docs 7 | head -0``: the reader has closed the pipe before the page
+    is written (the interpreter takes far longer to start than this takes to close it)."""
+    process = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "docs", "7"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()
+    error = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 0 and "Traceback" not in error, error

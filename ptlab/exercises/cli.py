@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -89,11 +90,15 @@ def _docs(args) -> int:
     if args.path:
         print(path)
         return 0
-    print(path.read_text(encoding="utf-8").rstrip("\n"))
-    print(f"\n-- this page: {path}")
+    lines = [path.read_text(encoding="utf-8").rstrip("\n"), f"\n-- this page: {path}"]
     if found is not None:
-        print(f"-- its pictures: {docs_folder() / 'exercises'}")
-        print(f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR")
+        lines += [f"-- its pictures: {docs_folder() / 'exercises'}",
+                  f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR"]
+    try:
+        print("\n".join(lines))
+        sys.stdout.flush()
+    except BrokenPipeError:     # the reader (head, a pager) stopped reading: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 
