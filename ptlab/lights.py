@@ -50,7 +50,7 @@ def solid_angle_pdf(pdf_area: np.ndarray, dist2: np.ndarray,
                     cos_theta_light: np.ndarray) -> np.ndarray:
     """(N,) density per solid angle of a light point chosen with density ``pdf_area`` per
     area, seen at squared distance ``dist2`` and angle ``cos_theta_light`` to its normal:
-    pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.13; inf or NaN where cos <= 0)."""
+    pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.9; inf or NaN where cos <= 0)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         return pdf_area * dist2 / cos_theta_light
 

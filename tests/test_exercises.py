@@ -4,9 +4,14 @@ exercise file and typical wrong answers; the grader's time limits; the command l
 from __future__ import annotations
 
 import json
+import re
+import shlex
 import shutil
+import subprocess
+import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ptlab.cli import main
@@ -41,14 +46,58 @@ def _wrong_answers():
     return sorted(WRONG.glob("[0-9][0-9]_wrong_*.py"))
 
 
-@pytest.mark.parametrize("path", _wrong_answers(), ids=lambda p: p.stem)
-def test_typical_wrong_answers_fail_the_checks_meant_to_catch_them(path):
+def _right_answers():
+    return sorted(WRONG.glob("[0-9][0-9]_right_*.py"))
+
+
+def _constants(path: Path) -> dict:
+    """EXPECTED_FAILURES, EXPECTED_HINTS, MISLEADING_HINTS of an answer in tests/exercises."""
     namespace: dict = {}
-    exec(compile(path.read_text(), str(path), "exec"), namespace)   # for EXPECTED_FAILURES
+    exec(compile(path.read_text(), str(path), "exec"), namespace)
+    return namespace
+
+
+@pytest.mark.parametrize("path", _wrong_answers(), ids=lambda p: p.stem)
+def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(path):
+    """Each wrong answer fails the checks it names, and no other (a mistake is reported by
+    the check that owns it); where it names hints, the messages say them (the essential
+    words), and not the misleading ones."""
+    constants = _constants(path)
     result = grade(chapter(path.name[:2]), path)
-    assert not result.full_marks
     failed = {r.name for r in result.results if not r.passed}
-    assert set(namespace["EXPECTED_FAILURES"]) <= failed, result.table()
+    assert failed == set(constants["EXPECTED_FAILURES"]), result.table()
+    messages = {r.name: r.message for r in result.results}
+    for check, phrases in constants.get("EXPECTED_HINTS", {}).items():
+        for phrase in phrases:
+            assert phrase in messages[check], (check, phrase, messages[check])
+    for check, phrases in constants.get("MISLEADING_HINTS", {}).items():
+        for phrase in phrases:
+            assert phrase not in messages[check], (check, phrase, messages[check])
+
+
+@pytest.mark.parametrize("path", _right_answers(), ids=lambda p: p.stem)
+def test_other_right_answers_get_full_marks_and_no_warning(path):
+    """Right answers written into the exercise file as a student would (another sampling
+    than the library's) get full marks, and the material harness warns of nothing: the
+    exercise file's own ``__init__`` keeps float32 float32."""
+    from ptlab.grading import check_material
+    from ptlab.grading.untrusted import import_file
+
+    result = grade(chapter(path.name[:2]), path)
+    assert result.full_marks, result.table()
+    module = import_file(path)
+    material = module.Lambertian() if hasattr(module, "Lambertian") else module.GGXMetal()
+    report = check_material(material, seed=0, samples=100_000)
+    assert [c.verdict for c in report.checks] == ["pass"] * len(report.checks), str(report)
+
+
+@pytest.mark.parametrize("number, name", [(6, "Lambertian"), (9, "GGXMetal")])
+def test_the_exercise_files_keep_material_parameters_in_float32(number, name):
+    from ptlab.grading.untrusted import import_file
+
+    material = getattr(import_file(chapter(number).template), name)()
+    parameter = material.albedo if number == 6 else material.f0
+    assert parameter.dtype == np.float32
 
 
 def test_every_chapter_has_a_wrong_answer_that_fails():
@@ -107,3 +156,55 @@ def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):
         assert main(["exercise", *arguments]) == 2
         error = capsys.readouterr().err
         assert message in error and error.count("\n") == 1
+
+
+def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_check_ran(tmp_path):
+    """A student in their home folder checks "my work/attempt.py": the harness's message
+    gives the ``ptlab grade`` command for that file, and the command works from there."""
+    work = tmp_path / "my work"
+    work.mkdir()
+    shutil.copyfile(WRONG / "06_wrong_pdf_off_by_2.py", work / "attempt.py")
+    ptlab = [sys.executable, "-m", "ptlab.cli"]
+    run = subprocess.run([*ptlab, "exercise", "check", "6", "my work/attempt.py", "--json", "r.json"],
+                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 1, run.stderr
+    checks = {c["name"]: c["message"] for c in json.loads((tmp_path / "r.json").read_text())["checks"]}
+    command = re.search(r"see the whole table with: ptlab (grade .*)\)$", checks["material harness"])
+    assert command and command.group(1) == "grade 'my work/attempt.py':Lambertian", checks
+    table = subprocess.run([*ptlab, *shlex.split(command.group(1))], cwd=tmp_path,
+                           capture_output=True, text=True, timeout=300)
+    assert table.returncode == 1 and "chi-square" in table.stdout, table.stderr
+
+
+@pytest.mark.parametrize("chinese", [False, True], ids=["en", "zh"])
+def test_docs_shows_a_chapters_page_and_where_its_tutorial_is(chinese, capsys):
+    from ptlab.exercises.pages import page, tutorial
+
+    found = chapter(7)
+    assert main(["exercise", "docs", "7", *(["--zh"] if chinese else [])]) == 0
+    shown = capsys.readouterr().out
+    assert shown.startswith(page(found, chinese).read_text(encoding="utf-8").rstrip("\n"))
+    assert ("路径追踪" in shown) == chinese and "ptlab exercise check 7" in shown
+    assert f"python {tutorial(found)} --out DIR" in shown and tutorial(found).is_file()
+    assert main(["exercise", "docs", "7", "--path"]) == 0
+    assert capsys.readouterr().out.strip() == str(page(found))
+
+
+def test_docs_without_a_chapter_shows_the_list_and_start_points_to_docs(tmp_path, capsys):
+    assert main(["exercise", "docs"]) == 0
+    assert "| 10 |" in capsys.readouterr().out
+    assert main(["exercise", "start", "6", str(tmp_path)]) == 0
+    assert "ptlab exercise docs 6" in capsys.readouterr().out
+    assert "ptlab exercise docs 6" in chapter(6).template.read_text()
+    assert main(["exercise", "docs", "12"]) == 2
+    assert "no such chapter" in capsys.readouterr().err
+
+
+def test_docs_piped_into_a_reader_that_stops_early_is_no_error():
+    """``ptlab exercise docs 7 | head -0``: the reader has closed the pipe before the page
+    is written (the interpreter takes far longer to start than this takes to close it)."""
+    process = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "docs", "7"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process.stdout.close()
+    error = process.stderr.read().decode()
+    assert process.wait(timeout=60) == 0 and "Traceback" not in error, error

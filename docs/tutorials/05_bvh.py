@@ -96,7 +96,7 @@ def main() -> None:
         plt.imsave(out / f"{name}.png", per_pixel.reshape(res, res), cmap="inferno", vmin=0,
                    vmax=top)
     print(f"wrote {out / 'bvh.png'} and {out / 'bvh-wrong.png'}: boxes entered per camera ray, "
-          f"black 0 to white {top:.0f} or more")
+          f"inferno colours from black (0) to pale yellow ({top:.0f} or more)")
 
 
 if __name__ == "__main__":

@@ -1,11 +1,12 @@
 """Exercises: from Whitted ray tracing to path tracing, one function at a time.
 
-Each chapter (``docs/NN-name.md``) asks the student to write one or a few functions of the
-renderer. ``ptlab exercise start NN`` copies the chapter's exercise file (signatures,
-docstrings, hints, ``NotImplementedError`` bodies); ``ptlab exercise check NN FILE`` plugs the
-student's functions into the renderer in place of the library's own and runs the chapter's
-checks (``ptlab.exercises.grader``): unit checks against known answers, the material harness
-where it applies, and a statistical comparison of a render with the library's.
+Each chapter (``docs/NN-name.md``, which ``ptlab exercise docs NN`` prints) asks the student
+to write one or a few functions of the renderer. ``ptlab exercise start NN`` copies the
+chapter's exercise file (signatures, docstrings, hints, ``NotImplementedError`` bodies);
+``ptlab exercise check NN FILE`` plugs the student's functions into the renderer in place of
+the library's own and runs the chapter's checks (``ptlab.exercises.grader``): unit checks
+against known answers, the material harness where it applies, and a statistical comparison
+of a render with the library's.
 
 A chapter is a module ``ptlab.exercises.chapters.chNN_name`` that defines ``CHAPTER``;
 its exercise file is ``templates/NN_name.py`` and the library's own answer, in the same

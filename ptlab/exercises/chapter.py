@@ -8,6 +8,7 @@ note of what it measured, or raises ``CheckFailed`` with a message for the stude
 
 from __future__ import annotations
 
+import shlex
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
@@ -73,7 +74,7 @@ class Chapter:
 
     @property
     def doc(self) -> str:
-        """The chapter's page, relative to the repository's ``docs/``."""
+        """The chapter's page, relative to the ``docs`` folder (``ptlab.exercises.pages``)."""
         return f"{self.number:02d}-{self.slug.replace('_', '-')}.md"
 
 
@@ -88,6 +89,15 @@ def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndar
         raise CheckFailed(f"{name} returned NaN or infinite values"
                           + (f" ({nan_hint})" if nan_hint else ""))
     return result
+
+
+def student_file(module: ModuleType) -> str:
+    """The student's file as a command run where the check runs can name it: relative to the
+    current folder when it lies inside it, else absolute; quoted for the shell if need be."""
+    path = Path(module.__file__).resolve()
+    here = Path.cwd().resolve()
+    shown = path.relative_to(here) if path.is_relative_to(here) else path
+    return shlex.quote(str(shown))
 
 
 def require(module: ModuleType, *names: str) -> list[Callable]:

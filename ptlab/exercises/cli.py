@@ -1,7 +1,8 @@
-"""``ptlab exercise start | check | list``: the exercises from the command line.
+"""``ptlab exercise start | check | list | docs``: the exercises from the command line.
 
     ptlab exercise list                    # the chapters, and which are passed here
     ptlab exercise start 1                 # copies 01_cameras.py into this folder
+    ptlab exercise docs 1                  # chapter 1's page (--zh: in Chinese), its tutorial
     ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full marks
     ptlab exercise check 1 01_cameras.py --json result.json
 """
@@ -10,6 +11,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
 import sys
 from pathlib import Path
@@ -18,7 +20,7 @@ from ptlab.errors import PtlabError
 
 
 def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``start``, ``check`` and ``list`` to the ``ptlab exercise`` subparser."""
+    """Add ``start``, ``check``, ``list`` and ``docs`` to the ``ptlab exercise`` subparser."""
     actions = parser.add_subparsers(dest="action", required=True, parser_class=type(parser))
     start = actions.add_parser(
         "start", help="copy a chapter's exercise file to write your functions in",
@@ -44,10 +46,20 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     listing.add_argument("dir", nargs="?", default=".",
                          help="your exercise folder (default here)")
 
+    docs = actions.add_parser(
+        "docs", help="show a chapter's page, and where its pictures and tutorial are",
+        description="Print chapter NN's page (Markdown), then where the page, its pictures and "
+                    "its tutorial script are on this machine, and the command that runs the "
+                    "tutorial. Without NN: the list of chapters.")
+    docs.add_argument("chapter", metavar="NN", nargs="?", help="the chapter number, e.g. 7")
+    docs.add_argument("--zh", action="store_true", help="the Chinese page (中文)")
+    docs.add_argument("--path", action="store_true",
+                      help="print only the page's path (to open it in a Markdown viewer)")
+
 
 def run_exercise(args: argparse.Namespace) -> int:
     """The handler of ``ptlab exercise``."""
-    return {"start": _start, "check": _check, "list": _list}[args.action](args)
+    return {"start": _start, "check": _check, "list": _list, "docs": _docs}[args.action](args)
 
 
 def _start(args) -> int:
@@ -63,9 +75,30 @@ def _start(args) -> int:
     folder.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(found.template, target)
     print(f"wrote {target.resolve()}")
-    print(f"Chapter {found.number}: {found.title}. Write {', '.join(found.functions)}; the "
-          f"chapter's page is docs/{found.doc}.")
+    print(f"Chapter {found.number}: {found.title}. Write {', '.join(found.functions)}.")
+    print(f"Read the chapter with: ptlab exercise docs {found.number}   (中文: --zh)")
     print(f"Check your work with: ptlab exercise check {found.number} {target}")
+    return 0
+
+
+def _docs(args) -> int:
+    from ptlab.exercises import chapter
+    from ptlab.exercises.pages import docs_folder, page, tutorial
+
+    found = chapter(args.chapter) if args.chapter is not None else None
+    path = page(found, chinese=args.zh)
+    if args.path:
+        print(path)
+        return 0
+    lines = [path.read_text(encoding="utf-8").rstrip("\n"), f"\n-- this page: {path}"]
+    if found is not None:
+        lines += [f"-- its pictures: {docs_folder() / 'exercises'}",
+                  f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR"]
+    try:
+        print("\n".join(lines))
+        sys.stdout.flush()
+    except BrokenPipeError:     # the reader (head, a pager) stopped reading: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
     return 0
 
 

@@ -31,7 +31,7 @@ from ptlab.grading.sphere import SphereGrid
 
 __all__ = ["Check", "Report", "check_material", "write_plots"]
 
-#: The angles between wo and n at which the statistical checks sample (the issue's 0, 45, 80).
+#: The angles between wo and n at which the statistical checks sample: head-on, oblique and grazing.
 WO_DEGREES = (0.0, 45.0, 80.0)
 
 

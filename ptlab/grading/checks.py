@@ -283,15 +283,19 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float) -> str:
 
     In order: most samples failing below the surface (the wrong hemisphere); the samples
     fitting pdf * g for one of the ``CANDIDATES`` (Pearson's test on the successful samples
-    against pdf * g normalised to their number); more failed samples than pdf admits.
+    against pdf * g normalised to their number); more failed samples than pdf admits; fewer
+    (a sample that should have failed was turned into another direction).
     """
-    unexplained_failures = []
+    unexplained_failures, missing_failures = [], []
     for lobe in lobes:
         n = lobe.samples
         expected_failed = n * max(0.0, 1.0 - lobe.pdf_integral)
-        if lobe.failed > expected_failed + 5 * math.sqrt(expected_failed + 1) + 0.001 * n \
+        slack = 5 * math.sqrt(expected_failed + 1) + 0.001 * n
+        if lobe.failed > expected_failed + slack \
                 and lobe.pdf_integral <= 1.01:   # (a pdf too large says nothing of failures)
             unexplained_failures.append((lobe, expected_failed / n))
+        elif lobe.failed < expected_failed - slack:
+            missing_failures.append((lobe, expected_failed / n))
     for lobe, expected in unexplained_failures:
         if lobe.failed > 0.5 * lobe.samples and lobe.failed_below > 0.9 * lobe.failed:
             return (f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land below the "
@@ -325,6 +329,9 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float) -> str:
                 f"is 0 "
                 f"(expected {expected:.1%}): pdf returns 0 where sample goes (do pdf's conditions match "
                 "the sampler?)")
+    if missing_failures:
+        lobe, expected = missing_failures[0]
+        return fails_too_rarely(lobe.failed / lobe.samples, expected, lobe.degrees)
     return ("the samples' histogram does not follow pdf (see --plots): sample and pdf describe "
             "different distributions (a wrong warp, the pdf of another sampling, a missing Jacobian?)")
 
@@ -368,14 +375,33 @@ def check_normalisation(lobes: list[Lobe]) -> Check:
             hint = (f"pdf integrates to {integral:.3g} > 1 at wo {worst.degrees:g}°: pdf is too large "
                     f"(by {integral:.3g}x if by a constant: check its normalisation; a missing Jacobian?)")
         elif integral < success:
-            hint = (f"pdf integrates to {integral:.3g} but {success:.1%} of the samples succeed: pdf is "
-                    f"about {success / max(integral, 1e-300):.3g}x too small "
-                    "(e.g. 1/(2 pi) where 1/pi belongs)")
+            factor = success / max(integral, 1e-300)
+            if any(abs(factor / simple - 1) < 0.02 for simple in SIMPLE_FACTORS):
+                hint = (f"pdf integrates to {integral:.3g} but {success:.1%} of the samples succeed: "
+                        f"pdf is about {factor:.3g}x too small (e.g. 1/(2 pi) where 1/pi belongs)")
+            else:
+                hint = (fails_too_rarely(1 - success, 1 - integral, worst.degrees)
+                        + f" (or else pdf is {factor:.3g}x too small)")
         else:
             hint = (f"sample fails ({1 - success:.1%}) more often than pdf admits "
                     f"(1 - ∫pdf = {1 - integral:.1%}): samples land where pdf is 0")
     return Check("pdf normalisation", verdict(passed), text,
                  f"|∫pdf - (1 - failed)| <= {z:.1f} σ + quadrature error", hint)
+
+
+#: Factors by which a pdf written with the wrong constant is off: 2 (hemisphere against
+#: sphere, or cos / (2 pi)), pi, 4, 2 pi, 4 pi.
+SIMPLE_FACTORS = (2.0, math.pi, 4.0, 2 * math.pi, 4 * math.pi)
+
+
+def fails_too_rarely(failed: float, expected: float, degrees: float) -> str:
+    """The hint for a sampler that fails less often than its pdf admits: it turns a sample
+    that should fail into another direction, most often by flipping it back above the
+    surface, which gives those directions a density pdf knows nothing of."""
+    return (f"pdf integrates to {1 - expected:.3g} at wo {degrees:g}°, so {expected:.1%} of the "
+            f"samples should fail (land where pdf is 0), but {failed:.1%} do: sample turns a "
+            f"failed sample into another direction. Did it flip a wi that landed below the "
+            f"surface back up? Let such a sample fail: return it as it is (pdf 0 there)")
 
 
 def check_energy(lobes: list[Lobe]) -> Check:

@@ -172,7 +172,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     data = scene.triangle_data.take(prim, axis=1)   # (13, N); .T gives (N, 3) views
     v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
     u, v = hits.u.take(alive)[:, None], hits.v.take(alive)[:, None]
-    # The point from its barycentrics: more accurate than origin + t * dir (pbrt 6.8.6).
+    # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5).
     p = v0 + u * e1 + v * e2
     wo = -take_rows(paths.dirs, alive)
     front = dot(n, wo) > 0

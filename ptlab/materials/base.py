@@ -7,7 +7,7 @@ BxDF ``f`` / ``PDF`` / ``Sample_f``; GAMES101 Homework 7's ``eval`` / ``pdf`` / 
 * ``pdf(wo, wi, n)``: the solid-angle density with which ``sample`` picks ``wi``;
 * ``sample(wo, n, u)``: a direction ``wi`` drawn from that density.
 
-Conventions (DESIGN.md): every direction is a unit vector pointing *away* from the
+Conventions (the whole library's): every direction is a unit vector pointing *away* from the
 surface; ``wo`` toward the viewer, ``wi`` toward the light; ``n`` the unit shading normal.
 Arrays are (N, 3), colours (N, 3). (GAMES101 passes the incoming ray direction, which
 points *toward* the surface, as its first argument: its ``wi`` is our ``-wo``.)

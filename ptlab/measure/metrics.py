@@ -12,7 +12,7 @@
 
 For an unbiased Monte Carlo estimator both fall as 1 / samples (MSE = variance / N), so on a
 log-log chart of error against time every unbiased method is a line of slope -1, and the
-better method is the lower line (Veach 1997, section 2.4; pbrt-v4 section 2.1.3).
+better method is the lower line (Veach 1997, section 2.4; pbrt-v4 section 2.1.4).
 """
 
 from __future__ import annotations

@@ -6,7 +6,14 @@ lighting come out in the wrong places."""
 
 import numpy as np
 
-EXPECTED_FAILURES = ("known hits", "behind the origin", "both faces", "many rays", "render")
+EXPECTED_FAILURES = ("known hits", "outside each edge", "behind the origin", "both faces", "many rays",
+                     "render")
+#: What the messages must say: (u, v) pairs printed alike for the expected and the answer;
+#: an error of 0.94 named as swapped barycentrics, not as float32 rounding.
+EXPECTED_HINTS = {"behind the origin": ("(0.25, 0.5) and (0.6, 0.2)", "(0.5, 0.25) and (0.2, 0.6)",
+                                        "swapped"),
+                  "many rays": ("u and v are swapped",)}
+MISLEADING_HINTS = {"many rays": ("float32",)}
 
 
 def ray_triangle(origins, dirs, v0, e1, e2):

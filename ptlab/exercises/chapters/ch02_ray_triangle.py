@@ -23,7 +23,7 @@ SLANTED_FRONT = (-0.3, 0.4, -1.2)
 
 #: The render check: the Cornell box path-traced (direct light and one bounce: the hit
 #: points, built from u and v, start the shadow rays and the bounce) through the NumPy BVH,
-#: cut into passes whose spread gives the standard errors; ``ch06_diffuse.compare_renders``
+#: cut into passes whose spread gives the standard errors; ``renders.compare_renders``
 #: compares the regions (false-alarm rate at most 1e-3). The library's picture comes from
 #: the fastest backend: the same hits, so the same picture up to rounding.
 RENDER = dict(res=32, passes=8, spp_per_pass=4, seed=5, integrator="path", max_depth=2)
@@ -155,9 +155,14 @@ def check_behind(module) -> str:
     if not np.allclose(t, -1.0, rtol=1e-5):
         raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours "
                           f"gives {_fmt(t)}")
-    if not np.allclose([u, v], [[0.25, 0.6], [0.5, 0.2]], atol=1e-6):
-        raise CheckFailed(f"behind the origin, u and v are still the hit point's barycentrics, "
-                          f"(0.25, 0.5) and (0.6, 0.2); yours are {_fmt(u)}, {_fmt(v)}")
+    want = np.array([[0.25, 0.5], [0.6, 0.2]])
+    got = np.stack([u, v], axis=1)
+    if not np.allclose(got, want, atol=1e-6):
+        hint = " (u and v swapped: u goes with e1 = v1 - v0)" if np.allclose(
+            got, want[:, ::-1], atol=1e-6) else ""
+        raise CheckFailed(f"behind the origin, (u, v) are still the hit points' barycentrics, "
+                          f"{_fmt(want[0])} and {_fmt(want[1])} for the two rays; yours are "
+                          f"{_fmt(got[0])} and {_fmt(got[1])}{hint}")
     return "triangles behind the origin come back with t = -1"
 
 
@@ -190,9 +195,31 @@ def check_many(module) -> str:
     for name, got, want in zip("tuv", (t, u, v), tuv.T, strict=True):
         error = np.abs(got[inside] - want[inside]) / np.maximum(1, np.abs(want[inside]))
         if error.max() > 1e-6:
-            raise CheckFailed(f"{name} of random rays is off by up to {error.max():.2g} "
-                              f"(computing in float32? keep the dtype you are given)")
+            raise CheckFailed(f"{name} of random rays is off by up to {error.max():.2g}"
+                              f"{_error_hint(name, error.max(), (t, u, v), tuv, inside)}")
     return f"{n} random rays and triangles agree with a direct linear solve"
+
+
+#: Errors up to this are small numerical slips (computing these rays in float32 is off by up
+#: to 4e-7, an epsilon of 1e-6 added to det by 6e-6); larger ones come from a wrong formula.
+SMALL_ERROR = 1e-4
+
+
+def _error_hint(name: str, error: float, got, tuv: np.ndarray, inside: np.ndarray) -> str:
+    """Why the student's ``name`` (t, u or v) of random hits is off by ``error``."""
+    if error <= SMALL_ERROR:
+        return (" (a small error, more than rounding: an epsilon added to det or t, or a "
+                "computation in lower precision? Keep the dtype you are given, float64 here, "
+                "and divide by det itself)")
+    t, u, v = (g[inside] for g in got)
+    t_want, u_want, v_want = tuv[inside].T
+    if np.allclose(u, v_want, atol=1e-6) and np.allclose(v, u_want, atol=1e-6):
+        return (": u and v are swapped (u weighs v1 and goes with e1 = v1 - v0, the lecture's "
+                "b1 = s1 . s / det)")
+    if name == "t":
+        return ": not rounding but a wrong formula: t = (s2 . e2) / det"
+    return (": not rounding but wrong barycentrics: u = (s1 . s) / det weighs v1, "
+            "v = (s2 . d) / det weighs v2, and 1 - u - v weighs v0")
 
 
 def check_render(module) -> str:

@@ -159,7 +159,7 @@ def fresnel_reference(cos_theta_i: np.ndarray, eta) -> np.ndarray:
 
     r_perpendicular = (cos_i - eta cos_t) / (cos_i + eta cos_t), r_parallel = (eta cos_i -
     cos_t) / (eta cos_i + cos_t), F = (r_perpendicular^2 + r_parallel^2) / 2, and F = 1 when
-    sin(theta_t) = sin(theta_i) / eta exceeds 1 (Hecht, Optics, 4.6; pbrt-v4 eq. 9.5-9.6).
+    sin(theta_t) = sin(theta_i) / eta exceeds 1 (Hecht, Optics, 4.6; pbrt-v4 eq. 9.7).
     """
     cos_i = np.asarray(cos_theta_i, dtype=np.float64)
     sin2_t = (1 - cos_i ** 2) / np.asarray(eta, dtype=np.float64) ** 2

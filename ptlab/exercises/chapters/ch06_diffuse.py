@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require, student_file
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 
 ALBEDO = (0.8, 0.5, 0.2)
@@ -34,12 +34,16 @@ def _material(module, albedo=ALBEDO):
 
 def probe(material) -> None:
     """Call ``eval``, ``pdf`` and ``sample`` once on a few directions, so that a method not
-    written yet, or one that raises, is reported as itself before a long check starts."""
-    n = np.array([[0.0, 0.0, 1.0]] * 2)
-    wo = np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96]])
-    material.eval(wo, wo[::-1], n)
-    material.pdf(wo, wo[::-1], n)
-    material.sample(wo, n, np.full((2, 2), 0.5))
+    written yet, one that raises, or one that returns the wrong shape, is reported as itself
+    (once, with the shapes) before a long check starts."""
+    rows = 5                    # not 3: a (3, 3) result would hide rows and colours swapped
+    n = np.tile([0.0, 0.0, 1.0], (rows, 1))
+    wo = _unit(np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96], [-0.3, 0.4, 0.5], [0.1, 0.1, 1.0],
+                         [0.9, -0.2, 0.3]]))
+    wi = wo[::-1]
+    _call(material, "eval", wo, wi, n)
+    _call(material, "pdf", wo, wi, n, width=None)
+    _call(material, "sample", wo, n, np.full((rows, 2), 0.5))
 
 
 def _call(material, method: str, *arrays, width: int | None = 3) -> np.ndarray:
@@ -162,18 +166,29 @@ def check_pdf_normalisation(module) -> str:
     return f"the pdf integrates to {total:.4f} over the sphere, 0 below the surface"
 
 
-def check_harness(module) -> str:
+def run_harness(material, seed: int, what: str, grade_command: str) -> str:
+    """``ptlab.grading.check_material`` on the student's material; a ``CheckFailed`` that
+    names each failed check with its hint (checks that failed alike, said once), ``what``
+    the material was and the ``ptlab grade`` command that prints the whole table."""
     from ptlab.grading import check_material
 
-    material = _material(module)
     probe(material)
-    report = check_material(material, seed=6, samples=HARNESS_SAMPLES)
-    if not report.passed:
-        failures = "; ".join(f"{c.name}: {c.hint or c.statistic}" for c in report.checks
-                             if not c.passed)
-        raise CheckFailed(f"the material harness failed {', '.join(report.failed)}. {failures} "
-                          f"(see the whole table with: ptlab grade 06_diffuse.py:Lambertian)")
-    return f"every check of ptlab.grading.check_material passes ({HARNESS_SAMPLES:,} samples per wo)"
+    report = check_material(material, seed=seed, samples=HARNESS_SAMPLES)
+    if report.passed:
+        return (f"every check of ptlab.grading.check_material passes{what} "
+                f"({HARNESS_SAMPLES:,} samples per wo)")
+    by_hint: dict[str, list[str]] = {}
+    for c in report.checks:
+        if not c.passed:
+            by_hint.setdefault(c.hint or c.statistic, []).append(c.name)
+    failures = "; ".join(f"{', '.join(names)}: {hint}" for hint, names in by_hint.items())
+    raise CheckFailed(f"the material harness failed {', '.join(report.failed)}{what}. {failures} "
+                      f"(see the whole table with: {grade_command})")
+
+
+def check_harness(module) -> str:
+    return run_harness(_material(module), 6, "",
+                       f"ptlab grade {student_file(module)}:Lambertian")
 
 
 def render_options() -> dict:

@@ -78,13 +78,31 @@ def check_sum_to_one(module) -> str:
             raise CheckFailed(f"with heuristic={heuristic!r}, the weights of the two strategies "
                               f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
                               f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}")
-        expected = pdf_light**2 / (pdf_light**2 + pdf_bsdf**2) if heuristic == "power" else \
-            pdf_light / (pdf_light + pdf_bsdf)
+        expected = _heuristic(heuristic, pdf_light, pdf_bsdf)
         if not np.allclose(light, expected, rtol=1e-4, atol=1e-6):
+            other_heuristic = "balance" if heuristic == "power" else "power"
+            if np.allclose(light, _heuristic(heuristic, pdf_bsdf, pdf_light), rtol=1e-4, atol=1e-6):
+                hint = (f"yours is the {heuristic} heuristic of (other, pdf): the densities are "
+                        f"passed on in the wrong order, so each strategy gets the other's weight. "
+                        f"mis_weight(pdf, other) is the weight of the strategy that drew the "
+                        f"sample with density pdf, and grows with it (the chapter's pitfall "
+                        f"\"The argument order\")")
+            elif np.allclose(light, _heuristic(other_heuristic, pdf_light, pdf_bsdf), rtol=1e-4,
+                             atol=1e-6):
+                hint = (f"yours is the {other_heuristic} heuristic: is the heuristic argument "
+                        f"passed on?")
+            else:
+                hint = "yours sums to 1 but gives other values"
             raise CheckFailed(f"mis_weight(..., {heuristic!r}) should be the {heuristic} "
-                              f"heuristic; yours sums to 1 but gives other values (is the "
-                              f"heuristic argument passed on?)")
+                              f"heuristic; {hint}")
     return "the two strategies' weights add up to 1 for 1000 random pairs, both heuristics"
+
+
+def _heuristic(name: str, pdf: np.ndarray, other: np.ndarray) -> np.ndarray:
+    """Veach's power (beta = 2) or balance heuristic, for densities that are not both 0."""
+    if name == "power":
+        return pdf**2 / (pdf**2 + other**2)
+    return pdf / (pdf + other)
 
 
 def check_zero_pdfs(module) -> str:
@@ -101,6 +119,9 @@ def check_zero_pdfs(module) -> str:
                    "a light sample), so this one must count it fully" if other[k] == 0 and pdf[k] > 0
                    else "this strategy cannot draw the sample, so its weight is 0" if pdf[k] == 0 and
                    other[k] > 0 else "a sample neither strategy can draw gets weight 0")
+            if np.array_equal(weight[:2], expected[1::-1]):
+                why += (" (yours gives these weights to the other strategy: are pdf and other "
+                        "passed on in the wrong order?)")
             raise CheckFailed(f"mis_weight(pdf = {pdf[k]:g}, other = {other[k]:g}, {heuristic!r}) "
                               f"should be {expected[k]:g}, yours is {weight[k]:g}: {why}")
     return "weight 1 when the other pdf is 0, 0 when this one is, 0 (not NaN) when both are"
@@ -146,7 +167,8 @@ def check_render(module) -> str:
         raise CheckFailed(f"veach-mis with your MIS weights differs from the library's render "
                           f"along the very same paths: {describe_region(*worst)} is "
                           f"{ratio:.3f}x the library's, the whole image {overall:.3f}x "
-                          f"(brighter: light counted by both strategies; darker: by neither)")
+                          f"(brighter: light counted by both strategies; darker: by neither; "
+                          f"else each strategy's weight is off, see 'weights sum to 1')")
     return (f"veach-mis with your MIS weights matches the library's render along the same "
             f"paths (whole image {overall:.6f}x)")
 

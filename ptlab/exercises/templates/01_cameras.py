@@ -1,4 +1,6 @@
-"""Chapter 1: cameras and primary rays (docs/01-cameras.md).
+"""Chapter 1: cameras and primary rays.
+
+The chapter's page: ``ptlab exercise docs 1`` (中文: ``--zh``).
 
 Write ``generate_rays``: one ray from the eye through a point of each pixel. Check your work
 with

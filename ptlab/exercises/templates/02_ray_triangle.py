@@ -1,4 +1,6 @@
-"""Chapter 2: ray-triangle intersection, Möller-Trumbore (docs/02-ray-triangle.md).
+"""Chapter 2: ray-triangle intersection, Möller-Trumbore.
+
+The chapter's page: ``ptlab exercise docs 2`` (中文: ``--zh``).
 
 Write ``ray_triangle``: where does each ray meet the plane of its triangle, and is that
 point inside the triangle? The BVH (chapters 4 and 5) calls it for every ray that reaches

@@ -1,4 +1,6 @@
-"""Chapter 3: Whitted-style ray tracing: reflection, refraction and Fresnel (docs/03-whitted.md).
+"""Chapter 3: Whitted-style ray tracing: reflection, refraction and Fresnel.
+
+The chapter's page: ``ptlab exercise docs 3`` (中文: ``--zh``).
 
 Write the three laws of a smooth surface that Homework 5's ``castRay`` follows: the mirror
 direction, the refracted direction (Snell's law) and the share of light that is reflected
@@ -85,7 +87,7 @@ def fresnel(cos_theta_i, eta):
         * cos_t from Snell's law as in ``refract``; where sin^2(theta_t) >= 1, return 1.
         * r_parallel = (eta cos_i - cos_t) / (eta cos_i + cos_t),
           r_perpendicular = (cos_i - eta cos_t) / (cos_i + eta cos_t),
-          F = (r_parallel^2 + r_perpendicular^2) / 2 (pbrt-v4 section 9.3.6; the homework's
+          F = (r_parallel^2 + r_perpendicular^2) / 2 (pbrt-v4 section 9.3.5; the homework's
           ``fresnel`` computes the same with etai and etat).
         * ``np.where(condition, 1.0, F)`` picks per row; silence 0 / 0 warnings where you
           replace the result anyway with ``np.errstate(invalid="ignore")``.

@@ -1,4 +1,6 @@
-"""Chapter 4: bounding boxes, the slab test (docs/04-bounding-boxes.md).
+"""Chapter 4: bounding boxes, the slab test.
+
+The chapter's page: ``ptlab exercise docs 4`` (中文: ``--zh``).
 
 Write ``slab_test``: does each ray pass through its axis-aligned box, and where does it
 enter? The BVH (chapter 5) asks this for every node it visits. Check your work with

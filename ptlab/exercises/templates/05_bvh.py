@@ -1,4 +1,6 @@
-"""Chapter 5: the BVH, built with the SAH and traversed front to back (docs/05-bvh.md).
+"""Chapter 5: the BVH, built with the SAH and traversed front to back.
+
+The chapter's page: ``ptlab exercise docs 5`` (中文: ``--zh``).
 
 ptlab's NumPy BVH (``ptlab.accel.numpy_bvh``) builds its tree top-down, one level at a
 time: it sorts the triangles of every node of the level into B bins by their centroids,

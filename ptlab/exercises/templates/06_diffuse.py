@@ -1,4 +1,6 @@
-"""Chapter 6: Monte Carlo and the diffuse material (docs/06-diffuse.md).
+"""Chapter 6: Monte Carlo and the diffuse material.
+
+The chapter's page: ``ptlab exercise docs 6`` (中文: ``--zh``).
 
 Write the three methods of ``Lambertian``, an ideal diffuse surface: ``eval`` (its BRDF),
 ``sample`` (a random direction to continue a path in) and ``pdf`` (the density with which
@@ -35,11 +37,12 @@ class Lambertian(Material):
     Monte Carlo weight ``eval * cos(theta_i) / pdf`` (0 where the pdf is 0).
 
     Args:
-        albedo: (3,) reflectance in [0, 1], one number per colour channel.
+        albedo: (3,) reflectance in [0, 1], one number per colour channel (kept as float32,
+            the renderer's type: a float64 albedo would turn its float32 arrays into float64).
     """
 
     def __init__(self, albedo=(0.8, 0.8, 0.8)):
-        self.albedo = np.asarray(albedo, dtype=np.float64)
+        self.albedo = np.asarray(albedo, dtype=np.float32)
 
     def eval(self, wo, wi, n):
         """The BRDF value f_r(wo, wi), *without* the cosine factor.
@@ -91,6 +94,8 @@ class Lambertian(Material):
 
         Hints:
             * Uniform sampling: 1 / (2 pi). Cosine-weighted: cos(theta_i) / pi.
+            * Return ``wi``'s dtype: a boolean mask divided by a number is float64, which
+              ``.astype(wi.dtype)`` turns back into the renderer's float32.
             * The density goes to 0 at grazing directions for cosine sampling: never divide
               by it here (``sample_weight`` handles pdf == 0), and never raise it to some
               small epsilon (that makes it integrate to more than 1).

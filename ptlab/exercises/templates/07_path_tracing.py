@@ -1,4 +1,6 @@
-"""Chapter 7: path tracing, the homework's castRay (docs/07-path-tracing.md).
+"""Chapter 7: path tracing, the homework's castRay.
+
+The chapter's page: ``ptlab exercise docs 7`` (中文: ``--zh``).
 
 Write the path tracer of GAMES101 Homework 7 for a whole batch of paths at once: the
 direct light by sampling the lights with a shadow ray, Russian roulette, the indirect

@@ -1,4 +1,6 @@
-"""Chapter 8: parallel rendering over tiles (docs/08-parallel.md).
+"""Chapter 8: parallel rendering over tiles.
+
+The chapter's page: ``ptlab exercise docs 8`` (中文: ``--zh``).
 
 Cut the image into tiles, render each tile as an independent job on a pool of worker
 processes, and add the tiles' results into the image, so that the image is the same, bit for

@@ -1,4 +1,6 @@
-"""Chapter 9: microfacet materials (docs/09-microfacet.md).
+"""Chapter 9: microfacet materials.
+
+The chapter's page: ``ptlab exercise docs 9`` (中文: ``--zh``).
 
 Write the GGX microfacet BRDF of a rough metal, piece by piece: the normal distribution
 ``D``, Smith's masking ``G1`` and masking-shadowing ``G2``, Schlick's Fresnel
@@ -93,14 +95,15 @@ class GGXMetal(Material):
     """A rough metal: the Cook-Torrance BRDF with GGX normals.
 
     Args:
-        f0: (3,) linear RGB reflectance at normal incidence (gold: 1.0, 0.782, 0.344).
+        f0: (3,) linear RGB reflectance at normal incidence (gold: 1.0, 0.782, 0.344), kept
+            as float32, the renderer's type (a float64 f0 would turn its arrays into float64).
         alpha: GGX roughness in (0, 1] (the scenes' "roughness" r is alpha = r^2).
         sampling: ``"ggx"`` (your importance sampling) or ``"hemisphere"`` (cosine-weighted,
             already written).
     """
 
     def __init__(self, f0=(1.0, 0.782, 0.344), alpha=0.25, sampling="ggx"):
-        self.f0 = np.asarray(f0, dtype=np.float64)
+        self.f0 = np.asarray(f0, dtype=np.float32)
         self.alpha = float(alpha)
         self.sampling = sampling
 

@@ -1,4 +1,6 @@
-"""Chapter 10: multiple importance sampling (docs/10-mis.md).
+"""Chapter 10: multiple importance sampling.
+
+The chapter's page: ``ptlab exercise docs 10`` (中文: ``--zh``).
 
 Write Veach's two heuristics, ``balance_heuristic`` and ``power_heuristic``, and
 ``mis_weight``, the function the path tracer calls to weigh each sample of its two

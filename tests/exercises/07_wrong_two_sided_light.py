@@ -1,0 +1,70 @@
+"""A typical wrong chapter-7 answer: lights that glow on both faces. The camera rays add the
+emission of whatever they hit, without asking ``hit.front``: a light seen from behind (the
+back of a lamp, an emitting panel that faces away) glows as brightly as from the front.
+In the Cornell box and the furnace no ray ever sees a light from behind, so only a scene
+with lights facing away from the camera shows it. Everything else here is right."""
+
+import numpy as np
+
+from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
+from ptlab.vectors import dot, take_rows
+
+EXPECTED_FAILURES = ("lights one-sided",)
+EXPECTED_HINTS = {"lights one-sided": ("from behind", "front face only", "hit.front")}
+
+
+def direct_light(film, scene, accel, hit, u):
+    light = scene.lights.sample(u)
+    to_light = light.points - hit.p
+    dist2 = dot(to_light, to_light)
+    wi = to_light / np.sqrt(dist2)[:, None]
+    cos_theta = np.maximum(dot(hit.n, wi), 0)
+    cos_theta_light = np.maximum(-dot(light.normals, wi), 0)
+    origin = hit.p + hit.offset[:, None] * hit.n
+    target = light.points + light.offset * light.normals
+    visible = ~accel.occluded(origin, target - origin, 1 - SHADOW_EPSILON)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    scale = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    add_to_film(film, hit.pixel, hit.throughput * f * light.radiance * scale[:, None])
+    return len(wi)
+
+
+def russian_roulette(throughput, p_rr, u):
+    return u < p_rr, throughput / np.float32(p_rr)
+
+
+def scatter(scene, hit, u, survive):
+    wi = shade(hit, "sample", hit.wo, hit.n, u)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
+    cos_theta = np.abs(dot(wi, hit.n))
+    weight = np.where(pdf > 1e-8, cos_theta / np.maximum(pdf, 1e-8), 0).astype(np.float32)
+    throughput = hit.throughput * f * weight[:, None]
+    side = np.where(dot(wi, hit.n) >= 0, hit.offset, -hit.offset)
+    origins = hit.p + side[:, None] * hit.n
+    rows = np.flatnonzero(survive)
+    return Paths(origins=take_rows(origins, rows), dirs=take_rows(wi, rows),
+                 throughput=take_rows(throughput, rows), pixel=hit.pixel[rows],
+                 sees_emission=hit.delta[rows])
+
+
+def trace_paths(film, scene, accel, paths, rng, settings):
+    rays = 0
+    for depth in range(settings.max_depth + 1):
+        hits = accel.intersect(paths.origins, paths.dirs)
+        rays += len(hits.prim)
+        hit = surface_hit(scene, paths, hits)
+        if len(hit.prim) == 0:
+            break
+        # (the bug: emission added whichever face the ray hits, hit.front not asked)
+        emitted = take_rows(scene.emission, hit.prim) * hit.sees_emission[:, None]
+        add_to_film(film, hit.pixel, hit.throughput * emitted)
+        if depth == settings.max_depth:
+            break
+        u = rng.random((6, len(hit.prim)), dtype=np.float32)
+        rays += direct_light(film, scene, accel, hit, u[0:3].T)
+        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u[3])
+        paths = scatter(scene, hit, u[4:6].T, survive)
+        if len(paths.pixel) == 0:
+            break
+    return rays
