@@ -1,10 +1,11 @@
 """Chapter 8 tutorial: rendering over tiles on several processes, reproducibly.
 
-Renders the Cornell box tile by tile on a pool of 2 worker processes, each tile's job with
-its own random stream ``stream(seed, tile, 0)`` (``ptlab.rendering.jobs.run_job``), and shows which
-process rendered which tile. Then the chapter's typical mistake: one random generator per
-worker process. With it, the image rendered by 1 worker and the one rendered by 2 differ,
-tile by tile; with streams per tile they are the same bit for bit.
+Renders the Cornell box tile by tile on a pool of 2 worker processes, each tile's job taking
+its random numbers from the render's sampler by pixel and sample
+(``ptlab.rendering.jobs.run_job``), and shows which process rendered which tile. Then the
+chapter's typical mistake: a sampler seeded per worker process. With it, the image rendered
+by 1 worker and the one rendered by 2 differ, tile by tile; with the render's own sampler
+they are the same bit for bit.
 
     python docs/tutorials/08_parallel.py                 # writes parallel-tiles.png, parallel-wrong.png
     python docs/tutorials/08_parallel.py --res 64 --spp 4 --out /tmp/t
@@ -12,6 +13,7 @@ tile by tile; with streams per tile they are the same bit for bit.
 
 from __future__ import annotations
 
+import dataclasses
 import multiprocessing
 import os
 import time
@@ -20,18 +22,15 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 import numpy as np
 
 import ptlab
-import ptlab.rendering.jobs
 from ptlab.accel import make_accelerator, resolve_backend
-from ptlab.exercises.plug import plugged
 from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import PathSettings
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
+from ptlab.samplers import make_sampler
 
-#: In each worker process: the accelerator (built once), and for the mistake, the one
-#: generator the process draws every tile's random numbers from.
+#: In each worker process: the accelerator, built once.
 _accelerator: dict = {}
-_per_worker: dict = {}
 
 
 def render_tile(setup: RenderSetup, tile, spp: int, per_worker_rng: bool):
@@ -39,13 +38,11 @@ def render_tile(setup: RenderSetup, tile, spp: int, per_worker_rng: bool):
     if setup.token not in _accelerator:
         _accelerator.clear()
         _accelerator[setup.token] = make_accelerator(setup.scene.triangles, setup.backend)
-    job = Job(tile, 0, spp)
-    if not per_worker_rng:
-        return tile, run_job(setup, job, _accelerator[setup.token]).sums, os.getpid()
-    # The mistake: whatever tile it is, the numbers come from this process's generator.
-    rng = _per_worker.setdefault(setup.token, np.random.default_rng([setup.seed, os.getpid()]))
-    with plugged(ptlab.rendering.jobs, stream=lambda seed, tile, pass_index: rng):
-        return tile, run_job(setup, job, _accelerator[setup.token]).sums, os.getpid()
+    if per_worker_rng:
+        # The mistake: whatever tile it is, the numbers depend on this process (its pid).
+        setup = dataclasses.replace(setup, seed=os.getpid(),
+                                    sampler=make_sampler("sobol", os.getpid()))
+    return tile, run_job(setup, Job(tile, 0, spp), _accelerator[setup.token]).sums, os.getpid()
 
 
 def render_parallel(scene, spp: int, res: int, workers: int, per_worker_rng: bool = False):
@@ -90,22 +87,22 @@ def main() -> None:
         counts = {pid: list(pids.values()).count(pid) for pid in sorted(set(pids.values()))}
         print(f"  {workers} worker(s): {time.perf_counter() - start:.1f} s, tiles per process "
               f"{list(counts.values())}")
-    print(f"streams per tile:  1 and 2 workers give the same image bit for bit: "
+    print(f"the render's sampler: 1 and 2 workers give the same image bit for bit: "
           f"{np.array_equal(images[1], images[2])}")
     library = ptlab.render_result(scene, spp=args.spp, res=args.res, seed=1, workers=1,
                                   tile_size=32, spp_per_pass=args.spp).image
-    print(f"                   and it is ptlab.render's image (seed 1, 32 x 32 tiles): "
+    print(f"                    and it is ptlab.render's image (seed 1, 32 x 32 tiles): "
           f"{np.array_equal(images[2], library)}")
     write_image(out / "parallel-tiles.png", tiles_picture(images[2], pids, args.res))
 
     wrong = {workers: render_parallel(scene, args.spp, args.res, workers, per_worker_rng=True)[0]
              for workers in (1, 2)}
     differ = np.any(wrong[1] != wrong[2], axis=2)
-    print(f"one generator per worker: 1 and 2 workers differ in {differ.mean():.0%} of the pixels")
+    print(f"a sampler per worker: 1 and 2 workers differ in {differ.mean():.0%} of the pixels")
     difference = np.abs(wrong[1] - wrong[2]).mean(axis=2)
     write_image(out / "parallel-wrong.png", np.repeat(np.clip(difference, 0, 1)[..., None], 3, axis=2))
     print(f"wrote {out / 'parallel-tiles.png'} (tiles tinted by process) and "
-          f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with one generator per worker)")
+          f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with a sampler per worker)")
 
 
 if __name__ == "__main__":

@@ -59,9 +59,11 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
                 **options) -> np.ndarray:
     """(passes, res, res, 3) float64: the image of each pass of one render, on its own.
 
-    Every pass draws its own random numbers (``ptlab.sampling.stream``), so the passes are
-    independent estimates of the same picture: their spread gives the standard error. The
-    render runs in this process (``workers=1``), where ``plugged`` functions are seen.
+    The render takes independent samples (``sampler="independent"``), so the passes are
+    independent estimates of the same picture and their spread gives the standard error.
+    (Stratified and sobol samples would make the passes of one pixel correlated, parts of
+    one pattern.) The render runs in this process (``workers=1``), where ``plugged``
+    functions are seen.
     """
     from ptlab.rendering import render_result
 
@@ -73,7 +75,8 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
         done[...] = film.sums
 
     render_result(scene, spp=passes * spp_per_pass, res=res, seed=seed, workers=1,
-                  tile_size=res, spp_per_pass=spp_per_pass, on_pass=keep, **options)
+                  tile_size=res, spp_per_pass=spp_per_pass, on_pass=keep,
+                  **dict(dict(sampler="independent"), **options))
     return np.stack(images)
 
 

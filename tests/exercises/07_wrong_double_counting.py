@@ -8,6 +8,7 @@ import numpy as np
 
 from ptlab.integrators.path import PathSettings, add_to_film, scatter, surface_hit
 from ptlab.integrators.path import direct_light as library_direct_light
+from ptlab.samplers import BounceUniforms
 from ptlab.vectors import take_rows
 
 EXPECTED_FAILURES = ("white furnace", "Cornell box")
@@ -21,7 +22,7 @@ def russian_roulette(throughput, p_rr, u):
     return u < p_rr, throughput / np.float32(p_rr)
 
 
-def trace_paths(film, scene, accel, paths, rng, settings):
+def trace_paths(film, scene, accel, paths, sampler, settings):
     rays = 0
     for depth in range(settings.max_depth + 1):
         hits = accel.intersect(paths.origins, paths.dirs)
@@ -33,10 +34,10 @@ def trace_paths(film, scene, accel, paths, rng, settings):
         add_to_film(film, hit.pixel, hit.throughput * emitted)
         if depth == settings.max_depth:
             break
-        u = rng.random((6, len(hit.prim)), dtype=np.float32)
-        rays += direct_light(film, scene, accel, hit, u[0:3].T)
-        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u[3])
-        paths = scatter(scene, hit, u[4:6].T, survive)
+        u = BounceUniforms(sampler, hit.sample, depth)
+        rays += direct_light(film, scene, accel, hit, u.light())
+        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u.roulette())
+        paths = scatter(scene, hit, u.bsdf(), survive)
         if len(paths.pixel) == 0:
             break
     return rays

@@ -7,6 +7,7 @@ with lights facing away from the camera shows it. Everything else here is right.
 import numpy as np
 
 from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
+from ptlab.samplers import BounceUniforms
 from ptlab.vectors import dot, take_rows
 
 EXPECTED_FAILURES = ("lights one-sided",)
@@ -45,10 +46,10 @@ def scatter(scene, hit, u, survive):
     rows = np.flatnonzero(survive)
     return Paths(origins=take_rows(origins, rows), dirs=take_rows(wi, rows),
                  throughput=take_rows(throughput, rows), pixel=hit.pixel[rows],
-                 sees_emission=hit.delta[rows])
+                 sees_emission=hit.delta[rows], sample=hit.sample[rows])
 
 
-def trace_paths(film, scene, accel, paths, rng, settings):
+def trace_paths(film, scene, accel, paths, sampler, settings):
     rays = 0
     for depth in range(settings.max_depth + 1):
         hits = accel.intersect(paths.origins, paths.dirs)
@@ -61,10 +62,10 @@ def trace_paths(film, scene, accel, paths, rng, settings):
         add_to_film(film, hit.pixel, hit.throughput * emitted)
         if depth == settings.max_depth:
             break
-        u = rng.random((6, len(hit.prim)), dtype=np.float32)
-        rays += direct_light(film, scene, accel, hit, u[0:3].T)
-        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u[3])
-        paths = scatter(scene, hit, u[4:6].T, survive)
+        u = BounceUniforms(sampler, hit.sample, depth)
+        rays += direct_light(film, scene, accel, hit, u.light())
+        survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u.roulette())
+        paths = scatter(scene, hit, u.bsdf(), survive)
         if len(paths.pixel) == 0:
             break
     return rays

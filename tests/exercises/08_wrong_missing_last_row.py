@@ -1,6 +1,6 @@
 """A typical wrong chapter-8 answer: only whole tiles, ``range(0, height - size + 1, size)``,
 so when the tile size does not divide the height the last, smaller row of tiles is never
-made: the bottom of the image stays black. The jobs, the streams and the pool are right, so
+made: the bottom of the image stays black. The jobs, their random numbers and the pool are right, so
 the checks of parallelism and worker counts pass; the tiles and the image do not."""
 
 import multiprocessing

@@ -1,8 +1,8 @@
-"""A typical wrong chapter-8 answer: random numbers seeded per worker, not per tile. Each
-worker process makes one generator from the seed and its pid and draws every tile's numbers
-from it, so a tile's noise depends on which process renders it and on what that process
-rendered before: the image changes with the number of workers (and from run to run), and
-it is not the library's image for the same seed. The tiles and the pool are right."""
+"""A typical wrong chapter-8 answer: random numbers seeded per worker, not by pixel and sample.
+Each worker process makes one sampler from its pid and draws every tile's numbers from it, so
+a tile's noise depends on which process renders it: the image changes with the number of
+workers (and from run to run), and it is not the library's image for the same seed. The tiles
+and the pool are right."""
 
 import multiprocessing
 import os
@@ -15,11 +15,12 @@ from ptlab.camera import generate_rays
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.rendering.jobs import RenderSetup, Tile
 from ptlab.rendering.settings import parse_resolution
+from ptlab.samplers import BounceUniforms, make_sampler
 
 EXPECTED_FAILURES = ("tile job", "any worker count", "matches the library")
 
 _accelerators: dict = {}
-_rng = None        # the bug: one generator per worker process
+_sampler = None        # the bug: one sampler per worker process, seeded by its pid
 
 
 def make_tiles(width, height, size):
@@ -29,21 +30,22 @@ def make_tiles(width, height, size):
 
 
 def render_tile(setup, tile, spp):
-    global _rng
-    if _rng is None:
-        _rng = np.random.default_rng([setup.seed, os.getpid()])
+    global _sampler
+    if _sampler is None:
+        _sampler = make_sampler("sobol", seed=os.getpid())
     if setup.token not in _accelerators:
         _accelerators[setup.token] = make_accelerator(setup.scene.triangles, setup.backend)
     height, width = tile.y1 - tile.y0, tile.x1 - tile.x0
     n = height * width
     pixel = np.tile(np.arange(n), spp)
-    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height,
-                                  tile.x0 + pixel % width, tile.y0 + pixel // width,
-                                  _rng.random((len(pixel), 2), dtype=np.float32))
+    pixel_x, pixel_y = tile.x0 + pixel % width, tile.y0 + pixel // width
+    sample = _sampler.keys(pixel_y * setup.width + pixel_x, np.repeat(np.arange(spp), n))
+    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x,
+                                  pixel_y, _sampler.get(sample, BounceUniforms.PIXEL, 2))
     paths = Paths(origins, dirs, np.ones((len(pixel), 3), np.float32, order="F"), pixel,
-                  np.ones(len(pixel), dtype=bool))
+                  np.ones(len(pixel), dtype=bool), sample)
     film = np.zeros((n, 3))
-    trace_paths(film, setup.scene, _accelerators[setup.token], paths, _rng, setup.settings)
+    trace_paths(film, setup.scene, _accelerators[setup.token], paths, _sampler, setup.settings)
     return film.reshape(height, width, 3), os.getpid()
 
 

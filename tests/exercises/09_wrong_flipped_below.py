@@ -13,7 +13,9 @@ from ptlab.materials import Material
 from ptlab.sampling import cosine_hemisphere, to_world
 from ptlab.vectors import dot, normalize, reflect
 
-EXPECTED_FAILURES = ("harness (importance)",)
+#: The flip makes the rough metals 1-2% too bright, which the render check sees too (at its
+#: fixed seeds, in one region, just beyond what a right answer reaches).
+EXPECTED_FAILURES = ("harness (importance)", "render (importance)")
 EXPECTED_HINTS = {"harness (importance)": ("flip a wi that landed below the surface back up",
                                            "should fail")}
 MISLEADING_HINTS = {"harness (importance)": ("1/(2 pi) where 1/pi belongs",)}

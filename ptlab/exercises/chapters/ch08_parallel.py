@@ -2,9 +2,9 @@
 ``render_tile``, ``render_parallel``).
 
 * Tiles must cover every pixel exactly once, at odd image sizes and at the image's edges.
-* A tile's job must give exactly the library's sums (``ptlab.rendering.jobs.run_job``: the tile's own
-  random stream ``ptlab.sampling.stream(seed, tile, 0)``), and the same sums again when the
-  same process has rendered other tiles in between (no generator shared between jobs).
+* A tile's job must give exactly the library's sums (``ptlab.rendering.jobs.run_job``: every
+  random number from the setup's sampler, by pixel and sample), and the same sums again when
+  the same process has rendered other tiles in between (no generator shared between jobs).
 * ``render_parallel`` must really use several processes (each tile's job reports the pid of
   the process that ran it), give the same image bit for bit with 1 and 2 workers, and that
   image must be the library's (``ptlab.render_result`` with the same seed and tile size, one
@@ -73,7 +73,7 @@ def check_tiles(module) -> str:
             if tile.index != position:
                 raise CheckFailed(f"{where}: tile {position} of the list has index {tile.index}; "
                                   f"number the tiles 0, 1, 2, ... in list order (a tile's index "
-                                  f"seeds its random stream)")
+                                  f"is its place in the list)")
             if not (0 <= tile.x0 < tile.x1 <= width and 0 <= tile.y0 < tile.y1 <= height):
                 raise CheckFailed(f"{where}: tile {tile.index} spans columns {tile.x0}..{tile.x1 - 1} "
                                   f"and rows {tile.y0}..{tile.y1 - 1}, outside the {width} x "
@@ -124,18 +124,20 @@ def check_tile_job(module) -> str:
         raise CheckFailed("the same tile rendered again, after another tile in the same "
                           "process, gives other sums: its random numbers depend on what the "
                           "process did before (one generator per process, or a global one?). "
-                          "Make a new stream(setup.seed, tile.index, 0) in every job")
+                          "Take every random number from setup.sampler, by the paths' keys "
+                          "sampler.keys(pixel ids, sample indices)")
     accel = make_accelerator(setup.scene.triangles, setup.backend)
     expected = run_job(setup, Job(first, 0, 4), accel).sums
     if not np.array_equal(sums, expected):
         if not np.isfinite(sums).all() or np.abs(sums).max() == 0:
             raise CheckFailed("the tile's sums are empty or not finite: return the film the "
                               "tile's paths were traced into, reshaped to (h, w, 3)")
-        raise CheckFailed("the tile's sums are not the library's: a tile's job draws every "
-                          "random number from its own stream, rng = stream(setup.seed, "
-                          "tile.index, 0), camera jitter first (rng.random((n, 2), float32) for "
-                          "paths in sample-major order, as ptlab.rendering.jobs.run_job does), then "
-                          "trace_paths with the same rng")
+        raise CheckFailed("the tile's sums are not the library's: a tile's job takes every "
+                          "random number from setup.sampler: keys = sampler.keys(pixel_y * "
+                          "setup.width + pixel_x, sample index) for paths in sample-major order, "
+                          "the camera jitter sampler.get(keys, BounceUniforms.PIXEL, 2), then "
+                          "trace_paths with the same sampler (as ptlab.rendering.jobs.run_job "
+                          "does)")
     return "a tile's sums are the library's, and the same whatever the process rendered before"
 
 
@@ -224,9 +226,9 @@ def check_worker_count(module) -> str:
         differ = np.any(one != two, axis=2)
         raise CheckFailed(f"the image with 2 workers differs from the one with 1 worker in "
                           f"{differ.sum()} of {differ.size} pixels: the random numbers depend on "
-                          f"which process renders which tile, or in which order. Seed a stream "
-                          f"per tile, stream(seed, tile.index, 0), never per worker, and share "
-                          f"no generator between jobs")
+                          f"which process renders which tile, or in which order. Take them from "
+                          f"setup.sampler, by pixel and sample: never a generator (or sampler) "
+                          f"made per worker, and none shared between jobs")
     return "the image is the same, bit for bit, with 1 and 2 workers"
 
 
@@ -258,9 +260,9 @@ def check_library(module) -> str:
         elif abs(ratio - 1) > 0.05:
             hint = "divide the sums by spp once, at the end"
         else:
-            hint = ("the same seed must give the library's random numbers: stream(seed, "
-                    "tile.index, 0) for the tile numbered as ptlab.rendering.jobs.make_tiles "
-                    "numbers it, and float64 sums divided by spp, then float32")
+            hint = ("the same seed must give the library's random numbers: setup.sampler's, "
+                    "keyed by each path's pixel in the whole image and its sample index, and "
+                    "float64 sums divided by spp, then float32")
         raise CheckFailed(f"your image differs from the library's (same seed, tile size {TILE}, "
                           f"one pass) in {differ.sum()} of {differ.size} pixels and is "
                           f"{ratio:.3f}x as bright: {hint}")

@@ -1,6 +1,7 @@
-"""Chapter 8, the library's own answer: tiles from ``ptlab.rendering.jobs.make_tiles``, a tile's job by
-``ptlab.rendering.jobs.run_job`` (whose random stream is ``ptlab.sampling.stream(seed, tile, 0)``), and
-a process pool that adds the tiles' sums into the image in the main process."""
+"""Chapter 8, the library's own answer: tiles from ``ptlab.rendering.jobs.make_tiles``, a
+tile's job by ``ptlab.rendering.jobs.run_job`` (whose random numbers are the setup's
+sampler's, by pixel and sample), and a process pool that adds the tiles' sums into the image
+in the main process."""
 
 import multiprocessing
 import os

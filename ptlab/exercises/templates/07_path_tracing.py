@@ -16,14 +16,17 @@ thousands of times slower, and the checks have time limits); Python loops over b
 
 The library gives you (``ptlab.integrators.path``; read it):
 
-* ``Paths``: the rays of the live paths (origins, dirs, throughput, pixel, sees_emission);
+* ``Paths``: the rays of the live paths (origins, dirs, throughput, pixel, sees_emission,
+  sample: each path's key to its random numbers);
 * ``surface_hit(scene, paths, hits)``: a ``SurfaceHit`` for the paths that hit something
   (the others are dropped): hit point ``p``, normal ``n`` turned toward ``wo``, ``wo``
   (back along the ray), ``front`` (the ray hit the triangle's front face), ``offset``,
-  ``throughput``, ``pixel``, ``sees_emission``, ``prim`` (the triangle), ``delta``;
+  ``throughput``, ``pixel``, ``sees_emission``, ``sample``, ``prim`` (the triangle), ``delta``;
 * ``shade(hit, "eval" | "pdf" | "sample", *arrays)``: each hit's own material's method;
 * ``add_to_film(film, pixel, radiance)``: film[pixel[k]] += radiance[k] for every k;
 * ``scene.lights.sample(u)``: points on the lights (``ptlab.lights.LightSample``);
+* ``BounceUniforms(sampler, hit.sample, depth)``: the random numbers of one bounce
+  (``ptlab.samplers``: ``.light()``, ``.roulette()``, ``.bsdf()``);
 * ``accel.intersect(origins, dirs)`` and ``accel.occluded(origins, dirs, tmax)``.
 
 Directions are unit vectors pointing *away* from the surface: ``wo`` toward the viewer,
@@ -34,6 +37,7 @@ vectors are (N, 3), float32 in the renderer.
 import numpy as np
 
 from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
+from ptlab.samplers import BounceUniforms
 from ptlab.vectors import dot, take_rows
 
 
@@ -53,7 +57,8 @@ def direct_light(film, scene, accel, hit, u):
         scene: the ``ptlab.scene.Scene`` (``scene.lights`` samples the lights).
         accel: the ray-query structure (``accel.occluded`` traces shadow rays).
         hit: the ``SurfaceHit`` of N paths.
-        u: (N, 3) uniforms in [0, 1) for the light samples.
+        u: (N, 2) uniforms in [0, 1) for the light samples (pass them to
+            ``scene.lights.sample`` as they are).
 
     Returns:
         the number of shadow rays traced (an int).
@@ -106,9 +111,10 @@ def scatter(scene, hit, u, survive):
         survive: (N,) bool, the paths that survived the roulette.
 
     Returns:
-        ``Paths(origins, dirs, throughput, pixel, sees_emission)`` of the surviving paths
-        only: origins (M, 3) float32, dirs (M, 3) float32 unit, throughput (M, 3) float32,
-        pixel (M,) from ``hit.pixel``, sees_emission (M,) bool = ``hit.delta`` of those rows
+        ``Paths(origins, dirs, throughput, pixel, sees_emission, sample)`` of the surviving
+        paths only: origins (M, 3) float32, dirs (M, 3) float32 unit, throughput (M, 3)
+        float32, pixel (M,) and sample (M,) from ``hit.pixel`` and ``hit.sample``,
+        sees_emission (M,) bool = ``hit.delta`` of those rows
         (the next ray counts the emission it hits only after a mirror or glass, whose light
         ``direct_light`` cannot find; after a diffuse bounce ``direct_light`` has counted it).
 
@@ -126,7 +132,7 @@ def scatter(scene, hit, u, survive):
     raise NotImplementedError("scatter")
 
 
-def trace_paths(film, scene, accel, paths, rng, settings):
+def trace_paths(film, scene, accel, paths, sampler, settings):
     """Trace a batch of camera paths to the end, adding their radiance into ``film``.
 
     The homework's castRay for every path at once. For depth = 0, 1, ..., settings.max_depth:
@@ -138,9 +144,9 @@ def trace_paths(film, scene, accel, paths, rng, settings):
        and rays after a mirror) and ``hit.front`` (lights emit from their front face).
        Forget it and the light is black;
     3. stop at depth == settings.max_depth (max_depth 0: emission only);
-    4. ``u = rng.random((6, len(hit.prim)), dtype=np.float32)``: the random numbers of
-       this bounce, one row per use: ``u[0:3].T`` for ``direct_light``, ``u[3]`` for
-       ``russian_roulette`` (with ``settings.rr``, a float here), ``u[4:6].T`` for
+    4. ``u = BounceUniforms(sampler, hit.sample, depth)``: the random numbers of this
+       bounce, one set per use: ``u.light()`` for ``direct_light``, ``u.roulette()`` for
+       ``russian_roulette`` (with ``settings.rr``, a float here), ``u.bsdf()`` for
        ``scatter``;
     5. direct light, roulette (put the new throughput back into ``hit.throughput``), then
        ``paths = scatter(...)``; stop when no path is left.
@@ -149,13 +155,15 @@ def trace_paths(film, scene, accel, paths, rng, settings):
         film: (P, 3) float64 sums of radiance per pixel, updated in place.
         scene, accel: the scene and its ray-query structure.
         paths: the camera rays (``Paths``), throughput 1, sees_emission True.
-        rng: this batch's ``numpy.random.Generator``.
+        sampler: the render's sampler (``ptlab.samplers``): each path's numbers depend on
+            its pixel, its sample number and the bounce only.
         settings: ``ptlab.integrators.path.PathSettings``: ``max_depth`` and ``rr``.
 
     Returns:
         the number of rays traced (closest-hit rays plus shadow rays), an int.
 
-    Hint: drawing the random numbers in the order above makes your image the library's,
-    sample for sample (the checks do not need that, but it makes comparing easy).
+    Hint: with ``BounceUniforms`` each path gets the library's random numbers, so your image
+    is the library's, sample for sample (the checks do not need that, but it makes comparing
+    easy).
     """
     raise NotImplementedError("trace_paths")

@@ -17,10 +17,12 @@ Two rules make a parallel render right:
 * **No shared state between jobs.** A worker process has its own copy of everything it is
   given; it cannot write into the main process's image. Each job *returns* its tile's sums,
   and the main process adds them into the image.
-* **Random numbers belong to tiles, not to workers.** Each tile's job draws from its own
-  stream, ``ptlab.sampling.stream(seed, tile.index, 0)``. A generator made once per worker
-  (or seeded with the worker's number or pid) hands each tile different numbers depending on
-  which worker ran it and what it ran before: the image changes with the number of workers.
+* **Random numbers belong to pixels and samples, not to workers.** The render's sampler,
+  ``setup.sampler`` (``ptlab.samplers``), gives every random number as a function of (seed,
+  pixel, sample index, dimension) alone, so a pixel gets the same numbers whichever process
+  renders its tile. A generator made once per worker (or seeded with the worker's number or
+  pid) hands each tile different numbers depending on which worker ran it and what it ran
+  before: the image changes with the number of workers.
 
 Tiles and the pool are the only Python loops here; inside a job everything is whole arrays.
 """
@@ -36,7 +38,7 @@ from ptlab.camera import generate_rays
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
 from ptlab.rendering.jobs import RenderSetup, Tile
 from ptlab.rendering.settings import parse_resolution
-from ptlab.sampling import stream
+from ptlab.samplers import BounceUniforms
 
 #: Given, nothing to write: in each worker process, the ray-query structure of the render it
 #: works for, built once per process rather than once per tile.
@@ -78,7 +80,7 @@ def render_tile(setup, tile, spp):
 
     Args:
         setup: a ``ptlab.rendering.jobs.RenderSetup``: ``scene``, ``width``, ``height``, ``seed``,
-            ``settings`` (the path tracer's) and ``backend``.
+            ``sampler``, ``settings`` (the path tracer's) and ``backend``.
         tile: a ``Tile``.
         spp: samples per pixel.
 
@@ -89,17 +91,18 @@ def render_tile(setup, tile, spp):
 
     The steps (``ptlab.rendering.jobs.run_job`` does the same for ``Job(tile, 0, spp)``):
 
-    1. ``rng = stream(setup.seed, tile.index, 0)``: this tile's own random stream;
-       ``accel = accelerator_for(setup)``.
+    1. ``accel = accelerator_for(setup)``; ``sampler = setup.sampler``.
     2. The paths, sample-major: with n = h * w pixels in the tile, path k goes through the
        tile's pixel k % n: ``pixel = np.tile(np.arange(n), spp)``, at image column
-       ``tile.x0 + pixel % w`` and row ``tile.y0 + pixel // w``.
-    3. ``origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height,
-       pixel_x, pixel_y, rng.random((len(pixel), 2), dtype=np.float32))``: the camera
-       jitter is the stream's first use.
-    4. ``Paths(origins, dirs, throughput, pixel, sees_emission)`` with throughput
+       ``tile.x0 + pixel % w`` and row ``tile.y0 + pixel // w``; it is sample number
+       ``index = np.repeat(np.arange(spp), n)`` of its pixel.
+    3. ``sample = sampler.keys(pixel_y * setup.width + pixel_x, index)``: each path's key to
+       its random numbers (by its pixel in the whole image, not in the tile). The camera
+       jitter is ``sampler.get(sample, BounceUniforms.PIXEL, 2)``: ``origins, dirs =
+       generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x, pixel_y, jitter)``.
+    4. ``Paths(origins, dirs, throughput, pixel, sees_emission, sample)`` with throughput
        ``np.ones((len(pixel), 3), np.float32, order="F")`` and sees_emission all True; a film
-       ``np.zeros((n, 3))``; then ``trace_paths(film, setup.scene, accel, paths, rng,
+       ``np.zeros((n, 3))``; then ``trace_paths(film, setup.scene, accel, paths, sampler,
        setup.settings)`` adds every path's radiance into the film row of its pixel.
     5. Return ``film.reshape(h, w, 3)`` and ``os.getpid()``.
     """
