@@ -734,6 +734,31 @@ def test_render_option_regression_is_one_line_exit_2_and_no_output(case, tmp_pat
     assert [p.name for p in tmp_path.iterdir()] == ["folder.png"]
 
 
+SPOILT_FILES = {"empty": lambda data: b"", "truncated": lambda data: data[:300],
+                "a zip of nothing": lambda data: b"PK\x03\x04" + bytes(100)}
+SPOILT_ARRAYS = {
+    "identity not a table": lambda arrays: {**arrays, "identity": np.array("[1, 2]")},
+    "no passes": lambda arrays: {**arrays, "passes": np.array([], dtype=np.int64)},
+    "rays not one number": lambda arrays: {**arrays, "rays": np.array([1, 2])},
+    "sums not numbers": lambda arrays: {**arrays, "sums": arrays["sums"].astype(str)},
+}
+
+
+@pytest.mark.parametrize("case", sorted(SPOILT_FILES) + sorted(SPOILT_ARRAYS))
+def test_a_spoilt_checkpoint_is_one_line_exit_2(case, tmp_path, capsys):
+    checkpoint = tmp_path / "box.npz"
+    options = ["render", "cornell-box", *TINY, "--out", str(tmp_path / "box.png")]
+    assert run_cli([*options, "--checkpoint", str(checkpoint)], capsys)[0] == 0
+    if case in SPOILT_FILES:
+        checkpoint.write_bytes(SPOILT_FILES[case](checkpoint.read_bytes()))
+    else:
+        with np.load(checkpoint) as data:
+            arrays = {name: data[name] for name in data.files}
+        np.savez(checkpoint, **SPOILT_ARRAYS[case](arrays))
+    code, err = run_cli([*options, "--resume", str(checkpoint)], capsys)
+    assert_one_line_error(code, err, starts=f"ptlab: error: {checkpoint}: ")
+
+
 def test_a_seed_beyond_32_bits_is_kept_in_the_exr(tmp_path, capsys):
     out = tmp_path / "seed.exr"
     code, err = run_cli(["render", "cornell-box", *TINY, "--seed", str(2**40), "--out", str(out)],
