@@ -68,11 +68,11 @@ def read_mesh_triangles(path: Path, where: str | None = None,
             raise SceneError(where, f"mesh {path.name}: {error}") from None
     try:
         mesh = trimesh.load(path, force="mesh", process=False)
-    except ModuleNotFoundError as error:
+    except ModuleNotFoundError:
         # trimesh imports a character-set detector (an optional package) only for a file
         # that is neither valid binary data of its format nor UTF-8 text.
         raise SceneError(where, f"cannot read mesh {path.name}: neither a binary .{fmt} file "
-                                f"nor UTF-8 text ({error})") from None
+                                f"nor UTF-8 text") from None
     except Exception as error:  # trimesh raises many kinds for unreadable files
         raise SceneError(where, f"cannot read mesh {path.name}: {error}") from None
     vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
