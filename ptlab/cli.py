@@ -179,6 +179,7 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def _render(args) -> int:
+    from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
     from ptlab.rendering import pass_schedule
     from ptlab.rendering.executors import dask_executor
@@ -189,9 +190,9 @@ def _render(args) -> int:
     width, height = parse_resolution(args.res)
     out = check_output_path(args.out or f"{scene.name}.png")
     checkpoint = args.checkpoint or args.resume
-    if checkpoint is not None and not Path(checkpoint).resolve().parent.is_dir():
-        raise PtlabError(f"{checkpoint}: folder {Path(checkpoint).parent} does not exist")
-    if args.preview_every is not None and args.preview_every < 0:
+    if checkpoint is not None:
+        check_writable_file(checkpoint)
+    if args.preview_every is not None and not args.preview_every >= 0:   # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
     workers = check_workers(args.workers)
     # (render_result reports a bad --spp; the bar just must not choke on one first)
@@ -298,24 +299,30 @@ class _Preview:
 
 
 def _converge(args) -> int:
+    from ptlab.atomic import check_writable_folder
     from ptlab.measure.converge import default_cache_dir, parse_estimators, run_converge
-    from ptlab.rendering.settings import MAX_SPP, check_workers, parse_resolution
+    from ptlab.rendering.settings import MAX_SPP, check_seed, check_workers, parse_resolution
     from ptlab.scene import load_scene
 
     estimators = parse_estimators(args.integrators, args.sampler)
+    check_seed(args.seed)
     scene = load_scene(args.scene)
     res = parse_resolution(args.res)
     if not 1 <= args.reference_spp <= MAX_SPP:
         raise PtlabError(f"--reference-spp {args.reference_spp}: must be from 1 to {MAX_SPP}")
     if not 0 < args.target < float("inf"):
         raise PtlabError(f"--target {args.target}: must be a positive relMSE")
-    out_dir = Path(args.out or f"converge-{scene.name}")
-    if out_dir.exists() and not out_dir.is_dir():
-        raise PtlabError(f"{out_dir}: exists and is not a folder")
+    out_dir = check_writable_folder(args.out or f"converge-{scene.name}")
+    cache_dir = None
+    if not args.no_cache and args.reference is None:
+        try:
+            cache_dir = check_writable_folder(default_cache_dir())
+        except PtlabError as error:
+            raise PtlabError(f"reference cache {error} (set PTLAB_CACHE, or give --no-cache)") from None
     echo = (lambda text: None) if args.quiet else print
     run_converge(scene, estimators, out_dir, res, args.budget, seed=args.seed,
                  reference=args.reference, reference_spp=args.reference_spp,
-                 cache_dir=None if args.no_cache else default_cache_dir(), target=args.target,
+                 cache_dir=cache_dir, target=args.target,
                  echo=echo, quiet=args.quiet, workers=check_workers(args.workers),
                  backend=args.backend)
     return 0
@@ -326,8 +333,8 @@ def _bench(args) -> int:
     from ptlab.measure.converge import default_cache_dir
     from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
 
-    res = args.res or (256 if args.accuracy else 512)
-    spp = args.spp or (64 if args.accuracy else 16)
+    res = args.res if args.res is not None else (256 if args.accuracy else 512)
+    spp = args.spp if args.spp is not None else (64 if args.accuracy else 16)
     if res <= 0 or spp <= 0:
         raise PtlabError("--res and --spp must be positive")
     if args.accuracy:

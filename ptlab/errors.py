@@ -5,8 +5,17 @@ anything else that goes wrong is a bug in ptlab and keeps its traceback.
 """
 
 
+def one_line(text: str) -> str:
+    """``text`` with line breaks and other unprintable characters escaped (``\\n``), so that
+    a name taken from the user's input (a TOML key, a file name) cannot break the line."""
+    return "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
+
+
 class PtlabError(Exception):
     """A problem with the user's input, described in one line."""
+
+    def __init__(self, message: object):
+        super().__init__(one_line(str(message)))
 
 
 class SceneError(PtlabError):

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ptlab.atomic import write_atomically
+from ptlab.atomic import check_writable_file, path_kind, write_atomically
 from ptlab.errors import PtlabError
 
 FORMATS = (".exr", ".png")
@@ -40,14 +40,12 @@ def encode_srgb8(linear: np.ndarray) -> np.ndarray:
 
 
 def check_output_path(path: str | Path) -> Path:
-    """The path, if its extension is a format we write and its folder exists."""
+    """The path, if its extension is a format we write and it can be written."""
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
         raise PtlabError(f"{path}: unsupported image format {path.suffix!r} "
                          f"(use {' or '.join(FORMATS)})")
-    if not path.parent.resolve().is_dir():
-        raise PtlabError(f"{path}: folder {path.parent} does not exist")
-    return path
+    return check_writable_file(path)
 
 
 def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = None) -> Path:
@@ -70,10 +68,12 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
     # EXR headers hold typed numbers; PNG text chunks hold only strings (OpenImageIO drops
-    # other types there), so a PNG gets every value as text.
+    # other types there), so a PNG gets every value as text. EXR integers are 32-bit: a
+    # larger one (a big seed) goes in as text too.
     typed = path.suffix.lower() == ".exr"
     for key, value in (metadata or {}).items():
-        keep = typed and isinstance(value, int | float) and not isinstance(value, bool)
+        keep = typed and (isinstance(value, float) or isinstance(value, int)
+                          and not isinstance(value, bool) and -2**31 <= value < 2**31)
         spec.attribute(f"ptlab:{key}", value if keep else str(value))
 
     def write(temporary: str) -> None:
@@ -97,7 +97,7 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = Path(path)
-    if not path.is_file():
+    if path_kind(path) != "file":
         raise PtlabError(f"{path}: no such image file")
     source = oiio.ImageInput.open(str(path))
     if source is None:

@@ -18,7 +18,7 @@ A scene file looks like this (``scenes/cornell-box/scene.toml`` is a full exampl
     emission = [47.8348, 38.5664, 31.0808]  # emitted radiance, from the front face
 
     [[mesh]]
-    file = "meshes/floor.obj"   # any format trimesh reads; relative to the scene file
+    file = "meshes/floor.obj"   # OBJ, STL, PLY, OFF or glTF; relative to the scene file
     material = "white"
 
 Loading flattens every mesh into one array of triangles with a material index each
@@ -29,16 +29,19 @@ Loading flattens every mesh into one array of triangles with a material index ea
 from __future__ import annotations
 
 import math
+import reprlib
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 
+from ptlab.atomic import path_kind
 from ptlab.camera import Camera
-from ptlab.errors import SceneError
+from ptlab.errors import PtlabError, SceneError
 from ptlab.lights import AreaLights
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
+from ptlab.meshes import drop_zero_area, read_mesh_triangles
 
 SCENE_FILE_NAME = "scene.toml"
 
@@ -52,6 +55,30 @@ MATERIAL_KEYS = {
 
 #: Rays start this fraction of a triangle's largest coordinate off it (see ``Scene``).
 OFFSET_SCALE = 1e-4
+
+# The sizes float32 rays can trace (docs/scene-format.md, "Sizes"). Scaling a scene scales
+# its ray offsets with it, so a scene renders the same picture at any size between these
+# two, as long as it lies near the origin (the third):
+#: Every coordinate, of a vertex or of the camera, lies within +-MAX_COORDINATE. Ray-triangle
+#: tests (Moller-Trumbore, Embree's) multiply three lengths of the scene together, since a
+#: shadow ray's direction is as long as the ray: float32 (at most 3.4e38) overflows for
+#: coordinates of about 4e12 (measured: the Cornell box scaled by 7e9 loses shadow rays).
+MAX_COORDINATE = 1e10
+#: A scene's box is at least this wide: Embree misses rays in a smaller one (measured: the
+#: Cornell box scaled to 1e-8 across).
+MIN_SCENE_SIZE = 1e-6
+#: No vertex lies farther than this many times the scene's width from the origin. The ray
+#: offsets grow with the distance from the origin (OFFSET_SCALE of a triangle's largest
+#: coordinate), so farther out they would exceed 1% of the scene and lose its contact
+#: shadows and small gaps (measured: the Cornell box moved 1e7 away renders 70% too dark).
+MAX_DISTANCE_IN_SIZES = 0.01 / OFFSET_SCALE
+#: The smallest sphere: a thousandth of the smallest scene (trimesh's icospheres collapse
+#: below a radius of about 1e-17).
+MIN_RADIUS = 1e-3 * MIN_SCENE_SIZE
+#: Each channel of an emission is at most this: a path's float32 radiance is the emission
+#: times its throughput (up to ~1e10 after deep Russian roulette) and the light's geometry
+#: factor (up to ~1e9 next to it), which must stay far below float32's 3.4e38.
+MAX_RADIANCE = 1e15
 
 
 def builtin_scenes_dir() -> Path:
@@ -167,14 +194,15 @@ class MaterialTable:
 def find_scene_file(name_or_path: str | Path) -> Path:
     """A scene file from a path (a file, or a folder holding ``scene.toml``) or a built-in name."""
     path = Path(name_or_path)
-    if path.is_file():
+    kind = path_kind(path)
+    if kind == "file":
         return path
-    if path.is_dir():
-        if (path / SCENE_FILE_NAME).is_file():
+    if kind == "folder":
+        if path_kind(path / SCENE_FILE_NAME) == "file":
             return path / SCENE_FILE_NAME
         raise SceneError(path, f"folder has no {SCENE_FILE_NAME}")
     builtin = builtin_scenes_dir() / str(name_or_path) / SCENE_FILE_NAME
-    if builtin.is_file():
+    if path_kind(builtin) == "file":
         return builtin
     names = ", ".join(builtin_scene_names()) or "none found"
     raise SceneError(name_or_path, f"no such scene file or built-in scene (built-in: {names})")
@@ -187,9 +215,43 @@ def load_scene(name_or_path: str | Path) -> Scene:
         data = tomllib.loads(path.read_text(encoding="utf-8"))
     except tomllib.TOMLDecodeError as error:
         raise SceneError(path, f"malformed TOML: {error}") from None
+    except RecursionError:  # tomllib parses nested arrays and tables recursively
+        raise SceneError(path, "malformed TOML: arrays or tables nested too deeply") from None
     except (OSError, UnicodeDecodeError) as error:
         raise SceneError(path, f"cannot read: {error}") from None
     return _SceneReader(path).read(data)
+
+
+def _shown(value: object) -> str:
+    """A short repr of a value from the scene file, for an error message."""
+    short = reprlib.Repr()
+    short.maxstring = short.maxother = 40
+    short.maxlist = short.maxdict = 6
+    short.maxlevel = 2
+    return short.repr(value)
+
+
+def _as_float(value: object) -> float | None:
+    """A TOML number as a finite float; None for inf, NaN or an integer too large for a float."""
+    try:
+        number = float(value)
+    except OverflowError:
+        return None
+    return number if math.isfinite(number) else None
+
+
+def _is_number(value: object) -> bool:
+    return isinstance(value, int | float) and not isinstance(value, bool)
+
+
+def _scaled_to_one(vector: np.ndarray) -> np.ndarray:
+    """``vector`` times the power of two that brings its largest component into [0.5, 1).
+
+    Exact (no rounding), so it changes no direction computed from it, and its length can
+    then be computed without overflow or underflow, whatever the scale of the input.
+    """
+    _, exponent = np.frexp(np.abs(vector).max())
+    return np.ldexp(vector, -exponent)
 
 
 class _SceneReader:
@@ -207,20 +269,30 @@ class _SceneReader:
             raise self.error(None, "no [camera] section")
         camera = self.camera(data["camera"])
         materials_table = data.get("materials", {})
-        if not isinstance(materials_table, dict) or not materials_table:
+        if not isinstance(materials_table, dict):
+            raise self.error("materials", f"must be a table of [materials.NAME] tables, "
+                                          f"got {_shown(materials_table)}")
+        if not materials_table:
             raise self.error("materials", "no materials: add a [materials.NAME] section")
         names = list(materials_table)
         materials = [self.material(f"materials.{name}", spec)
                      for name, spec in materials_table.items()]
         meshes = data.get("mesh", [])
-        if not isinstance(meshes, list) or not meshes:
+        if not isinstance(meshes, list):
+            raise self.error("mesh", f"must be an array of tables, each one [[mesh]], "
+                                     f"got {_shown(meshes)}")
+        if not meshes:
             raise self.error("mesh", "no meshes: add a [[mesh]] section")
-        triangles, material_ids = [], []
+        triangles, material_ids, keys = [], [], []
         for i, spec in enumerate(meshes):
-            tri, material = self.mesh(f"mesh[{i}]", spec, names)
+            tri, material, key = self.mesh(f"mesh[{i}]", spec, names)
             triangles.append(tri)
             material_ids.append(np.full(len(tri), material, dtype=np.intp))
-        scene = Scene(triangles=np.concatenate(triangles), material_ids=np.concatenate(material_ids),
+            keys.append(key)
+        self.check_extent(triangles, keys)
+        material_ids = np.concatenate(material_ids)
+        self.check_light_power(triangles, material_ids, materials)
+        scene = Scene(triangles=np.concatenate(triangles), material_ids=material_ids,
                       materials=materials, camera=camera, name=self.path.parent.name
                       if self.path.name == SCENE_FILE_NAME else self.path.stem,
                       material_names=names)
@@ -233,7 +305,7 @@ class _SceneReader:
 
     def check_keys(self, table: dict, key: str | None, allowed: set[str]) -> None:
         if not isinstance(table, dict):
-            raise self.error(key, "must be a table")
+            raise self.error(key, f"must be a table, got {_shown(table)}")
         for name in table:
             if name not in allowed:
                 full = name if key is None else f"{key}.{name}"
@@ -246,13 +318,20 @@ class _SceneReader:
                 raise self.error(full, "missing")
             return np.asarray(default, dtype=np.float64)
         value = table[name]
-        if (not isinstance(value, list) or len(value) != 3
-                or not all(isinstance(x, int | float) and not isinstance(x, bool) for x in value)):
-            raise self.error(full, f"must be a list of 3 numbers, got {value!r}")
-        vector = np.asarray(value, dtype=np.float64)
-        if not np.all(np.isfinite(vector)):
-            raise self.error(full, f"must be finite, got {value!r}")
-        return vector
+        if not isinstance(value, list) or len(value) != 3 or not all(map(_is_number, value)):
+            raise self.error(full, f"must be a list of 3 numbers, got {_shown(value)}")
+        numbers = [_as_float(x) for x in value]
+        if None in numbers:
+            raise self.error(full, f"must be finite, got {_shown(value)}")
+        return np.asarray(numbers, dtype=np.float64)
+
+    def point(self, table: dict, key: str, name: str) -> np.ndarray:
+        """A position in the scene: a vector within +-MAX_COORDINATE."""
+        point = self.vector(table, key, name)
+        if np.abs(point).max() > MAX_COORDINATE:
+            raise self.error(f"{key}.{name}", f"must lie within +-{MAX_COORDINATE:g} of the "
+                                              f"origin (float32 rays), got {point.tolist()}")
+        return point
 
     def number(self, table: dict, key: str, name: str, default: float | None = None) -> float:
         full = f"{key}.{name}"
@@ -261,55 +340,66 @@ class _SceneReader:
                 raise self.error(full, "missing")
             return default
         value = table[name]
-        if not isinstance(value, int | float) or isinstance(value, bool) or not math.isfinite(value):
-            raise self.error(full, f"must be a finite number, got {value!r}")
-        return float(value)
+        number = _as_float(value) if _is_number(value) else None
+        if number is None:
+            raise self.error(full, f"must be a finite number, got {_shown(value)}")
+        return number
 
-    def colour(self, table: dict, key: str, name: str, default, upper: float | None) -> np.ndarray:
+    def colour(self, table: dict, key: str, name: str, default, upper: float = 1.0,
+               why: str = "energy conservation") -> np.ndarray:
+        """One number (a grey) or three, each from 0 to ``upper``."""
         full = f"{key}.{name}"
         value = table.get(name, default)
-        if isinstance(value, int | float) and not isinstance(value, bool):
+        if _is_number(value):
             value = [value] * 3
         colour = self.vector({name: value}, key, name)
         if np.any(colour < 0):
             raise self.error(full, f"must not be negative, got {colour.tolist()}")
-        if upper is not None and np.any(colour > upper):
-            raise self.error(full, f"must be at most {upper} (energy conservation), "
-                                   f"got {colour.tolist()}")
+        if np.any(colour > upper):
+            raise self.error(full, f"must be at most {upper:g} ({why}), got {colour.tolist()}")
         return colour
 
     def camera(self, spec: dict) -> Camera:
         key = "camera"
         self.check_keys(spec, key, {"position", "look_at", "direction", "up", "fov"})
-        position = self.vector(spec, key, "position")
+        position = self.point(spec, key, "position")
         if ("look_at" in spec) == ("direction" in spec):
             raise self.error(key, "give exactly one of `look_at` and `direction`")
         if "look_at" in spec:
-            forward = self.vector(spec, key, "look_at") - position
+            forward = self.point(spec, key, "look_at") - position
+            if not forward.any():
+                raise self.error(f"{key}.look_at", "is the camera's position: the camera "
+                                                   "looks nowhere")
         else:
             forward = self.vector(spec, key, "direction")
+            if not forward.any():
+                raise self.error(f"{key}.direction", "must not be zero")
         up = self.vector(spec, key, "up", default=(0.0, 1.0, 0.0))
         fov = self.number(spec, key, "fov", default=40.0)
         if not 0 < fov < 180:
             raise self.error(f"{key}.fov", f"must be between 0 and 180 degrees, got {fov}")
-        if np.linalg.norm(forward) == 0:
-            raise self.error(key, "the camera looks nowhere (zero direction)")
+        forward = _scaled_to_one(forward)
         forward = forward / np.linalg.norm(forward)
-        if np.linalg.norm(up) == 0 or np.linalg.norm(np.cross(forward, up / np.linalg.norm(up))) < 1e-6:
-            raise self.error(f"{key}.up", "must not be zero or parallel to the viewing direction")
+        if not up.any():
+            raise self.error(f"{key}.up", "must not be zero")
+        up = _scaled_to_one(up)
+        if np.linalg.norm(np.cross(forward, up / np.linalg.norm(up))) < 1e-6:
+            raise self.error(f"{key}.up", "must not be parallel to the viewing direction")
         return Camera.look_at(position, position + forward, up, fov)
 
     def material(self, key: str, spec: dict) -> Material:
         if not isinstance(spec, dict):
-            raise self.error(key, "must be a table")
+            raise self.error(key, f"must be a table, got {_shown(spec)}")
         kind = spec.get("type")
         known = ", ".join(MATERIAL_KEYS)
         if kind is None:
             raise self.error(f"{key}.type", f"missing (known types: {known})")
-        if kind not in MATERIAL_KEYS:
-            raise self.error(f"{key}.type", f"unknown material type {kind!r} (known types: {known})")
+        if not isinstance(kind, str) or kind not in MATERIAL_KEYS:
+            raise self.error(f"{key}.type", f"unknown material type {_shown(kind)} "
+                                            f"(known types: {known})")
         self.check_keys(spec, key, {"type", "emission"} | MATERIAL_KEYS[kind])
-        emission = self.colour(spec, key, "emission", default=0.0, upper=None)
+        emission = self.colour(spec, key, "emission", default=0.0, upper=MAX_RADIANCE,
+                               why="float32 radiance")
         try:
             material = self.build_material(kind, key, spec)
         except ValueError as error:
@@ -320,94 +410,109 @@ class _SceneReader:
     def build_material(self, kind: str, key: str, spec: dict) -> Material:
         """The material of one ``[materials.NAME]`` table (its keys already checked)."""
         if kind == "diffuse":
-            return Diffuse(albedo=self.colour(spec, key, "albedo", default=0.8, upper=1.0))
+            return Diffuse(albedo=self.colour(spec, key, "albedo", default=0.8))
         if kind == "mirror":
-            return Mirror(reflectance=self.colour(spec, key, "reflectance", 1.0, upper=1.0),
+            return Mirror(reflectance=self.colour(spec, key, "reflectance", 1.0),
                           fresnel=self.flag(spec, key, "fresnel", default=False))
         if kind == "dielectric":
             return Dielectric(eta=self.number(spec, key, "eta", default=1.5),
-                              transmittance=self.colour(spec, key, "transmittance", 1.0, 1.0))
+                              transmittance=self.colour(spec, key, "transmittance", 1.0))
         f0 = spec.get("f0", "gold")
         if not isinstance(f0, str):
-            f0 = self.colour(spec, key, "f0", default=None, upper=1.0)
+            f0 = self.colour(spec, key, "f0", default=None)
         options = {name: self.number(spec, key, name) for name in ("roughness", "alpha")
                    if name in spec}
         sampling = spec.get("sampling", "vndf")
         if not isinstance(sampling, str):
-            raise self.error(f"{key}.sampling", f"must be a string, got {sampling!r}")
-        return Microfacet(f0=f0, kd=self.colour(spec, key, "kd", 0.0, upper=1.0),
-                          ks=self.colour(spec, key, "ks", 1.0, upper=1.0), sampling=sampling,
+            raise self.error(f"{key}.sampling", f"must be a string, got {_shown(sampling)}")
+        return Microfacet(f0=f0, kd=self.colour(spec, key, "kd", 0.0),
+                          ks=self.colour(spec, key, "ks", 1.0), sampling=sampling,
                           **options)
 
     def flag(self, table: dict, key: str, name: str, default: bool) -> bool:
         value = table.get(name, default)
         if not isinstance(value, bool):
-            raise self.error(f"{key}.{name}", f"must be true or false, got {value!r}")
+            raise self.error(f"{key}.{name}", f"must be true or false, got {_shown(value)}")
         return value
 
-    def mesh(self, key: str, spec: dict, material_names: list[str]) -> tuple[np.ndarray, int]:
+    def mesh(self, key: str, spec: dict, material_names: list[str]) -> tuple[np.ndarray, int, str]:
+        """The triangles of one ``[[mesh]]``, its material's index, and the key they came from."""
         self.check_keys(spec, key, {"file", "sphere", "material"})
         if not isinstance(spec.get("material"), str):
             raise self.error(f"{key}.material", "missing, or not a string")
         if spec["material"] not in material_names:
-            raise self.error(f"{key}.material", f"no material named {spec['material']!r} "
+            raise self.error(f"{key}.material", f"no material named {_shown(spec['material'])} "
                                                 f"(defined: {', '.join(material_names)})")
         if ("file" in spec) == ("sphere" in spec):
             raise self.error(key, "give exactly one of `file` and `sphere`")
         if "sphere" in spec:
-            triangles = self.sphere(f"{key}.sphere", spec["sphere"])
+            key = f"{key}.sphere"
+            triangles = self.sphere(key, spec["sphere"])
         else:
+            key = f"{key}.file"
             if not isinstance(spec["file"], str):
-                raise self.error(f"{key}.file", "must be a string")
+                raise self.error(key, f"must be a string, got {_shown(spec['file'])}")
             mesh_path = self.path.parent / spec["file"]
-            if not mesh_path.is_file():
-                raise self.error(f"{key}.file", f"mesh file not found: {mesh_path}")
-            triangles = read_mesh_triangles(mesh_path, f"{self.path}: {key}.file")
-        return triangles, material_names.index(spec["material"])
+            try:
+                kind = path_kind(mesh_path)
+            except PtlabError as error:
+                raise self.error(key, str(error)) from None
+            if kind != "file":
+                raise self.error(key, f"mesh file not found: {mesh_path}")
+            triangles = read_mesh_triangles(mesh_path, f"{self.path}: {key}", MAX_COORDINATE)
+        return triangles, material_names.index(spec["material"]), key
 
     def sphere(self, key: str, spec: dict) -> np.ndarray:
         """An icosphere (trimesh) from ``{center = [x, y, z], radius = r, subdivisions = 4}``."""
         import trimesh
 
         self.check_keys(spec, key, {"center", "radius", "subdivisions"})
-        center = self.vector(spec, key, "center")
+        center = self.point(spec, key, "center")
         radius = self.number(spec, key, "radius")
         subdivisions = spec.get("subdivisions", 4)
-        if radius <= 0:
-            raise self.error(f"{key}.radius", f"must be positive, got {radius}")
+        if radius < MIN_RADIUS:
+            raise self.error(f"{key}.radius", f"must be at least {MIN_RADIUS:g}, got {radius:g}")
+        if np.abs(center).max() + radius > MAX_COORDINATE:
+            raise self.error(f"{key}.radius", f"the sphere reaches beyond +-{MAX_COORDINATE:g} "
+                                              f"(float32 rays), radius {radius:g}")
         if not isinstance(subdivisions, int) or isinstance(subdivisions, bool) or not (
                 0 <= subdivisions <= 7):
             raise self.error(f"{key}.subdivisions", f"must be an integer from 0 to 7, "
-                                                    f"got {subdivisions!r}")
+                                                    f"got {_shown(subdivisions)}")
         mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
-        return mesh.vertices[mesh.faces] + center
+        triangles = drop_zero_area(mesh.vertices[mesh.faces] + center)
+        if len(triangles) == 0:
+            raise self.error(f"{key}.radius", f"{radius:g} is too small for a sphere centred "
+                                              f"{np.abs(center).max():g} from the origin: its "
+                                              f"triangles have zero area")
+        return triangles
 
+    def check_extent(self, triangles: list[np.ndarray], keys: list[str]) -> None:
+        """The whole scene's size and place, against MIN_SCENE_SIZE and MAX_DISTANCE_IN_SIZES."""
+        corners = np.concatenate([t.reshape(-1, 3) for t in triangles])
+        size = float(np.ptp(corners, axis=0).max())
+        if size < MIN_SCENE_SIZE:
+            raise self.error("mesh", f"the scene is only {size:g} wide; float32 rays need at "
+                                     f"least {MIN_SCENE_SIZE:g}: use smaller units")
+        farthest = [float(np.abs(t).max()) for t in triangles]
+        i = int(np.argmax(farthest))
+        if farthest[i] > MAX_DISTANCE_IN_SIZES * size:
+            raise self.error(keys[i], f"a vertex lies {farthest[i]:g} from the origin, more "
+                                      f"than {MAX_DISTANCE_IN_SIZES:g} times the scene's width "
+                                      f"({size:g}): rays would leave surfaces "
+                                      f"{OFFSET_SCALE * farthest[i]:g} off them; move the scene "
+                                      f"nearer the origin")
 
-def read_mesh_triangles(path: Path, where: str | None = None) -> np.ndarray:
-    """(T, 3, 3) float64 triangles of a mesh file, through trimesh.
-
-    Raises ``SceneError`` for unreadable files, empty meshes and non-finite vertices.
-    Degenerate (zero-area) triangles are dropped: no ray can hit them.
-    """
-    import trimesh
-
-    where = where or str(path)
-    try:
-        mesh = trimesh.load(path, force="mesh", process=False)
-    except Exception as error:  # trimesh raises many kinds for unreadable files
-        raise SceneError(where, f"cannot read mesh {path.name}: {error}") from None
-    vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
-    faces = np.asarray(getattr(mesh, "faces", ()), dtype=np.intp)
-    if len(faces) == 0:
-        raise SceneError(where, f"mesh {path.name} has no triangles")
-    bad = ~np.isfinite(vertices).all(axis=1)
-    if bad.any():
-        raise SceneError(where, f"mesh {path.name} has {int(bad.sum())} vertices that are NaN "
-                                f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})")
-    triangles = vertices[faces]
-    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
-                                    triangles[:, 2] - triangles[:, 0]), axis=1)
-    triangles = triangles[area2 > 0]
-    if len(triangles) == 0:
-        raise SceneError(where, f"mesh {path.name} has only zero-area triangles")
-    return triangles
+    def check_light_power(self, triangles: list[np.ndarray], material_ids: np.ndarray,
+                          materials: list[Material]) -> None:
+        """The lights' total power (area x radiance), which light sampling divides by in
+        float32, must be a normal float32 number."""
+        emission = np.array([m.emission.mean() if m.emission is not None else 0.0
+                             for m in materials])[material_ids]
+        tri = np.concatenate(triangles)
+        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+        power = float(np.sum(area * emission))
+        float32 = np.finfo(np.float32)
+        if power > 0 and not float32.tiny <= power <= float32.max:
+            raise self.error(None, f"the lights' total power (area x radiance) is {power:g}, "
+                                   f"outside float32's range: change the emission or the units")

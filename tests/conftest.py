@@ -1,15 +1,33 @@
-"""Shared fixtures: small scenes built in Python, and the built-in Cornell box."""
+"""Shared fixtures: small scenes built in Python, and the built-in Cornell box; the
+Hypothesis profiles."""
 
 from __future__ import annotations
+
+import os
+import tempfile
+from pathlib import Path
 
 import numpy as np
 import pytest
 import trimesh
+from hypothesis import HealthCheck, settings
 
 import ptlab
 from ptlab.camera import Camera
 from ptlab.materials import Diffuse
 from ptlab.scene import Scene
+
+# Property-based tests (tests/test_fuzz.py) run a fixed, derandomized set of examples by
+# default, so that the suite's time and verdict are the same on every run, and keep no
+# example database; Hypothesis's other files (caches) go to the temporary folder, not the
+# checkout. HYPOTHESIS_PROFILE=long searches afresh, far longer.
+os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY",
+                      str(Path(tempfile.gettempdir()) / "ptlab-hypothesis"))
+_FUZZ = dict(database=None, deadline=None, print_blob=True,
+             suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+settings.register_profile("fixed", max_examples=100, derandomize=True, **_FUZZ)
+settings.register_profile("long", max_examples=2000, **_FUZZ)
+settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
 
 
 def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:

@@ -77,10 +77,16 @@ class Dielectric(DeltaMaterial):
 
 
     batched = ("eta", "transmittance")
+    #: Real indices lie between 1 and about 4; relative ones (an air bubble in water, 0.75)
+    #: a little beyond. Refraction scales radiance by eta^2, which this range keeps far
+    #: inside float32.
+    ETA_RANGE = (0.01, 100.0)
 
     def __init__(self, eta: float = 1.5, transmittance=(1.0, 1.0, 1.0)):
-        if not (np.isfinite(eta) and eta > 0):
-            raise ValueError(f"eta must be a positive index of refraction, got {eta!r}")
+        lowest, highest = self.ETA_RANGE
+        if not lowest <= eta <= highest:
+            raise ValueError(f"eta must be an index of refraction from {lowest:g} to "
+                             f"{highest:g}, got {eta!r}")
         self.eta = float(eta)
         self.transmittance = np.asarray(transmittance, dtype=np.float64)
         if (self.transmittance.shape != (3,) or not np.isfinite(self.transmittance).all()

@@ -146,6 +146,9 @@ class Microfacet(Material):
             raise ValueError("give roughness or alpha, not both (alpha = roughness ** 2)")
         if alpha is None:
             roughness = 0.5 if roughness is None else float(roughness)
+            if not roughness >= 0:      # (squaring would hide the sign)
+                raise ValueError(f"roughness must be in (0, 1] (alpha = roughness ** 2), "
+                                 f"got {roughness}")
             alpha = roughness * roughness
         if not MIN_ALPHA <= alpha <= 1:
             raise ValueError(f"alpha must be in [{MIN_ALPHA}, 1] (roughness in "

@@ -222,8 +222,8 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
     """
     from ptlab.measure.charts import convergence_chart, equal_time_strip
 
-    if not budget > 0:
-        raise PtlabError(f"budget {budget!r}: must be a positive number of seconds")
+    if not 0 < budget < math.inf:
+        raise PtlabError(f"budget {budget!r}: must be a positive, finite number of seconds")
     if reference is not None:
         reference_pixels = load_reference(reference, res)
     else:

@@ -14,11 +14,12 @@ from __future__ import annotations
 
 import hashlib
 import json
+import zipfile
 from pathlib import Path
 
 import numpy as np
 
-from ptlab.atomic import write_atomically
+from ptlab.atomic import path_kind, write_atomically
 from ptlab.errors import PtlabError
 from ptlab.rendering.film import Film
 
@@ -51,23 +52,23 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
 def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     """Fill ``film`` from the checkpoint at ``path``, which must match ``identity``."""
     path = Path(path)
-    if not path.is_file():
+    if path_kind(path) != "file":
         raise PtlabError(f"{path}: no such checkpoint file")
     try:
-        with np.load(path, allow_pickle=False) as data:
+        with open(path, "rb") as file, np.load(file, allow_pickle=False) as data:
             saved = json.loads(str(data["identity"]))
             arrays = {k: data[k] for k in ("sums", "passes", "passes_done", "rays",
                                            "query_seconds", "sampler_seconds")}
-    except (OSError, ValueError, KeyError, json.JSONDecodeError) as error:
+    except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
-    if saved.get("format") != FORMAT_VERSION:
-        raise PtlabError(f"{path}: checkpoint format {saved.get('format')} is not "
-                         f"{FORMAT_VERSION}")
+    if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
+        version = saved.get("format") if isinstance(saved, dict) else None
+        raise PtlabError(f"{path}: checkpoint format {version} is not {FORMAT_VERSION}")
     for key, value in identity.items():
         if key != "spp" and saved.get(key) != value:
             raise PtlabError(f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, "
                              f"this render has {value!r}")
-    if arrays["sums"].shape != film.sums.shape or len(arrays["passes_done"]) != len(film.tiles):
+    if not _fits(arrays, film):
         raise PtlabError(f"{path}: the checkpoint's film does not fit this render")
     # The passes done must be the first passes of this render's schedule (a render may be
     # resumed with more spp than it was started with, never with other passes).
@@ -82,3 +83,15 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])
     film.sampler_seconds = float(arrays["sampler_seconds"])
+
+
+def _fits(arrays: dict, film: Film) -> bool:
+    """Whether a checkpoint's arrays have the shapes and kinds of number this film needs."""
+    expected = {"sums": (film.sums.shape, np.floating),
+                "passes_done": ((len(film.tiles),), np.integer),
+                "rays": ((), np.integer), "query_seconds": ((), np.floating),
+                "sampler_seconds": ((), np.floating)}
+    passes = arrays["passes"]
+    return (all(arrays[name].shape == shape and np.issubdtype(arrays[name].dtype, kind)
+                for name, (shape, kind) in expected.items())
+            and passes.ndim == 1 and len(passes) > 0 and np.issubdtype(passes.dtype, np.integer))

@@ -15,6 +15,10 @@ INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
 MAX_PIXELS = 1 << 28
 MAX_WORKERS = 1024
+#: Russian roulette compares float32 uniforms, multiples of 2^-24, with the survival
+#: probability: a smaller one would survive more often than it says (and then divide the
+#: throughput by almost nothing, to infinity).
+MIN_SURVIVAL = 2.0 ** -24
 
 
 def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
@@ -43,8 +47,7 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
     """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
     if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
         raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
-    if not _is_int(seed) or seed < 0:
-        raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
+    check_seed(seed)
     if sampler not in SAMPLERS:
         raise PtlabError(f"sampler {sampler!r}: choose one of {', '.join(SAMPLERS)}")
     if sampling not in SAMPLINGS:
@@ -68,9 +71,17 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
         probability = float(rr)
     except (TypeError, ValueError):
         raise PtlabError(f"russian roulette {rr!r}: give 'throughput' or a probability") from None
-    if not 0 < probability <= 1:
-        raise PtlabError(f"russian roulette {rr!r}: the survival probability must be in (0, 1]")
+    if not MIN_SURVIVAL <= probability <= 1:
+        raise PtlabError(f"russian roulette {rr!r}: the survival probability must be in "
+                         f"[2^-24, 1] (the uniforms it is drawn against are float32)")
     return probability
+
+
+def check_seed(seed: int) -> int:
+    """A random seed: any non-negative integer."""
+    if not _is_int(seed) or seed < 0:
+        raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
+    return int(seed)
 
 
 def default_workers() -> int:
