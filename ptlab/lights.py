@@ -31,7 +31,7 @@ from ptlab.sampling import uniform_triangle
 class LightSample:
     """Points sampled on the lights, one per shading point.
 
-    Attributes:
+    Attributes (where every light has the same value, a read-only broadcast view):
         points: (N, 3) float32 positions on the lights.
         normals: (N, 3) float32 unit front-face normals there.
         radiance: (N, 3) float32 emitted radiance Le.
@@ -82,15 +82,25 @@ class AreaLights:
         self.e2 = (v2 - v0).astype(np.float32)
         self.normals = (cross / double_area[:, None]).astype(np.float32)
         self.radiance = radiance.astype(np.float32)
-        # Everything `sample` gathers per chosen triangle, in one column (one `take`).
-        # Rows: v0 | e1 | e2 | unit normal | radiance | offset | pdf_area | the cdf below the
-        # triangle's interval | 1 / the interval's width (to stretch u back to [0, 1)).
+        # What `sample` looks up per chosen triangle: v0, e1, e2, the unit normal, Le, the
+        # offset, pdf_area, the cdf below the triangle's interval and 1 / the interval's width
+        # (to stretch u back to [0, 1)), each as rows of a (rows, L) table.
         cdf_below = np.concatenate([[0.0], self.cdf[:-1]]).astype(np.float32)
         width = np.maximum(self.cdf - cdf_below, np.float32(1e-30))
-        self._packed = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
-                                  self.radiance.T, np.asarray(offset, dtype=np.float32)[None],
-                                  self.pdf_area(self.radiance)[None], cdf_below[None],
-                                  (1 / width)[None]]).astype(np.float32)
+        fields = dict(v0=self.v0.T, e1=self.e1.T, e2=self.e2.T, normals=self.normals.T,
+                      radiance=self.radiance.T, offset=np.asarray(offset, np.float32)[None],
+                      pdf_area=self.pdf_area(self.radiance)[None], cdf_below=cdf_below[None],
+                      stretch=(1 / width)[None])
+        # Fields that are the same for every light (in the Cornell box: the normal, Le, the
+        # offset, pdf_area and the stretch) are kept as one column that broadcasts to every
+        # sample; the others are packed in one table, gathered with one `take` per sample.
+        self._same = {name: rows[:, :1] for name, rows in fields.items()
+                      if (rows == rows[:, :1]).all()}
+        varying = [name for name in fields if name not in self._same]
+        self._packed = np.vstack([fields[name] for name in varying]).astype(np.float32)
+        starts = np.cumsum([0] + [len(fields[name]) for name in varying])
+        self._rows = {name: slice(a, b)
+                      for name, a, b in zip(varying, starts[:-1], starts[1:], strict=True)}
 
     def __len__(self) -> int:
         return len(self.areas)
@@ -120,11 +130,20 @@ class AreaLights:
         else:
             index = np.searchsorted(self.cdf, u0, side="right")
             np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
-        data = self._packed.take(index, axis=1)     # (19, N): rows are contiguous
+        data = self._packed.take(index, axis=1)     # (rows, N): rows are contiguous
+
+        def field(name: str) -> np.ndarray:
+            """(N, k) per sample: gathered rows, or one column broadcast to every sample
+            (a read-only view, no copy); transposed from (k, N), so in the column-major
+            layout of ptlab.vectors."""
+            if name in self._same:
+                return np.broadcast_to(self._same[name], (self._same[name].shape[0], len(u0))).T
+            return data[self._rows[name]].T
+
         # u0 within [cdf_below, cdf_at), stretched to [0, 1) (and kept below 1 in float32).
-        stretched = np.minimum((u0 - data[17]) * data[18], np.float32(1 - 2.0 ** -24))
+        stretched = (u0 - field("cdf_below")[:, 0]) * field("stretch")[:, 0]
+        np.minimum(stretched, np.float32(1 - 2.0 ** -24), out=stretched)
         b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
-        # Transposed slices are (N, 3) arrays in the column-major layout of ptlab.vectors.
-        points = data[0:3].T + b1[:, None] * data[3:6].T + b2[:, None] * data[6:9].T
-        return LightSample(points=points, normals=data[9:12].T, radiance=data[12:15].T,
-                           offset=data[15:16].T, pdf_area=data[16])
+        points = field("v0") + b1[:, None] * field("e1") + b2[:, None] * field("e2")
+        return LightSample(points=points, normals=field("normals"), radiance=field("radiance"),
+                           offset=field("offset"), pdf_area=field("pdf_area")[:, 0])

@@ -145,7 +145,9 @@ class Scene:
             if material.emission is not None:
                 emission[k] = material.emission
         self.emission = emission.astype(np.float32).take(self.material_ids, axis=0)
-        emitters = np.flatnonzero(self.emission.max(axis=1) > 0)
+        #: (T,) bool: the triangle emits light.
+        self.emits = self.emission.max(axis=1) > 0
+        emitters = np.flatnonzero(self.emits)
         self.lights = AreaLights(v0[emitters], v1[emitters], v2[emitters],
                                  self.emission[emitters], offset[emitters]) if len(emitters) else None
         self.material_table = MaterialTable(self.materials)

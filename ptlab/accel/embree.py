@@ -4,7 +4,9 @@ Embree is the production-quality path: a highly optimised BVH traversal in C++ t
 releases the GIL while it runs. Facts about the binding that shape this module
 (measured with embreex 4.4):
 
-* it wants float32 arrays, of any strides (row-major ones trace fastest);
+* it wants writable float32 arrays of any strides: ptlab's column-major batches go in as
+  they are (measured: copying them to row-major costs 9 ns a ray, more than the 2-4% that
+  Embree then saves);
 * the ray start distance is fixed at 0, so ``tmin`` is applied by moving the origin;
 * the per-ray far distance goes in through ``dists``, which INTERSECT overwrites;
 * OCCLUDED returns 0 for occluded rays and -1 for visible ones.
@@ -20,9 +22,10 @@ from ptlab.accel.base import Hits
 
 
 def _as_f32(a: np.ndarray) -> np.ndarray:
-    # Embree reads rays row by row: row-major input traced 10% faster than ptlab's
-    # column-major batches (ptlab.vectors), more than the copy costs.
-    return np.ascontiguousarray(a, dtype=np.float32)
+    # No copy of a float32 array in any layout; a read-only one (the camera's broadcast
+    # origins) is copied, since the binding asks for a writable buffer.
+    a = np.asarray(a, dtype=np.float32)
+    return a if a.flags.writeable else a.copy()
 
 
 def _far_distances(tmax: float | np.ndarray, n: int) -> np.ndarray:

@@ -164,17 +164,31 @@ def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> No
     film += sums
 
 
+def kept(a: np.ndarray | None, rows: np.ndarray, every_row: bool) -> np.ndarray | None:
+    """Rows ``rows`` of ``a`` (None stays None); ``a`` itself, not a copy, when ``rows`` are
+    all of its rows, as after the first bounces in a closed room, where no path ends."""
+    if a is None or every_row:
+        return a
+    return take_rows(a, rows)
+
+
 def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
-    """The vertices of the paths that hit something; the others are dropped."""
+    """The vertices of the paths that hit something; the others are dropped.
+
+    Where every path hit, the vertices share the paths' arrays (``kept``)."""
     alive = np.flatnonzero(hits.prim >= 0)
-    prim = hits.prim.take(alive)
+    every = len(alive) == len(hits.prim)
+    prim = kept(hits.prim, alive, every)
     # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
     data = scene.triangle_data.take(prim, axis=1)   # (13, N); .T gives (N, 3) views
     v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
-    u, v = hits.u.take(alive)[:, None], hits.v.take(alive)[:, None]
-    # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5).
-    p = v0 + u * e1 + v * e2
-    wo = -take_rows(paths.dirs, alive)
+    u, v = kept(hits.u, alive, every)[:, None], kept(hits.v, alive, every)[:, None]
+    # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5),
+    # computed in place: v0 + u e1 + v e2 with two temporaries fewer.
+    p = u * e1
+    p += v0
+    p += v * e2
+    wo = -kept(paths.dirs, alive, every)
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
     n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
@@ -184,10 +198,11 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
         if material.is_delta:
             delta[slice(None) if rows is None else rows] = True
     return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
-                      throughput=take_rows(paths.throughput, alive),
-                      pixel=paths.pixel.take(alive), sees_emission=paths.sees_emission.take(alive),
-                      sample=paths.sample.take(alive), materials=materials, delta=delta, t=hits.t.take(alive),
-                      pdf=None if paths.pdf is None else paths.pdf.take(alive))
+                      throughput=kept(paths.throughput, alive, every),
+                      pixel=kept(paths.pixel, alive, every),
+                      sees_emission=kept(paths.sees_emission, alive, every),
+                      sample=kept(paths.sample, alive, every), materials=materials, delta=delta,
+                      t=kept(hits.t, alive, every), pdf=kept(paths.pdf, alive, every))
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
@@ -197,19 +212,20 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     with ``"bsdf"``, not at all with ``"nee"`` and with the MIS weight with ``"mis"``.
     Lights emit from their front face only.
     """
-    strategy = settings.strategy
-    weight = (hit.front & hit.sees_emission).astype(np.float32)
-    if strategy == "bsdf":
-        weight = hit.front.astype(np.float32)
-    emitted = take_rows(scene.emission, hit.prim)
-    if strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
+    counted = hit.front if settings.strategy != "nee" else hit.front & hit.sees_emission
+    # Only the rows that see an emitter's front (a few percent): the rest would add 0.
+    rows = np.flatnonzero(counted & scene.emits.take(hit.prim))
+    if len(rows) == 0:
+        return
+    emitted = take_rows(scene.emission, hit.prim.take(rows))
+    if settings.strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
-        pdf_light = solid_angle_pdf(scene.lights.pdf_area(emitted), hit.t * hit.t,
-                                    dot(hit.n, hit.wo))
-        weight = np.where(hit.sees_emission, 1.0, mis_weight(hit.pdf, pdf_light, settings.heuristic))
-        weight = (weight * hit.front).astype(np.float32)
-    emitted *= weight[:, None]
-    add_to_film(film, hit.pixel, hit.throughput * emitted)
+        t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
+        pdf_light = solid_angle_pdf(scene.lights.pdf_area(emitted), t * t, dot(n, wo))
+        weight = np.where(hit.sees_emission.take(rows), 1.0,
+                          mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic))
+        emitted *= weight.astype(np.float32)[:, None]
+    add_to_film(film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted)
 
 
 def mis_weight(pdf: np.ndarray, other: np.ndarray, heuristic: str = "power") -> np.ndarray:
@@ -288,11 +304,12 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
     throughput = hit.throughput * weight
     go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
                                       | (throughput[:, 2] > 0)))
-    wi, n, p, offset = (take_rows(a, go_on) for a in (wi, hit.n, hit.p, hit.offset))
+    every = len(go_on) == len(survive)
+    wi, n, p, offset = (kept(a, go_on, every) for a in (wi, hit.n, hit.p, hit.offset))
     return Paths(origins=leave_surface(p, n, offset, wi), dirs=wi,
-                 throughput=take_rows(throughput, go_on), pixel=hit.pixel.take(go_on),
-                 sees_emission=hit.delta.take(go_on), sample=hit.sample.take(go_on),
-                 pdf=None if pdf is None else pdf.take(go_on))
+                 throughput=kept(throughput, go_on, every), pixel=kept(hit.pixel, go_on, every),
+                 sees_emission=kept(hit.delta, go_on, every), sample=kept(hit.sample, go_on, every),
+                 pdf=kept(pdf, go_on, every))
 
 
 def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarray) -> np.ndarray:
