@@ -229,7 +229,8 @@ class SobolSampler(Sampler):
     of the shuffled index is computed; and both coordinates get a random digital shift (an
     XOR with a random 32-bit number, which keeps every elementary interval's count and makes
     each point uniform on [0, 1)). Measured on the Cornell box at 64 spp, the shift gave the
-    same error as a full nested (Owen) scramble of the coordinates, at half the cost.
+    same error as a full nested (Owen) scramble of the coordinates, for less than half the
+    sampler's time.
 
     Keys hold the bit-reversed index: the shuffle works on the reversed index (so that the
     scramble nests from the index's highest bit down), and its result ``a`` is then the
