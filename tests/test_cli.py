@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import os
+import re
 import subprocess
 import sys
 
@@ -99,6 +100,17 @@ def test_png_is_srgb_encoded(tmp_path):
     assert values[0, 1].tolist() == [5] * 3
     assert values[1, 0].tolist() == [255] * 3
     assert values[1, 1].tolist() == [0] * 3
+
+
+@pytest.mark.parametrize("content, message", [
+    (b"P6\n4 4\n255\n" + bytes(10), "cannot read image: Premature end of file"),
+    (b"P5\n2 2\n255\n" + bytes(4), "has 1 channel(s), not the 3 of an RGB image"),
+])
+def test_a_cut_short_or_grey_image_is_a_one_line_error(tmp_path, content, message):
+    from ptlab.errors import PtlabError
+    (tmp_path / "x.ppm").write_bytes(content)
+    with pytest.raises(PtlabError, match=re.escape(message)):
+        read_image(tmp_path / "x.ppm")
 
 
 def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
