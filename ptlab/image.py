@@ -104,7 +104,11 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
         raise PtlabError(f"{path}: cannot read image: {oiio.geterror()}")
     try:
         spec = source.spec()
+        if spec.nchannels < 3:
+            raise PtlabError(f"{path}: has {spec.nchannels} channel(s), not the 3 of an RGB image")
         pixels = source.read_image(0, 0, 0, 3, oiio.FLOAT)
+        if pixels is None:   # e.g. a file cut short
+            raise PtlabError(f"{path}: cannot read image: {source.geterror() or 'no pixels'}")
     finally:
         source.close()
     metadata = {a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs
