@@ -1,6 +1,8 @@
 """Race ptlab against Mitsuba 3 on the same scene: seconds, error, and whether they agree.
 
-Not run in CI, and Mitsuba is not a dependency of ptlab: install it beside ptlab first.
+Not run in CI, and Mitsuba is not a dependency of ptlab: install it beside ptlab first (the
+``llvm_ad_rgb`` variant needs a libLLVM recent enough for Dr.Jit, e.g. Debian's ``libllvm19``;
+the script says so, in one line with exit code 2, if Mitsuba cannot render here).
 
     pip install mitsuba
     python scripts/against_mitsuba.py --workers 2                  # cornell-box, 256x256, 64 spp
@@ -30,7 +32,8 @@ Not run in CI, and Mitsuba is not a dependency of ptlab: install it beside ptlab
    seconds, relMSE (``ptlab.measure.metrics``), relMSE without the pixels that see the light
    (reference above 1 in some channel), RMSE and seconds x relMSE (lower is better: an
    unbiased estimator's error falls as 1 / time, so this is its cost for a given error), and
-   the same two ratios against ptlab's default sampler, round by round.
+   its speed and efficiency against ptlab with its default sampler, round by round (that
+   one's seconds, and seconds x relMSE, over this one's).
 5. With ``--ptlab-reference`` (a high-spp ptlab render), the two references are compared:
    per-channel mean ratio with its z-score, and their relMSE beside what their noise alone
    would give. They must agree; a difference beyond noise is a bug in the scene's
@@ -633,7 +636,7 @@ def run_rounds(order: list[Contender], args: argparse.Namespace, reference: np.n
         seed = args.seed + round_
         for contender in order if round_ % 2 == 0 else order[::-1]:
             run = measure(contender, round_, seed, reference, unlit)
-            echo(f"round {round_ + 1}/{args.repeat}  {contender.label:34} {run.seconds:7.2f} s  "
+            echo(f"round {round_ + 1}/{args.repeat}  {contender.label:42} {run.seconds:7.2f} s  "
                  f"relMSE {run.relmse:.4g}")
 
 
@@ -695,24 +698,24 @@ def _spp_from_metadata(path: str) -> int | None:
 
 def process_contenders(args: argparse.Namespace, scene_xml: Path, folder: Path,
                        echo: Callable[[str], None]) -> tuple[list[Contender], list[Contender]]:
-    """``ptlab render`` and ``mitsuba`` as whole processes, each with its own defaults
-    (ptlab: sampler sobol, nee; Mitsuba: sampler independent, rr_depth 5)."""
+    """``ptlab render`` (its default sampler) and ``mitsuba`` (the scene file's defaults:
+    sampler independent, rr_depth 5) as whole processes."""
     ptlab_command = _executable("ptlab")
     if ptlab_command is None:
         raise PtlabError("the ptlab command is not installed: pip install -e . from the repository")
     workers = [] if args.workers is None else ["--workers", str(args.workers)]
     ptlab = command_contender(
-        "ptlab render [process]",
+        f"ptlab render {DEFAULT_SAMPLER} {args.ptlab_strategy} [process]",
         lambda seed, out: [ptlab_command, "render", args.scene, "--res", args.res, "--spp",
-                           str(args.spp), "--seed", str(seed), "--quiet", "--out", str(out),
-                           *workers],
+                           str(args.spp), "--seed", str(seed), "--strategy", args.ptlab_strategy,
+                           "--quiet", "--out", str(out), *workers],
         folder / "ptlab.exr")
     mitsuba_command = _executable("mitsuba")
     if mitsuba_command is None:
         echo("no mitsuba command beside this Python or on the PATH: its process is not timed")
         return [ptlab], []
     mitsuba = command_contender(
-        "mitsuba [process]",
+        f"mitsuba independent rr_depth {MITSUBA_RR_DEPTH} [process]",
         lambda seed, out: [mitsuba_command, "-m", args.variant, "-o", str(out), "-D",
                            f"spp={args.spp}", "-D", f"seed={seed}", str(scene_xml)],
         folder / "mitsuba.exr")
