@@ -22,7 +22,7 @@ def pixel_points(name: str, count: int, dim: int, pixel: int = 12345, seed: int 
     return sampler.get(keys, dim, 2)
 
 
-@pytest.mark.parametrize("dim", [0, 2, 5, 41])
+@pytest.mark.parametrize("dim", [0, 2, 5, 10])
 @pytest.mark.parametrize("pixel", [0, 12345, 999_999])
 def test_sobol_prefixes_are_nets(dim, pixel):
     # A (0, 2)-sequence: the first 2^k points put exactly one point in every elementary
@@ -35,6 +35,23 @@ def test_sobol_prefixes_are_nets(dim, pixel):
             cells = (np.floor(first[:, 0] * (1 << a)) * (1 << b)
                      + np.floor(first[:, 1] * (1 << b))).astype(int)
             assert np.bincount(cells, minlength=1 << k).tolist() == [1] * (1 << k), (k, a, b)
+
+
+@pytest.mark.parametrize("name", ["sobol", "stratified"])
+def test_dimensions_after_the_second_bounce_are_independent(name):
+    # Only the camera's and the first two bounces' dimensions are spread evenly
+    # (PATTERNED_DIMENSIONS); from there on every sampler draws independent numbers.
+    from ptlab.samplers import PATTERNED_DIMENSIONS, independent_one, independent_pair
+    assert PATTERNED_DIMENSIONS == BounceUniforms(make_sampler("sobol"), None, 2).first
+    sampler = make_sampler(name, 3, 16)
+    keys = sampler.keys(np.full(16, 9), np.arange(16))
+    assert np.array_equal(sampler.get(keys, PATTERNED_DIMENSIONS, 2),
+                          np.stack(independent_pair(keys, PATTERNED_DIMENSIONS)).T)
+    assert np.array_equal(sampler.get(keys, PATTERNED_DIMENSIONS + 2, 1)[:, 0],
+                          independent_one(keys, PATTERNED_DIMENSIONS + 2))
+    # while the last pair before them is still stratified: one point per 1/16 strip
+    last = sampler.get(keys, PATTERNED_DIMENSIONS - 2, 2)
+    assert np.bincount((last[:, 0] * 16).astype(int), minlength=16).max() == 1
 
 
 def test_sobol_one_dimension_is_stratified():
