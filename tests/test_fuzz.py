@@ -353,6 +353,26 @@ def test_cornell_box_with_a_mesh_changed_renders_what_the_file_says_or_fails_cle
             canonical(obj_triangles(data.decode())), data
 
 
+@examples(150)
+@given(change=mutated_obj())
+def test_obj_files_the_check_accepts_read_as_trimesh_reads_them(change):
+    # ptlab reads OBJ text itself (sparing trimesh's and SciPy's imports): the triangles, in
+    # their order and each vertex's, must be trimesh's, so that images stay the same.
+    import trimesh
+
+    from ptlab.meshes import check_obj_text, read_obj
+    _, data = change
+    try:
+        check_obj_text(data)
+    except ValueError:
+        return
+    event("accepted")
+    vertices, faces = read_obj(data.decode().replace("\r\n", "\n"))
+    mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", force="mesh",
+                        process=False)
+    assert np.array_equal(vertices[faces], np.asarray(mesh.vertices)[np.asarray(mesh.faces)])
+
+
 @examples(200)
 @given(change=mutated_obj())
 def test_the_quick_obj_scan_accepts_only_what_the_line_by_line_check_accepts(change):
