@@ -113,6 +113,9 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeat", type=int, default=3,
                        help="--accuracy: renders per sampler, alternating, each with another "
                             "seed; --against: runs of each program (default 3)")
+    bench.add_argument("--reference", metavar="REF.exr",
+                       help="--accuracy: the reference image (linear EXR at --res) instead of "
+                            "a rendered one")
     bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
                        help="--accuracy: spp of the reference (default 4096; cached in "
                             "$PTLAB_CACHE or ~/.cache/ptlab/references)")
@@ -359,7 +362,7 @@ def _bench(args) -> int:
             raise PtlabError(f"--reference-spp {args.reference_spp}: must be from 1 to {MAX_SPP}")
         workers = check_workers(args.workers[0]) if args.workers else 1
         run_accuracy(args.sampler or list(SAMPLERS), res=res, spp=spp, repeat=args.repeat,
-                     reference_spp=args.reference_spp, workers=workers,
+                     reference=args.reference, reference_spp=args.reference_spp, workers=workers,
                      cache_dir=default_cache_dir(), backend=(args.backend or ["auto"])[0],
                      **ESTIMATORS[(args.estimator or ["default"])[0]])
         return 0

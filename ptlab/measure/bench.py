@@ -128,15 +128,19 @@ def _median_range(values: list[float], digits: str) -> str:
 
 
 def run_accuracy(samplers: list[str], res: int = 256, spp: int = 64, repeat: int = 3,
-                 scene: str = "cornell-box", reference_spp: int = 4096, workers: int = 1,
+                 scene: str = "cornell-box", reference: str | None = None,
+                 reference_spp: int = 4096, workers: int = 1,
                  cache_dir=None, echo=print, **render_options) -> list[AccuracyRow]:
     """Render ``scene`` with each sampler, ``repeat`` times alternately; print relMSE against
     a cached reference, seconds, their product and the sampler's share of the time."""
-    from ptlab.measure.converge import reference_image
+    from ptlab.measure.converge import load_reference, reference_image
 
     loaded = load_scene(scene)
-    reference = reference_image(loaded, (res, res), reference_spp, 0, cache_dir, echo,
-                                workers=None, **render_options)
+    if reference is not None:
+        reference_pixels = load_reference(reference, (res, res))
+    else:
+        reference_pixels = reference_image(loaded, (res, res), reference_spp, 0, cache_dir,
+                                           echo, workers=None, **render_options)
     render_result(loaded, spp=1, res=32, workers=1)   # warm-up: imports, first calls
     rows = {name: AccuracyRow(name, [], [], []) for name in samplers}
     for k in range(repeat):
@@ -145,10 +149,11 @@ def run_accuracy(samplers: list[str], res: int = 256, spp: int = 64, repeat: int
                                    sampler=name, **render_options)
             row = rows[name]
             row.seconds.append(result.seconds)
-            row.relmse.append(relmse(result.image, reference))
+            row.relmse.append(relmse(result.image, reference_pixels))
             row.sampler_share.append(result.sampler_seconds / (result.seconds * workers))
+    source = reference if reference is not None else f"{reference_spp} spp"
     echo(f"{loaded.summary()}; {res}x{res}, {spp} spp, {workers} worker(s), reference "
-         f"{reference_spp} spp; median (range) over {repeat} seeds")
+         f"{source}; median (range) over {repeat} seeds")
     echo(f"{'sampler':11} {'relMSE':>24} {'seconds':>20} {'seconds x relMSE':>26} "
          f"{'in sampler':>22}")
     for row in rows.values():
