@@ -84,7 +84,7 @@ def test_start_copies_the_exercise_file_and_refuses_to_overwrite(tmp_path, capsy
 
 def test_check_prints_a_score_table_writes_json_and_list_shows_progress(tmp_path, capsys):
     answer = tmp_path / "01_cameras.py"
-    shutil.copyfile(chapter(1).solution, answer)
+    shutil.copyfile(WRONG / "01_right_own_code.py", answer)
     assert main(["exercise", "check", "1", str(answer), "--json", str(tmp_path / "r.json")]) == 0
     table = capsys.readouterr().out
     assert "10/10" in table and "full marks" in table
@@ -93,7 +93,8 @@ def test_check_prints_a_score_table_writes_json_and_list_shows_progress(tmp_path
     assert {c["name"] for c in result["checks"]} >= {"centre ray", "render"}
     assert main(["exercise", "list", str(tmp_path)]) == 0
     listing = capsys.readouterr().out
-    assert "passed (10/10)" in listing.splitlines()[1]
+    assert "1 record found" in listing.splitlines()[0]
+    assert "passed (10/10)" in listing.splitlines()[2]
 
 
 def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):

@@ -21,7 +21,7 @@ LAYERS = [
                   "ptlab.accel", "ptlab.materials", "ptlab.lights", "ptlab.scene"]),
     ("integrators", ["ptlab.integrators"]),
     ("rendering", ["ptlab.rendering", "ptlab"]),
-    ("tools", ["ptlab.measure", "ptlab.grading"]),
+    ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
     ("exercises", ["ptlab.exercises"]),
     ("command line", ["ptlab.cli"]),
 ]

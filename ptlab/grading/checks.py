@@ -25,12 +25,13 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 * **estimator agreement**: the importance-sampled estimate mean(f cos / pdf) over the
   samples equals the integral of f |cos| computed by the quadrature (a stratified
   uniform-sphere estimate without noise), within 4.4 standard errors (Sidak over the wo's
-  and channels at 1e-4) plus the quadrature's error. False-alarm rate 1e-4.
+  and channels at 1e-4) plus the quadrature's error and 8 float32 ulps of the value (the
+  material's own rounding). False-alarm rate 1e-4.
 * **sample_weight**: ``sample_weight`` returns the direction ``sample`` returns for the same
   ``u`` and the weight f cos / pdf (0 where pdf is 0), to a relative 1e-5, on the first
   10^5 samples of each wo. Deterministic.
-* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-6 on 20 000 random pairs
-  above the surface, grazing ones included. Deterministic.
+* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-5 (float32 rounding
+  allowed) on 20 000 random pairs above the surface, grazing ones included. Deterministic.
 * **consistency**: at special directions (grazing, exactly tangent, wi = +-n, wi = +-wo,
   the mirror direction, below the surface) and edge values of u: nothing NaN or infinite,
   eval >= 0, pdf >= 0, both 0 below the surface, sample gives unit vectors, sample_weight
@@ -63,7 +64,10 @@ ALPHA_NORMALISATION = 1e-4
 ALPHA_ESTIMATOR = 1e-4
 MIN_EXPECTED = 5.0
 ENERGY_SLACK = 1e-3
-RECIPROCITY_RTOL = 1e-6
+#: Reciprocity holds to this relative difference: a material that computes in float32 (or
+#: with float32 constants) differs by a few float32 ulps (1.2e-7 each) between the two
+#: orders; a non-reciprocal term from a mistake differs by a percent or more.
+RECIPROCITY_RTOL = 1e-5
 SAMPLE_WEIGHT_RTOL = 1e-5
 POINTWISE_ROWS = 100_000
 #: Values above this negative number count as 0: a cosine rounded to -1e-17 is no mistake.
@@ -71,6 +75,10 @@ NEGATIVE_ROUNDING = 1e-12
 #: Quadrature tolerance on the integrals of f |cos|: each region's error at most this times
 #: (its integral + its share of the sphere), so about 2e-4 over the sphere at worst.
 F_TOLERANCE = 1e-4
+#: Relative slack of the estimator check for a material's own rounding: 8 float32 ulps. A
+#: Lambertian with pi = np.float32(math.pi) integrates to 1 - 2.8e-8; with cosine sampling
+#: its f cos / pdf is the same for every sample, so no noise term covers that.
+FLOAT32_SLACK = 8 * float(np.finfo(np.float32).eps)
 
 
 class MaterialError(Exception):
@@ -404,7 +412,7 @@ def check_estimator(lobes: list[Lobe]) -> Check:
     for lobe in lobes:
         reference = lobe.reflectance
         allowed = (z * lobe.estimate_sd / math.sqrt(lobe.samples) + 2 * lobe.errors[1:]
-                   + 1e-9 * (1 + np.abs(reference)))
+                   + 1e-9 + FLOAT32_SLACK * np.abs(reference))
         with np.errstate(invalid="ignore"):
             ratio = np.abs(lobe.estimate - reference) / allowed
         ratio = np.where(np.isfinite(ratio), ratio, np.inf)
@@ -422,12 +430,19 @@ def check_estimator(lobes: list[Lobe]) -> Check:
                     f"{lobe.degrees:g}°): sample never goes there, so the estimate misses that light")
         else:
             ratio = estimate / reference if reference else math.inf
-            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.4g} but ∫ f cos = "
-                    f"{reference:.4g} at wo {lobe.degrees:g}° (ratio {ratio:.3g}): "
+            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.6g} but ∫ f cos = "
+                    f"{reference:.6g} at wo {lobe.degrees:g}° (ratio {_ratio_text(ratio)}): "
                     "sample and pdf disagree (see chi-square)")
     return Check("estimator agreement", verdict(passed),
                  f"max |IS - ∫| / allowed = {worst_ratio:.3g} (wo {lobe.degrees:g}°, {'rgb'[c]})",
                  f"<= 1 (allowed {z:.1f} σ + quadrature error)", hint)
+
+
+def _ratio_text(ratio: float) -> str:
+    """``1.5``, or ``1 - 3.2e-05`` for a ratio too close to 1 to show as a number."""
+    if math.isfinite(ratio) and abs(ratio - 1) < 1e-3:
+        return f"1 {'+' if ratio >= 1 else '-'} {abs(ratio - 1):.2g}"
+    return f"{ratio:.3g}"
 
 
 # -- sample_weight ------------------------------------------------------------------------
