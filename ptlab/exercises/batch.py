@@ -26,6 +26,8 @@ from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
 
+from tqdm import tqdm
+
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import Chapter
@@ -109,8 +111,6 @@ def grade_all(chapter: Chapter, folder: Path, csv_path: Path, workers: int = 1,
     rows = read_rows(csv_path, chapter)
     todo = [work for work in find_work(folder, chapter) if work.student not in rows]
     limit = sum(c.timeout for c in chapter.checks) * timeout_scale + OVERALL_SLACK + EXTRA_SECONDS
-    from tqdm import tqdm
-
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
     runner = _Runner(chapter, timeout_scale, limit)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:

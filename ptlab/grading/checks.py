@@ -30,8 +30,9 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 * **sample_weight**: ``sample_weight`` returns the direction ``sample`` returns for the same
   ``u`` and the weight f cos / pdf (0 where pdf is 0), to a relative 1e-5, on the first
   10^5 samples of each wo. Deterministic.
-* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-5 (float32 rounding
-  allowed) on 20 000 random pairs above the surface, grazing ones included. Deterministic.
+* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-5 (1e-3 for an eval that
+  returns float32: rounding in float32 arithmetic) on 20 000 random pairs above the surface,
+  grazing ones included. Deterministic.
 * **consistency**: at special directions (grazing, exactly tangent, wi = +-n, wi = +-wo,
   the mirror direction, below the surface) and edge values of u: nothing NaN or infinite,
   eval >= 0, pdf >= 0, both 0 below the surface, sample gives unit vectors, sample_weight
@@ -64,10 +65,13 @@ ALPHA_NORMALISATION = 1e-4
 ALPHA_ESTIMATOR = 1e-4
 MIN_EXPECTED = 5.0
 ENERGY_SLACK = 1e-3
-#: Reciprocity holds to this relative difference: a material that computes in float32 (or
-#: with float32 constants) differs by a few float32 ulps (1.2e-7 each) between the two
-#: orders; a non-reciprocal term from a mistake differs by a percent or more.
+#: Reciprocity holds to this relative difference (float32 constants in float64 arithmetic
+#: differ by a few float32 ulps, 1.2e-7 each, between the two orders), or for a material
+#: whose eval returns float32 to RECIPROCITY_RTOL_FLOAT32: measured up to 4e-5 for the
+#: library's microfacet computing in float32 (the Fresnel term at h . wo against h . wi,
+#: rounded apart). A non-reciprocal term from a mistake differs by a percent or more.
 RECIPROCITY_RTOL = 1e-5
+RECIPROCITY_RTOL_FLOAT32 = 1e-3
 SAMPLE_WEIGHT_RTOL = 1e-5
 POINTWISE_ROWS = 100_000
 #: Values above this negative number count as 0: a cosine rounded to -1e-17 is no mistake.
@@ -511,7 +515,9 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
         sin = np.sqrt(1 - cosines[:, k] ** 2)
         frames.append(to_world(vec3(sin * np.cos(phi), sin * np.sin(phi), cosines[:, k]), n))
     wo, wi = frames
-    forward = call(material, "eval", wo, wi, n, shapes=[(rows, 3)]).astype(np.float64)
+    forward = call(material, "eval", wo, wi, n, shapes=[(rows, 3)])
+    tolerance = RECIPROCITY_RTOL_FLOAT32 if forward.dtype == np.float32 else RECIPROCITY_RTOL
+    forward = forward.astype(np.float64)
     backward = call(material, "eval", wi, wo, n, shapes=[(rows, 3)]).astype(np.float64)
     finite = np.isfinite(forward).all(axis=1) & np.isfinite(backward).all(axis=1)
     scale = max(np.abs(forward[finite]).max(initial=0), np.abs(backward[finite]).max(initial=0))
@@ -519,7 +525,7 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
     with np.errstate(invalid="ignore"):
         relative = (np.abs(forward - backward) / larger).max(axis=1)
     worst = float(relative[finite].max(initial=0.0))
-    passed = bool(finite.all()) and worst <= RECIPROCITY_RTOL
+    passed = bool(finite.all()) and worst <= tolerance
     hint = ""
     if not finite.all():
         hint = "eval returns NaN or inf for directions above the surface (see consistency)"
@@ -527,7 +533,7 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
         hint = _explain_reciprocity(forward, backward, dot(wo, n), dot(wi, n))
     return Check("reciprocity", verdict(passed),
                  f"max |f(wo,wi) - f(wi,wo)| / f = {worst:.2g} ({rows} pairs)",
-                 f"<= {RECIPROCITY_RTOL:g}", hint)
+                 f"<= {tolerance:g}", hint)
 
 
 def _explain_reciprocity(forward, backward, cos_theta_o, cos_theta_i) -> str:

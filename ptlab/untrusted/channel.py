@@ -18,6 +18,8 @@ import struct
 import time
 from collections.abc import Callable
 
+import numpy as np
+
 COUNT = struct.Struct("<I")
 LENGTH = struct.Struct("<Q")
 #: Parts in one message, at most (a reply's arrays, one part each).
@@ -86,7 +88,7 @@ class Channel:
 
     # -- receiving --------------------------------------------------------------------
 
-    def receive(self, deadline: float, limit: int) -> list[bytearray]:
+    def receive(self, deadline: float, limit: int) -> list:
         """The next message; at most ``limit`` bytes of parts in all."""
         (count,) = COUNT.unpack(self._read(COUNT.size, deadline))
         if count > MAX_PARTS:
@@ -103,7 +105,7 @@ class Channel:
             taken = self._pending[:size]
             del self._pending[:size]
             return taken
-        buffer = bytearray(size)
+        buffer = _buffer(size)
         view = memoryview(buffer)
         filled = len(self._pending)
         view[:filled] = self._pending
@@ -211,7 +213,7 @@ class Reader:
         while len(self._pending) < size:
             want = size - len(self._pending)
             if want >= READ_AHEAD:
-                buffer = bytearray(size)
+                buffer = _buffer(size)
                 view = memoryview(buffer)
                 filled = len(self._pending)
                 view[:filled] = self._pending
@@ -245,10 +247,20 @@ def write_message(fd: int, parts: list) -> None:
         _advance(chunks, written)
 
 
+def _buffer(size: int) -> bytearray | np.ndarray:
+    """A buffer to read ``size`` bytes into: a large one is not zeroed first (NumPy's
+    ``empty``; a ``bytearray`` of 24 MB costs milliseconds of zeroing, every call)."""
+    return bytearray(size) if size < READ_AHEAD else np.empty(size, np.uint8)
+
+
 def _chunks(parts: list) -> list[memoryview]:
-    """A message as the byte views to write: the header, then each part."""
-    header = COUNT.pack(len(parts)) + b"".join(LENGTH.pack(memoryview(p).nbytes) for p in parts)
-    return [memoryview(header)] + [memoryview(part).cast("B") for part in parts]
+    """A message as the byte views to write: the header, then each part (a part may be a
+    tuple of buffers, sent one after the other, to save joining them)."""
+    pieces = [[memoryview(b).cast("B") for b in (part if isinstance(part, tuple) else (part,))]
+              for part in parts]
+    header = COUNT.pack(len(parts)) + b"".join(LENGTH.pack(sum(len(b) for b in piece))
+                                               for piece in pieces)
+    return [memoryview(header)] + [b for piece in pieces for b in piece if len(b)]
 
 
 def _advance(chunks: list[memoryview], written: int) -> None:

@@ -10,7 +10,8 @@ is the student's to change: the grader trusts nothing it says beyond the schema 
 2. imports the student's file (``import_file``) and says whether that worked;
 3. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
    an object it holds (object 0 is the student's module), ``call`` a function or method,
-   ``repr`` an object, ``import_by_stem`` the file again under its own name.
+   ``call_each`` a method of several objects on their rows, ``repr`` an object,
+   ``import_by_stem`` the file again under its own name.
 
 A call's reply is its result, plus (for functions, not methods) the changes it made to its
 arguments in place: arrays written into (the film that ``trace_paths`` adds to), fields of
@@ -39,6 +40,7 @@ from pathlib import Path
 import numpy as np
 
 from ptlab.errors import PtlabError
+from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
 
@@ -106,7 +108,8 @@ def serve(path: str, receive: Connection, send: Connection, output: Connection,
     ``receive``, ``send`` and ``output`` are the pipes' ends (as ``Connection`` objects,
     which the fork server passes to a new process; only their file descriptors are used).
     """
-    _leave_the_grader(output.fileno(), limits)
+    _leave_the_grader(output.fileno(), limits, keep={receive.fileno(), send.fileno()})
+    keep_freed_memory()     # every call's arrays arrive in new buffers: no page faults for them
     requests = Reader(receive.fileno())
     server = _Server(Path(path), send.fileno())
     try:
@@ -123,10 +126,11 @@ def serve(path: str, receive: Connection, send: Connection, output: Connection,
         server.answer(parts)
 
 
-def _leave_the_grader(output_fd: int, limits: Limits) -> None:
+def _leave_the_grader(output_fd: int, limits: Limits, keep: set[int]) -> None:
     os.setsid()     # a session and process group of its own: the grader's terminal signals stay there
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    _close_inherited(keep | {output_fd})
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)
     os.dup2(output_fd, 1)
@@ -143,6 +147,33 @@ def _leave_the_grader(output_fd: int, limits: Limits) -> None:
         _lower_limit(name, value)
 
 
+def _close_inherited(keep: set[int]) -> None:
+    """Close every file descriptor but stdin, stdout, stderr and ``keep``.
+
+    A process from multiprocessing's fork server inherits the grader's ends of the fork
+    server's and the resource tracker's pipes (so that it could start processes through
+    them); written to, they would crash the grader's fork server. The student's code gets
+    a fork server and tracker of its own instead, should it start processes.
+    """
+    from multiprocessing import forkserver, resource_tracker
+
+    try:
+        open_fds = [int(name) for name in os.listdir("/proc/self/fd")]
+    except OSError:
+        open_fds = range(3, 1024)
+    for fd in open_fds:
+        if fd > 2 and fd not in keep:
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+    # Forget them: these are multiprocessing's own records of the inherited ends.
+    forkserver._forkserver._forkserver_alive_fd = None
+    forkserver._forkserver._inherited_fds = None
+    resource_tracker._resource_tracker._fd = None
+    resource_tracker._resource_tracker._pid = None
+
+
 def _lower_limit(name: int, value: int) -> None:
     soft, hard = resource.getrlimit(name)
     if hard != resource.RLIM_INFINITY:
@@ -154,8 +185,10 @@ def _lower_limit(name: int, value: int) -> None:
 
 
 def _user_tasks() -> int:
-    """Processes and threads of this user now (what RLIMIT_NPROC counts)."""
+    """Processes and threads of this user now (what RLIMIT_NPROC counts; 0 without /proc)."""
     uid, count = os.getuid(), 0
+    if not Path("/proc/self").is_dir():
+        return 0
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
@@ -211,13 +244,25 @@ class _Server:
 
     def do_call(self, encoder: Encoder, handle: int, args: tuple, kwargs: dict,
                 writeback: bool) -> dict:
-        before = _Snapshot((args, kwargs)) if writeback else None
+        before = _Snapshot(args, kwargs) if writeback else None
         result = self.handles[handle](*args, **kwargs)
         envelope = {"value": encoder.encode(result)}
         if before is not None:
             envelope["writeback"] = [[path, how, encoder.encode(value)]
                                      for path, how, value in before.changes()]
         return envelope
+
+    def do_call_each(self, encoder: Encoder, handles: list[int], which: np.ndarray, method: str,
+                     args: tuple) -> dict:
+        """``method`` of several objects, each on its rows (``which[k]`` is the object of row
+        k): the library's ``shade``, here, so that all the rows take one request."""
+        from types import SimpleNamespace
+
+        from ptlab.integrators.path import shade
+
+        groups = [(np.flatnonzero(which == k), self.handles[h]) for k, h in enumerate(handles)]
+        hit = SimpleNamespace(prim=which, materials=[g for g in groups if len(g[0])])
+        return {"value": encoder.encode(shade(hit, method, *args))}
 
     def do_import_by_stem(self, encoder: Encoder) -> dict:
         """The student's file imported again under its own name (``08_parallel``), with its
@@ -293,7 +338,8 @@ def _text(error: BaseException) -> str:
 
 class _Unpickler(pickle.Unpickler):
     """Unpickles the grader's requests (trusted data), resolving the grader's references to
-    objects held here (``handle``) and to objects sent once per check (``shared``)."""
+    objects held here (``handle``), to objects sent once per check (``shared``), and to
+    arrays sent as their one repeated row (``rows``)."""
 
     def __init__(self, data, server: _Server, buffers=()):
         super().__init__(io.BytesIO(data), buffers=buffers)
@@ -303,6 +349,11 @@ class _Unpickler(pickle.Unpickler):
         kind, key, *payload = pid
         if kind == "handle":
             return self.server.handles[key]
+        if kind == "rows":      # an array whose rows are all ``key`` (one row)
+            rows, order = payload
+            array = np.empty((rows, key.shape[1]), key.dtype, order=order)
+            array[...] = key
+            return array
         if kind == "shared":
             if payload:
                 self.server.shared[key] = _Unpickler(payload[0], self.server).load()
@@ -315,9 +366,14 @@ class _Snapshot:
     library's records and items of lists and dicts (by identity), random generators (by
     state). ``changes()`` lists what differs after the call as (path, how, new value)."""
 
-    def __init__(self, arguments):
+    def __init__(self, args: tuple, kwargs: dict):
         self.entries: list[tuple] = []
-        self._walk(arguments, [], 0)
+        # The paths start in the call's (args, kwargs); those two themselves the function
+        # cannot change for its caller.
+        for k, value in enumerate(args):
+            self._walk(value, [("item", 0), ("item", k)], 0)
+        for name, value in kwargs.items():
+            self._walk(value, [("item", 1), ("key", name)], 0)
 
     def _walk(self, value, path: list, depth: int) -> None:
         if isinstance(value, np.ndarray):

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import io
 import math
+import re
 from collections.abc import Callable, Iterator
 from dataclasses import fields, is_dataclass
 from itertools import islice
@@ -64,7 +65,7 @@ class Encoder:
 
     def __init__(self, keep: Callable[[object], int], describe: Callable[[object], dict]):
         self.keep, self.describe = keep, describe
-        self.parts: list[memoryview] = []
+        self.parts: list[tuple[bytes, memoryview]] = []
 
     def encode(self, value, depth: int = 0):
         if depth > MAX_DEPTH:
@@ -108,10 +109,22 @@ class Encoder:
         array = np.asarray(value)
         if array.dtype.kind not in ARRAY_KINDS or array.dtype.fields is not None:
             raise UnsendableError(f"an array of {array.dtype} (the grader reads arrays of numbers)")
-        stream = io.BytesIO()
-        np.save(stream, array, allow_pickle=False)
-        self.parts.append(stream.getbuffer())
+        self.parts.append(npy_part(array))
         return len(self.parts) - 1
+
+
+def npy_part(array: np.ndarray) -> tuple[bytes, memoryview]:
+    """An array as an ``.npy`` file (format 1.0, as ``numpy.save`` writes it): its header,
+    and its data viewed in place (no copy unless the array is neither C- nor F-ordered)."""
+    fortran = bool(array.flags.f_contiguous and not array.flags.c_contiguous)
+    if not (array.flags.c_contiguous or fortran):
+        array = np.ascontiguousarray(array)
+    header = (f"{{'descr': {np.lib.format.dtype_to_descr(array.dtype)!r}, "
+              f"'fortran_order': {fortran}, 'shape': {array.shape!r}, }}").encode("latin1")
+    padding = -(len(NPY_MAGIC) + 2 + len(header) + 1) % 64      # numpy aligns data to 64 bytes
+    header += b" " * padding + b"\n"
+    data = memoryview(array.reshape(-1, order="F" if fortran else "C")).cast("B")
+    return NPY_MAGIC + len(header).to_bytes(2, "little") + header, data
 
 
 # -- the grader's side -------------------------------------------------------------------
@@ -119,6 +132,38 @@ class Encoder:
 def read_array(part: bytearray) -> np.ndarray:
     """The array in one ``.npy`` part, viewed in place; ``MalformedError`` unless it is a plain
     array of numbers whose data is exactly as long as its header says."""
+    shape, fortran_order, dtype, offset = _read_header(part)
+    if dtype.kind not in ARRAY_KINDS or dtype.fields is not None or dtype.subdtype is not None:
+        raise MalformedError(f"an array of {dtype}")
+    count = math.prod(shape)
+    if count * dtype.itemsize != len(part) - offset:
+        raise MalformedError(f"an array of shape {shape} with {len(part) - offset} bytes of data")
+    if count == 0:
+        return np.empty(shape, dtype)
+    flat = np.frombuffer(part, dtype=dtype, count=count, offset=offset)
+    return flat.reshape(shape, order="F" if fortran_order else "C")
+
+
+NPY_MAGIC = b"\x93NUMPY\x01\x00"
+#: The header ``numpy.save`` writes for an array of a simple type (format 1.0): parsed
+#: directly, 100x faster than numpy's general parser, which takes every other header.
+_SIMPLE_HEADER = re.compile(rb"\{'descr': '([<>|=][a-z]\d+)', 'fortran_order': (True|False), "
+                            rb"'shape': \(((?:\d+, )*\d+,?)?\), \} *\n")
+
+
+def _read_header(part: bytearray) -> tuple[tuple, bool, np.dtype, int]:
+    """(shape, fortran_order, dtype, data offset) from an ``.npy`` part's header."""
+    if bytes(part[:len(NPY_MAGIC)]) == NPY_MAGIC and len(part) >= 10:
+        end = 10 + int.from_bytes(bytes(part[8:10]), "little")
+        match = _SIMPLE_HEADER.fullmatch(bytes(part[10:end]))
+        if match:
+            descr, fortran, shape = match.groups()
+            try:
+                dtype = np.dtype(descr.decode("ascii"))
+            except TypeError:
+                raise MalformedError(f"an array of type {descr!r}") from None
+            shape = tuple(int(n) for n in (shape or b"").split(b",") if n.strip())
+            return shape, fortran == b"True", dtype, end
     stream = io.BytesIO(bytes(part[:65536]))
     try:
         version = np.lib.format.read_magic(stream)
@@ -131,16 +176,7 @@ def read_array(part: bytearray) -> np.ndarray:
         raise
     except Exception as error:  # numpy's parser refusing the header, in whatever way
         raise MalformedError(f"an .npy part with a bad header ({error})") from None
-    if dtype.kind not in ARRAY_KINDS or dtype.fields is not None or dtype.subdtype is not None:
-        raise MalformedError(f"an array of {dtype}")
-    count = math.prod(shape)
-    offset = stream.tell()
-    if count * dtype.itemsize != len(part) - offset:
-        raise MalformedError(f"an array of shape {shape} with {len(part) - offset} bytes of data")
-    if count == 0:
-        return np.empty(shape, dtype)
-    flat = np.frombuffer(part, dtype=dtype, count=count, offset=offset)
-    return flat.reshape(shape, order="F" if fortran_order else "C")
+    return shape, fortran_order, dtype, stream.tell()
 
 
 def clean_text(text: str) -> str:

@@ -47,9 +47,8 @@ def _prctl(option: int, value: int = 0) -> int:
     return 0
 
 
-def process_table(alive_only: bool = False) -> dict[int, int]:
-    """{pid: parent pid} of every process this user can see (Linux ``/proc``); with
-    ``alive_only``, without zombies (processes that ended and wait for their parent)."""
+def _scan() -> dict[int, tuple[int, bool]]:
+    """{pid: (parent pid, is a zombie)} of every process this user can see (Linux ``/proc``)."""
     table = {}
     for entry in Path("/proc").iterdir():
         if not entry.name.isdigit():
@@ -60,9 +59,15 @@ def process_table(alive_only: bool = False) -> dict[int, int]:
             continue
         # pid (comm) state ppid ...; comm may hold spaces and parentheses: split after the last ')'.
         state, parent = stat[stat.rfind(b")") + 2:].split()[:2]
-        if not (alive_only and state == b"Z"):
-            table[int(entry.name)] = int(parent)
+        table[int(entry.name)] = (int(parent), state == b"Z")
     return table
+
+
+def process_table(alive_only: bool = False) -> dict[int, int]:
+    """{pid: parent pid} of every process this user can see; with ``alive_only``, without
+    zombies (processes that ended and wait for their parent to reap them)."""
+    return {pid: parent for pid, (parent, zombie) in _scan().items()
+            if not (alive_only and zombie)}
 
 
 def descendants(roots: Iterable[int], table: dict[int, int]) -> set[int]:
@@ -90,6 +95,7 @@ class ProcessGuard:
     def __init__(self):
         self._previous: int | None = None
         self._helpers: set[int] = set()
+        self._servers: set[int] = set()
 
     def __enter__(self) -> ProcessGuard:
         if LINUX:
@@ -110,9 +116,15 @@ class ProcessGuard:
             me = os.getpid()
             self._helpers = {pid for pid, parent in process_table().items() if parent == me}
 
+    def add_server(self, pid: int) -> None:
+        """Count ``pid`` (a fork server) as a helper whose children are all ours to end: a
+        student's code that asked it for a process of its own (through its socket) must not
+        slip out of reach."""
+        self._servers.add(pid)
+
     def end(self, *roots: int, keep: Iterable[int] = ()) -> None:
-        """End ``roots``, every process below them, and every orphan re-parented here
-        (but not the children of this process in ``keep``, nor their trees)."""
+        """End ``roots``, every process below them, every orphan re-parented here and every
+        child of a fork server; but not the processes in ``keep``."""
         if not LINUX:
             for pid in roots:
                 _signal_group(pid, signal.SIGKILL)
@@ -121,9 +133,9 @@ class ProcessGuard:
         stopped: set[int] = set()
         for _ in range(MAX_SWEEPS):
             table = process_table()
-            orphans = {pid for pid, parent in table.items()
-                       if parent == me and pid not in self._helpers and pid not in keep}
-            victims = descendants(set(roots) | orphans, table) - stopped - {me}
+            orphans = {pid for pid, parent in table.items() if pid not in keep and (
+                (parent == me and pid not in self._helpers) or parent in self._servers)}
+            victims = descendants(set(roots) | orphans, table) - stopped - keep - {me}
             if not victims:
                 break
             for pid in victims:
@@ -154,11 +166,12 @@ def _reap(pids: set[int], me: int) -> None:
     waiting = set(pids)
     deadline = time.monotonic() + REAP_SECONDS
     while waiting and time.monotonic() < deadline:
-        table, alive = process_table(), process_table(alive_only=True)
+        table = _scan()
         for pid in list(waiting):
-            if pid not in table or (pid not in alive and table[pid] != me):
+            parent, zombie = table.get(pid, (None, True))
+            if parent is None or (zombie and parent != me):
                 waiting.discard(pid)
-            elif table[pid] == me:
+            elif parent == me:
                 try:
                     done, _ = os.waitpid(pid, os.WNOHANG)
                 except ChildProcessError:

@@ -121,8 +121,7 @@ class RemoteObject:
         if name in self._callables:
             return self._callables[name]
         try:
-            value = self._submission.request("get", self._handle, name,
-                                             during=f"{self._type_name}.{name}")
+            value = self._submission.request("get", self._handle, name, during=self._name_of(name))
         except StudentError as error:
             if error.type_name == "AttributeError":
                 raise AttributeError(str(error)) from None
@@ -136,7 +135,10 @@ class RemoteObject:
             raise AttributeError(f"cannot set {name} on the student's object")
         self._callables.pop(name, None)
         self._submission.request("set", self._handle, name, value,
-                                 during=f"setting {self._type_name}.{name}")
+                                 during=f"setting {self._name_of(name)}")
+
+    def _name_of(self, attribute: str) -> str:
+        return f"{self._type_name}.{attribute}"
 
     def __repr__(self) -> str:
         return f"{self._type_name} object"
@@ -148,6 +150,7 @@ def remote_object(submission: Submission, handle: int, type_name: str) -> Remote
     cls = _object_classes.get(name)
     if cls is None:
         cls = _object_classes[name] = type(name, (RemoteObject,), {"__module__": "student"})
+        STAND_INS.add(cls)
     return cls(submission, handle, name)
 
 
@@ -157,8 +160,15 @@ class RemoteModule(RemoteObject):
     def __init__(self, submission: Submission, handle: int = 0):
         super().__init__(submission, handle, "module")
 
+    def _name_of(self, attribute: str) -> str:
+        return attribute
+
     def __repr__(self) -> str:
         return f"<the student's file {self._submission.path.name}>"
+
+
+#: Every class of stand-in (the pickler looks an object's exact type up here).
+STAND_INS: set[type] = {RemoteFunction, RemoteObject, RemoteModule}
 
 
 def submission_of(proxy: RemoteObject | RemoteFunction) -> Submission:

@@ -37,12 +37,14 @@ from pathlib import Path
 
 import numpy as np
 
+from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import Channel, ChannelClosedError, ChannelError, ChannelTimeoutError, enlarge
 from ptlab.untrusted.child import PTLAB, Limits, serve
 from ptlab.untrusted.ownership import library_answer as borrowed_answer
 from ptlab.untrusted.plain_data import RECORDS, Decoder, MalformedError
-from ptlab.untrusted.processes import ProcessGuard
+from ptlab.untrusted.processes import LINUX, ProcessGuard, process_table
 from ptlab.untrusted.proxies import (
+    STAND_INS,
     RemoteFunction,
     RemoteModule,
     RemoteObject,
@@ -53,7 +55,7 @@ from ptlab.untrusted.proxies import (
 )
 
 #: Imported once in the fork server, not again in every check's process.
-PRELOAD = ["numpy", "trimesh", "ptlab.rendering", "ptlab.untrusted.child", "ptlab.exercises"]
+PRELOAD = ["numpy", "ptlab.rendering", "ptlab.untrusted.child"]
 #: The largest reply, in bytes (a few renders' worth of arrays).
 MAX_REPLY = 1 << 30
 #: The library's own answers, which are graded as themselves (not as re-exports).
@@ -84,7 +86,7 @@ class UnreadableResultError(StudentError):
     """The student's function returned something the schema cannot carry."""
 
 
-def shared_types() -> tuple[type, ...]:
+def shared_types() -> frozenset[type]:
     """The classes whose objects cross once per check (see the module docstring)."""
     from ptlab.accel.numpy_bvh import NumpyBVH
     from ptlab.scene import Scene
@@ -94,7 +96,7 @@ def shared_types() -> tuple[type, ...]:
         kinds.append(EmbreeAccelerator)
     except ImportError:      # no Embree here: nothing of that kind to send
         pass
-    return tuple(kinds)
+    return frozenset(kinds)
 
 
 class Submission:
@@ -103,7 +105,8 @@ class Submission:
     Args:
         path: the student's Python file.
         guard: the ``ProcessGuard`` that ends the process and all it starts.
-        time_limit: seconds from now by which everything asked of this process must be done.
+        time_limit: seconds, from when the process has started, by which everything asked
+            of it must be done.
         call_time_limit: seconds any one request may take (default: the whole ``time_limit``).
         on_output: called with each line the student's code prints (default: dropped).
         limits: the process's resource limits.
@@ -119,7 +122,6 @@ class Submission:
         self.path = Path(path)
         self.guard = guard
         self.time_limit = time_limit
-        self.deadline = time.monotonic() + time_limit
         self.call_time_limit = call_time_limit
         self.tree = parse(self.path)
         self.library_answers_allowed = self.path.resolve().is_relative_to(SOLUTIONS)
@@ -129,12 +131,16 @@ class Submission:
         self._shared_types = shared_types()
         self.process, self.channel = self._start(on_output, limits or Limits(
             cpu_seconds=int(time_limit) + 10))
+        # From here: starting the fork server (the first time, a second or two) is not the
+        # student's time.
+        self.deadline = time.monotonic() + time_limit
         self.module = RemoteModule(self)
         self._wait_until_imported()
 
     # -- starting and ending -------------------------------------------------------------
 
     def _start(self, on_output, limits: Limits):
+        keep_freed_memory()     # replies arrive in new buffers, as they do in the student's process
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(PRELOAD)
         multiprocessing.forkserver.ensure_running()
@@ -153,6 +159,9 @@ class Submission:
         finally:
             for end in ends:
                 end.close()
+        server = process_table().get(process.pid) if LINUX else None
+        if server is not None and server != os.getpid():
+            self.guard.add_server(server)
         return process, Channel(request_w, reply_r, output_r, on_output)
 
     @property
@@ -176,9 +185,9 @@ class Submission:
 
     def end_started_processes(self) -> None:
         """End the processes the student's code started (its pools), not the process itself."""
-        from ptlab.untrusted.processes import LINUX, process_table
         if LINUX:
-            self.guard.end(*[pid for pid, parent in process_table().items() if parent == self.pid])
+            self.guard.end(*[pid for pid, parent in process_table().items() if parent == self.pid],
+                           keep={self.pid})
 
     def import_by_file_name(self) -> RemoteModule | str:
         """The student's file imported again in its process, under its own name
@@ -219,6 +228,12 @@ class Submission:
         if writeback:
             self._write_back((args, kwargs), changes, function.__name__)
         return value
+
+    def call_each(self, objects: list[RemoteObject], which: np.ndarray, method: str, *args):
+        """``objects[which[k]].<method>`` on row k of ``args``, for all rows in one request
+        (materials of the student's that shade one batch of hits)."""
+        return self.request("call_each", [o._handle for o in objects], which, method, args,
+                            during=f"{objects[0]._type_name}.{method}")
 
     def request(self, operation: str, *arguments, during: str, changes: bool = False):
         """Send one request and return its decoded answer (with ``changes``: and the
@@ -272,7 +287,7 @@ class Submission:
         try:
             if not parts:
                 raise MalformedError("an empty reply")
-            envelope = json.loads(parts[0])
+            envelope = json.loads(bytes(parts[0]))
             if type(envelope) is not dict or envelope.get("id") != request_id:
                 raise MalformedError("a reply that does not answer the request")
         except (ValueError, RecursionError, UnicodeDecodeError, MalformedError) as error:
@@ -319,20 +334,15 @@ class Submission:
         _Pickler(stream, self, buffer_callback=buffers.append).dump(value)
         return [stream.getbuffer(), *(b.raw() for b in buffers)]
 
-    def _persistent_id(self, value, top):
-        if isinstance(value, RemoteObject | RemoteFunction):
-            if submission_of(value) is not self:
-                raise pickle.PicklingError("an object of another student's process")
-            return ("handle", value._handle)
-        if value is not top and isinstance(value, self._shared_types):
-            if id(value) in self._shared:
-                return ("shared", self._shared[id(value)][0])
-            key = len(self._shared)
-            self._shared[id(value)] = (key, value)      # (kept alive, so its id stays its own)
-            stream = io.BytesIO()
-            _Pickler(stream, self, top=value).dump(value)
-            return ("shared", key, stream.getvalue())
-        return None
+    def _share(self, value) -> tuple:
+        """The reference to a shared object (with the object itself, the first time)."""
+        if id(value) in self._shared:
+            return ("shared", self._shared[id(value)][0])
+        key = len(self._shared)
+        self._shared[id(value)] = (key, value)      # (kept alive, so its id stays its own)
+        stream = io.BytesIO()
+        _Pickler(stream, self, top=value).dump(value)
+        return ("shared", key, stream.getvalue())
 
     # -- a call's changes, to the grader's arguments --------------------------------------
 
@@ -375,14 +385,44 @@ class Submission:
 
 class _Pickler(pickle.Pickler):
     """Pickles the grader's data for the student's process, with stand-ins sent as the
-    handles of the objects they stand for, and shared objects sent once."""
+    handles of the objects they stand for, shared objects sent once, and large arrays whose
+    rows are all the same (the graders' ``batch(wo, rows)``) sent as one row."""
 
     def __init__(self, stream, submission: Submission, top=None, buffer_callback=None):
         super().__init__(stream, protocol=5, buffer_callback=buffer_callback)
         self.submission, self.top = submission, top
+        self.special = STAND_INS | submission._shared_types | {np.ndarray}
 
     def persistent_id(self, value):
-        return self.submission._persistent_id(value, self.top)
+        kind = type(value)      # (called for every object pickled: exact types, looked up)
+        if kind not in self.special or value is self.top:
+            return None
+        if kind is np.ndarray:
+            if not _same_rows(value):
+                return None
+            return ("rows", value[:1].copy(), len(value), "F" if value.flags.f_contiguous else "C")
+        if kind in STAND_INS:
+            if submission_of(value) is not self.submission:
+                raise pickle.PicklingError("an object of another student's process")
+            return ("handle", value._handle)
+        return self.submission._share(value)
+
+
+#: Arrays at least this large are looked at for rows that are all the same.
+SAME_ROWS_BYTES = 1 << 18
+
+
+def _same_rows(array: np.ndarray) -> bool:
+    """Whether every row of a large 2-D array is, bit for bit, its first (most arrays that
+    are not differ in their second row, which is looked at first)."""
+    if array.ndim != 2 or len(array) < 2 or array.nbytes < SAME_ROWS_BYTES \
+            or array.dtype.kind not in "biuf" or array.dtype.fields is not None:
+        return False
+    bits = array.view(f"u{array.dtype.itemsize}")
+    first = bits[0]
+    if (bits[1] != first).any():
+        return False
+    return bool((bits.min(axis=0) == first).all() and (bits.max(axis=0) == first).all())
 
 
 def _step(container, kind: str, key):
