@@ -22,14 +22,32 @@ import pytest
 from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade, run_check
-from ptlab.untrusted import ProcessGuard, StudentError, Submission
+from ptlab.untrusted import ProcessGuard, StudentError, Submission, SubmissionFailed
 from ptlab.untrusted.channel import Channel, ChannelError, ChannelTimeoutError
 from ptlab.untrusted.ownership import library_answer
 from ptlab.untrusted.plain_data import Decoder, Encoder, MalformedError, UnsendableError
-from ptlab.untrusted.processes import process_table
+from ptlab.untrusted.processes import descendants, process_table
 
 ATTACKS = Path(__file__).parent / "attacks"
 RIGHT_CAMERA = Path(__file__).parent / "exercises" / "01_right_own_code.py"
+
+
+def _is_multiprocessing_helper(pid: int) -> bool:
+    """The fork server and resource tracker that the graders share for the whole session."""
+    try:
+        command = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return True        # gone meanwhile
+    return b"multiprocessing.forkserver" in command or b"multiprocessing.resource_tracker" in command
+
+
+@pytest.fixture(autouse=True)
+def nothing_left_behind():
+    """After every test: no process below this one but multiprocessing's own helpers."""
+    yield
+    below = descendants({os.getpid()}, process_table(alive_only=True)) - {os.getpid()}
+    left = [pid for pid in below if not _is_multiprocessing_helper(pid)]
+    assert left == [], [Path(f"/proc/{pid}/cmdline").read_bytes()[:200] for pid in left]
 
 
 @pytest.fixture
@@ -317,6 +335,20 @@ def test_calls_change_the_graders_arguments_as_they_would_in_its_own_process(tmp
         material, x = module.Material(3), np.ones(2)
         assert material.k == 3 and material.eval(x) == 3 and (x == 1).all()  # methods: results only
         assert getattr(module, "missing", None) is None
+
+
+def test_a_call_has_its_own_time_limit_and_ends_the_process(tmp_path):
+    path = tmp_path / "student.py"
+    path.write_text("import time\ndef slow():\n    time.sleep(60)\ndef fast():\n    return 1\n")
+    with ProcessGuard() as guard, Submission(path, guard, time_limit=30,
+                                             call_time_limit=0.5) as submission:
+        start = time.monotonic()
+        with pytest.raises(SubmissionFailed, match=r"took longer than 0.5 s .*\(in slow\)"):
+            submission.module.slow()
+        assert time.monotonic() - start < 5
+        with pytest.raises(SubmissionFailed):       # the process is gone: so is every later call
+            submission.module.fast()
+        assert alive([submission.pid]) == []
 
 
 def test_the_guard_ends_processes_that_left_their_session_and_their_parent():

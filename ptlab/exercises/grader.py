@@ -142,7 +142,7 @@ def run_check(check, path: Path, timeout: float, guard: ProcessGuard,
     except SubmissionFailed as failure:
         message = str(failure)
         if failure.kind == "timeout":
-            message = (f"took longer than {timeout:.0f} s and was stopped, in {failure.during} "
+            message = (f"took longer than {timeout:.3g} s and was stopped, in {failure.during} "
                        f"({TIMEOUT_HINT})")
     except PtlabError as error:
         message = str(error)

@@ -116,11 +116,14 @@ class ProcessGuard:
             me = os.getpid()
             self._helpers = {pid for pid, parent in process_table().items() if parent == me}
 
-    def add_server(self, pid: int) -> None:
-        """Count ``pid`` (a fork server) as a helper whose children are all ours to end: a
-        student's code that asked it for a process of its own (through its socket) must not
-        slip out of reach."""
+    def add_server(self, pid: int, started: int) -> None:
+        """Count ``pid``, the fork server that just ``started`` a process, as a helper whose
+        later children are all ours to end (a student's code that asks it for a process of
+        its own, through its socket, must not slip out of reach); its children of now but
+        ``started`` (the workers of a pool this process keeps) stay helpers."""
         self._servers.add(pid)
+        self._helpers |= {child for child, parent in process_table().items()
+                          if parent == pid and child != started}
 
     def end(self, *roots: int, keep: Iterable[int] = ()) -> None:
         """End ``roots``, every process below them, every orphan re-parented here and every
@@ -133,8 +136,9 @@ class ProcessGuard:
         stopped: set[int] = set()
         for _ in range(MAX_SWEEPS):
             table = process_table()
-            orphans = {pid for pid, parent in table.items() if pid not in keep and (
-                (parent == me and pid not in self._helpers) or parent in self._servers)}
+            orphans = {pid for pid, parent in table.items()
+                       if pid not in keep and pid not in self._helpers
+                       and (parent == me or parent in self._servers)}
             victims = descendants(set(roots) | orphans, table) - stopped - keep - {me}
             if not victims:
                 break

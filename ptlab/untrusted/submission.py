@@ -129,6 +129,7 @@ class Submission:
         self._failure: SubmissionFailed | None = None
         self._shared: dict[int, tuple[int, object]] = {}
         self._shared_types = shared_types()
+        self._special: tuple[int, frozenset[type]] | None = None
         self.process, self.channel = self._start(on_output, limits or Limits(
             cpu_seconds=int(time_limit) + 10))
         # From here: starting the fork server (the first time, a second or two) is not the
@@ -161,7 +162,7 @@ class Submission:
                 end.close()
         server = process_table().get(process.pid) if LINUX else None
         if server is not None and server != os.getpid():
-            self.guard.add_server(server)
+            self.guard.add_server(server, started=process.pid)
         return process, Channel(request_w, reply_r, output_r, on_output)
 
     @property
@@ -208,7 +209,7 @@ class Submission:
             self.close()
             if failure.kind == "timeout":
                 raise ImportFailed(f"importing {self.path.name} took longer than "
-                                   f"{self.time_limit:.0f} s (does it run something at import?)") from None
+                                   f"{self.time_limit:g} s (does it run something at import?)") from None
             raise ImportFailed(str(failure)) from None
         if "import_failed" in envelope and type(envelope["import_failed"]) is str:
             self.close()
@@ -241,18 +242,17 @@ class Submission:
         if self._failure is not None:
             raise self._failure
         self._requests += 1
-        deadline = self.deadline
+        deadline, limit = self.deadline, self.time_limit
         if self.call_time_limit is not None and time.monotonic() + self.call_time_limit < deadline:
-            deadline = time.monotonic() + self.call_time_limit
-            during = f"{during}, which may take {self.call_time_limit:.0f} s"
+            deadline, limit = time.monotonic() + self.call_time_limit, self.call_time_limit
         parts = self._pickle((operation, *arguments))
         try:
             self.channel.send([self._requests.to_bytes(8, "little"), *parts], deadline)
         except ChannelTimeoutError:
-            self._fail("timeout", during)
+            self._fail("timeout", during, limit=limit)
         except ChannelClosedError:
             self._fail("ended", during)
-        envelope, decoder = self._receive(self._requests, during, deadline)
+        envelope, decoder = self._receive(self._requests, during, deadline, limit)
         try:
             if "raised" in envelope:
                 raise self._student_error(envelope["raised"])
@@ -274,12 +274,13 @@ class Submission:
         except MalformedError as error:
             self._fail("malformed", during, str(error))
 
-    def _receive(self, request_id: int, during: str, deadline: float | None = None):
+    def _receive(self, request_id: int, during: str, deadline: float | None = None,
+                 limit: float | None = None):
         deadline = self.deadline if deadline is None else deadline
         try:
             parts = self.channel.receive(deadline, MAX_REPLY)
         except ChannelTimeoutError:
-            self._fail("timeout", during)
+            self._fail("timeout", during, limit=limit)
         except ChannelClosedError:
             self._fail("ended", during)
         except ChannelError as error:
@@ -311,11 +312,12 @@ class Submission:
         return student_error(_one_line(type_name)[:60], _one_line(message),
                              None if where is None else _one_line(where)[:200], not_implemented)
 
-    def _fail(self, kind: str, during: str, detail: str = ""):
+    def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None):
         """Record the failure, end the process, raise ``SubmissionFailed`` (now and for
-        every later request)."""
+        every later request); ``limit`` is the time limit that ran out, if one did."""
         if kind == "timeout":
-            message = f"took longer than {self.time_limit:.0f} s and was stopped (in {during})"
+            limit = self.time_limit if limit is None else limit
+            message = f"took longer than {limit:g} s and was stopped (in {during})"
         elif kind == "ended":
             self.process.join(1)
             message = f"your code's process ended during {during} ({_exit_cause(self.process.exitcode)})"
@@ -328,20 +330,27 @@ class Submission:
     # -- the grader's data, to the student's process --------------------------------------
 
     def _pickle(self, value) -> list:
-        """[pickle, *out-of-band buffers] (large arrays cross without a copy into the pickle)."""
-        buffers: list = []
+        """[pickle, *arrays' data]: arrays cross as their bytes, without a copy into the pickle."""
+        arrays: list = []
         stream = io.BytesIO()
-        _Pickler(stream, self, buffer_callback=buffers.append).dump(value)
-        return [stream.getbuffer(), *(b.raw() for b in buffers)]
+        _Pickler(stream, self, arrays).dump(value)
+        return [stream.getbuffer(), *arrays]
 
-    def _share(self, value) -> tuple:
+    def _special_types(self) -> frozenset[type]:
+        """The types the pickler treats apart (stand-ins, shared objects, arrays); made
+        again only when a new class of stand-in has appeared."""
+        if self._special is None or self._special[0] != len(STAND_INS):
+            self._special = (len(STAND_INS), frozenset(STAND_INS | self._shared_types | {np.ndarray}))
+        return self._special[1]
+
+    def _share(self, value, arrays: list) -> tuple:
         """The reference to a shared object (with the object itself, the first time)."""
         if id(value) in self._shared:
             return ("shared", self._shared[id(value)][0])
         key = len(self._shared)
         self._shared[id(value)] = (key, value)      # (kept alive, so its id stays its own)
         stream = io.BytesIO()
-        _Pickler(stream, self, top=value).dump(value)
+        _Pickler(stream, self, arrays, top=value).dump(value)
         return ("shared", key, stream.getvalue())
 
     # -- a call's changes, to the grader's arguments --------------------------------------
@@ -384,28 +393,38 @@ class Submission:
 
 
 class _Pickler(pickle.Pickler):
-    """Pickles the grader's data for the student's process, with stand-ins sent as the
-    handles of the objects they stand for, shared objects sent once, and large arrays whose
-    rows are all the same (the graders' ``batch(wo, rows)``) sent as one row."""
+    """Pickles the grader's data for the student's process: stand-ins as the handles of the
+    objects they stand for, shared objects once, arrays as their raw bytes in a part of
+    their own (``arrays``), and large arrays whose rows are all the same (the graders'
+    ``batch(wo, rows)``) as one row."""
 
-    def __init__(self, stream, submission: Submission, top=None, buffer_callback=None):
-        super().__init__(stream, protocol=5, buffer_callback=buffer_callback)
-        self.submission, self.top = submission, top
-        self.special = STAND_INS | submission._shared_types | {np.ndarray}
+    def __init__(self, stream, submission: Submission, arrays: list, top=None):
+        super().__init__(stream, protocol=pickle.HIGHEST_PROTOCOL)
+        self.submission, self.arrays, self.top = submission, arrays, top
+        self.special = submission._special_types()
 
     def persistent_id(self, value):
         kind = type(value)      # (called for every object pickled: exact types, looked up)
         if kind not in self.special or value is self.top:
             return None
         if kind is np.ndarray:
-            if not _same_rows(value):
-                return None
-            return ("rows", value[:1].copy(), len(value), "F" if value.flags.f_contiguous else "C")
+            return self._array(value)
         if kind in STAND_INS:
             if submission_of(value) is not self.submission:
                 raise pickle.PicklingError("an object of another student's process")
             return ("handle", value._handle)
-        return self.submission._share(value)
+        return self.submission._share(value, self.arrays)
+
+    def _array(self, value: np.ndarray):
+        if value.dtype.hasobject or value.dtype.fields is not None:
+            return None                     # (pickled as usual)
+        order = "F" if value.flags.f_contiguous and not value.flags.c_contiguous else "C"
+        if _same_rows(value):
+            return ("rows", value[:1].copy(), len(value), order)
+        if not (value.flags.c_contiguous or value.flags.f_contiguous):
+            value = np.ascontiguousarray(value)
+        self.arrays.append(memoryview(value.reshape(-1, order=order)).cast("B"))
+        return ("array", len(self.arrays) - 1, value.dtype.str, value.shape, order)
 
 
 #: Arrays at least this large are looked at for rows that are all the same.
