@@ -93,7 +93,7 @@ class Channel:
         (count,) = COUNT.unpack(self._read(COUNT.size, deadline))
         if count > MAX_PARTS:
             raise ChannelError(f"a message of {count} parts")
-        lengths = [LENGTH.unpack(self._read(LENGTH.size, deadline))[0] for _ in range(count)]
+        lengths = struct.unpack(f"<{count}Q", self._read(LENGTH.size * count, deadline))
         if sum(lengths) > limit:
             raise ChannelError(f"a message of {sum(lengths):,} bytes (the limit is {limit:,})")
         return [self._read(length, deadline) for length in lengths]
@@ -235,7 +235,7 @@ class Reader:
     def read_message(self) -> list[bytearray]:
         """The next message from the grader (blocking)."""
         (count,) = COUNT.unpack(self._read(COUNT.size))
-        lengths = [LENGTH.unpack(self._read(LENGTH.size))[0] for _ in range(count)]
+        lengths = struct.unpack(f"<{count}Q", self._read(LENGTH.size * count))
         return [self._read(length) for length in lengths]
 
 
@@ -256,11 +256,14 @@ def _buffer(size: int) -> bytearray | np.ndarray:
 def _chunks(parts: list) -> list[memoryview]:
     """A message as the byte views to write: the header, then each part (a part may be a
     tuple of buffers, sent one after the other, to save joining them)."""
-    pieces = [[memoryview(b).cast("B") for b in (part if isinstance(part, tuple) else (part,))]
-              for part in parts]
-    header = COUNT.pack(len(parts)) + b"".join(LENGTH.pack(sum(len(b) for b in piece))
-                                               for piece in pieces)
-    return [memoryview(header)] + [b for piece in pieces for b in piece if len(b)]
+    lengths, views = [], []
+    for part in parts:
+        pieces = [memoryview(b).cast("B") for b in part] if isinstance(part, tuple) \
+            else [memoryview(part).cast("B")]
+        lengths.append(sum(map(len, pieces)))
+        views.extend(pieces)
+    header = COUNT.pack(len(parts)) + struct.pack(f"<{len(lengths)}Q", *lengths)
+    return [memoryview(header)] + [view for view in views if len(view)]
 
 
 def _advance(chunks: list[memoryview], written: int) -> None:

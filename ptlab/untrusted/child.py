@@ -348,15 +348,16 @@ class _Unpickler(pickle.Unpickler):
         self.server, self.arrays = server, arrays
 
     def persistent_load(self, pid):
-        kind, key, *payload = pid
-        if kind == "handle":
-            return self.server.handles[key]
-        if kind == "array":
-            dtype, shape, order = np.dtype(payload[0]), payload[1], payload[2]
+        if isinstance(pid, str):        # "array <part> <dtype> <shape> <order>"
+            _, part, dtype, shape, order = pid.split(" ")
+            dtype, shape = np.dtype(dtype), tuple(int(n) for n in shape.split(",") if n)
             count = math.prod(shape)
             if count == 0:
                 return np.empty(shape, dtype, order=order)
-            return np.frombuffer(self.arrays[key], dtype, count).reshape(shape, order=order)
+            return np.frombuffer(self.arrays[int(part)], dtype, count).reshape(shape, order=order)
+        kind, key, *payload = pid
+        if kind == "handle":
+            return self.server.handles[key]
         if kind == "rows":      # an array whose rows are all ``key`` (one row)
             rows, order = payload
             array = np.empty((rows, key.shape[1]), key.dtype, order=order)
@@ -409,6 +410,8 @@ class _Snapshot:
 
 
 _MISSING = object()
+#: Arrays smaller than this are compared as bytes (NumPy's comparison costs more to start).
+SMALL_ARRAY = 1 << 16
 
 
 def _same_bits(array: np.ndarray, before: np.ndarray) -> bool:
@@ -417,7 +420,7 @@ def _same_bits(array: np.ndarray, before: np.ndarray) -> bool:
     comparing ``tobytes()``, which reorders a column-major array)."""
     if array.shape != before.shape or array.dtype != before.dtype:
         return False
-    if array.dtype.itemsize not in (1, 2, 4, 8):
+    if array.nbytes < SMALL_ARRAY or array.dtype.itemsize not in (1, 2, 4, 8):
         return array.tobytes() == before.tobytes()
     bits = f"u{array.dtype.itemsize}"
     return bool(np.array_equal(array.view(bits), before.view(bits)))

@@ -20,6 +20,7 @@ of Python objects, strings or records is refused. Anything else, or anything dee
 
 from __future__ import annotations
 
+import functools
 import io
 import math
 import re
@@ -119,12 +120,17 @@ def npy_part(array: np.ndarray) -> tuple[bytes, memoryview]:
     fortran = bool(array.flags.f_contiguous and not array.flags.c_contiguous)
     if not (array.flags.c_contiguous or fortran):
         array = np.ascontiguousarray(array)
-    header = (f"{{'descr': {np.lib.format.dtype_to_descr(array.dtype)!r}, "
-              f"'fortran_order': {fortran}, 'shape': {array.shape!r}, }}").encode("latin1")
+    data = memoryview(array.reshape(-1, order="F" if fortran else "C")).cast("B")
+    return _npy_header(array.dtype, array.shape, fortran), data
+
+
+@functools.lru_cache(maxsize=256)
+def _npy_header(dtype: np.dtype, shape: tuple, fortran: bool) -> bytes:
+    header = (f"{{'descr': {np.lib.format.dtype_to_descr(dtype)!r}, "
+              f"'fortran_order': {fortran}, 'shape': {shape!r}, }}").encode("latin1")
     padding = -(len(NPY_MAGIC) + 2 + len(header) + 1) % 64      # numpy aligns data to 64 bytes
     header += b" " * padding + b"\n"
-    data = memoryview(array.reshape(-1, order="F" if fortran else "C")).cast("B")
-    return NPY_MAGIC + len(header).to_bytes(2, "little") + header, data
+    return NPY_MAGIC + len(header).to_bytes(2, "little") + header
 
 
 # -- the grader's side -------------------------------------------------------------------
@@ -155,15 +161,9 @@ def _read_header(part: bytearray) -> tuple[tuple, bool, np.dtype, int]:
     """(shape, fortran_order, dtype, data offset) from an ``.npy`` part's header."""
     if bytes(part[:len(NPY_MAGIC)]) == NPY_MAGIC and len(part) >= 10:
         end = 10 + int.from_bytes(bytes(part[8:10]), "little")
-        match = _SIMPLE_HEADER.fullmatch(bytes(part[10:end]))
-        if match:
-            descr, fortran, shape = match.groups()
-            try:
-                dtype = np.dtype(descr.decode("ascii"))
-            except TypeError:
-                raise MalformedError(f"an array of type {descr!r}") from None
-            shape = tuple(int(n) for n in (shape or b"").split(b",") if n.strip())
-            return shape, fortran == b"True", dtype, end
+        simple = _simple_header(bytes(part[10:end]))
+        if simple is not None:
+            return *simple, end
     stream = io.BytesIO(bytes(part[:65536]))
     try:
         version = np.lib.format.read_magic(stream)
@@ -177,6 +177,20 @@ def _read_header(part: bytearray) -> tuple[tuple, bool, np.dtype, int]:
     except Exception as error:  # numpy's parser refusing the header, in whatever way
         raise MalformedError(f"an .npy part with a bad header ({error})") from None
     return shape, fortran_order, dtype, stream.tell()
+
+
+@functools.lru_cache(maxsize=256)
+def _simple_header(header: bytes) -> tuple[tuple, bool, np.dtype] | None:
+    """(shape, fortran_order, dtype) of a header as ``numpy.save`` writes it, else None."""
+    match = _SIMPLE_HEADER.fullmatch(header)
+    if not match:
+        return None
+    descr, fortran, shape = match.groups()
+    try:
+        dtype = np.dtype(descr.decode("ascii"))
+    except TypeError:
+        raise MalformedError(f"an array of type {descr!r}") from None
+    return tuple(int(n) for n in (shape or b"").split(b",") if n.strip()), fortran == b"True", dtype
 
 
 def clean_text(text: str) -> str:

@@ -424,7 +424,9 @@ class _Pickler(pickle.Pickler):
         if not (value.flags.c_contiguous or value.flags.f_contiguous):
             value = np.ascontiguousarray(value)
         self.arrays.append(memoryview(value.reshape(-1, order=order)).cast("B"))
-        return ("array", len(self.arrays) - 1, value.dtype.str, value.shape, order)
+        # One string, not a tuple: pickle asks persistent_id about each item of a tuple.
+        shape = ",".join(map(str, value.shape))
+        return f"array {len(self.arrays) - 1} {value.dtype.str} {shape} {order}"
 
 
 #: Arrays at least this large are looked at for rows that are all the same.
