@@ -45,7 +45,10 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 
 All together a correct material fails with probability at most about 1.2e-3 by chance;
 ``scripts/false_alarm_rate.py`` measures it: 0 failures in 200 runs (its default), and 0 in
-1000 (``--seeds 100 --every-material``), that is below 0.37% with 95% confidence.
+1000 (``--seeds 100 --every-material``), that is below 0.37% with 95% confidence; with the
+four materials that compute in float32 added to its list, 0 failures in 140 runs
+(``--seeds 140``, each of the 14 materials 10 times, 10^6 samples per wo) and 0 in 280
+(``--seeds 20 --every-material --samples 200000``).
 """
 
 from __future__ import annotations
