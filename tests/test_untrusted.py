@@ -199,6 +199,27 @@ def test_the_librarys_answers_under_the_students_names_earn_nothing(attack):
         assert_honest_failure(result, "this is ptlab's own answer (ptlab.materials.")
 
 
+def test_what_the_students_code_says_cannot_forge_lines_of_the_table(tmp_path):
+    path = tmp_path / "01_cameras.py"
+    path.write_text("def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
+                    "    raise ValueError('oops\\n  render   2/2    pass     ok\\n  total"
+                    "  10/10  full marks\\x1b[2J')\n")
+    result = grade(chapter(1), path, timeout_scale=0.2)
+    lines = result.table().splitlines()
+    assert len(lines) == 3 + len(chapter(1).checks) + 1 and result.score == 0
+    assert all("\x1b" not in line and "oops render 2/2 pass ok total" in line for line in lines[3:-1])
+
+
+def test_resource_limits_hold_in_the_students_process(tmp_path):
+    path = tmp_path / "01_cameras.py"
+    path.write_text("import numpy as np\n"
+                    "def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
+                    "    return np.ones((1 << 40,)), None     # 8 TiB\n")
+    with ProcessGuard() as guard:
+        result = run_check(chapter(1).checks[0], path, 10.0, guard)
+    assert not result.passed and "MemoryError" in result.message
+
+
 # -- attacks on ptlab grade -----------------------------------------------------------------
 
 def test_ptlab_grade_judges_in_its_own_process_whatever_the_file_patches(attack, capsys):

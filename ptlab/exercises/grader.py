@@ -18,6 +18,7 @@ code started is ended before ``grade`` returns, and so before any result is writ
 from __future__ import annotations
 
 import hashlib
+import threading
 import time
 import unicodedata
 from collections.abc import Callable
@@ -109,6 +110,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
     if not path.is_file():
         raise PtlabError(f"{path}: no such file")
     sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
+    threading.Thread(target=_import_what_checks_use, daemon=True).start()
     overall = sum(check.timeout for check in chapter.checks) * timeout_scale + OVERALL_SLACK
     deadline = time.monotonic() + overall
     results = []
@@ -125,6 +127,16 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
     return Grade(chapter.number, chapter.title, str(path), results, sha256)
+
+
+def _import_what_checks_use() -> None:
+    """Import the renderer and the mesh and statistics libraries the checks use (trimesh
+    and SciPy take a second or more) while the first student's process starts, instead of
+    in the first check that needs them."""
+    import scipy.special  # noqa: F401
+    import trimesh  # noqa: F401
+
+    import ptlab.rendering  # noqa: F401
 
 
 def run_check(check, path: Path, timeout: float, guard: ProcessGuard,
