@@ -149,15 +149,19 @@ def _leave_the_grader(output_fd: int, limits: Limits, keep: set[int]) -> None:
 
 
 def _close_inherited(keep: set[int]) -> None:
-    """Close every file descriptor but stdin, stdout, stderr and ``keep``.
+    """Close every file descriptor but stdin, stdout, stderr, ``keep`` and the resource
+    tracker's.
 
-    A process from multiprocessing's fork server inherits the grader's ends of the fork
-    server's and the resource tracker's pipes (so that it could start processes through
-    them); written to, they would crash the grader's fork server. The student's code gets
-    a fork server and tracker of its own instead, should it start processes.
+    A process from multiprocessing's fork server inherits the grader's end of the fork
+    server's "alive" pipe (so that it could start processes through that server); written
+    to, it crashes the grader's fork server, so it goes, and the student's code gets a fork
+    server of its own should it start processes. The resource tracker's pipe stays: what
+    the student's code can do with it (register names for the tracker to unlink at its exit)
+    it can do anyway as the same user, and its pools need no tracker of their own.
     """
     from multiprocessing import forkserver, resource_tracker
 
+    keep = keep | {resource_tracker._resource_tracker._fd}
     try:
         open_fds = [int(name) for name in os.listdir("/proc/self/fd")]
     except OSError:
@@ -168,11 +172,9 @@ def _close_inherited(keep: set[int]) -> None:
                 os.close(fd)
             except OSError:
                 pass
-    # Forget them: these are multiprocessing's own records of the inherited ends.
+    # Forget them: multiprocessing's own records of the inherited ends just closed.
     forkserver._forkserver._forkserver_alive_fd = None
     forkserver._forkserver._inherited_fds = None
-    resource_tracker._resource_tracker._fd = None
-    resource_tracker._resource_tracker._pid = None
 
 
 def _lower_limit(name: int, value: int) -> None:
