@@ -5,8 +5,8 @@ is the student's to change: the grader trusts nothing it says beyond the schema 
 ``ptlab.untrusted.plain_data``. It
 
 1. leaves the grader's session and process group, asks to be killed if the fork server
-   goes, points its stdout and stderr at the grader's output pipe, and lowers its own
-   resource limits (``Limits``);
+   goes, closes the fork server's pipe it inherited, points its stdout and stderr at the
+   grader's output pipe, and lowers its own resource limits (``Limits``);
 2. imports the student's file (``import_file``) and says whether that worked;
 3. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
    an object it holds (object 0 is the student's module), ``call`` a function or method,
