@@ -174,15 +174,16 @@ def build_parser() -> argparse.ArgumentParser:
     from ptlab.grading.cli import add_grade_arguments
     add_grade_arguments(commands.add_parser(
         "grade", help="check a material's sample / eval / pdf statistically",
-        description="Load a material class from a Python file and run every check of "
-                    "ptlab.grading on it; exit 0 only if all pass (1 if any fails, 2 if the "
-                    "file cannot be loaded)."))
+        description="Load a material (anything with eval, pdf and sample) from a Python file "
+                    "in a process of its own and run every check of ptlab.grading on it; exit 0 "
+                    "only if all pass (1 if any fails, 2 if the file cannot be loaded)."))
 
     from ptlab.exercises.cli import add_exercise_arguments
     add_exercise_arguments(commands.add_parser(
-        "exercise", help="the step-by-step exercises: start, check, list",
+        "exercise", help="the step-by-step exercises: start, check, list, grade-all",
         description="Exercises from Whitted ray tracing to path tracing: `start NN` copies a "
-                    "chapter's file, `check NN FILE` grades it, `list` shows your progress."))
+                    "chapter's file, `check NN FILE` grades it, `list` shows your progress, "
+                    "`grade-all NN DIR` grades a whole class."))
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser

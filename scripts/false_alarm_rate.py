@@ -4,24 +4,72 @@
     python scripts/false_alarm_rate.py --seeds 50 --samples 200000 --every-material
 
 Seed k grades the (k mod M)-th of M correct materials (or, with ``--every-material``, all of
-them), with the harness's defaults otherwise. It prints each failure with the failed checks
-and the measured false-alarm rate with its 95% Clopper-Pearson interval. The issue asks for
-at most 2%; the checks' documented rates add up to about 0.12%.
+them), with the harness's defaults otherwise. Four of them compute in float32, as a
+student's material may (the renderer passes float32 arrays): the library's on float32
+copies of the arguments, and a Lambertian whose pi is ``np.float32(math.pi)``; they have only
+the homework's three functions, as the graders accept. It prints each failure with the
+failed checks and the measured false-alarm rate with its 95% Clopper-Pearson interval. The
+checks' documented rates add up to about 0.12%.
 """
 
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import time
 
 # One core, as the performance target says (NumPy's BLAS would otherwise spread over all).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
+import numpy as np  # noqa: E402
 from scipy.stats import beta  # noqa: E402
 
 from ptlab.grading import check_material  # noqa: E402
 from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror  # noqa: E402
+
+
+class Float32:
+    """A correct material computing in float32: ``material``'s three functions on float32
+    copies of the arguments (no sample_weight of its own: the graders derive it)."""
+
+    def __init__(self, material):
+        self.material = material
+
+    def eval(self, wo, wi, n):
+        return self.material.eval(*(np.asarray(a, np.float32) for a in (wo, wi, n)))
+
+    def pdf(self, wo, wi, n):
+        return self.material.pdf(*(np.asarray(a, np.float32) for a in (wo, wi, n)))
+
+    def sample(self, wo, n, u):
+        return self.material.sample(*(np.asarray(a, np.float32) for a in (wo, n, u)))
+
+    def __repr__(self) -> str:
+        return f"float32 {self.material!r}"
+
+
+class Float32Pi:
+    """A correct Lambertian (cosine sampling) whose pi is np.float32(math.pi)."""
+
+    albedo = np.array([0.8, 0.5, 0.2])
+
+    def eval(self, wo, wi, n):
+        above = (np.sum(wo * n, axis=1) > 0) & (np.sum(wi * n, axis=1) > 0)
+        return above[:, None] * self.albedo / np.float32(math.pi)
+
+    def pdf(self, wo, wi, n):
+        cos_theta = np.sum(wi * n, axis=1)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0),
+                        cos_theta / np.float32(math.pi), 0.0)
+
+    def sample(self, wo, n, u):
+        from ptlab.sampling import cosine_hemisphere_around
+        return cosine_hemisphere_around(n, u)
+
+    def __repr__(self) -> str:
+        return "Lambertian with a float32 pi"
+
 
 MATERIALS = [
     Diffuse((0.8, 0.5, 0.2)),
@@ -34,6 +82,10 @@ MATERIALS = [
     Microfacet("silver", roughness=0.6, kd=(0.5, 0.4, 0.3), ks=0.5, sampling="hemisphere"),
     Mirror((0.9, 0.8, 0.7), fresnel=True),
     Dielectric(1.5),
+    Float32(Diffuse((0.8, 0.5, 0.2))),
+    Float32(Microfacet("gold", alpha=0.3)),
+    Float32(Microfacet((1.0, 1.0, 1.0), alpha=0.05, sampling="hemisphere")),
+    Float32Pi(),
 ]
 
 

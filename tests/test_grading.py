@@ -8,6 +8,7 @@ rates). ``scripts/false_alarm_rate.py`` measures the false-alarm rate over 200 s
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 
 import numpy as np
@@ -174,3 +175,68 @@ def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, a
     assert ptlab_main(["grade", target, "--args", args]) == 2
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+
+
+# -- any object with the homework's three functions; float32 arithmetic ------------------------
+
+PLAIN = Path(__file__).parent / "exercises" / "06_right_plain_class_float32.py"
+
+
+class PlainDiffuse:
+    """The homework's three functions and nothing else (no base class)."""
+
+    def eval(self, wo, wi, n):
+        above = (np.sum(wo * n, axis=1) > 0) & (np.sum(wi * n, axis=1) > 0)
+        return np.outer(above * 0.7 / math.pi, np.ones(3))
+
+    def pdf(self, wo, wi, n):
+        cos_theta = np.sum(wi * n, axis=1)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0), cos_theta / math.pi, 0.0)
+
+    def sample(self, wo, n, u):
+        from ptlab.sampling import cosine_hemisphere_around
+        return cosine_hemisphere_around(n, u)
+
+
+def test_an_object_with_only_the_three_functions_is_a_material():
+    report = check_material(PlainDiffuse(), samples=SAMPLES)
+    assert report.passed, str(report)
+    assert report["sample_weight"].verdict == "pass"     # derived from the three, and checked
+
+
+def test_ptlab_grade_takes_a_class_that_inherits_from_nothing(capsys):
+    assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000",
+                       "--args", '{"albedo": [0.8, 0.5, 0.2]}']) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("Lambertian object") and "PASSED" in out
+
+
+class Float32Pi(Diffuse):
+    """A right Lambertian whose pi is np.float32(math.pi): its pdf integrates to 1 - 2.8e-8,
+    and with cosine sampling every sample's f cos / pdf is the same, so no noise covers it."""
+
+    def eval(self, wo, wi, n):
+        above = (np.sum(wo * n, axis=1) > 0) & (np.sum(wi * n, axis=1) > 0)
+        return above[:, None] * self.albedo / np.float32(math.pi)
+
+    def pdf(self, wo, wi, n):
+        cos_theta = np.sum(wi * n, axis=1)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0),
+                        cos_theta / np.float32(math.pi), 0.0)
+
+
+def test_float32_rounding_in_a_material_is_not_a_mistake():
+    # 10^6 samples at 80 degrees: there the tolerance without the float32 slack was 3e-9.
+    report = check_material(Float32Pi((0.8, 0.8, 0.8)), samples=1_000_000, wo_degrees=(80,))
+    assert report["estimator agreement"].verdict == "pass", str(report)
+
+
+def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
+    path = tmp_path / "slow.py"
+    path.write_text(PLAIN.read_text() + "\n\nclass Slow(Lambertian):\n"
+                    "    def pdf(self, wo, wi, n):\n        while True:\n            pass\n")
+    start = time.monotonic()
+    assert ptlab_main(["grade", f"{path}:Slow", "--samples", "20000", "--time-limit", "3"]) == 1
+    assert time.monotonic() - start < 30
+    out = capsys.readouterr().out
+    assert "FAILED: took longer than 3 s and was stopped (in Slow.pdf)" in out

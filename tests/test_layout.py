@@ -22,7 +22,7 @@ LAYERS = [
                   "ptlab.scene"]),
     ("integrators", ["ptlab.integrators"]),
     ("rendering", ["ptlab.rendering", "ptlab"]),
-    ("tools", ["ptlab.measure", "ptlab.grading"]),
+    ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
     ("exercises", ["ptlab.exercises"]),
     ("command line", ["ptlab.cli"]),
 ]

@@ -404,22 +404,31 @@ class NumpyBVH:
                         ray: np.ndarray, hits: Hits) -> np.ndarray:
         """Test rays ``j`` against the triangles of their leaf ``node``, keeping hits
         with ``t_lo < t < t_best``: ``t_best`` is lowered in place, ``hits`` filled in
-        at ``ray[j]``. Returns (len(j),) bool: which rays found a hit."""
+        at ``ray[j]``. Returns (len(j),) bool: which rays found a hit.
+
+        Every (ray, triangle of its leaf) pair goes to ``ray_triangle`` in one batch, and
+        each ray keeps its nearest hit (the first of equal ones, in the leaf's order).
+        """
         first, count = self.bvh.first.take(node), self.bvh.count.take(node)
-        found = np.zeros(len(j), bool)
-        for slot in range(count.max()):
-            s = np.flatnonzero(count > slot)   # rays whose leaf has a triangle in this slot
-            rows, tri = j.take(s), first.take(s) + slot
-            t, u, v = ray_triangle(o.take(rows, axis=1).T, d.take(rows, axis=1).T,
-                                   self._v0.take(tri, axis=1).T, self._e1.take(tri, axis=1).T,
-                                   self._e2.take(tri, axis=1).T)
-            nearer = np.flatnonzero((t > t_lo.take(rows)) & (t < t_best.take(rows)))
-            rows, s, tri = rows.take(nearer), s.take(nearer), tri.take(nearer)
-            t_best[rows] = t.take(nearer)
-            r = ray.take(rows)
-            hits.t[r], hits.u[r], hits.v[r] = t.take(nearer), u.take(nearer), v.take(nearer)
-            hits.prim[r] = self.bvh.order.take(tri)
-            found[s] = True
+        start = np.cumsum(count) - count                 # where each ray's pairs begin
+        owner = np.repeat(np.arange(len(j)), count)      # the ray (index into j) of each pair
+        tri = np.repeat(first - start, count) + np.arange(len(owner))
+        rows = j.take(owner)
+        t, u, v = ray_triangle(o.take(rows, axis=1).T, d.take(rows, axis=1).T,
+                               self._v0.take(tri, axis=1).T, self._e1.take(tri, axis=1).T,
+                               self._e2.take(tri, axis=1).T)
+        t = np.where((t > t_lo.take(rows)) & (t < t_best.take(rows)), t, np.float32(np.inf))
+        nearest = np.minimum.reduceat(t, start)
+        found = nearest < np.inf
+        # The first pair of each ray that has its nearest t.
+        best = np.flatnonzero(t == nearest.take(owner))
+        best = best[np.unique(owner.take(best), return_index=True)[1]]
+        best = best.compress(found.take(owner.take(best)))
+        rows = rows.take(best)
+        t_best[rows] = t.take(best)
+        r = ray.take(rows)
+        hits.t[r], hits.u[r], hits.v[r] = t.take(best), u.take(best), v.take(best)
+        hits.prim[r] = self.bvh.order.take(tri.take(best))
         return found
 
     def _push_children(self, j: np.ndarray, node: np.ndarray, d: np.ndarray,

@@ -27,6 +27,10 @@ class TimedAccelerator:
         self.seconds = 0.0
         self._lock = threading.Lock()
 
+    def __reduce__(self):
+        # A lock cannot be pickled: a copy in another process times its own queries anew.
+        return (TimedAccelerator, (self.inner,))
+
     def _add(self, start: float) -> None:
         with self._lock:
             self.seconds += time.perf_counter() - start

@@ -1,8 +1,9 @@
 """What a chapter of the exercises is: its graded checks, and the helpers checks use.
 
 A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``,
-a list of ``Check``s. A check is a plain function of the student's module: it returns a short
-note of what it measured, or raises ``CheckFailed`` with a message for the student.
+a list of ``Check``s. A check is a plain function of the student's module (a stand-in for
+it, whose functions run in the student's own process: ``ptlab.untrusted``): it returns a
+short note of what it measured, or raises ``CheckFailed`` with a message for the student.
 ``ptlab.exercises.grader`` runs the checks; this module only describes them.
 """
 
@@ -15,6 +16,8 @@ from pathlib import Path
 from types import ModuleType
 
 import numpy as np
+
+from ptlab.untrusted import library_answer
 
 #: The exercises package: templates/ and solutions/ are beside this file.
 HERE = Path(__file__).parent
@@ -93,17 +96,28 @@ def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndar
 
 def student_file(module: ModuleType) -> str:
     """The student's file as a command run where the check runs can name it: relative to the
-    current folder when it lies inside it, else absolute; quoted for the shell if need be."""
-    path = Path(module.__file__).resolve()
+    current folder when it lies inside it, else absolute; quoted for the shell if need be.
+
+    ``module`` is the grader's stand-in for the student's module (``ptlab.untrusted``),
+    which knows the file it was imported from."""
+    from ptlab.untrusted import submission_of
+
+    path = submission_of(module).path.resolve()
     here = Path.cwd().resolve()
     shown = path.relative_to(here) if path.is_relative_to(here) else path
     return shlex.quote(str(shown))
 
 
 def require(module: ModuleType, *names: str) -> list[Callable]:
-    """The functions ``names`` of the student's module; a clear failure if one is missing."""
+    """The functions ``names`` of the student's module; a clear failure if one is missing,
+    or is ptlab's own answer under the student's name (``ptlab.untrusted.ownership``)."""
     missing = [name for name in names if not callable(getattr(module, name, None))]
     if missing:
         raise CheckFailed(f"your file has no function {', '.join(missing)} (keep the names of "
                           f"the exercise file)")
+    for name in names:
+        origin = library_answer(module, name)
+        if origin is not None:
+            raise CheckFailed(f"{name}: this is ptlab's own answer ({origin}), not yours: "
+                              f"write it in your file")
     return [getattr(module, name) for name in names]

@@ -1,10 +1,11 @@
-"""``ptlab exercise start | check | list | docs``: the exercises from the command line.
+"""``ptlab exercise start | check | list | docs | grade-all``: the exercises from the command line.
 
-    ptlab exercise list                    # the chapters, and which are passed here
+    ptlab exercise list                    # the chapters, and which are passed (and where)
     ptlab exercise start 1                 # copies 01_cameras.py into this folder
     ptlab exercise docs 1                  # chapter 1's page (--zh: in Chinese), its tutorial
     ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full marks
     ptlab exercise check 1 01_cameras.py --json result.json
+    ptlab exercise grade-all 1 submissions/ --csv grades.csv --workers 2   # a whole class
 """
 
 from __future__ import annotations
@@ -16,11 +17,13 @@ import shutil
 import sys
 from pathlib import Path
 
+from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 
 
 def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``start``, ``check``, ``list`` and ``docs`` to the ``ptlab exercise`` subparser."""
+    """Add ``start``, ``check``, ``list``, ``docs`` and ``grade-all`` to the ``ptlab exercise``
+    subparser."""
     actions = parser.add_subparsers(dest="action", required=True, parser_class=type(parser))
     start = actions.add_parser(
         "start", help="copy a chapter's exercise file to write your functions in",
@@ -32,19 +35,22 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     check = actions.add_parser(
         "check", help="grade your functions for a chapter",
         description="Plug FILE's functions into the renderer in place of the library's own, "
-                    "run the chapter's checks, print a score table. Exit 0 only on full "
-                    "marks, 1 otherwise, 2 if FILE cannot be read.")
+                    "run the chapter's checks, print a score table. FILE runs in a process of "
+                    "its own; what it prints is shown after '|'. Exit 0 only on full marks, 1 "
+                    "otherwise, 2 if FILE cannot be read.")
     check.add_argument("chapter", metavar="NN", help="the chapter number")
     check.add_argument("file", metavar="FILE", help="your exercise file")
     check.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT")
-    check.add_argument("--timeout-scale", type=float, default=1.0, metavar="X",
-                       help="multiply every check's time limit by X (slow machines)")
+    _add_timeout_scale(check)
 
     listing = actions.add_parser(
         "list", help="list the chapters and which you have passed",
-        description="List the chapters, with the score of the last check of each in DIR.")
-    listing.add_argument("dir", nargs="?", default=".",
-                         help="your exercise folder (default here)")
+        description="List the chapters with the last result of each, from the records that "
+                    "'check' keeps beside the files it checked: in DIR and its subfolders, or "
+                    "(without DIR) in this folder, its subfolders and the folders 'start' "
+                    "copied files into.")
+    listing.add_argument("dir", nargs="?", help="where to look (default: here, and the folders "
+                                                "'start' made)")
 
     docs = actions.add_parser(
         "docs", help="show a chapter's page, and where its pictures and tutorial are",
@@ -56,14 +62,35 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     docs.add_argument("--path", action="store_true",
                       help="print only the page's path (to open it in a Markdown viewer)")
 
+    batch = actions.add_parser(
+        "grade-all", help="grade a whole class's submissions (for teachers)",
+        description="Grade every submission in DIR for chapter NN: each Python file, or each "
+                    "folder (holding the chapter's file, or one Python file), is one student. "
+                    "Each is graded in isolation, several at once; the CSV gets one row per "
+                    "student and is rewritten after each, so an interrupted run resumes "
+                    "(students already in the CSV are not graded again).")
+    batch.add_argument("chapter", metavar="NN", help="the chapter number")
+    batch.add_argument("dir", metavar="DIR", help="the folder of submissions")
+    batch.add_argument("--csv", metavar="OUT", help="the grades (default grades-NN.csv here)")
+    batch.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) // 2),
+                       metavar="K", help="students graded at once (default: half the cores)")
+    _add_timeout_scale(batch)
+
+
+def _add_timeout_scale(parser: argparse.ArgumentParser) -> None:
+    parser.add_argument("--timeout-scale", type=float, default=1.0, metavar="X",
+                        help="multiply every check's time limit by X (slow machines)")
+
 
 def run_exercise(args: argparse.Namespace) -> int:
     """The handler of ``ptlab exercise``."""
-    return {"start": _start, "check": _check, "list": _list, "docs": _docs}[args.action](args)
+    return {"start": _start, "check": _check, "list": _list, "docs": _docs,
+            "grade-all": _grade_all}[args.action](args)
 
 
 def _start(args) -> int:
     from ptlab.exercises import chapter
+    from ptlab.exercises.progress import remember_folder
 
     found = chapter(args.chapter)
     folder = Path(args.dir)
@@ -74,6 +101,7 @@ def _start(args) -> int:
         raise PtlabError(f"{target}: already exists (your work?); use --force to overwrite it")
     folder.mkdir(parents=True, exist_ok=True)
     shutil.copyfile(found.template, target)
+    remember_folder(folder)
     print(f"wrote {target.resolve()}")
     print(f"Chapter {found.number}: {found.title}. Write {', '.join(found.functions)}.")
     print(f"Read the chapter with: ptlab exercise docs {found.number}   (中文: --zh)")
@@ -102,43 +130,88 @@ def _docs(args) -> int:
     return 0
 
 
+def _timeout_scale(args) -> float:
+    if not 0 < args.timeout_scale <= 100:
+        raise PtlabError(f"--timeout-scale {args.timeout_scale}: must be in (0, 100]")
+    return args.timeout_scale
+
+
 def _check(args) -> int:
     from ptlab.exercises import chapter
     from ptlab.exercises.grader import grade
     from ptlab.exercises.progress import remember
 
     found = chapter(args.chapter)
-    if not 0 < args.timeout_scale <= 100:
-        raise PtlabError(f"--timeout-scale {args.timeout_scale}: must be in (0, 100]")
+    scale = _timeout_scale(args)
     path = Path(args.file)
     if path.suffix != ".py":
         raise PtlabError(f"{path}: expected a Python file (.py)")
+    if args.json and not Path(args.json).parent.is_dir():
+        raise PtlabError(f"--json {args.json}: folder {Path(args.json).parent} does not exist")
     # A line per check as it finishes, on a terminal (a course's scripts get the table only).
     echo = (lambda line: print(line, file=sys.stderr)) if sys.stderr.isatty() else None
-    result = grade(found, path, timeout_scale=args.timeout_scale, echo=echo)
+    result = grade(found, path, timeout_scale=scale, echo=echo,
+                   on_output=lambda line: print(f"    | {line}", file=sys.stderr))
+    # grade() has ended every process of the student's code: nothing can change what follows.
     print(result.table())
     if args.json:
-        Path(args.json).write_text(json.dumps(result.as_dict(), indent=2) + "\n")
+        text = json.dumps(result.as_dict(), indent=2) + "\n"
+        write_atomically(args.json, lambda temporary: Path(temporary).write_text(text))
     remember(result)
     return 0 if result.full_marks else 1
 
 
 def _list(args) -> int:
     from ptlab.exercises import all_chapters
-    from ptlab.exercises.progress import read_record
+    from ptlab.exercises.progress import find_progress, folders_below, started_folders, status
 
-    folder = Path(args.dir)
-    if not folder.is_dir():
-        raise PtlabError(f"{folder}: no such folder")
-    record = read_record(folder)
-    print(f"{'NN':2}  {'chapter':52}  {'status':18}  write")
+    if args.dir is not None:
+        top = Path(args.dir)
+        if not top.is_dir():
+            raise PtlabError(f"{top}: no such folder")
+        places, folders = [f"{top} and its subfolders"], folders_below(top)
+    else:
+        started = started_folders()
+        places = ["this folder and its subfolders"] + [str(f) for f in started]
+        folders = folders_below(Path.cwd()) + started
+    progress, records = find_progress(folders)
+    print(f"looked in {'; '.join(places)}: "
+          + (f"{len(records)} record{'s' if len(records) != 1 else ''} found"
+             if records else "no results recorded ('ptlab exercise check' records them "
+                             "beside the file it checks)"))
+    print(f"{'NN':2}  {'chapter':52}  {'status':26}  {'file':30}  write")
     for found in all_chapters():
-        entry = record.get(f"{found.number:02d}")
-        if entry is None:
-            status = "-"
-        elif entry.get("full_marks"):
-            status = f"passed ({entry['score']}/{entry['max_score']})"
-        else:
-            status = f"{entry.get('score')}/{entry.get('max_score')} points"
-        print(f"{found.number:02d}  {found.title:52}  {status:18}  {', '.join(found.functions)}")
+        entry = progress.get(f"{found.number:02d}")
+        state, where = "-", ""
+        if entry is not None:
+            state = status(*entry)
+            where = _shown(entry[1] / str(entry[0].get("file", "")))
+        print(f"{found.number:02d}  {found.title:52}  {state:26}  {where:30}  "
+              f"{', '.join(found.functions)}")
+    return 0
+
+
+def _shown(path: Path) -> str:
+    """``path`` relative to here where it is below here, else as it is."""
+    try:
+        return str(path.relative_to(Path.cwd().resolve()))
+    except ValueError:
+        return str(path)
+
+
+def _grade_all(args) -> int:
+    from ptlab.exercises import chapter
+    from ptlab.exercises.batch import grade_all
+
+    found = chapter(args.chapter)
+    scale = _timeout_scale(args)
+    if args.workers < 1:
+        raise PtlabError(f"--workers {args.workers}: must be at least 1")
+    csv_path = Path(args.csv or f"grades-{found.number:02d}.csv")
+    if not csv_path.parent.is_dir():
+        raise PtlabError(f"--csv {csv_path}: folder {csv_path.parent} does not exist")
+    rows = grade_all(found, Path(args.dir), csv_path, workers=args.workers, timeout_scale=scale,
+                     progress=sys.stderr.isatty())
+    full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
+    print(f"{len(rows)} students in {csv_path}: {full} with full marks")
     return 0

@@ -1,28 +1,40 @@
 """Running a chapter's checks on a student's file, like a course autograder.
 
-Every check is worth some points and runs in a process of its own, with a time limit: a
-student's function that loops forever or crashes the interpreter costs that check's
-points, and the grader goes on to the next one. A check is a plain function of the
-student's module: it returns a short note of what it measured, or raises ``CheckFailed``
-with a message for the student. Anything else the student's code raises becomes the
-check's message too (the error, and the line of the student's file it came from), never a
-traceback.
+Student code only computes; trusted code judges. Every check runs here, in the grader's
+process, on a stand-in for the student's module: the student's file is imported, and each
+of its functions runs, in a process of its own (``ptlab.untrusted.Submission``, a fresh one
+per check), which sends back plain data only. So nothing the student's code does (patching
+NumPy or the checks, writing to the grader's pipes, exiting early) can touch a verdict.
+
+Every check is worth some points and has a time limit: a student's function that loops
+forever, crashes its process or sends nonsense costs that check's points, and the grader
+goes on to the next one. A check is a plain function of the student's module: it returns a
+short note of what it measured, or raises ``CheckFailed`` with a message for the student.
+An exception the student's code raised becomes the check's message too (the error, and the
+line of the student's file it came from), never a traceback. Every process the student's
+code started is ended before ``grade`` returns, and so before any result is written.
 """
 
 from __future__ import annotations
 
-import multiprocessing
-import os
-import signal
+import hashlib
+import threading
 import time
-import traceback
+import unicodedata
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from types import ModuleType
 
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import CheckFailed
+from ptlab.untrusted import ProcessGuard, StudentError, Submission, SubmissionFailed
+
+#: Seconds the whole grading may take beyond the sum of its checks' limits (starting the
+#: fork server, the library's own renders).
+OVERALL_SLACK = 60.0
+#: The longest message a check reports (the rest is cut off).
+MAX_MESSAGE = 1000
+TIMEOUT_HINT = "an endless loop, or a Python loop over every ray?"
 
 
 @dataclass
@@ -39,12 +51,18 @@ class CheckResult:
 
 @dataclass
 class Grade:
-    """Every check of one chapter on one file."""
+    """Every check of one chapter on one file.
+
+    Attributes:
+        sha256: the file's content as graded (hex), so that a record of the grade can tell
+            whether the file changed since.
+    """
 
     chapter: int
     title: str
     file: str
     results: list[CheckResult]
+    sha256: str = ""
 
     @property
     def score(self) -> int:
@@ -61,7 +79,7 @@ class Grade:
     def as_dict(self) -> dict:
         """A JSON-ready summary, for course infrastructure."""
         return dict(chapter=self.chapter, title=self.title, file=self.file, score=self.score,
-                    max_score=self.max_score, full_marks=self.full_marks,
+                    max_score=self.max_score, full_marks=self.full_marks, sha256=self.sha256,
                     checks=[asdict(r) for r in self.results])
 
     def table(self) -> str:
@@ -79,99 +97,76 @@ class Grade:
 
 
 def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
-          echo: Callable[[str], None] | None = None) -> Grade:
-    """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``."""
+          echo: Callable[[str], None] | None = None,
+          on_output: Callable[[str], None] | None = None) -> Grade:
+    """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
+
+    Args:
+        timeout_scale: multiplies every check's time limit (slow machines).
+        echo: called with a line per check as it finishes.
+        on_output: called with each line the student's code prints (default: dropped).
+    """
     path = Path(path)
     if not path.is_file():
         raise PtlabError(f"{path}: no such file")
+    sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
+    threading.Thread(target=_import_what_checks_use, daemon=True).start()
+    overall = sum(check.timeout for check in chapter.checks) * timeout_scale + OVERALL_SLACK
+    deadline = time.monotonic() + overall
     results = []
-    for index, check in enumerate(chapter.checks):
-        result = run_check(chapter.number, index, path, check.timeout * timeout_scale)
-        if echo is not None:
-            echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
-        results.append(result)
-    return Grade(chapter.number, chapter.title, str(path), results)
+    with ProcessGuard() as guard:
+        for check in chapter.checks:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                result = CheckResult(check.name, 0, check.points, False,
+                                     f"not run: grading reached its overall limit of {overall:.0f} s", 0.0)
+            else:
+                result = run_check(check, path, min(check.timeout * timeout_scale, left),
+                                   guard, on_output)
+            if echo is not None:
+                echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
+            results.append(result)
+    return Grade(chapter.number, chapter.title, str(path), results, sha256)
 
 
-def run_check(chapter_number: int, index: int, path: Path, timeout: float) -> CheckResult:
-    """Run one check in a fresh process, killed after ``timeout`` seconds.
+def _import_what_checks_use() -> None:
+    """Import the renderer and the mesh and statistics libraries the checks use (trimesh
+    and SciPy take a second or more) while the first student's process starts, instead of
+    in the first check that needs them."""
+    import scipy.special  # noqa: F401
+    import trimesh  # noqa: F401
 
-    The process comes from a forkserver: a clean copy of an interpreter that has run no
-    renders (forking this process instead could inherit Embree's threads mid-lock).
-    """
-    from ptlab.exercises import chapter as find_chapter
+    import ptlab.rendering  # noqa: F401
 
-    check = find_chapter(chapter_number).checks[index]
-    context = multiprocessing.get_context("forkserver")
-    # Imported once in the server, not again in every check's process (~0.5 s each).
-    context.set_forkserver_preload(["numpy", "trimesh", "ptlab.rendering", "ptlab.exercises"])
-    receive, send = context.Pipe(duplex=False)
+
+def run_check(check, path: Path, timeout: float, guard: ProcessGuard,
+              on_output: Callable[[str], None] | None = None) -> CheckResult:
+    """Run one check on a fresh process of the student's file, stopped after ``timeout`` s."""
     start = time.perf_counter()
-    # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
-    process = context.Process(target=_check_in_child,
-                              args=(chapter_number, index, str(path), send))
-    process.start()
-    send.close()
-    passed, message = False, ""
-    if receive.poll(timeout):
-        try:
-            passed, message = receive.recv()
-        except EOFError:
-            message = "the check's process died (the code crashed the interpreter)"
-    else:
-        message = (f"took longer than {timeout:.0f} s and was stopped (an endless loop, or "
-                   f"a Python loop over every ray?)")
-    _kill_process_group(process.pid)     # the check and any process the student's code started
-    process.join()
-    receive.close()
-    return CheckResult(check.name, check.points if passed else 0, check.points, passed,
-                       message, time.perf_counter() - start)
-
-
-def _check_in_child(chapter_number: int, index: int, path: str, send) -> None:
-    """In the check's process: load the student's file, run the check, send the verdict."""
-    from ptlab.exercises import chapter as find_chapter
-
-    os.setpgid(0, 0)    # a process group of its own, which the grader ends as a whole
-
-    check = find_chapter(chapter_number).checks[index]
+    passed = False
     try:
-        module = load_student(Path(path))
-        verdict = (True, check.run(module))
+        with Submission(path, guard, time_limit=timeout, on_output=on_output) as submission:
+            message, passed = str(check.run(submission.module)), True
     except CheckFailed as failure:
-        verdict = (False, str(failure))
-    except NotImplementedError as error:
-        name = f"{error} " if str(error) else ""
-        verdict = (False, f"{name}is not written yet: it still raises NotImplementedError "
-                          f"({where(error, path)})")
+        message = str(failure)
+    except StudentError as error:
+        message = error.describe()
+    except SubmissionFailed as failure:
+        message = str(failure)
+        if failure.kind == "timeout":
+            message = (f"took longer than {timeout:.3g} s and was stopped, in {failure.during} "
+                       f"({TIMEOUT_HINT})")
     except PtlabError as error:
-        verdict = (False, str(error))
-    except Exception as error:  # the student's code raised: report it, do not crash
-        verdict = (False, f"{type(error).__name__}: {error} ({where(error, path)})")
-    send.send(verdict)
-    send.close()
+        message = str(error)
+    except Exception as error:  # the checks' code failed on what the student's code returned
+        message = f"{type(error).__name__}: {error} (raised outside your file)"
+    return CheckResult(check.name, check.points if passed else 0, check.points, passed,
+                       one_line(message), time.perf_counter() - start)
 
 
-def _kill_process_group(pid: int) -> None:
-    """SIGKILL the process group led by ``pid`` (if it still exists)."""
-    try:
-        os.killpg(pid, signal.SIGKILL)
-    except (ProcessLookupError, PermissionError):
-        pass
-
-
-def where(error: BaseException, path: str) -> str:
-    """``file.py:line`` of the deepest frame of the student's file in the traceback."""
-    frames = [f for f in traceback.extract_tb(error.__traceback__)
-              if Path(f.filename).resolve() == Path(path).resolve()]
-    if not frames:
-        return "raised outside your file"
-    return f"{Path(path).name}:{frames[-1].lineno}"
-
-
-def load_student(path: Path) -> ModuleType:
-    """Import the student's file (a ``PtlabError`` names a syntax error or a failed import)."""
-    from ptlab.grading.untrusted import import_file
-    return import_file(path)
-
-
+def one_line(text: str) -> str:
+    """``text`` as one printable line of at most ``MAX_MESSAGE`` characters (a message may
+    quote what the student's code said, which must not forge lines of the table)."""
+    printable = "".join(c if unicodedata.category(c)[0] != "C" else " " for c in text)
+    line = " ".join(printable.split())
+    return line if len(line) <= MAX_MESSAGE else line[:MAX_MESSAGE - 3] + "..."

@@ -1,49 +1,147 @@
-"""Which chapters a student has passed, remembered in their exercise folder.
+"""Which chapters a student has passed, remembered beside their exercise files.
 
-``ptlab exercise check`` records each result in ``.ptlab-exercises.json`` beside the checked
-file; ``ptlab exercise list`` reads it back. The record is a convenience for the student;
-a course grades by running the checks itself.
+``ptlab exercise check`` records each result in ``.ptlab-exercises.json`` in the checked
+file's folder (after every process of the student's code has ended, atomically), and
+``ptlab exercise start`` remembers the folders it copies exercise files into (in
+``$XDG_STATE_HOME/ptlab/exercise-folders.json``, by default under ``~/.local/state``).
+``ptlab exercise list`` reads the records of the current folder, its subfolders and the
+remembered folders, and says where it looked.
+
+The record is a convenience, not proof: the student's code runs as the student and could
+write the file itself. So the grader never reads it, each check replaces its chapter's
+entry (a pass is not kept once the file fails), and an entry keeps the SHA-256 of the file
+it graded: ``list`` says "passed" only while the file is still the one that passed. A
+course grades by running the checks itself (``ptlab exercise grade-all``).
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
 import time
 from pathlib import Path
 
 from ptlab.atomic import write_atomically
 
 RECORD = ".ptlab-exercises.json"
+#: How deep below the folder ``list`` looks, and how many folders it reads at most.
+SEARCH_DEPTH = 3
+SEARCH_FOLDERS = 2000
+#: Folders never searched: tools' and environments' (a folder holding pyvenv.cfg is a venv).
+SKIPPED = {"__pycache__", "node_modules", "site-packages", "build", "dist"}
 
 
 def read_record(folder: Path) -> dict:
-    """{"NN": {"score", "max_score", "full_marks", "file", "when"}} for a folder ({} if none)."""
-    path = folder / RECORD
+    """{"NN": {"score", "max_score", "full_marks", "file", "sha256", "when"}} ({} if none)."""
     try:
-        record = json.loads(path.read_text())
-    except (FileNotFoundError, json.JSONDecodeError):
+        record = json.loads((folder / RECORD).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
         return {}
-    return record if isinstance(record, dict) else {}
+    if not isinstance(record, dict):
+        return {}
+    return {key: entry for key, entry in record.items() if isinstance(entry, dict)}
 
 
-def remember(grade) -> None:
-    """Add a ``Grade`` to the record in its file's folder (a chapter once passed stays passed)."""
+def remember(grade) -> Path | None:
+    """Record a ``Grade`` in its file's folder; the path written, or None if not written."""
     folder = Path(grade.file).resolve().parent
     if folder.is_relative_to(Path(__file__).resolve().parent):
-        return              # the library's own answers are not a student's progress
+        return None         # the library's own answers are not a student's progress
     record = read_record(folder)
-    key = f"{grade.chapter:02d}"
-    previous = record.get(key, {})
-    if previous.get("full_marks") and not grade.full_marks:
-        return
-    record[key] = dict(score=grade.score, max_score=grade.max_score,
-                       full_marks=grade.full_marks, file=Path(grade.file).name,
-                       when=time.strftime("%Y-%m-%d %H:%M"))
-
-    def write(temporary: str) -> None:
-        Path(temporary).write_text(json.dumps(record, indent=2, sort_keys=True) + "\n")
-
+    record[f"{grade.chapter:02d}"] = dict(
+        score=grade.score, max_score=grade.max_score, full_marks=grade.full_marks,
+        file=Path(grade.file).name, sha256=grade.sha256, when=time.strftime("%Y-%m-%d %H:%M:%S"))
     try:
-        write_atomically(folder / RECORD, write)
+        return _write_json(folder / RECORD, record)
     except OSError as error:        # a read-only folder: the grade itself still stands
         print(f"ptlab: note: could not record the result in {folder / RECORD}: {error}")
+        return None
+
+
+def _write_json(path: Path, value) -> Path:
+    def write(temporary: str) -> None:
+        Path(temporary).write_text(json.dumps(value, indent=2, sort_keys=True) + "\n")
+
+    return write_atomically(path, write)
+
+
+# -- the folders ``start`` made ---------------------------------------------------------
+
+def state_file() -> Path:
+    """Where the folders ``ptlab exercise start`` copied files into are remembered."""
+    base = os.environ.get("XDG_STATE_HOME") or Path.home() / ".local" / "state"
+    return Path(base) / "ptlab" / "exercise-folders.json"
+
+
+def started_folders() -> list[Path]:
+    """The folders ``ptlab exercise start`` copied exercise files into (that still exist)."""
+    try:
+        names = json.loads(state_file().read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return []
+    if not isinstance(names, list):
+        return []
+    return [Path(name) for name in names if isinstance(name, str) and Path(name).is_dir()]
+
+
+def remember_folder(folder: Path) -> None:
+    """Add ``folder`` to the folders ``list`` looks in (quietly skipped where unwritable)."""
+    names = [str(p) for p in started_folders()]
+    folder = str(folder.resolve())
+    if folder in names:
+        return
+    try:
+        state_file().parent.mkdir(parents=True, exist_ok=True)
+        _write_json(state_file(), names + [folder])
+    except OSError:
+        pass
+
+
+# -- finding the records ---------------------------------------------------------------
+
+def folders_below(top: Path) -> list[Path]:
+    """``top`` and its subfolders down to ``SEARCH_DEPTH`` (not hidden ones, caches or
+    virtual environments), at most ``SEARCH_FOLDERS`` of them."""
+    found, level = [], [top]
+    for _ in range(SEARCH_DEPTH + 1):
+        found.extend(level)
+        below = []
+        for folder in level:
+            try:
+                entries = sorted(folder.iterdir())
+            except OSError:
+                continue
+            below.extend(entry for entry in entries
+                         if entry.is_dir() and not entry.is_symlink()
+                         and not entry.name.startswith(".") and entry.name not in SKIPPED
+                         and not (entry / "pyvenv.cfg").exists())
+        level = below[:max(0, SEARCH_FOLDERS - len(found))]
+    return found
+
+
+def find_progress(folders: list[Path]) -> tuple[dict[str, tuple[dict, Path]], list[Path]]:
+    """({"NN": (entry, folder)} with each chapter's latest entry, the record files read)."""
+    latest: dict[str, tuple[dict, Path]] = {}
+    read = []
+    for folder in dict.fromkeys(f.resolve() for f in folders):
+        if not (folder / RECORD).is_file():
+            continue
+        read.append(folder / RECORD)
+        for key, entry in read_record(folder).items():
+            if key not in latest or str(entry.get("when", "")) > str(latest[key][0].get("when", "")):
+                latest[key] = (entry, folder)
+    return latest, read
+
+
+def status(entry: dict, folder: Path) -> str:
+    """How a recorded entry stands: passed (if the file is unchanged), points, or changed."""
+    points = f"{entry.get('score')}/{entry.get('max_score')}"
+    file = folder / str(entry.get("file", ""))
+    try:
+        unchanged = hashlib.sha256(file.read_bytes()).hexdigest() == entry.get("sha256")
+    except OSError:
+        return f"{points}, file gone"
+    if not unchanged:
+        return f"{points}, file changed since"
+    return f"passed ({points})" if entry.get("full_marks") is True else f"{points} points"

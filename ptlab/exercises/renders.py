@@ -37,10 +37,13 @@ CHANNELS = ("red", "green", "blue")
 def replace_materials(scene, replace: Callable):
     """The scene with every material ``m`` for which ``replace(m)`` is not None replaced by it.
 
-    The replacement keeps ``m``'s emission, so a light stays a light. Materials are looked
-    up per triangle through ``scene.materials`` (and the ``material_table`` built from it),
-    so a new ``Scene`` over the same triangles is all it takes.
+    The replacement (anything with ``eval``, ``pdf`` and ``sample``, made a full material by
+    ``ptlab.grading.material.as_material``) keeps ``m``'s emission, so a light stays a light.
+    Materials are looked up per triangle through ``scene.materials`` (and the
+    ``material_table`` built from it), so a new ``Scene`` over the same triangles is all it
+    takes.
     """
+    from ptlab.grading.material import as_material
     from ptlab.scene import Scene
 
     materials = []
@@ -49,6 +52,7 @@ def replace_materials(scene, replace: Callable):
         if new is None:
             new = material
         else:
+            new = as_material(new)
             new.emission = material.emission
         materials.append(new)
     return Scene(scene.triangles, scene.material_ids, materials, scene.camera, scene.name,

@@ -25,6 +25,7 @@ import time
 import numpy as np
 
 from ptlab.grading import checks, delta
+from ptlab.grading.material import AdaptedMaterial, as_material
 from ptlab.grading.plots import write_plots
 from ptlab.grading.report import Check, Report
 from ptlab.grading.sphere import SphereGrid
@@ -40,8 +41,10 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
     """Run every check on ``material`` and return the report.
 
     Args:
-        material: anything with ``eval``, ``pdf``, ``sample`` and ``sample_weight`` as in
-            ``ptlab.materials.base.Material`` (and ``is_delta`` for mirrors and glass).
+        material: anything with ``eval``, ``pdf`` and ``sample`` as in
+            ``ptlab.materials.base.Material``; ``sample_weight`` (else derived from the
+            three), ``is_delta`` (mirrors and glass; else False) and ``emission`` are optional
+            (``ptlab.grading.material.as_material``).
         seed: seeds every random choice (the normal, the wo azimuths, the samples).
         samples: directions drawn per wo for the statistical checks (default 10^6; fewer
             make the tests weaker, not wrong).
@@ -52,10 +55,11 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
     not apply to them.
     """
     start = time.perf_counter()
+    material = as_material(material)
     root = np.random.SeedSequence(seed)
     streams = [np.random.default_rng(s) for s in root.spawn(8)]
     n = checks.normalize(streams[0].normal(size=(1, 3)))[0]
-    if getattr(material, "is_delta", False):
+    if material.is_delta:
         results = _delta_checks(material, n, streams)
         samples = delta.SAMPLES
     else:
@@ -65,6 +69,8 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
 
 def _describe(material) -> str:
     """The material's repr, or its class name where the repr is Python's default."""
+    if isinstance(material, AdaptedMaterial):
+        material = material.material
     text = repr(material)
     return f"{type(material).__name__} object" if " object at 0x" in text else text
 

@@ -25,12 +25,14 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 * **estimator agreement**: the importance-sampled estimate mean(f cos / pdf) over the
   samples equals the integral of f |cos| computed by the quadrature (a stratified
   uniform-sphere estimate without noise), within 4.4 standard errors (Sidak over the wo's
-  and channels at 1e-4) plus the quadrature's error. False-alarm rate 1e-4.
+  and channels at 1e-4) plus the quadrature's error and 8 float32 ulps of the value (the
+  material's own rounding). False-alarm rate 1e-4.
 * **sample_weight**: ``sample_weight`` returns the direction ``sample`` returns for the same
   ``u`` and the weight f cos / pdf (0 where pdf is 0), to a relative 1e-5, on the first
   10^5 samples of each wo. Deterministic.
-* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-6 on 20 000 random pairs
-  above the surface, grazing ones included. Deterministic.
+* **reciprocity**: eval(wo, wi) == eval(wi, wo) to a relative 1e-5 (1e-3 for an eval that
+  returns float32: rounding in float32 arithmetic) on 20 000 random pairs above the surface,
+  grazing ones included. Deterministic.
 * **consistency**: at special directions (grazing, exactly tangent, wi = +-n, wi = +-wo,
   the mirror direction, below the surface) and edge values of u: nothing NaN or infinite,
   eval >= 0, pdf >= 0, both 0 below the surface, sample gives unit vectors, sample_weight
@@ -43,7 +45,10 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 
 All together a correct material fails with probability at most about 1.2e-3 by chance;
 ``scripts/false_alarm_rate.py`` measures it: 0 failures in 200 runs (its default), and 0 in
-1000 (``--seeds 100 --every-material``), that is below 0.37% with 95% confidence.
+1000 (``--seeds 100 --every-material``), that is below 0.37% with 95% confidence; with the
+four materials that compute in float32 added to its list, 0 failures in 140 runs
+(``--seeds 140``, each of the 14 materials 10 times, 10^6 samples per wo) and 0 in 280
+(``--seeds 20 --every-material --samples 200000``).
 """
 
 from __future__ import annotations
@@ -63,7 +68,13 @@ ALPHA_NORMALISATION = 1e-4
 ALPHA_ESTIMATOR = 1e-4
 MIN_EXPECTED = 5.0
 ENERGY_SLACK = 1e-3
-RECIPROCITY_RTOL = 1e-6
+#: Reciprocity holds to this relative difference (float32 constants in float64 arithmetic
+#: differ by a few float32 ulps, 1.2e-7 each, between the two orders), or for a material
+#: whose eval returns float32 to RECIPROCITY_RTOL_FLOAT32: measured up to 4e-5 for the
+#: library's microfacet computing in float32 (the Fresnel term at h . wo against h . wi,
+#: rounded apart). A non-reciprocal term from a mistake differs by a percent or more.
+RECIPROCITY_RTOL = 1e-5
+RECIPROCITY_RTOL_FLOAT32 = 1e-3
 SAMPLE_WEIGHT_RTOL = 1e-5
 POINTWISE_ROWS = 100_000
 #: Values above this negative number count as 0: a cosine rounded to -1e-17 is no mistake.
@@ -71,6 +82,10 @@ NEGATIVE_ROUNDING = 1e-12
 #: Quadrature tolerance on the integrals of f |cos|: each region's error at most this times
 #: (its integral + its share of the sphere), so about 2e-4 over the sphere at worst.
 F_TOLERANCE = 1e-4
+#: Relative slack of the estimator check for a material's own rounding: 8 float32 ulps. A
+#: Lambertian with pi = np.float32(math.pi) integrates to 1 - 2.8e-8; with cosine sampling
+#: its f cos / pdf is the same for every sample, so no noise term covers that.
+FLOAT32_SLACK = 8 * float(np.finfo(np.float32).eps)
 
 
 class MaterialError(Exception):
@@ -430,7 +445,7 @@ def check_estimator(lobes: list[Lobe]) -> Check:
     for lobe in lobes:
         reference = lobe.reflectance
         allowed = (z * lobe.estimate_sd / math.sqrt(lobe.samples) + 2 * lobe.errors[1:]
-                   + 1e-9 * (1 + np.abs(reference)))
+                   + 1e-9 + FLOAT32_SLACK * np.abs(reference))
         with np.errstate(invalid="ignore"):
             ratio = np.abs(lobe.estimate - reference) / allowed
         ratio = np.where(np.isfinite(ratio), ratio, np.inf)
@@ -448,12 +463,19 @@ def check_estimator(lobes: list[Lobe]) -> Check:
                     f"{lobe.degrees:g}°): sample never goes there, so the estimate misses that light")
         else:
             ratio = estimate / reference if reference else math.inf
-            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.4g} but ∫ f cos = "
-                    f"{reference:.4g} at wo {lobe.degrees:g}° (ratio {ratio:.3g}): "
+            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.6g} but ∫ f cos = "
+                    f"{reference:.6g} at wo {lobe.degrees:g}° (ratio {_ratio_text(ratio)}): "
                     "sample and pdf disagree (see chi-square)")
     return Check("estimator agreement", verdict(passed),
                  f"max |IS - ∫| / allowed = {worst_ratio:.3g} (wo {lobe.degrees:g}°, {'rgb'[c]})",
                  f"<= 1 (allowed {z:.1f} σ + quadrature error)", hint)
+
+
+def _ratio_text(ratio: float) -> str:
+    """``1.5``, or ``1 - 3.2e-05`` for a ratio too close to 1 to show as a number."""
+    if math.isfinite(ratio) and abs(ratio - 1) < 1e-3:
+        return f"1 {'+' if ratio >= 1 else '-'} {abs(ratio - 1):.2g}"
+    return f"{ratio:.3g}"
 
 
 # -- sample_weight ------------------------------------------------------------------------
@@ -522,7 +544,9 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
         sin = np.sqrt(1 - cosines[:, k] ** 2)
         frames.append(to_world(vec3(sin * np.cos(phi), sin * np.sin(phi), cosines[:, k]), n))
     wo, wi = frames
-    forward = call(material, "eval", wo, wi, n, shapes=[(rows, 3)]).astype(np.float64)
+    forward = call(material, "eval", wo, wi, n, shapes=[(rows, 3)])
+    tolerance = RECIPROCITY_RTOL_FLOAT32 if forward.dtype == np.float32 else RECIPROCITY_RTOL
+    forward = forward.astype(np.float64)
     backward = call(material, "eval", wi, wo, n, shapes=[(rows, 3)]).astype(np.float64)
     finite = np.isfinite(forward).all(axis=1) & np.isfinite(backward).all(axis=1)
     scale = max(np.abs(forward[finite]).max(initial=0), np.abs(backward[finite]).max(initial=0))
@@ -530,7 +554,7 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
     with np.errstate(invalid="ignore"):
         relative = (np.abs(forward - backward) / larger).max(axis=1)
     worst = float(relative[finite].max(initial=0.0))
-    passed = bool(finite.all()) and worst <= RECIPROCITY_RTOL
+    passed = bool(finite.all()) and worst <= tolerance
     hint = ""
     if not finite.all():
         hint = "eval returns NaN or inf for directions above the surface (see consistency)"
@@ -538,7 +562,7 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
         hint = _explain_reciprocity(forward, backward, dot(wo, n), dot(wi, n))
     return Check("reciprocity", verdict(passed),
                  f"max |f(wo,wi) - f(wi,wo)| / f = {worst:.2g} ({rows} pairs)",
-                 f"<= {RECIPROCITY_RTOL:g}", hint)
+                 f"<= {tolerance:g}", hint)
 
 
 def _explain_reciprocity(forward, backward, cos_theta_o, cos_theta_i) -> str:

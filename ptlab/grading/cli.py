@@ -1,10 +1,14 @@
-"""``ptlab grade FILE.py:Name``: load a student's material, check it, print the verdict.
+"""``ptlab grade FILE.py:Name``: check a student's material, print the verdict.
 
     ptlab grade my_material.py:Microfacet --args '{"roughness": 0.3}' --plots plots/
 
 ``Name`` is a class (constructed with the ``--args`` JSON object as keyword arguments) or a
-ready-made material object in the file. The exit code is 0 when every check passes, 1 when
-one fails, 2 when the file or the name cannot be loaded (one line on stderr, no traceback).
+ready-made material object in the file: anything with ``eval``, ``pdf`` and ``sample``
+(``ptlab.grading.material.as_material``). The file is imported, and every method of the
+material runs, in a process of its own (``ptlab.untrusted``); the statistics and the
+verdict are computed here. The exit code is 0 when every check passes, 1 when one fails
+(or the material is ptlab's own, or its process hangs or ends), 2 when the file or the
+name cannot be loaded (one line on stderr, no traceback).
 
 ``ptlab.cli`` wires it in with ``add_grade_arguments(subparser)`` and the handler
 ``run_grade(args)``.
@@ -14,11 +18,23 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 
-from ptlab.grading.untrusted import GradeLoadError, import_file
+from ptlab.grading.material import NotAMaterialError, as_material
+from ptlab.untrusted import (
+    GradeLoadError,
+    ImportFailed,
+    ProcessGuard,
+    RemoteFunction,
+    StudentError,
+    Submission,
+    SubmissionFailed,
+    library_answer,
+)
 
-REQUIRED_METHODS = ("eval", "pdf", "sample", "sample_weight")
+#: Seconds one call of the material may take (10^6 directions take well under one).
+CALL_TIME_LIMIT = 120.0
 
 
 def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -32,6 +48,9 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentPar
     parser.add_argument("--seed", type=int, default=0, help="random seed of the checks (default 0)")
     parser.add_argument("--samples", type=int, default=1_000_000,
                         help="directions sampled per wo (default 10^6)")
+    parser.add_argument("--time-limit", type=float, default=900.0, metavar="SECONDS",
+                        help="stop the material's process after this long (default 900; one "
+                             f"call may take {CALL_TIME_LIMIT:.0f})")
     return parser
 
 
@@ -41,8 +60,28 @@ def run_grade(args: argparse.Namespace) -> int:
 
     if args.samples < 1000:
         raise GradeLoadError("--samples must be at least 1000")
-    material = load_material(args.target, args.args)
-    report = check_material(material, seed=args.seed, samples=args.samples)
+    if not args.time_limit > 0:
+        raise GradeLoadError(f"--time-limit {args.time_limit:g}: must be a positive number of seconds")
+    path, name, keywords = parse_target(args.target, args.args)
+    with ProcessGuard() as guard:
+        try:
+            with Submission(path, guard, time_limit=args.time_limit,
+                            call_time_limit=CALL_TIME_LIMIT, on_output=_show_output) as submission:
+                origin = library_answer(submission.module, name)
+                if origin is not None:
+                    failure = f"{name} is ptlab's own answer ({origin}), not yours"
+                else:
+                    material = load_material(submission, name, keywords)
+                    report = check_material(material, seed=args.seed, samples=args.samples)
+                    failure = None
+        except ImportFailed as error:
+            raise GradeLoadError(str(error)) from None
+        except (SubmissionFailed, StudentError) as error:
+            failure = error.describe() if isinstance(error, StudentError) else str(error)
+    # Everything the file started has ended: only now is anything written.
+    if failure is not None:
+        print(f"{args.target}: FAILED: {failure}")
+        return 1
     print(report)
     if args.plots and not report.passed:
         written = write_plots(report, args.plots)
@@ -51,8 +90,8 @@ def run_grade(args: argparse.Namespace) -> int:
     return 0 if report.passed else 1
 
 
-def load_material(target: str, arguments: str = "{}"):
-    """The material ``FILE.py:Name`` names, built with the JSON ``arguments`` if a class."""
+def parse_target(target: str, arguments: str = "{}") -> tuple[Path, str, dict]:
+    """``FILE.py:Name`` and the ``--args`` JSON as (path, name, keyword arguments)."""
     file, separator, name = target.rpartition(":")
     if not separator or not file or not name:
         raise GradeLoadError(f"{target!r}: expected FILE.py:Name")
@@ -65,21 +104,29 @@ def load_material(target: str, arguments: str = "{}"):
         raise GradeLoadError(f"--args is not valid JSON: {error}") from None
     if not isinstance(keywords, dict):
         raise GradeLoadError("--args must be a JSON object, e.g. '{\"roughness\": 0.3}'")
-    module = import_file(path)
-    if not hasattr(module, name):
-        raise GradeLoadError(f"{file}: no class or object named {name!r}")
-    found = getattr(module, name)
-    if isinstance(found, type):
+    return path, name, keywords
+
+
+def load_material(submission: Submission, name: str, keywords: dict):
+    """The material ``name`` of the student's file (built with ``keywords`` if a class),
+    as a full ``Material`` whose methods run in the student's process."""
+    file = submission.path
+    try:
+        found = getattr(submission.module, name)
+    except AttributeError:
+        raise GradeLoadError(f"{file}: no class or object named {name!r}") from None
+    if isinstance(found, RemoteFunction) and found.is_class:
         try:
             found = found(**keywords)
-        except Exception as error:  # the student's constructor: report it, do not crash
-            raise GradeLoadError(f"{name}(**{keywords}) raised {type(error).__name__}: {error}") from None
+        except StudentError as error:
+            raise GradeLoadError(f"{name}(**{keywords}) raised {error.type_name}: {error}") from None
     elif keywords:
         raise GradeLoadError(f"{name} is not a class, so --args cannot be applied")
-    missing = [m for m in REQUIRED_METHODS if not callable(getattr(found, m, None))]
-    if missing:
-        raise GradeLoadError(f"{name} is not a material: it has no {', '.join(missing)} "
-                             "(subclass ptlab.materials.Material)")
-    return found
+    try:
+        return as_material(found)
+    except NotAMaterialError as error:
+        raise GradeLoadError(f"{name} is not a material: {error}") from None
 
 
+def _show_output(line: str) -> None:
+    print(f"  | {line}", file=sys.stderr)

@@ -5,7 +5,8 @@ too dark, speckled where a few shadow rays get through."""
 
 import numpy as np
 
-from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, scatter, shade, surface_hit
+from ptlab.integrators import path
+from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms
 from ptlab.vectors import dot, take_rows
 
@@ -28,6 +29,12 @@ def direct_light(film, scene, accel, hit, u):
 
 def russian_roulette(throughput, p_rr, u):
     return u < p_rr, throughput / np.float32(p_rr)
+
+
+def scatter(scene, hit, u, survive):
+    """The library's indirect bounce (this file is about another mistake)."""
+    paths = path.scatter(scene, hit, u, survive)
+    return paths
 
 
 def trace_paths(film, scene, accel, paths, sampler, settings):

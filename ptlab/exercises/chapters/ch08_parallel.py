@@ -13,23 +13,20 @@
 The scene is chapter 7's furnace (``ch07_path_tracing.furnace_scene``): built without
 reading mesh files, so the checks spend their time on the parallel part.
 
-The checks that run the student's pool end any worker the student's code leaves behind
-(and the grader ends the check's whole process group when it is done or out of time).
+The student's code runs in a process of its own (``ptlab.untrusted``): "this process" below
+is that one. The checks that run the student's pool end any worker the student's code
+leaves behind (and the grader ends every process the check started when it is done).
 """
 
 from __future__ import annotations
 
-import importlib
-import multiprocessing
-import os
-import sys
-from pathlib import Path
 from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.untrusted import submission_of
 
 if TYPE_CHECKING:
     from ptlab.rendering.jobs import RenderSetup
@@ -115,9 +112,10 @@ def check_tile_job(module) -> str:
     setup = _setup(_scene())
     first, second = Tile(5, 16, 16, 32, 32), Tile(8, 32, 32, 48, 40)
     sums, pid = _tile_result(render_tile, setup, first, 4)
-    if pid != os.getpid():
+    here = submission_of(module).pid
+    if pid != here:
         raise CheckFailed(f"render_tile must return the pid of the process that ran it "
-                          f"(os.getpid()); it returned {pid!r}, this process is {os.getpid()}")
+                          f"(os.getpid()); it returned {pid!r}, this process is {here}")
     _tile_result(render_tile, setup, second, 4)
     again, _ = _tile_result(render_tile, setup, first, 4)
     if not np.array_equal(again, sums):
@@ -143,13 +141,6 @@ def check_tile_job(module) -> str:
 
 # -- the pool -----------------------------------------------------------------------------------
 
-def _end_leftover_workers() -> None:
-    """End worker processes that the student's code started and left running."""
-    for child in multiprocessing.active_children():
-        child.terminate()
-        child.join(5)
-
-
 def importable(module: ModuleType) -> ModuleType:
     """The student's module again, imported under its file's name from its folder.
 
@@ -157,17 +148,10 @@ def importable(module: ModuleType) -> ModuleType:
     (started by forkserver or spawn) could not import to find ``render_tile`` by; imported
     as ``08_parallel`` with its folder on ``sys.path`` (which new processes inherit) it can.
     """
-    path = Path(module.__file__).resolve()
-    if str(path.parent) not in sys.path:
-        sys.path.insert(0, str(path.parent))
-    try:
-        imported = importlib.import_module(path.stem)
-    except Exception as error:  # the student's module raised on a second import
-        raise CheckFailed(f"importing {path.name} again raised {type(error).__name__}: "
-                          f"{error}") from None
-    if Path(getattr(imported, "__file__", "") or "").resolve() != path:
-        raise CheckFailed(f"another module is called {path.stem!r} too ({imported.__name__} "
-                          f"from {getattr(imported, '__file__', 'Python itself')}): rename your "
+    imported = submission_of(module).import_by_file_name()
+    if isinstance(imported, str):
+        name = submission_of(module).path.stem
+        raise CheckFailed(f"another module is called {name!r} too ({imported}): rename your "
                           f"file, e.g. to 08_parallel.py, so that worker processes import yours")
     return imported
 
@@ -177,7 +161,7 @@ def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
     try:
         result = render_parallel(_scene(), spp, RES, seed=SEED, workers=workers, tile_size=TILE)
     finally:
-        _end_leftover_workers()
+        submission_of(module).end_started_processes()     # workers left behind
     if not (isinstance(result, tuple) and len(result) == 2):
         raise CheckFailed("render_parallel must return two things: (image, pids)")
     image, pids = np.asarray(result[0]), set(result[1])
@@ -202,10 +186,10 @@ PARALLEL_SPP, PARALLEL_ATTEMPTS = 4 * SPP, 3
 
 
 def check_parallel(module) -> str:
-    module = importable(module)
+    student = importable(module)
     for _ in range(PARALLEL_ATTEMPTS):
-        _, pids = _render(module, workers=2, spp=PARALLEL_SPP)
-        workers = pids - {os.getpid()}
+        _, pids = _render(student, workers=2, spp=PARALLEL_SPP)
+        workers = pids - {submission_of(module).pid}
         if len(workers) >= 2:
             break
     if len(workers) < 2:

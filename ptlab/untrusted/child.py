@@ -1,0 +1,448 @@
+"""The process that imports a student's file and runs its functions for the grader.
+
+It is started by ``ptlab.untrusted.submission`` from a fork server, and everything in it
+is the student's to change: the grader trusts nothing it says beyond the schema of
+``ptlab.untrusted.plain_data``. It
+
+1. leaves the grader's session and process group, asks to be killed if the fork server
+   goes, closes the fork server's pipe it inherited, points its stdout and stderr at the
+   grader's output pipe, and lowers its own resource limits (``Limits``);
+2. imports the student's file (``import_file``) and says whether that worked;
+3. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
+   an object it holds (object 0 is the student's module), ``call`` a function or method,
+   ``call_each`` a method of several objects on their rows, ``repr`` an object,
+   ``import_by_stem`` the file again under its own name.
+
+A call's reply is its result, plus (for functions, not methods) the changes it made to its
+arguments in place: arrays written into (the film that ``trace_paths`` adds to), fields of
+the library's dataclasses given new values, a random generator's state. The grader copies
+those into its own arguments, as if the function had run in its process.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib
+import importlib.util
+import inspect
+import io
+import json
+import math
+import os
+import pickle
+import resource
+import signal
+import sys
+import traceback
+from dataclasses import dataclass, fields, is_dataclass
+from multiprocessing.connection import Connection
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.errors import PtlabError
+from ptlab.rendering.memory import keep_freed_memory
+from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
+from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
+
+#: The ptlab package: code under it is the library's own, not a student's.
+PTLAB = Path(__file__).resolve().parent.parent
+#: A graded class is ptlab's own answer if these methods are all ptlab's (and not the
+#: ``Material`` interface's, which only raise ``NotImplementedError``).
+MATERIAL_METHODS = ("eval", "pdf", "sample")
+INTERFACE = PTLAB / "materials" / "base.py"
+MAX_MESSAGE_TEXT = 2000
+PR_SET_PDEATHSIG = 1
+
+
+class GradeLoadError(PtlabError):
+    """The student's file cannot be loaded: a syntax error, or an exception at import."""
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Resource limits of the student's process (``resource.setrlimit``), each inherited by
+    every process it starts.
+
+    Attributes:
+        cpu_seconds: CPU time of each process (then SIGKILL).
+        memory_bytes: address space of each process (allocations beyond fail: MemoryError).
+        file_bytes: the largest file a process may write.
+        processes: processes and threads the user may have beyond those of now (not
+            enforced for root).
+    """
+
+    cpu_seconds: int = 600
+    memory_bytes: int = 8 << 30
+    file_bytes: int = 64 << 20
+    processes: int = 512
+
+
+def import_file(path: Path):
+    """Import a Python file as a module of its own; its folder is importable while it loads."""
+    module_name = f"ptlab_graded_{abs(hash(str(path.resolve())))}"
+    spec = importlib.util.spec_from_file_location(module_name, path)
+    if spec is None or spec.loader is None:
+        raise GradeLoadError(f"{path}: not a Python file")
+    module = importlib.util.module_from_spec(spec)
+    folder = str(path.resolve().parent)
+    sys.path.insert(0, folder)
+    sys.modules[module_name] = module   # (dataclasses and pickling look modules up there)
+    try:
+        spec.loader.exec_module(module)
+    except SyntaxError as error:
+        del sys.modules[module_name]
+        raise GradeLoadError(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
+    except BaseException as error:  # anything the student's module raises on import  # noqa: B036
+        sys.modules.pop(module_name, None)
+        raise GradeLoadError(f"{path}: importing it raised {type(error).__name__}: "
+                             f"{_text(error)}") from None
+    finally:
+        sys.path.remove(folder)
+    return module
+
+
+def serve(path: str, receive: Connection, send: Connection, output: Connection,
+          limits: Limits) -> None:
+    """The child's whole life: set up, import the student's file, answer until told to stop.
+
+    ``receive``, ``send`` and ``output`` are the pipes' ends (as ``Connection`` objects,
+    which the fork server passes to a new process; only their file descriptors are used).
+    """
+    _leave_the_grader(output.fileno(), limits, keep={receive.fileno(), send.fileno()})
+    keep_freed_memory()     # every call's arrays arrive in new buffers: no page faults for them
+    requests = Reader(receive.fileno())
+    server = _Server(Path(path), send.fileno())
+    try:
+        server.handles.append(import_file(Path(path)))
+    except GradeLoadError as error:
+        server.send({"id": 0, "import_failed": str(error)})
+        return
+    server.send({"id": 0, "ready": True})
+    while True:
+        try:
+            parts = requests.read_message()
+        except ChannelClosedError:
+            return
+        server.answer(parts)
+
+
+def _leave_the_grader(output_fd: int, limits: Limits, keep: set[int]) -> None:
+    os.setsid()     # a session and process group of its own: the grader's terminal signals stay there
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    _close_inherited(keep | {output_fd})
+    null = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(null, 0)
+    os.dup2(output_fd, 1)
+    os.dup2(output_fd, 2)
+    os.close(null)
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.reconfigure(line_buffering=True)
+    for name, value in ((resource.RLIMIT_CPU, limits.cpu_seconds),
+                        (resource.RLIMIT_AS, limits.memory_bytes),
+                        (resource.RLIMIT_FSIZE, limits.file_bytes),
+                        (resource.RLIMIT_CORE, 0),
+                        (resource.RLIMIT_NPROC, _user_tasks() + limits.processes)):
+        _lower_limit(name, value)
+
+
+def _close_inherited(keep: set[int]) -> None:
+    """Close every file descriptor but stdin, stdout, stderr, ``keep`` and the resource
+    tracker's.
+
+    A process from multiprocessing's fork server inherits the grader's end of the fork
+    server's "alive" pipe (so that it could start processes through that server); written
+    to, it crashes the grader's fork server, so it goes, and the student's code gets a fork
+    server of its own should it start processes. The resource tracker's pipe stays: what
+    the student's code can do with it (register names for the tracker to unlink at its exit)
+    it can do anyway as the same user, and its pools need no tracker of their own.
+    """
+    from multiprocessing import forkserver, resource_tracker
+
+    keep = keep | {resource_tracker._resource_tracker._fd}
+    try:
+        open_fds = [int(name) for name in os.listdir("/proc/self/fd")]
+    except OSError:
+        open_fds = range(3, 1024)
+    for fd in open_fds:
+        if fd > 2 and fd not in keep:
+            try:
+                os.close(fd)
+            except OSError:
+                pass
+    # Forget them: multiprocessing's own records of the inherited ends just closed.
+    forkserver._forkserver._forkserver_alive_fd = None
+    forkserver._forkserver._inherited_fds = None
+
+
+def _lower_limit(name: int, value: int) -> None:
+    soft, hard = resource.getrlimit(name)
+    if hard != resource.RLIM_INFINITY:
+        value = min(value, hard)
+    try:
+        resource.setrlimit(name, (value, value))
+    except (ValueError, OSError):
+        pass
+
+
+def _user_tasks() -> int:
+    """Processes and threads of this user now (what RLIMIT_NPROC counts; 0 without /proc)."""
+    uid, count = os.getuid(), 0
+    if not Path("/proc/self").is_dir():
+        return 0
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if entry.stat().st_uid == uid:
+                    count += len(os.listdir(entry / "task"))
+            except OSError:
+                pass
+    return count
+
+
+class _Server:
+    """Answers the grader's requests about the objects it holds (``handles``)."""
+
+    def __init__(self, path: Path, send_fd: int):
+        self.path, self.send_fd = path, send_fd
+        self.handles: list = []
+        self.shared: dict[int, object] = {}
+
+    def send(self, envelope: dict, parts: tuple = ()) -> None:
+        write_message(self.send_fd, [json.dumps(envelope).encode(), *parts])
+
+    def keep(self, value) -> int:
+        self.handles.append(value)
+        return len(self.handles) - 1
+
+    def answer(self, parts) -> None:
+        request_id = int.from_bytes(parts[0], "little")
+        try:
+            operation, *arguments = _Unpickler(parts[1], self, parts[2:]).load()
+        except Exception as error:  # the grader sent what this process cannot rebuild
+            self.send({"id": request_id, "unreceived": f"{type(error).__name__}: {_text(error)}"})
+            return
+        encoder = Encoder(self.keep, self.describe)
+        try:
+            envelope = getattr(self, f"do_{operation}")(encoder, *arguments)
+        except UnsendableError as error:
+            envelope = {"unreadable": str(error)}
+        except BaseException as error:  # the student's code raised: report it  # noqa: B036
+            envelope = {"raised": self.describe_error(error)}
+        self.send(dict(id=request_id, **envelope), encoder.parts)
+
+    # -- requests ----------------------------------------------------------------------
+
+    def do_get(self, encoder: Encoder, handle: int, name: str) -> dict:
+        return {"value": encoder.encode(getattr(self.handles[handle], name))}
+
+    def do_set(self, encoder: Encoder, handle: int, name: str, value) -> dict:
+        setattr(self.handles[handle], name, value)
+        return {"value": None}
+
+    def do_repr(self, encoder: Encoder, handle: int) -> dict:
+        return {"value": repr(self.handles[handle])[:200]}
+
+    def do_call(self, encoder: Encoder, handle: int, args: tuple, kwargs: dict,
+                writeback: bool) -> dict:
+        before = _Snapshot(args, kwargs) if writeback else None
+        result = self.handles[handle](*args, **kwargs)
+        envelope = {"value": encoder.encode(result)}
+        if before is not None:
+            envelope["writeback"] = [[path, how, encoder.encode(value)]
+                                     for path, how, value in before.changes()]
+        return envelope
+
+    def do_call_each(self, encoder: Encoder, handles: list[int], which: np.ndarray, method: str,
+                     args: tuple) -> dict:
+        """``method`` of several objects, each on its rows (``which[k]`` is the object of row
+        k): the library's ``shade``, here, so that all the rows take one request."""
+        from types import SimpleNamespace
+
+        from ptlab.integrators.path import shade
+
+        groups = [(np.flatnonzero(which == k), self.handles[h]) for k, h in enumerate(handles)]
+        hit = SimpleNamespace(prim=which, materials=[g for g in groups if len(g[0])])
+        return {"value": encoder.encode(shade(hit, method, *args))}
+
+    def do_import_by_stem(self, encoder: Encoder) -> dict:
+        """The student's file imported again under its own name (``08_parallel``), with its
+        folder on ``sys.path`` for good, so that processes it starts can import it too."""
+        folder = str(self.path.resolve().parent)
+        if folder not in sys.path:
+            sys.path.insert(0, folder)
+        module = importlib.import_module(self.path.stem)
+        found = Path(getattr(module, "__file__", "") or "")
+        if found.resolve() != self.path.resolve():
+            return {"value": encoder.encode({"taken_by": str(found) or "Python itself"})}
+        return {"value": encoder.encode(module)}
+
+    # -- descriptions ------------------------------------------------------------------
+
+    def describe(self, value) -> dict:
+        """A callable's name, kind, parameters and, if it is ptlab's own, where it is from."""
+        kind = "class" if inspect.isclass(value) else "method" if inspect.ismethod(value) else "function"
+        try:
+            parameters = [[p.name, int(p.kind)] for p in inspect.signature(value).parameters.values()]
+        except (TypeError, ValueError):
+            parameters = None
+        name = getattr(value, "__qualname__", None)
+        return {"name": name if isinstance(name, str) else type(value).__name__, "kind": kind,
+                "origin": self.library_origin(value), "parameters": parameters}
+
+    def library_origin(self, value) -> str | None:
+        """``module.name`` if ``value`` is ptlab's own function, or a class whose material
+        methods are all ptlab's; None if it is (at least partly) the student's."""
+        if inspect.isclass(value):
+            methods = [getattr(value, name, None) for name in MATERIAL_METHODS]
+            files = [_code_file(m) for m in methods]
+            if all(f is not None and self._is_library(f) and f != INTERFACE for f in files):
+                return f"{value.__module__}.{value.__qualname__}"
+            return None
+        file = _code_file(value)
+        if file is not None and self._is_library(file):
+            return f"{getattr(value, '__module__', '?')}.{getattr(value, '__qualname__', '?')}"
+        return None
+
+    def _is_library(self, file: Path) -> bool:
+        return file.is_relative_to(PTLAB) and file != self.path.resolve()
+
+    def describe_error(self, error: BaseException) -> dict:
+        return {"type": type(error).__name__, "message": _text(error),
+                "where": self.where(error),
+                "not_implemented": isinstance(error, NotImplementedError)}
+
+    def where(self, error: BaseException) -> str | None:
+        """``file.py:line`` of the deepest frame of the student's file in the traceback."""
+        graded = self.path.resolve()
+        lines = [frame.lineno for frame in traceback.extract_tb(error.__traceback__)
+                 if Path(frame.filename).resolve() == graded]
+        return f"{self.path.name}:{lines[-1]}" if lines else None
+
+
+def _code_file(value) -> Path | None:
+    """The source file of a function (or method, or partial), if it has Python code."""
+    for _ in range(5):
+        value = getattr(value, "__func__", None) or getattr(value, "func", None) or value
+        code = getattr(value, "__code__", None)
+        if code is not None:
+            return Path(code.co_filename).resolve()
+    return None
+
+
+def _text(error: BaseException) -> str:
+    try:
+        return str(error)[:MAX_MESSAGE_TEXT]
+    except BaseException:  # noqa: B036 (a student's __str__ that raises)
+        return f"(a {type(error).__name__} whose message cannot be shown)"
+
+
+class _Unpickler(pickle.Unpickler):
+    """Unpickles the grader's requests (trusted data), resolving the grader's references to
+    objects held here (``handle``), to objects sent once per check (``shared``), to arrays
+    sent as raw bytes in the message's other parts (``array``), and to arrays sent as their
+    one repeated row (``rows``)."""
+
+    def __init__(self, data, server: _Server, arrays: list):
+        super().__init__(io.BytesIO(data))
+        self.server, self.arrays = server, arrays
+
+    def persistent_load(self, pid):
+        if isinstance(pid, str):        # "array <part> <dtype> <shape> <order>"
+            _, part, dtype, shape, order = pid.split(" ")
+            dtype, shape = np.dtype(dtype), tuple(int(n) for n in shape.split(",") if n)
+            count = math.prod(shape)
+            if count == 0:
+                return np.empty(shape, dtype, order=order)
+            return np.frombuffer(self.arrays[int(part)], dtype, count).reshape(shape, order=order)
+        kind, key, *payload = pid
+        if kind == "handle":
+            return self.server.handles[key]
+        if kind == "rows":      # an array whose rows are all ``key`` (one row)
+            rows, order = payload
+            array = np.empty((rows, key.shape[1]), key.dtype, order=order)
+            array[...] = key
+            return array
+        if kind == "shared":
+            if payload:
+                self.server.shared[key] = _Unpickler(payload[0], self.server, self.arrays).load()
+            return self.server.shared[key]
+        raise pickle.UnpicklingError(f"unknown reference {kind!r}")
+
+
+class _Snapshot:
+    """What a call may change in its arguments: arrays (by content), fields of the
+    library's records and items of lists and dicts (by identity), random generators (by
+    state). ``changes()`` lists what differs after the call as (path, how, new value)."""
+
+    def __init__(self, args: tuple, kwargs: dict):
+        self.entries: list[tuple] = []
+        # The paths start in the call's (args, kwargs); those two themselves the function
+        # cannot change for its caller.
+        for k, value in enumerate(args):
+            self._walk(value, [("item", 0), ("item", k)], 0)
+        for name, value in kwargs.items():
+            self._walk(value, [("item", 1), ("key", name)], 0)
+
+    def _walk(self, value, path: list, depth: int) -> None:
+        if isinstance(value, np.ndarray):
+            self.entries.append((path, "array", value, value.copy(order="K")))
+        elif isinstance(value, np.random.Generator):
+            self.entries.append((path, "state", value, repr(value.bit_generator.state)))
+        elif depth < 4:
+            for step, child in _children(value):
+                if _rebindable(value):
+                    self.entries.append((path + [step], "identity", value, child))
+                self._walk(child, path + [step], depth + 1)
+
+    def changes(self) -> list[tuple]:
+        found = []
+        for path, how, value, before in self.entries:
+            if how == "array" and not _same_bits(value, before):
+                found.append((path, "array", value))
+            elif how == "state" and repr(value.bit_generator.state) != before:
+                found.append((path, "state", value.bit_generator.state))
+            elif how == "identity":
+                now = dict(_children(value)).get(path[-1], _MISSING)
+                if now is not before and now is not _MISSING:
+                    found.append((path, "value", now))
+        return found
+
+
+_MISSING = object()
+#: Arrays smaller than this are compared as bytes (NumPy's comparison costs more to start).
+SMALL_ARRAY = 1 << 16
+
+
+def _same_bits(array: np.ndarray, before: np.ndarray) -> bool:
+    """Whether ``array`` still holds, bit for bit, what its copy ``before`` holds (compared
+    as unsigned integers, so that NaN equals NaN and -0.0 differs from 0.0; 10x faster than
+    comparing ``tobytes()``, which reorders a column-major array)."""
+    if array.shape != before.shape or array.dtype != before.dtype:
+        return False
+    if array.nbytes < SMALL_ARRAY or array.dtype.itemsize not in (1, 2, 4, 8):
+        return array.tobytes() == before.tobytes()
+    bits = f"u{array.dtype.itemsize}"
+    return bool(np.array_equal(array.view(bits), before.view(bits)))
+
+
+def _children(value) -> list[tuple]:
+    """The (step, child) pairs the snapshot looks into: the call's (args, kwargs), list
+    and tuple items, string-keyed dict items, fields of the library's records."""
+    if isinstance(value, list | tuple):
+        return [(("item", k), v) for k, v in enumerate(value)]
+    if isinstance(value, dict):
+        return [(("key", k), v) for k, v in value.items() if isinstance(k, str)]
+    if is_dataclass(value) and type(value) in RECORDS.values():
+        return [(("field", f.name), getattr(value, f.name)) for f in fields(value)]
+    return []
+
+
+def _rebindable(value) -> bool:
+    """Whether a call can give ``value`` a new item or field (a list, a dict, a record
+    that is not frozen)."""
+    if isinstance(value, list | dict):
+        return True
+    return is_dataclass(value) and not type(value).__dataclass_params__.frozen

@@ -1,0 +1,514 @@
+"""A student's file, imported in a process of its own, and the grader's end of the talk.
+
+``Submission(path, ...)`` reads the file's source (a syntax error is reported without
+running anything), starts a process from a fork server (a clean interpreter that has
+already imported NumPy and the renderer, so a check's process starts in milliseconds and
+inherits no Embree threads), waits for it to import the file, and gives the grader
+``submission.module``, a stand-in for the student's module (``ptlab.untrusted.proxies``).
+
+Every request is pickled to the student's process (which may unpickle the grader's data:
+it is the grader's), and every reply is plain data (``ptlab.untrusted.plain_data``), by a
+deadline: the check's time limit, and a limit per call. A reply that is late, missing (the
+process ended) or malformed raises ``SubmissionFailed``, which ends the check: it is a
+``BaseException``, so that no ``except Exception`` in the grader's code takes it for a
+mistake of one call and goes on. ``close()`` ends the process and everything it started
+(``ptlab.untrusted.processes``) and closes the pipes.
+
+Objects sent in many calls and never changed (a ``Scene``, a ray-query structure) cross
+once per check: later requests refer to the copy the student's process already has. An
+Embree structure cannot be pickled and is rebuilt there from its triangles.
+"""
+
+from __future__ import annotations
+
+import ast
+import io
+import json
+import multiprocessing
+import multiprocessing.connection
+import multiprocessing.forkserver
+import os
+import pickle
+import signal
+import time
+from collections.abc import Callable
+from dataclasses import fields, is_dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ptlab.rendering.memory import keep_freed_memory
+from ptlab.untrusted.channel import Channel, ChannelClosedError, ChannelError, ChannelTimeoutError, enlarge
+from ptlab.untrusted.child import PTLAB, Limits, serve
+from ptlab.untrusted.ownership import library_answer as borrowed_answer
+from ptlab.untrusted.plain_data import RECORDS, Decoder, MalformedError
+from ptlab.untrusted.processes import LINUX, ProcessGuard, process_table
+from ptlab.untrusted.proxies import (
+    STAND_INS,
+    RemoteFunction,
+    RemoteModule,
+    RemoteObject,
+    StudentError,
+    remote_object,
+    student_error,
+    submission_of,
+)
+
+#: Imported once in the fork server, not again in every check's process.
+PRELOAD = ["numpy", "ptlab.rendering", "ptlab.untrusted.child"]
+#: The largest reply, in bytes (a few renders' worth of arrays).
+MAX_REPLY = 1 << 30
+#: The library's own answers, which are graded as themselves (not as re-exports).
+SOLUTIONS = PTLAB / "exercises" / "solutions"
+
+
+class SubmissionFailed(BaseException):  # noqa: N818 (ends a check, like KeyboardInterrupt)
+    """The student's process cannot go on: too slow, ended, or a reply out of the schema.
+
+    Attributes:
+        kind: ``"timeout"``, ``"ended"``, ``"malformed"`` or ``"import"``.
+        during: what the grader was asking for (``"Lambertian.eval"``), or None.
+    """
+
+    def __init__(self, message: str, kind: str, during: str | None = None):
+        super().__init__(message)
+        self.kind, self.during = kind, during
+
+
+class ImportFailed(SubmissionFailed):
+    """The student's file cannot be imported (a syntax error, an exception at import)."""
+
+    def __init__(self, message: str):
+        super().__init__(message, "import")
+
+
+class UnreadableResultError(StudentError):
+    """The student's function returned something the schema cannot carry."""
+
+
+def shared_types() -> frozenset[type]:
+    """The classes whose objects cross once per check (see the module docstring)."""
+    from ptlab.accel.numpy_bvh import NumpyBVH
+    from ptlab.scene import Scene
+    kinds = [Scene, NumpyBVH]
+    try:
+        from ptlab.accel.embree import EmbreeAccelerator
+        kinds.append(EmbreeAccelerator)
+    except ImportError:      # no Embree here: nothing of that kind to send
+        pass
+    return frozenset(kinds)
+
+
+class Submission:
+    """The student's file at ``path``, imported in a process of its own.
+
+    Args:
+        path: the student's Python file.
+        guard: the ``ProcessGuard`` that ends the process and all it starts.
+        time_limit: seconds, from when the process has started, by which everything asked
+            of it must be done.
+        call_time_limit: seconds any one request may take (default: the whole ``time_limit``).
+        on_output: called with each line the student's code prints (default: dropped).
+        limits: the process's resource limits.
+
+    Raises:
+        ImportFailed: the file has a syntax error, or importing it raised or timed out.
+    """
+
+    def __init__(self, path: str | Path, guard: ProcessGuard, time_limit: float,
+                 call_time_limit: float | None = None,
+                 on_output: Callable[[str], None] | None = None,
+                 limits: Limits | None = None):
+        self.path = Path(path)
+        self.guard = guard
+        self.time_limit = time_limit
+        self.call_time_limit = call_time_limit
+        self.tree = parse(self.path)
+        self.library_answers_allowed = self.path.resolve().is_relative_to(SOLUTIONS)
+        self._requests = 0
+        self._failure: SubmissionFailed | None = None
+        self._shared: dict[int, tuple[int, object]] = {}
+        self._shared_types = shared_types()
+        self._special: tuple[int, frozenset[type]] | None = None
+        self.process, self.channel = self._start(on_output, limits or Limits(
+            cpu_seconds=int(time_limit) + 10))
+        # From here: starting the fork server (the first time, a second or two) is not the
+        # student's time.
+        self.deadline = time.monotonic() + time_limit
+        self.module = RemoteModule(self)
+        self._wait_until_imported()
+
+    # -- starting and ending -------------------------------------------------------------
+
+    def _start(self, on_output, limits: Limits):
+        keep_freed_memory()     # replies arrive in new buffers, as they do in the student's process
+        context = multiprocessing.get_context("forkserver")
+        context.set_forkserver_preload(PRELOAD)
+        multiprocessing.forkserver.ensure_running()
+        self.guard.trust_current_children()
+        request_r, request_w = os.pipe()
+        reply_r, reply_w = os.pipe()
+        output_r, output_w = os.pipe()
+        for fd in (request_w, reply_w):
+            enlarge(fd)
+        ends = [multiprocessing.connection.Connection(fd) for fd in (request_r, reply_w, output_w)]
+        # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
+        process = context.Process(target=serve, args=(str(self.path), *ends, limits),
+                                  name="ptlab-student")
+        try:
+            process.start()
+        finally:
+            for end in ends:
+                end.close()
+        server = process_table().get(process.pid) if LINUX else None
+        if server is not None and server != os.getpid():
+            self.guard.add_server(server, started=process.pid)
+        return process, Channel(request_w, reply_r, output_r, on_output)
+
+    @property
+    def pid(self) -> int:
+        """The student's process."""
+        return self.process.pid
+
+    def close(self) -> None:
+        """End the student's process and every process below it; close the pipes."""
+        self.guard.end(self.process.pid)
+        self.process.join(5)
+        self.channel.close()
+        if self.process.exitcode is not None:
+            self.process.close()
+
+    def __enter__(self) -> Submission:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def end_started_processes(self) -> None:
+        """End the processes the student's code started (its pools), not the process itself."""
+        if LINUX:
+            self.guard.end(*[pid for pid, parent in process_table().items() if parent == self.pid],
+                           keep={self.pid})
+
+    def import_by_file_name(self) -> RemoteModule | str:
+        """The student's file imported again in its process, under its own name
+        (``08_parallel``) with its folder on ``sys.path``, so that the processes the
+        student's code starts can import it; or, if another module has that name, where
+        that module is from."""
+        found = self.request("import_by_stem", during=f"importing {self.path.name} by name")
+        if isinstance(found, RemoteObject) and found._type_name == "module":
+            return RemoteModule(self, found._handle)
+        if isinstance(found, dict) and isinstance(found.get("taken_by"), str):
+            return found["taken_by"]
+        self._fail("malformed", f"importing {self.path.name} by name", "not a module")
+
+    def _wait_until_imported(self) -> None:
+        try:
+            envelope, _ = self._receive(0, "importing your file")
+        except SubmissionFailed as failure:
+            self.close()
+            if failure.kind == "timeout":
+                raise ImportFailed(f"importing {self.path.name} took longer than "
+                                   f"{self.time_limit:g} s (does it run something at import?)") from None
+            raise ImportFailed(str(failure)) from None
+        if "import_failed" in envelope and type(envelope["import_failed"]) is str:
+            self.close()
+            raise ImportFailed(_one_line(envelope["import_failed"]))
+        if envelope.get("ready") is not True:
+            self.close()
+            raise ImportFailed(f"importing {self.path.name}: the process sent a malformed reply")
+
+    # -- requests ------------------------------------------------------------------------
+
+    def call(self, function: RemoteFunction, args: tuple, kwargs: dict):
+        """Run the student's ``function`` on the grader's arguments; a plain function's
+        changes to its arguments (arrays written into, ...) are copied into them here."""
+        writeback = function.kind == "function"
+        value, changes = self.request("call", function._handle, args, kwargs, writeback,
+                                      during=function.__name__, changes=True)
+        if writeback:
+            self._write_back((args, kwargs), changes, function.__name__)
+        return value
+
+    def call_each(self, objects: list[RemoteObject], which: np.ndarray, method: str, *args):
+        """``objects[which[k]].<method>`` on row k of ``args``, for all rows in one request
+        (materials of the student's that shade one batch of hits)."""
+        return self.request("call_each", [o._handle for o in objects], which, method, args,
+                            during=f"{objects[0]._type_name}.{method}")
+
+    def request(self, operation: str, *arguments, during: str, changes: bool = False):
+        """Send one request and return its decoded answer (with ``changes``: and the
+        call's changes to its arguments)."""
+        if self._failure is not None:
+            raise self._failure
+        self._requests += 1
+        deadline, limit = self.deadline, self.time_limit
+        if self.call_time_limit is not None and time.monotonic() + self.call_time_limit < deadline:
+            deadline, limit = time.monotonic() + self.call_time_limit, self.call_time_limit
+        parts = self._pickle((operation, *arguments))
+        try:
+            self.channel.send([self._requests.to_bytes(8, "little"), *parts], deadline)
+        except ChannelTimeoutError:
+            self._fail("timeout", during, limit=limit)
+        except ChannelClosedError:
+            self._fail("ended", during)
+        envelope, decoder = self._receive(self._requests, during, deadline, limit)
+        try:
+            if "raised" in envelope:
+                raise self._student_error(envelope["raised"])
+            if "unreadable" in envelope and type(envelope["unreadable"]) is str:
+                raise UnreadableResultError("TypeError", f"{during} returned {envelope['unreadable']}",
+                                       None, False)
+            if "unreceived" in envelope:
+                raise RuntimeError(f"the grader could not send {during} its arguments: "
+                                   f"{_one_line(str(envelope['unreceived']))}")
+            if "value" not in envelope:
+                raise MalformedError("a reply without a value")
+            value = decoder.decode(envelope["value"])
+            if not changes:
+                return value
+            found = envelope.get("writeback", [])
+            if type(found) is not list:
+                raise MalformedError("a call's changes that are not a list")
+            return value, [self._change(entry, decoder) for entry in found]
+        except MalformedError as error:
+            self._fail("malformed", during, str(error))
+
+    def _receive(self, request_id: int, during: str, deadline: float | None = None,
+                 limit: float | None = None):
+        deadline = self.deadline if deadline is None else deadline
+        try:
+            parts = self.channel.receive(deadline, MAX_REPLY)
+        except ChannelTimeoutError:
+            self._fail("timeout", during, limit=limit)
+        except ChannelClosedError:
+            self._fail("ended", during)
+        except ChannelError as error:
+            self._fail("malformed", during, str(error))
+        try:
+            if not parts:
+                raise MalformedError("an empty reply")
+            envelope = json.loads(bytes(parts[0]))
+            if type(envelope) is not dict or envelope.get("id") != request_id:
+                raise MalformedError("a reply that does not answer the request")
+        except (ValueError, RecursionError, UnicodeDecodeError, MalformedError) as error:
+            self._fail("malformed", during, str(error)[:200])
+        return envelope, Decoder(parts[1:], self._proxy)
+
+    def _proxy(self, tag: dict):
+        if "function" in tag:
+            return RemoteFunction(self, tag)
+        return remote_object(self, tag["object"], tag["type"])
+
+    @staticmethod
+    def _student_error(raised) -> StudentError:
+        if type(raised) is not dict or set(raised) != {"type", "message", "where", "not_implemented"}:
+            raise MalformedError("an error report without its fields")
+        type_name, message, where, not_implemented = (
+            raised[k] for k in ("type", "message", "where", "not_implemented"))
+        if type(type_name) is not str or type(message) is not str or \
+                not (where is None or type(where) is str) or type(not_implemented) is not bool:
+            raise MalformedError("an error report with a bad field")
+        return student_error(_one_line(type_name)[:60], _one_line(message),
+                             None if where is None else _one_line(where)[:200], not_implemented)
+
+    def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None):
+        """Record the failure, end the process, raise ``SubmissionFailed`` (now and for
+        every later request); ``limit`` is the time limit that ran out, if one did."""
+        if kind == "timeout":
+            limit = self.time_limit if limit is None else limit
+            message = f"took longer than {limit:g} s and was stopped (in {during})"
+        elif kind == "ended":
+            self.process.join(1)
+            message = f"your code's process ended during {during} ({_exit_cause(self.process.exitcode)})"
+        else:
+            message = f"your code's process sent a malformed reply during {during} ({detail})"
+        self._failure = SubmissionFailed(message, kind, during)
+        self.guard.end(self.process.pid)
+        raise self._failure
+
+    # -- the grader's data, to the student's process --------------------------------------
+
+    def _pickle(self, value) -> list:
+        """[pickle, *arrays' data]: arrays cross as their bytes, without a copy into the pickle."""
+        arrays: list = []
+        stream = io.BytesIO()
+        _Pickler(stream, self, arrays).dump(value)
+        return [stream.getbuffer(), *arrays]
+
+    def _special_types(self) -> frozenset[type]:
+        """The types the pickler treats apart (stand-ins, shared objects, arrays); made
+        again only when a new class of stand-in has appeared."""
+        if self._special is None or self._special[0] != len(STAND_INS):
+            self._special = (len(STAND_INS), frozenset(STAND_INS | self._shared_types | {np.ndarray}))
+        return self._special[1]
+
+    def _share(self, value, arrays: list) -> tuple:
+        """The reference to a shared object (with the object itself, the first time)."""
+        if id(value) in self._shared:
+            return ("shared", self._shared[id(value)][0])
+        key = len(self._shared)
+        self._shared[id(value)] = (key, value)      # (kept alive, so its id stays its own)
+        stream = io.BytesIO()
+        _Pickler(stream, self, arrays, top=value).dump(value)
+        return ("shared", key, stream.getvalue())
+
+    # -- a call's changes, to the grader's arguments --------------------------------------
+
+    @staticmethod
+    def _change(entry, decoder: Decoder) -> tuple:
+        if type(entry) is not list or len(entry) != 3 or type(entry[0]) is not list or \
+                entry[1] not in ("array", "state", "value"):
+            raise MalformedError("a change that is not [path, how, value]")
+        path = entry[0]
+        if not path or not all(type(step) is list and len(step) == 2 and
+                               step[0] in ("item", "key", "field") for step in path):
+            raise MalformedError("a change with a bad path")
+        return path, entry[1], decoder.decode(entry[2])
+
+    def _write_back(self, arguments, changes: list, during: str) -> None:
+        try:
+            for path, how, value in changes:
+                container = arguments
+                for step in path[:-1]:
+                    container = _step(container, *step)
+                kind, key = path[-1]
+                target = _step(container, kind, key)
+                if how == "array":
+                    if not (isinstance(target, np.ndarray) and isinstance(value, np.ndarray)
+                            and target.shape == value.shape):
+                        raise MalformedError("an array change that does not fit the argument")
+                    if target.flags.writeable:
+                        np.copyto(target, value, casting="unsafe")
+                elif how == "state":
+                    if not isinstance(target, np.random.Generator):
+                        raise MalformedError("a generator state for something else")
+                    target.bit_generator.state = value
+                else:
+                    _rebind(container, kind, key, value)
+        except MalformedError as error:
+            self._fail("malformed", during, str(error))
+        except (TypeError, ValueError, KeyError) as error:   # a state numpy refuses, ...
+            self._fail("malformed", during, f"a change the grader cannot make: {error}")
+
+
+class _Pickler(pickle.Pickler):
+    """Pickles the grader's data for the student's process: stand-ins as the handles of the
+    objects they stand for, shared objects once, arrays as their raw bytes in a part of
+    their own (``arrays``), and large arrays whose rows are all the same (the graders'
+    ``batch(wo, rows)``) as one row."""
+
+    def __init__(self, stream, submission: Submission, arrays: list, top=None):
+        super().__init__(stream, protocol=pickle.HIGHEST_PROTOCOL)
+        self.submission, self.arrays, self.top = submission, arrays, top
+        self.special = submission._special_types()
+
+    def persistent_id(self, value):
+        kind = type(value)      # (called for every object pickled: exact types, looked up)
+        if kind not in self.special or value is self.top:
+            return None
+        if kind is np.ndarray:
+            return self._array(value)
+        if kind in STAND_INS:
+            if submission_of(value) is not self.submission:
+                raise pickle.PicklingError("an object of another student's process")
+            return ("handle", value._handle)
+        return self.submission._share(value, self.arrays)
+
+    def _array(self, value: np.ndarray):
+        if value.dtype.hasobject or value.dtype.fields is not None:
+            return None                     # (pickled as usual)
+        order = "F" if value.flags.f_contiguous and not value.flags.c_contiguous else "C"
+        if _same_rows(value):
+            return ("rows", value[:1].copy(), len(value), order)
+        if not (value.flags.c_contiguous or value.flags.f_contiguous):
+            value = np.ascontiguousarray(value)
+        self.arrays.append(memoryview(value.reshape(-1, order=order)).cast("B"))
+        # One string, not a tuple: pickle asks persistent_id about each item of a tuple.
+        shape = ",".join(map(str, value.shape))
+        return f"array {len(self.arrays) - 1} {value.dtype.str} {shape} {order}"
+
+
+#: Arrays at least this large are looked at for rows that are all the same.
+SAME_ROWS_BYTES = 1 << 18
+
+
+def _same_rows(array: np.ndarray) -> bool:
+    """Whether every row of a large 2-D array is, bit for bit, its first (most arrays that
+    are not differ in their second row, which is looked at first)."""
+    if array.ndim != 2 or len(array) < 2 or array.nbytes < SAME_ROWS_BYTES \
+            or array.dtype.kind not in "biuf" or array.dtype.fields is not None:
+        return False
+    bits = array.view(f"u{array.dtype.itemsize}")
+    first = bits[0]
+    if (bits[1] != first).any():
+        return False
+    return bool((bits.min(axis=0) == first).all() and (bits.max(axis=0) == first).all())
+
+
+def _step(container, kind: str, key):
+    """One step of a change's path into the grader's arguments."""
+    if kind == "item" and isinstance(container, list | tuple) and type(key) is int \
+            and 0 <= key < len(container):
+        return container[key]
+    if kind == "key" and isinstance(container, dict) and type(key) is str and key in container:
+        return container[key]
+    if kind == "field" and type(container) in RECORDS.values() and type(key) is str \
+            and key in {f.name for f in fields(container)}:
+        return getattr(container, key)
+    raise MalformedError(f"a change at {kind} {key!r}, which the arguments do not have")
+
+
+def _rebind(container, kind: str, key, value) -> None:
+    if kind == "item" and isinstance(container, list):
+        container[key] = value
+    elif kind == "key" and isinstance(container, dict):
+        container[key] = value
+    elif kind == "field" and is_dataclass(container) and \
+            not type(container).__dataclass_params__.frozen:
+        setattr(container, key, value)
+    else:
+        raise MalformedError(f"a new value at {kind} {key!r}, which cannot be given one")
+
+
+def parse(path: Path) -> ast.Module:
+    """The file's syntax tree; ``ImportFailed`` for a syntax error (nothing is run)."""
+    try:
+        source = path.read_bytes()
+    except OSError as error:
+        raise ImportFailed(f"{path}: cannot read it: {error.strerror}") from None
+    try:
+        return ast.parse(source, filename=str(path))
+    except SyntaxError as error:
+        raise ImportFailed(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
+    except (ValueError, RecursionError, MemoryError) as error:
+        raise ImportFailed(f"{path}: not a Python file Python can read ({type(error).__name__})") from None
+
+
+def library_answer(module: RemoteModule, name: str) -> str | None:
+    """The ptlab answer that the student's ``name`` is (``ptlab.integrators.path.trace_paths``),
+    or None if it is the student's own code; the library's own answers (``solutions/``)
+    are always their own."""
+    submission = submission_of(module)
+    if submission.library_answers_allowed:
+        return None
+    found = borrowed_answer(submission.tree, name)
+    if found is None:
+        value = getattr(module, name, None)
+        found = value.origin if isinstance(value, RemoteFunction) else None
+    return found
+
+
+def _exit_cause(code: int | None) -> str:
+    if code is None:
+        return "it stopped answering"
+    if code >= 0:
+        return f"it exited with code {code}: os._exit or sys.exit?"
+    name = signal.Signals(-code).name if -code in signal.valid_signals() else f"signal {-code}"
+    cause = {"SIGXCPU": "its CPU-time limit", "SIGXFSZ": "its file-size limit",
+             "SIGSEGV": "a crash", "SIGABRT": "a crash", "SIGKILL": "killed, perhaps for memory"}
+    return f"{name}: {cause.get(name, 'a signal')}"
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split())
