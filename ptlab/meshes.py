@@ -41,11 +41,22 @@ _RECORD_SIZES = {"v": (3, 7), "vt": (1, 3), "vn": (3, 3)}
 
 def read_mesh_triangles(path: Path, where: str | None = None,
                         limit: float = math.inf) -> np.ndarray:
-    """(T, 3, 3) float64 triangles of a mesh file, through trimesh.
+    """(T, 3, 3) float64 triangles of a mesh file, through trimesh (``read_mesh``)."""
+    return read_mesh(path, where, limit)[0]
+
+
+def read_mesh(path: Path, where: str | None = None,
+              limit: float = math.inf) -> tuple[np.ndarray, np.ndarray | None]:
+    """The triangles of a mesh file, through trimesh, and their texture coordinates.
+
+    Returns:
+        triangles: (T, 3, 3) float64, vertex k of triangle i at ``triangles[i, k]``;
+        uv: (T, 3, 2) float64 texture coordinates of those vertices (an OBJ file's ``vt``;
+        a missing v is 0), or None if the file has none.
 
     Raises ``SceneError`` (naming ``where``, e.g. the scene file and key) for a file trimesh
-    cannot read or would misread, an empty mesh, NaN or infinite vertices, and coordinates
-    beyond +-``limit``. Triangles of zero area are then dropped.
+    cannot read or would misread, an empty mesh, NaN or infinite vertices or texture
+    coordinates, and coordinates beyond +-``limit``. Triangles of zero area are then dropped.
     """
     import trimesh
 
@@ -99,18 +110,40 @@ def read_mesh_triangles(path: Path, where: str | None = None,
         vertex = triangles[beyond][0]
         raise SceneError(where, f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
                                 f"coordinate must lie within +-{limit:g}")
+    uv = _texture_coordinates(mesh, len(vertices), where, path.name)
+    uv = None if uv is None else uv[faces]
     # (Only now: a vertex far out can make its triangles degenerate in float64.)
-    triangles = drop_zero_area(triangles)
-    if len(triangles) == 0:
+    kept = has_area(triangles)
+    if not kept.any():
         raise SceneError(where, f"mesh {path.name} has only zero-area triangles")
-    return triangles
+    return triangles[kept], None if uv is None else uv[kept]
+
+
+def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.ndarray | None:
+    """(V, 2) uv per vertex of a trimesh mesh (v = 0 where the file gives u only), or None."""
+    uv = getattr(getattr(mesh, "visual", None), "uv", None)
+    if uv is None:
+        return None
+    uv = np.asarray(uv, dtype=np.float64)
+    if uv.ndim != 2 or len(uv) != vertex_count or uv.shape[1] == 0:
+        raise SceneError(where, f"mesh {name}: texture coordinates of shape {uv.shape} for "
+                                f"{vertex_count} vertices")
+    uv = np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
+    if not np.isfinite(uv).all():
+        raise SceneError(where, f"mesh {name} has texture coordinates that are NaN or infinite")
+    return uv
+
+
+def has_area(triangles: np.ndarray) -> np.ndarray:
+    """(T,) bool: which of the (T, 3, 3) ``triangles`` have an area that is not zero."""
+    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
+                                    triangles[:, 2] - triangles[:, 0]), axis=1)
+    return area2 > 0
 
 
 def drop_zero_area(triangles: np.ndarray) -> np.ndarray:
     """(T', 3, 3) the triangles of (T, 3, 3) ``triangles`` whose area is not zero."""
-    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
-                                    triangles[:, 2] - triangles[:, 0]), axis=1)
-    return triangles[area2 > 0]
+    return triangles[has_area(triangles)]
 
 
 def check_obj_text(data: bytes) -> None:
