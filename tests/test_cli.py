@@ -80,9 +80,9 @@ def test_help_describes_every_render_option(capsys):
         assert option in text
 
 
-def test_scenes_lists_cornell_box(capsys):
+def test_scenes_lists_cornell_box_and_the_homeworks(capsys):
     assert main(["scenes"]) == 0
-    assert "cornell-box" in capsys.readouterr().out.split()
+    assert {"cornell-box", "games101-hw5", "games101-hw6"} <= set(capsys.readouterr().out.split())
 
 
 LIT_BY_A_POINT = """
