@@ -114,7 +114,7 @@ def build_parser() -> argparse.ArgumentParser:
                        help="compare the samplers' error at equal spp and its product with time")
     bench.add_argument("--repeat", type=int, default=3,
                        help="--accuracy: renders per sampler, alternating, each with another "
-                            "seed (default 3)")
+                            "seed; --against: runs of each program (default 3)")
     bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
                        help="--accuracy: spp of the reference (default 4096; cached in "
                             "$PTLAB_CACHE or ~/.cache/ptlab/references)")
@@ -125,6 +125,13 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--workers", action="append", type=int,
                        help="worker processes (repeatable; default one per core); one "
                             "worker is always measured too, as the baseline of the speed-up")
+    bench.add_argument("--against", metavar="PATH",
+                       help="time PATH, a compiled C++ path tracer such as the GAMES101 Homework 7 "
+                            "build/RayTracing, against ptlab render with the homework's estimator "
+                            "at its image's size, alternately --repeat times, as whole processes")
+    bench.add_argument("--cpp-args", default="{spp}", metavar="ARGS",
+                       help="--against: the C++ program's arguments ({spp} is replaced by --spp; "
+                            "default '{spp}')")
 
     converge = commands.add_parser(
         "converge", help="chart error against time for several estimators",
@@ -335,6 +342,14 @@ def _bench(args) -> int:
     from ptlab.measure.converge import default_cache_dir
     from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
 
+    if args.against is not None:
+        from ptlab.measure.against import reject_options, run_against
+        reject_options({"--accuracy": args.accuracy, "--res": args.res, "--backend": args.backend,
+                        "--estimator": args.estimator, "--sampler": args.sampler,
+                        "a second --workers": (args.workers or [])[1:]})
+        run_against(args.against, args.cpp_args, spp=16 if args.spp is None else args.spp,
+                    repeat=args.repeat, workers=(args.workers or [None])[0])
+        return 0
     res = args.res if args.res is not None else (256 if args.accuracy else 512)
     spp = args.spp if args.spp is not None else (64 if args.accuracy else 16)
     if res <= 0 or spp <= 0:

@@ -1,9 +1,11 @@
-"""Images: the float64 film, files through OpenImageIO, sRGB through colour-science.
+"""Images: the float64 film, and files through OpenImageIO.
 
 * ``.exr`` files hold linear float32 RGB, exactly what the renderer computed, with the
   render's settings in the header (spp, seed, seconds, scene, ptlab version).
 * ``.png`` files hold 8-bit sRGB: linear values clipped to [0, 1] and encoded with the
-  sRGB transfer function (IEC 61966-2-1) from colour-science. (The homework writes
+  sRGB transfer function of IEC 61966-2-1 (``srgb_encode``; ``tests/test_image.py`` checks
+  it against colour-science's ``cctf_encoding``, which gives the same numbers but costs
+  a second of imports, matplotlib's among them, at every PNG). (The homework writes
   ``pow(x, 0.6)``, which is neither sRGB nor a gamma any display expects.)
 
 Files are written atomically: to a temporary file beside the target, then renamed, so a
@@ -12,7 +14,6 @@ crash never leaves a half-written image under the final name.
 
 from __future__ import annotations
 
-import warnings
 from pathlib import Path
 
 import numpy as np
@@ -23,20 +24,17 @@ from ptlab.errors import PtlabError
 FORMATS = (".exr", ".png")
 
 
-def _colour():
-    """colour-science, imported without its warning that matplotlib is not installed."""
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message=".*[Mm]atplotlib.*")
-        import colour
-    return colour
+def srgb_encode(linear: np.ndarray) -> np.ndarray:
+    """Linear values in [0, 1] -> sRGB-encoded values in [0, 1] (IEC 61966-2-1:1999):
+    12.92 L below the break point 0.0031308, 1.055 L^(1 / 2.4) - 0.055 above it."""
+    return np.where(linear <= 0.0031308, 12.92 * linear,
+                    1.055 * np.power(linear, 1 / 2.4) - 0.055)
 
 
 def encode_srgb8(linear: np.ndarray) -> np.ndarray:
     """(H, W, 3) linear RGB -> (H, W, 3) uint8 sRGB (clipped to [0, 1] first)."""
-    colour = _colour()
     clipped = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64)), 0.0, 1.0)
-    encoded = colour.cctf_encoding(clipped, function="sRGB")
-    return np.round(encoded * 255.0).astype(np.uint8)
+    return np.round(srgb_encode(clipped) * 255.0).astype(np.uint8)
 
 
 def check_output_path(path: str | Path) -> Path:
@@ -104,7 +102,11 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
         raise PtlabError(f"{path}: cannot read image: {oiio.geterror()}")
     try:
         spec = source.spec()
+        if spec.nchannels < 3:
+            raise PtlabError(f"{path}: has {spec.nchannels} channel(s), not the 3 of an RGB image")
         pixels = source.read_image(0, 0, 0, 3, oiio.FLOAT)
+        if pixels is None:   # e.g. a file cut short
+            raise PtlabError(f"{path}: cannot read image: {source.geterror() or 'no pixels'}")
     finally:
         source.close()
     metadata = {a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs

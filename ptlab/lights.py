@@ -129,8 +129,8 @@ class AreaLights:
         self._same = {name: rows[:, :1] for name, rows in fields.items()
                       if (rows == rows[:, :1]).all()}
         varying = [name for name in fields if name not in self._same]
-        self._packed = (np.vstack([fields[name] for name in varying]).astype(np.float32)
-                        if varying else np.zeros((0, len(self.areas)), np.float32))  # (one light)
+        self._packed = np.vstack([fields[name] for name in varying] + [np.zeros((0, len(v0)))]
+                                 ).astype(np.float32)     # (one light: nothing varies)
         starts = np.cumsum([0] + [len(fields[name]) for name in varying])
         self._rows = {name: slice(a, b)
                       for name, a, b in zip(varying, starts[:-1], starts[1:], strict=True)}

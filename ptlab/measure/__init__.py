@@ -2,6 +2,8 @@
 
 * ``metrics``: relMSE and RMSE of an image against a reference;
 * ``bench``: ``ptlab bench``, samples and rays per second and the share spent in ray queries;
+* ``against``: ``ptlab bench --against``, ptlab's time against the homework's compiled C++
+  path tracer, whole process against whole process;
 * ``converge``: ``ptlab converge``, error against time for several estimators;
 * ``charts``: the convergence chart and the equal-time strip that ``converge`` draws.
 """
