@@ -233,7 +233,7 @@ class PointLights:
 
     A point light of intensity I (W/sr, an RGB triple) sends the radiance-like quantity
     I / r^2 to a point at distance r: the irradiance there is E = I cos(theta) / r^2
-    (pbrt-v4's ``PointLight``, section 12.2.1; GAMES101 lecture 14). No ray can hit a point,
+    (pbrt-v4's ``PointLight``, section 12.2; GAMES101 lecture 14). No ray can hit a point,
     so only light sampling finds it: a *delta* light, whose multiple-importance weight is 1.
     Its power is 4 pi mean(I) (pbrt-v4's ``PointLight::Phi``, the mean over RGB as for area
     lights); light sampling picks one of them in proportion to it.
