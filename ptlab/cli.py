@@ -54,7 +54,8 @@ def build_parser() -> argparse.ArgumentParser:
                     "and write .png (8-bit sRGB) or .exr (linear float).")
     render.add_argument("scene", help="built-in scene name or path to a scene .toml")
     render.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
-    render.add_argument("--res", default="512", help="N (square) or WxH (default 512)")
+    render.add_argument("--res", help="N (square) or WxH (default: the scene file's [render] "
+                                      "res, else 512)")
     render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
     render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
     render.add_argument("--backend", choices=("auto", "embree", "numpy"), default="auto",
@@ -68,7 +69,8 @@ def build_parser() -> argparse.ArgumentParser:
                         help="bounces before Russian roulette starts (default 0 with a fixed "
                              "P, like the homework; 2 with throughput)")
     render.add_argument("--max-depth", type=int,
-                        help="most bounces per path (default 100; 5 for whitted)")
+                        help="most bounces per path (default: the scene file's [render] "
+                             "max_depth, else 100; 5 for whitted)")
     render.add_argument("--integrator", choices=INTEGRATORS, default="path",
                         help="path tracing (default), the Whitted ray tracer (mirrors, glass "
                              "and direct light only) or a debug view")
@@ -192,13 +194,13 @@ def build_parser() -> argparse.ArgumentParser:
 def _render(args) -> int:
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
-    from ptlab.rendering import pass_schedule
+    from ptlab.rendering import pass_schedule, resolution
     from ptlab.rendering.executors import dask_executor
-    from ptlab.rendering.settings import MAX_SPP, check_workers, parse_resolution
+    from ptlab.rendering.settings import MAX_SPP, check_workers
     from ptlab.scene import load_scene
 
     scene = load_scene(args.scene)
-    width, height = parse_resolution(args.res)
+    width, height = resolution(scene, args.res)
     out = check_output_path(args.out or f"{scene.name}.png")
     checkpoint = args.checkpoint or args.resume
     if checkpoint is not None:

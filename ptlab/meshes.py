@@ -3,9 +3,10 @@
 trimesh reads each format and triangulates polygons; ptlab then checks what came out (three
 coordinates per vertex, faces that refer to existing vertices, nothing NaN or infinite) and
 drops triangles of zero area, which no ray can hit. OBJ text that ``check_obj_text`` accepts
-is plain enough to read directly (``read_obj``), with the same triangles as trimesh's: that
-spares a render of OBJ meshes importing trimesh, and through it SciPy, a second of its
-start-up (measured: 1.2 s of 1.3 s CPU for a 16 x 16 Cornell box).
+and that has no texture coordinates is plain enough to read directly (``read_obj``), with
+the same triangles as trimesh's: that spares a render of OBJ meshes importing trimesh, and
+through it SciPy, a second of its start-up (measured: 1.2 s of 1.3 s CPU for a 16 x 16
+Cornell box).
 
 trimesh's OBJ reader is fast because it is lenient, and some of its leniency goes wrong
 silently: it takes the number of values per vertex from the first ``v`` line, skips ``v``
@@ -44,11 +45,23 @@ _RECORD_SIZES = {"v": (3, 7), "vt": (1, 3), "vn": (3, 3)}
 
 def read_mesh_triangles(path: Path, where: str | None = None,
                         limit: float = math.inf) -> np.ndarray:
-    """(T, 3, 3) float64 triangles of a mesh file (OBJ read here, other formats by trimesh).
+    """(T, 3, 3) float64 triangles of a mesh file (``read_mesh``)."""
+    return read_mesh(path, where, limit)[0]
+
+
+def read_mesh(path: Path, where: str | None = None,
+              limit: float = math.inf) -> tuple[np.ndarray, np.ndarray | None]:
+    """The triangles of a mesh file and their texture coordinates: an OBJ file without
+    texture coordinates read here (``read_obj``), any other file by trimesh.
+
+    Returns:
+        triangles: (T, 3, 3) float64, vertex k of triangle i at ``triangles[i, k]``;
+        uv: (T, 3, 2) float64 texture coordinates of those vertices (an OBJ file's ``vt``;
+        a missing v is 0), or None if the file has none.
 
     Raises ``SceneError`` (naming ``where``, e.g. the scene file and key) for a file trimesh
-    cannot read or would misread, an empty mesh, NaN or infinite vertices, and coordinates
-    beyond +-``limit``. Triangles of zero area are then dropped.
+    cannot read or would misread, an empty mesh, NaN or infinite vertices or texture
+    coordinates, and coordinates beyond +-``limit``. Triangles of zero area are then dropped.
     """
     path = Path(path)
     where = where or str(path)
@@ -67,9 +80,13 @@ def read_mesh_triangles(path: Path, where: str | None = None,
             check_obj_text(data)
         except ValueError as error:
             raise SceneError(where, f"mesh {path.name}: {error}") from None
+    if fmt == "obj" and b"\nvt " not in b"\n" + data:
         vertices, faces = read_obj(data.decode("utf-8").replace("\r\n", "\n"))
+        mesh = None
     else:
-        vertices, faces = _read_with_trimesh(path, where, fmt)
+        mesh = _read_with_trimesh(path, where, fmt)
+        vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
+        faces = np.asarray(getattr(mesh, "faces", ()))
     if len(faces) == 0:
         raise SceneError(where, f"mesh {path.name} has no triangles")
     if vertices.ndim != 2 or vertices.shape[1] != 3:
@@ -92,15 +109,39 @@ def read_mesh_triangles(path: Path, where: str | None = None,
         vertex = triangles[beyond][0]
         raise SceneError(where, f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
                                 f"coordinate must lie within +-{limit:g}")
+    uv = None if mesh is None else _texture_coordinates(mesh, len(vertices), where, path.name)
+    uv = None if uv is None else uv[faces]
     # (Only now: a vertex far out can make its triangles degenerate in float64.)
-    triangles = drop_zero_area(triangles)
-    if len(triangles) == 0:
+    kept = has_area(triangles)
+    if not kept.any():
         raise SceneError(where, f"mesh {path.name} has only zero-area triangles")
-    return triangles
+    return triangles[kept], None if uv is None else uv[kept]
 
 
-def _read_with_trimesh(path: Path, where: str, fmt: str) -> tuple[np.ndarray, np.ndarray]:
-    """(vertices, faces) of a mesh file of any format trimesh reads."""
+def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.ndarray | None:
+    """(V, 2) uv per vertex of a trimesh mesh (v = 0 where the file gives u only), or None."""
+    uv = getattr(getattr(mesh, "visual", None), "uv", None)
+    if uv is None:
+        return None
+    uv = np.asarray(uv, dtype=np.float64)
+    if uv.ndim != 2 or len(uv) != vertex_count or uv.shape[1] == 0:
+        raise SceneError(where, f"mesh {name}: texture coordinates of shape {uv.shape} for "
+                                f"{vertex_count} vertices")
+    uv = np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
+    if not np.isfinite(uv).all():
+        raise SceneError(where, f"mesh {name} has texture coordinates that are NaN or infinite")
+    return uv
+
+
+def has_area(triangles: np.ndarray) -> np.ndarray:
+    """(T,) bool: which of the (T, 3, 3) ``triangles`` have an area that is not zero."""
+    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
+                                    triangles[:, 2] - triangles[:, 0]), axis=1)
+    return area2 > 0
+
+
+def _read_with_trimesh(path: Path, where: str, fmt: str):
+    """The trimesh mesh of a file of any format trimesh reads."""
     import trimesh
 
     try:
@@ -112,8 +153,7 @@ def _read_with_trimesh(path: Path, where: str, fmt: str) -> tuple[np.ndarray, np
                                 f"nor UTF-8 text") from None
     except Exception as error:  # trimesh raises many kinds for unreadable files
         raise SceneError(where, f"cannot read mesh {path.name}: {error}") from None
-    return (np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64),
-            np.asarray(getattr(mesh, "faces", ())))
+    return mesh
 
 
 def read_obj(text: str) -> tuple[np.ndarray, np.ndarray]:
@@ -162,9 +202,7 @@ _TEXTURE_AND_NORMAL = re.compile(r"/\S*")
 
 def drop_zero_area(triangles: np.ndarray) -> np.ndarray:
     """(T', 3, 3) the triangles of (T, 3, 3) ``triangles`` whose area is not zero."""
-    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
-                                    triangles[:, 2] - triangles[:, 0]), axis=1)
-    return triangles[area2 > 0]
+    return triangles[has_area(triangles)]
 
 
 def check_obj_text(data: bytes) -> None:

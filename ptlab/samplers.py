@@ -37,7 +37,9 @@ Three samplers (``SAMPLERS``):
 Dimensions (``BounceUniforms``, used by every integrator): the camera's pixel jitter is the pair
 (0, 1); bounce ``depth`` then uses, from ``2 + 5 * depth`` on, the light sample (a pair: its
 first coordinate picks the light triangle and, stretched back to [0, 1) inside the chosen
-interval, becomes the point's first coordinate), Russian roulette (one), and the BSDF
+interval, becomes the point's first coordinate; in a scene with point lights or a sky it
+first picks the kind of light, stretched the same way: ``ptlab.lights.LightSampler``),
+Russian roulette (one), and the BSDF
 direction (a pair: a material that also chooses a lobe does it with the first coordinate,
 stretched the same way). Pairs are stratified together; the warps that turn them into
 directions and points are bijective so that the stratification survives (``ptlab.sampling``).
@@ -411,7 +413,7 @@ class BounceUniforms:
         self.first = 2 + self.PER_BOUNCE * depth
 
     def light(self) -> np.ndarray:
-        """(N, 2): which light triangle (stretched back to [0, 1) afterwards), and where on it."""
+        """(N, 2): which light (stretched back to [0, 1) afterwards), and where on it."""
         return self.sampler.get(self.keys, self.first, 2)
 
     def roulette(self) -> np.ndarray:

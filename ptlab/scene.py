@@ -21,6 +21,9 @@ A scene file looks like this (``scenes/cornell-box/scene.toml`` is a full exampl
     file = "meshes/floor.obj"   # OBJ, STL, PLY, OFF or glTF; relative to the scene file
     material = "white"
 
+and may add point lights (``[[point_light]]``), a sky (``[sky]``) and the render's defaults
+(``[render]``): ``docs/scene-format.md`` describes every key.
+
 Loading flattens every mesh into one array of triangles with a material index each
 (``Scene``); the renderer never sees meshes. Anything wrong in the file raises a
 ``SceneError`` that names the file, the key and the problem.
@@ -39,9 +42,10 @@ import numpy as np
 from ptlab.atomic import path_kind
 from ptlab.camera import Camera
 from ptlab.errors import PtlabError, SceneError
-from ptlab.lights import AreaLights
+from ptlab.lights import AreaLights, LightSampler, PointLights, Sky, light_shares
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
-from ptlab.meshes import drop_zero_area, read_mesh_triangles
+from ptlab.meshes import drop_zero_area, has_area, read_mesh
+from ptlab.textures import Checkerboard
 
 SCENE_FILE_NAME = "scene.toml"
 
@@ -79,6 +83,9 @@ MIN_RADIUS = 1e-3 * MIN_SCENE_SIZE
 #: times its throughput (up to ~1e10 after deep Russian roulette) and the light's geometry
 #: factor (up to ~1e9 next to it), which must stay far below float32's 3.4e38.
 MAX_RADIANCE = 1e15
+#: The largest width or height, and the most bounces, a ``[render]`` table may ask for.
+MAX_RESOLUTION = 1 << 16
+MAX_DEPTH = 10_000
 
 
 def builtin_scenes_dir() -> Path:
@@ -98,6 +105,19 @@ def builtin_scene_names() -> list[str]:
     return sorted(p.name for p in root.iterdir() if (p / SCENE_FILE_NAME).is_file())
 
 
+@dataclass(frozen=True)
+class RenderDefaults:
+    """What a scene file's ``[render]`` table asks for when the render does not say.
+
+    Attributes:
+        res: (width, height), or None for the renderer's default.
+        max_depth: the most bounces, or None for the integrator's default.
+    """
+
+    res: tuple[int, int] | None = None
+    max_depth: int | None = None
+
+
 @dataclass
 class Scene:
     """Everything the renderer needs, as flat arrays.
@@ -109,6 +129,15 @@ class Scene:
         camera: the pinhole camera.
         name: a short name for messages and metadata.
         material_names: the name of each material in the scene file.
+        point_lights: the scene's ``PointLights``, or None.
+        sky: the ``Sky`` that rays escaping the scene see, or None (black).
+        uvs: (T, 3, 2) texture coordinates of each triangle's vertices, or None; textured
+            materials need them.
+        defaults: the scene file's ``[render]`` defaults.
+
+    After construction, ``lights`` holds the emissive triangles (``AreaLights``, or None) and
+    ``light_sampler`` picks among all the lights (None for a scene without light); the
+    point lights and the sky then carry their share of the light samples.
     """
 
     triangles: np.ndarray
@@ -117,6 +146,10 @@ class Scene:
     camera: Camera
     name: str = "scene"
     material_names: list[str] = field(default_factory=list)
+    point_lights: PointLights | None = None
+    sky: Sky | None = None
+    uvs: np.ndarray | None = None
+    defaults: RenderDefaults = field(default_factory=RenderDefaults)
 
     def __post_init__(self):
         tri = np.asarray(self.triangles, dtype=np.float64)
@@ -147,17 +180,49 @@ class Scene:
         self.emission = emission.astype(np.float32).take(self.material_ids, axis=0)
         #: (T,) bool: the triangle emits light.
         self.emits = self.emission.max(axis=1) > 0
-        emitters = np.flatnonzero(self.emits)
+        # (A zero-area triangle is never hit nor sampled: it is no light.)
+        emitters = np.flatnonzero(self.emits & (np.linalg.norm(cross, axis=1) > 0))
+        area_share, point_share, sky_share = light_shares(
+            _area_light_power(tri[emitters], self.emission[emitters]),
+            self.point_lights.power if self.point_lights is not None else 0.0,
+            self.sky is not None)
         self.lights = AreaLights(v0[emitters], v1[emitters], v2[emitters],
-                                 self.emission[emitters], offset[emitters]) if len(emitters) else None
+                                 self.emission[emitters], offset[emitters],
+                                 share=area_share) if len(emitters) else None
+        if self.point_lights is not None:
+            self.point_lights = PointLights(self.point_lights.positions,
+                                            self.point_lights.intensity, share=point_share)
+        if self.sky is not None:
+            # Shadow rays toward the sky go twice the scene's diagonal: out of it from anywhere.
+            diagonal = float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
+            self.sky = Sky(self.sky.radiance, share=sky_share, distance=2 * diagonal)
+        kinds = [kind for kind in (self.lights, self.point_lights, self.sky) if kind is not None]
+        self.light_sampler = LightSampler(kinds) if kinds else None
         self.material_table = MaterialTable(self.materials)
+        self.triangle_uv = None
+        if self.uvs is not None:
+            uvs = np.asarray(self.uvs, dtype=np.float64)
+            if uvs.shape != (len(tri), 3, 2):
+                raise ValueError(f"uvs must be (T, 3, 2) = {(len(tri), 3, 2)}, not {uvs.shape}")
+            self.uvs = uvs
+            # Packed for one gather per bounce: uv0 | uv1 - uv0 | uv2 - uv0, (6, T).
+            self.triangle_uv = np.vstack([uvs[:, 0].T, (uvs[:, 1] - uvs[:, 0]).T,
+                                          (uvs[:, 2] - uvs[:, 0]).T]).astype(np.float32)
+        elif any(m.textured for m in self.materials):
+            raise ValueError("a textured material needs texture coordinates: give uvs")
 
     def with_sampling(self, sampling: str) -> Scene:
         """This scene with every diffuse material sampling directions by ``sampling``."""
         materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m
                      for m in self.materials]
         return Scene(self.triangles, self.material_ids, materials, self.camera, self.name,
-                     self.material_names)
+                     self.material_names, self.point_lights, self.sky, self.uvs, self.defaults)
+
+    def uv_at(self, prim: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
+        """(N, 2) float32 texture coordinates at the points with barycentrics ``b1``, ``b2``
+        (N,) on triangles ``prim`` (N,): uv0 + b1 (uv1 - uv0) + b2 (uv2 - uv0)."""
+        data = self.triangle_uv.take(prim, axis=1)
+        return (data[0:2] + b1 * data[2:4] + b2 * data[4:6]).T
 
     @property
     def triangle_count(self) -> int:
@@ -166,8 +231,19 @@ class Scene:
     def summary(self) -> str:
         """One line: name, triangles, materials, lights."""
         lights = len(self.lights) if self.lights is not None else 0
+        points = len(self.point_lights) if self.point_lights is not None else 0
+        sky = ", a sky" if self.sky is not None else ""
         return (f"{self.name}: {self.triangle_count} triangles, {len(self.materials)} materials, "
-                f"{lights} emissive triangles")
+                f"{lights} emissive triangles, {points} point lights{sky}")
+
+
+def _area_light_power(triangles: np.ndarray, radiance: np.ndarray) -> float:
+    """The flux of emissive triangles, pi x area x mean(Le) (``AreaLights.power``)."""
+    if len(triangles) == 0:
+        return 0.0
+    area = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
+                                         triangles[:, 2] - triangles[:, 0]), axis=1)
+    return math.pi * float(np.sum(area * radiance.mean(axis=1)))
 
 
 class MaterialTable:
@@ -246,6 +322,10 @@ def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
+def _is_int(value: object) -> bool:
+    return isinstance(value, int) and not isinstance(value, bool)
+
+
 def _scaled_to_one(vector: np.ndarray) -> np.ndarray:
     """``vector`` times the power of two that brings its largest component into [0.5, 1).
 
@@ -266,7 +346,8 @@ class _SceneReader:
         return SceneError(self.path, problem, key)
 
     def read(self, data: dict) -> Scene:
-        self.check_keys(data, None, {"camera", "materials", "mesh"})
+        self.check_keys(data, None, {"camera", "materials", "mesh", "point_light", "sky",
+                                     "render"})
         if "camera" not in data:
             raise self.error(None, "no [camera] section")
         camera = self.camera(data["camera"])
@@ -285,25 +366,79 @@ class _SceneReader:
                                      f"got {_shown(meshes)}")
         if not meshes:
             raise self.error("mesh", "no meshes: add a [[mesh]] section")
-        triangles, material_ids, keys = [], [], []
+        triangles, uvs, material_ids, keys = [], [], [], []
         for i, spec in enumerate(meshes):
-            tri, material, key = self.mesh(f"mesh[{i}]", spec, names)
+            tri, uv, material, key = self.mesh(f"mesh[{i}]", spec, names)
+            if materials[material].textured and uv is None:
+                raise self.error(key, f"material {names[material]!r} is textured, but this mesh "
+                                      f"has no texture coordinates (a `quad`'s `uv`, or `vt` "
+                                      f"lines in an OBJ file)")
             triangles.append(tri)
+            uvs.append(uv if uv is not None else np.zeros((len(tri), 3, 2)))
             material_ids.append(np.full(len(tri), material, dtype=np.intp))
             keys.append(key)
         self.check_extent(triangles, keys)
         material_ids = np.concatenate(material_ids)
-        self.check_light_power(triangles, material_ids, materials)
+        point_lights = self.point_lights(data.get("point_light", []))
+        sky = self.sky(data["sky"]) if "sky" in data else None
+        self.check_light_power(triangles, material_ids, materials, point_lights)
+        textured = any(m.textured for m in materials)
         scene = Scene(triangles=np.concatenate(triangles), material_ids=material_ids,
                       materials=materials, camera=camera, name=self.path.parent.name
                       if self.path.name == SCENE_FILE_NAME else self.path.stem,
-                      material_names=names)
-        if scene.lights is None:
+                      material_names=names, point_lights=point_lights, sky=sky,
+                      uvs=np.concatenate(uvs) if textured else None,
+                      defaults=self.render_defaults(data.get("render", {})))
+        if scene.light_sampler is None:
             raise self.error(None, "the scene has no light: give a material an `emission` "
-                                   "and a mesh that uses it")
-        if not scene.lights.total_area > 0:
-            raise self.error(None, "the lights have zero area")
+                                   "and a mesh that uses it, add a [[point_light]], or a [sky]")
         return scene
+
+    def point_lights(self, specs: list) -> PointLights | None:
+        """The ``[[point_light]]`` tables: a position and an intensity (W/sr) each."""
+        if not isinstance(specs, list):
+            raise self.error("point_light", f"must be an array of tables, each one "
+                                            f"[[point_light]], got {_shown(specs)}")
+        positions, intensities = [], []
+        for i, spec in enumerate(specs):
+            key = f"point_light[{i}]"
+            self.check_keys(spec, key, {"position", "intensity"})
+            positions.append(self.point(spec, key, "position"))
+            if "intensity" not in spec:
+                raise self.error(f"{key}.intensity", "missing (W/sr: one number or three)")
+            intensity = self.colour(spec, key, "intensity", default=None, upper=MAX_RADIANCE,
+                                    why="float32 radiance")
+            if not intensity.max() > 0:
+                raise self.error(f"{key}.intensity", "must not be 0 in every channel: such a "
+                                                     "light gives no light")
+            intensities.append(intensity)
+        return PointLights(positions, intensities) if positions else None
+
+    def sky(self, spec: dict) -> Sky | None:
+        """The ``[sky]`` table: the radiance that escaping rays see (None if it is black)."""
+        self.check_keys(spec, "sky", {"radiance"})
+        if "radiance" not in spec:
+            raise self.error("sky.radiance", "missing (linear RGB radiance: one number or three)")
+        radiance = self.colour(spec, "sky", "radiance", default=None, upper=MAX_RADIANCE,
+                               why="float32 radiance")
+        return Sky(radiance) if radiance.max() > 0 else None
+
+    def render_defaults(self, spec: dict) -> RenderDefaults:
+        """The ``[render]`` table: ``res`` (N or [width, height]) and ``max_depth``."""
+        self.check_keys(spec, "render", {"res", "max_depth"})
+        res = spec.get("res")
+        if res is not None:
+            sizes = [res, res] if _is_int(res) else res
+            if not (isinstance(sizes, list) and len(sizes) == 2 and all(map(_is_int, sizes))
+                    and all(1 <= n <= MAX_RESOLUTION for n in sizes)):
+                raise self.error("render.res", f"must be an integer or [width, height], from 1 "
+                                               f"to {MAX_RESOLUTION}, got {_shown(res)}")
+            res = (int(sizes[0]), int(sizes[1]))
+        max_depth = spec.get("max_depth")
+        if max_depth is not None and not (_is_int(max_depth) and 0 <= max_depth <= MAX_DEPTH):
+            raise self.error("render.max_depth", f"must be an integer from 0 to {MAX_DEPTH}, "
+                                                 f"got {_shown(max_depth)}")
+        return RenderDefaults(res=res, max_depth=max_depth)
 
     def check_keys(self, table: dict, key: str | None, allowed: set[str]) -> None:
         if not isinstance(table, dict):
@@ -354,6 +489,9 @@ class _SceneReader:
         value = table.get(name, default)
         if _is_number(value):
             value = [value] * 3
+        if not isinstance(value, list):
+            raise self.error(full, f"must be a colour: one number or a list of 3, got "
+                                   f"{_shown(value)}")
         colour = self.vector({name: value}, key, name)
         if np.any(colour < 0):
             raise self.error(full, f"must not be negative, got {colour.tolist()}")
@@ -412,6 +550,8 @@ class _SceneReader:
     def build_material(self, kind: str, key: str, spec: dict) -> Material:
         """The material of one ``[materials.NAME]`` table (its keys already checked)."""
         if kind == "diffuse":
+            if isinstance(spec.get("albedo"), dict):
+                return Diffuse(albedo=self.checkerboard(f"{key}.albedo", spec["albedo"]))
             return Diffuse(albedo=self.colour(spec, key, "albedo", default=0.8))
         if kind == "mirror":
             return Mirror(reflectance=self.colour(spec, key, "reflectance", 1.0),
@@ -431,38 +571,98 @@ class _SceneReader:
                           ks=self.colour(spec, key, "ks", 1.0), sampling=sampling,
                           **options)
 
+    def checkerboard(self, key: str, spec: dict) -> Checkerboard:
+        """``{ checkerboard = [COLOUR, COLOUR], scale = 5 }``: Homework 5's floor texture."""
+        self.check_keys(spec, key, {"checkerboard", "scale"})
+        colours = spec.get("checkerboard")
+        if not isinstance(colours, list) or len(colours) != 2:
+            raise self.error(f"{key}.checkerboard", f"must be a list of two colours, got "
+                                                    f"{_shown(colours)}")
+        pair = [self.colour({"colour": c}, f"{key}.checkerboard[{i}]", "colour", None)
+                for i, c in enumerate(colours)]
+        scale = self.number(spec, key, "scale", default=5.0)
+        if not 0 < scale <= MAX_COORDINATE:
+            raise self.error(f"{key}.scale", f"must be a positive number of squares per unit "
+                                             f"of uv, got {scale:g}")
+        return Checkerboard(pair, scale)
+
     def flag(self, table: dict, key: str, name: str, default: bool) -> bool:
         value = table.get(name, default)
         if not isinstance(value, bool):
             raise self.error(f"{key}.{name}", f"must be true or false, got {_shown(value)}")
         return value
 
-    def mesh(self, key: str, spec: dict, material_names: list[str]) -> tuple[np.ndarray, int, str]:
-        """The triangles of one ``[[mesh]]``, its material's index, and the key they came from."""
-        self.check_keys(spec, key, {"file", "sphere", "material"})
+    def mesh(self, key: str, spec: dict,
+             material_names: list[str]) -> tuple[np.ndarray, np.ndarray | None, int, str]:
+        """The triangles of one ``[[mesh]]``, their texture coordinates (or None), its
+        material's index, and the key they came from."""
+        self.check_keys(spec, key, {"file", "sphere", "quad", "material", "scale"})
         if not isinstance(spec.get("material"), str):
             raise self.error(f"{key}.material", "missing, or not a string")
         if spec["material"] not in material_names:
             raise self.error(f"{key}.material", f"no material named {_shown(spec['material'])} "
                                                 f"(defined: {', '.join(material_names)})")
-        if ("file" in spec) == ("sphere" in spec):
-            raise self.error(key, "give exactly one of `file` and `sphere`")
+        shapes = [name for name in ("file", "sphere", "quad") if name in spec]
+        if len(shapes) != 1:
+            raise self.error(key, "give exactly one of `file`, `sphere` and `quad`")
+        if "scale" in spec and "file" not in spec:
+            raise self.error(f"{key}.scale", "scales a mesh `file` only (give a sphere its "
+                                             "radius, a quad its corners)")
+        material = material_names.index(spec["material"])
+        shape_key = f"{key}.{shapes[0]}"
         if "sphere" in spec:
-            key = f"{key}.sphere"
-            triangles = self.sphere(key, spec["sphere"])
-        else:
-            key = f"{key}.file"
-            if not isinstance(spec["file"], str):
-                raise self.error(key, f"must be a string, got {_shown(spec['file'])}")
-            mesh_path = self.path.parent / spec["file"]
-            try:
-                kind = path_kind(mesh_path)
-            except PtlabError as error:
-                raise self.error(key, str(error)) from None
-            if kind != "file":
-                raise self.error(key, f"mesh file not found: {mesh_path}")
-            triangles = read_mesh_triangles(mesh_path, f"{self.path}: {key}", MAX_COORDINATE)
-        return triangles, material_names.index(spec["material"]), key
+            return self.sphere(shape_key, spec["sphere"]), None, material, shape_key
+        if "quad" in spec:
+            return *self.quad(shape_key, spec["quad"]), material, shape_key
+        scale = self.number(spec, key, "scale", default=1.0)
+        if not 0 < scale <= MAX_COORDINATE:
+            raise self.error(f"{key}.scale", f"must be a positive number, got {scale:g}")
+        triangles, uv = self.mesh_file(shape_key, spec["file"], scale)
+        return triangles, uv, material, shape_key
+
+    def mesh_file(self, key: str, name: object, scale: float) -> tuple[np.ndarray, np.ndarray | None]:
+        """A mesh file's triangles (times ``scale``) and texture coordinates (or None)."""
+        if not isinstance(name, str):
+            raise self.error(key, f"must be a string, got {_shown(name)}")
+        mesh_path = self.path.parent / name
+        try:
+            kind = path_kind(mesh_path)
+        except PtlabError as error:
+            raise self.error(key, str(error)) from None
+        if kind != "file":
+            raise self.error(key, f"mesh file not found: {mesh_path}")
+        triangles, uv = read_mesh(mesh_path, f"{self.path}: {key}", MAX_COORDINATE / scale)
+        if scale == 1:
+            return triangles, uv
+        triangles = triangles * scale
+        kept = has_area(triangles)
+        if not kept.any():
+            raise self.error(key, f"scaled by {scale:g}, every triangle has zero area")
+        return triangles[kept], None if uv is None else uv[kept]
+
+    def quad(self, key: str, spec: dict) -> tuple[np.ndarray, np.ndarray]:
+        """Two triangles from ``{corners = [P0, P1, P2, P3], uv = [[u, v] x 4]}``: (P0, P1,
+        P3) and (P1, P2, P3), as Homework 5 splits its floor; uv defaults to the unit square
+        (0, 0), (1, 0), (1, 1), (0, 1)."""
+        self.check_keys(spec, key, {"corners", "uv"})
+        corners = spec.get("corners")
+        if not isinstance(corners, list) or len(corners) != 4:
+            raise self.error(f"{key}.corners", f"must be a list of 4 points, got {_shown(corners)}")
+        points = np.array([self.point({"corner": c}, f"{key}.corners[{i}]", "corner")
+                           for i, c in enumerate(corners)])
+        uv = spec.get("uv", [[0, 0], [1, 0], [1, 1], [0, 1]])
+        if not (isinstance(uv, list) and len(uv) == 4
+                and all(isinstance(c, list) and len(c) == 2 and all(map(_is_number, c)) for c in uv)):
+            raise self.error(f"{key}.uv", f"must be 4 pairs [u, v], one per corner, got {_shown(uv)}")
+        values = [[_as_float(x) for x in c] for c in uv]
+        if any(x is None for c in values for x in c):
+            raise self.error(f"{key}.uv", f"must be finite, got {_shown(uv)}")
+        corners_of = np.array([[0, 1, 3], [1, 2, 3]])
+        triangles, uvs = points[corners_of], np.array(values)[corners_of]
+        kept = has_area(triangles)
+        if not kept.any():
+            raise self.error(f"{key}.corners", "the quad has zero area")
+        return triangles[kept], uvs[kept]
 
     def sphere(self, key: str, spec: dict) -> np.ndarray:
         """An icosphere (trimesh) from ``{center = [x, y, z], radius = r, subdivisions = 4}``."""
@@ -506,9 +706,9 @@ class _SceneReader:
                                       f"nearer the origin")
 
     def check_light_power(self, triangles: list[np.ndarray], material_ids: np.ndarray,
-                          materials: list[Material]) -> None:
-        """The lights' total power (area x radiance), which light sampling divides by in
-        float32, must be a normal float32 number."""
+                          materials: list[Material], point_lights: PointLights | None) -> None:
+        """The lights' total power (area x radiance, and 4 pi x intensity), which light
+        sampling divides by in float32, must be a normal float32 number."""
         emission = np.array([m.emission.mean() if m.emission is not None else 0.0
                              for m in materials])[material_ids]
         tri = np.concatenate(triangles)
@@ -518,3 +718,6 @@ class _SceneReader:
         if power > 0 and not float32.tiny <= power <= float32.max:
             raise self.error(None, f"the lights' total power (area x radiance) is {power:g}, "
                                    f"outside float32's range: change the emission or the units")
+        if point_lights is not None and not point_lights.power <= float32.max:
+            raise self.error("point_light", f"the point lights' total power (4 pi x intensity) "
+                                            f"is {point_lights.power:g}, beyond float32's range")

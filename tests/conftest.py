@@ -1,5 +1,5 @@
-"""Shared fixtures: small scenes built in Python, and the built-in Cornell box; the
-Hypothesis profiles."""
+"""Shared fixtures: small scenes built in Python, and the built-in Cornell box; cameras that
+graze a scene's floor and a record of NaN contributions; the Hypothesis profiles."""
 
 from __future__ import annotations
 
@@ -13,6 +13,7 @@ import trimesh
 from hypothesis import HealthCheck, settings
 
 import ptlab
+import ptlab.integrators.path
 from ptlab.camera import Camera
 from ptlab.materials import Diffuse
 from ptlab.scene import Scene
@@ -83,3 +84,47 @@ def furnace_with(inner, albedo: float = 0.5, emission: float = 0.3) -> Scene:
     material_ids = np.concatenate([box.material_ids, np.ones(len(sphere_triangles), dtype=np.intp)])
     return Scene(triangles=triangles, material_ids=material_ids,
                  materials=[box.materials[0], inner], camera=box.camera, name="furnace-with")
+
+
+def grazing_cameras(scene) -> dict[str, Camera]:
+    """Cameras that look along the floor (the scene's lowest plane, y = min y).
+
+    ``along the floor``: the scene's camera lowered to the floor, looking level the way it
+    looked; the rays of the middle rows run in the floor's plane or just off it.
+    ``on the floor``: standing on the floor in the middle of the scene, looking along +x:
+    every ray starts on a surface, half of them below it.
+    """
+    low, high = scene.triangles.min(axis=(0, 1)), scene.triangles.max(axis=(0, 1))
+    floor = low[1]
+    eye = scene.camera.position.copy()
+    eye[1] = floor
+    level = scene.camera.forward * [1, 0, 1]
+    if np.linalg.norm(level) < 1e-6:          # a camera looking straight up or down
+        level = np.array([0.0, 0.0, 1.0])
+    middle = (low + high) / 2
+    middle[1] = floor
+    return {
+        "along the floor": Camera.look_at(eye, eye + level, (0, 1, 0), fov_y=40),
+        "on the floor": Camera.look_at(middle, middle + [1, 0, 0], (0, 1, 0), fov_y=90),
+    }
+
+
+@pytest.fixture
+def bad_contributions(monkeypatch) -> list[int]:
+    """Counts of path contributions that are NaN or infinite, as the renderer makes them.
+
+    The film drops such contributions (``ptlab.integrators.path.add_to_film``) so that one
+    bad sample cannot spoil a pixel for good; that would also hide the bug that made it.
+    This records them on the way in (rendering in this process: ``workers=1``).
+    """
+    bad = []
+    add_to_film = ptlab.integrators.path.add_to_film
+
+    def recording_add_to_film(film, pixel, radiance):
+        finite = np.isfinite(radiance).all(axis=1)
+        if not finite.all():
+            bad.append(int(np.count_nonzero(~finite)))
+        add_to_film(film, pixel, radiance)
+
+    monkeypatch.setattr(ptlab.integrators.path, "add_to_film", recording_add_to_film)
+    return bad

@@ -81,9 +81,64 @@ def test_help_describes_every_render_option(capsys):
         assert option in text
 
 
-def test_scenes_lists_cornell_box(capsys):
+def test_scenes_lists_cornell_box_and_the_homeworks(capsys):
     assert main(["scenes"]) == 0
-    assert "cornell-box" in capsys.readouterr().out.split()
+    assert {"cornell-box", "games101-hw5", "games101-hw6"} <= set(capsys.readouterr().out.split())
+
+
+LIT_BY_A_POINT = """
+[render]
+res = [20, 10]
+
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+
+[materials.floor]
+type = "diffuse"
+
+[[mesh]]
+quad = {{ corners = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]]{uv} }}
+material = "floor"
+
+[[point_light]]
+position = [0, 0, 2]
+intensity = {intensity}
+
+[sky]
+radiance = {sky}
+"""
+
+
+def point_lit_scene(tmp_path, intensity="1", sky="0.5", uv="") -> str:
+    path = tmp_path / "lit.toml"
+    path.write_text(LIT_BY_A_POINT.format(intensity=intensity, sky=sky, uv=uv))
+    return str(path)
+
+
+def test_render_takes_the_scene_files_resolution_unless_told(tmp_path):
+    scene = point_lit_scene(tmp_path)
+    assert main(["render", scene, "--spp", "1", "--out", str(tmp_path / "a.png"), "--quiet"]) == 0
+    assert read_image(tmp_path / "a.png")[0].shape == (10, 20, 3)
+    assert main(["render", scene, "--spp", "1", "--res", "8", "--out", str(tmp_path / "b.png"),
+                 "--quiet"]) == 0
+    assert read_image(tmp_path / "b.png")[0].shape == (8, 8, 3)
+
+
+@pytest.mark.parametrize("change, problem", [
+    (dict(intensity="[1, -1, 1]"), "point_light[0].intensity: must not be negative"),
+    (dict(sky='"blue"'), "sky.radiance: must be a colour"),
+    (dict(sky="[0.1, 0.2]"), "sky.radiance: must be a list of 3 numbers"),
+    (dict(uv=", uv = [[0, 0], [1, 0]]"), "mesh[0].quad.uv: must be 4 pairs"),
+])
+def test_bad_lights_and_uvs_are_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsys,
+                                                              change, problem):
+    scene = point_lit_scene(tmp_path, **change)
+    monkeypatch.chdir(tmp_path)
+    assert exit_code(["render", scene]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and problem in err and "Traceback" not in err, err
+    assert [p.name for p in tmp_path.iterdir()] == ["lit.toml"]
 
 
 def test_png_is_srgb_encoded(tmp_path):

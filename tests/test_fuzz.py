@@ -167,7 +167,8 @@ words = st.one_of(st.sampled_from(NAMES), st.text(max_size=10))
 KEYS = ["camera", "materials", "mesh", "position", "look_at", "direction", "up", "fov", "type",
         "emission", "albedo", "f0", "roughness", "alpha", "kd", "ks", "sampling", "reflectance",
         "fresnel", "eta", "transmittance", "file", "sphere", "material", "center", "radius",
-        "subdivisions"]
+        "subdivisions", "quad", "corners", "uv", "scale", "checkerboard", "point_light",
+        "intensity", "sky", "radiance", "render", "res", "max_depth"]
 scalars = st.one_of(numbers, words, st.booleans(), st.dates())
 plausible = st.one_of(st.floats(0, 1), st.lists(st.floats(0, 1), min_size=3, max_size=3),
                       st.lists(st.floats(-1000, 1000), min_size=3, max_size=3), st.floats(1, 179))
@@ -407,10 +408,11 @@ bad_colours = st.sampled_from([-0.1, 1.5, [1, 2], math.nan, "red", [0.5, 0.5, 1e
 
 @st.composite
 def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
-    """A scene's data and its OBJ files: a camera, materials of every type, spheres and
-    meshes; valid, but for (often) one value drawn from the absurd instead."""
+    """A scene's data and its OBJ files: a camera, materials of every type, spheres, quads
+    and meshes, point lights, a sky, render defaults; valid, but for (often) one value drawn
+    from the absurd instead."""
     spots = iter(range(1000))
-    broken = draw(st.one_of(st.just(-1), st.integers(0, 30)))   # which value is absurd
+    broken = draw(st.one_of(st.just(-1), st.integers(0, 40)))   # which value is absurd
 
     def pick(valid, absurd):
         return draw(absurd if next(spots) == broken else valid)
@@ -443,11 +445,28 @@ def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
         materials[f"m{k}"] = {"type": kind, **kinds[kind]()}
     materials["lamp"] = {"type": "diffuse", "albedo": 0.5, "emission": pick(
         st.one_of(st.floats(0.1, 50), st.just([1, 0, 0])), st.sampled_from([0, 1e-300, 1e16]))}
+    materials["board"] = {"type": "diffuse", "albedo": {
+        "checkerboard": pick(st.lists(colours, min_size=2, max_size=2),
+                             st.sampled_from([[0.5], [0.5, 2], "red", [[0.5, 0.5], 0.5]])),
+        "scale": pick(st.floats(0.1, 10), st.sampled_from([0, -1, math.inf, "5"]))}}
     names = sorted(materials)
     meshes, files = [], {}
     for k in range(draw(st.integers(1, 3))):
         material = draw(st.sampled_from(names))
-        if draw(st.booleans()):
+        shape = draw(st.sampled_from(["sphere", "quad", "file"]))
+        if shape == "quad":
+            centre = draw(points)
+            corners = [[centre[0] + x, centre[1] + y, centre[2]] for x, y in
+                       ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+            quad = {"corners": pick(st.just(corners), st.sampled_from(
+                [corners[:3], [[0, 0, 0]] * 4, "square", [corners[0]] * 3 + [[1e11, 0, 0]]]))}
+            if draw(st.booleans()):
+                quad["uv"] = pick(st.lists(st.lists(st.floats(-2, 2), min_size=2, max_size=2),
+                                           min_size=4, max_size=4),
+                                  st.sampled_from([[[0, 0]] * 3, [[0, 0, 0]] * 4, [[math.nan, 0]] * 4,
+                                                   "uv", [[0, 0], [1, 0], [1, 1], ["a", 1]]]))
+            meshes.append({"quad": quad, "material": material})
+        elif shape == "sphere":
             sphere = {"center": pick(points, far_points),
                       "radius": pick(st.floats(0.1, 5), st.sampled_from([1e-200, 1e11, 0, -1])),
                       "subdivisions": pick(st.integers(0, 2), st.sampled_from([-1, 8, 1.5]))}
@@ -466,9 +485,26 @@ def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
                 for _ in range(2)]
             files[f"part{k}.obj"] = "\n".join(vertex_lines + face_lines) + "\n"
             meshes.append({"file": f"part{k}.obj", "material": material})
-    meshes.append({"sphere": {"center": pick(points, far_points), "radius": 1.0,
-                              "subdivisions": 0}, "material": "lamp"})
-    return {"camera": camera, "materials": materials, "mesh": meshes}, files
+            if draw(st.booleans()):
+                meshes[-1]["scale"] = pick(st.floats(0.1, 10), st.sampled_from([0, -2, 1e300, 1e-300]))
+    data = {"camera": camera, "materials": materials, "mesh": meshes}
+    if draw(st.booleans()):
+        meshes.append({"sphere": {"center": pick(points, far_points), "radius": 1.0,
+                                  "subdivisions": 0}, "material": "lamp"})
+    lights = [{"position": pick(points, far_points), "intensity": pick(
+        st.one_of(st.floats(0.1, 100), st.lists(st.floats(0, 10), min_size=3, max_size=3)),
+        st.sampled_from([-1, 0, [1, -1, 1], "bright", 1e16, [1, 2], math.nan]))}
+        for _ in range(draw(st.integers(0, 2)))]
+    if lights:
+        data["point_light"] = lights
+    if draw(st.booleans()):
+        data["sky"] = {"radiance": pick(colours, st.sampled_from(
+            [-0.1, "blue", [1, 2], math.nan, 1e16, {"r": 1}, [0.1, 0.2, math.inf]]))}
+    if draw(st.booleans()):
+        data["render"] = {"res": pick(st.sampled_from([4, [4, 3]]), st.sampled_from(
+            [0, [4], [4, 3, 2], "4x3", 10**6, 1.5])), "max_depth": pick(
+            st.integers(0, 6), st.sampled_from([-1, 1.5, 10**6, "5"]))}
+    return data, files
 
 
 @examples(60)

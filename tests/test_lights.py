@@ -1,4 +1,5 @@
-"""Area lights: triangles picked in proportion to power (area x mean Le), points uniform."""
+"""Lights: triangles picked in proportion to power (area x mean Le), points uniform on them;
+point lights picked by power; the sky's directions; the choice between kinds of light."""
 
 from __future__ import annotations
 
@@ -6,7 +7,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ptlab.lights import AreaLights
+from ptlab.lights import SKY_SHARE, AreaLights, LightSampler, PointLights, Sky, light_shares
 
 N = 100_000
 
@@ -67,3 +68,79 @@ def test_many_lights_are_chosen_in_proportion_to_their_power(count):
     expected = N * power / power.sum()
     statistic = ((counts - expected) ** 2 / expected).sum()
     assert stats.chi2.sf(statistic, df=count - 1) > 1e-3     # false-alarm rate 0.1%
+
+
+# -- point lights, the sky, and the choice between kinds of light ----------------------------
+
+def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance():
+    positions = np.array([[0.0, 2, 0], [3, 4, 0]])
+    intensity = np.array([[10.0, 20, 30], [40, 0, 0]])     # mean 20 and 13.3: power 3 : 2
+    lights = PointLights(positions, intensity, share=0.5)
+    assert lights.power == pytest.approx(4 * np.pi * (20 + 40 / 3))
+    np.testing.assert_allclose(lights.probability, [0.5 * 0.6, 0.5 * 0.4], rtol=1e-6)
+    p = np.zeros((N, 3), np.float32)
+    sample = lights.sample_li(p, np.random.default_rng(1).random((N, 2)).astype(np.float32))
+    first = sample.target[:, 1] == 2
+    counts = [np.count_nonzero(first), np.count_nonzero(~first)]
+    statistic = sum((c - e) ** 2 / e for c, e in zip(counts, [0.6 * N, 0.4 * N], strict=True))
+    assert stats.chi2.sf(statistic, df=1) > 1e-3, counts          # false-alarm rate 0.1%
+    np.testing.assert_allclose(sample.radiance[first][0], np.array([10, 20, 30]) / 4, rtol=1e-6)
+    np.testing.assert_allclose(sample.radiance[~first][0], np.array([40, 0, 0]) / 25, rtol=1e-6)
+    np.testing.assert_allclose(sample.wi[~first][0], [0.6, 0.8, 0], rtol=1e-6)
+    np.testing.assert_allclose(sample.pdf, np.where(first, 0.3, 0.2), rtol=1e-6)
+
+
+@pytest.mark.parametrize("intensity", [[[-1.0, 1, 1]], [[0.0, 0, 0]]])
+def test_a_point_light_needs_an_intensity_that_shines(intensity):
+    with pytest.raises(ValueError, match="intensity"):
+        PointLights([[0.0, 0, 0]], intensity)
+
+
+def test_the_sky_is_sampled_uniformly_on_the_sphere_with_its_share():
+    sky = Sky([0.2, 0.4, 0.6], share=0.25, distance=10.0)
+    p = np.ones((N, 3), np.float32)
+    sample = sky.sample_li(p, np.random.default_rng(2).random((N, 2)).astype(np.float32))
+    np.testing.assert_allclose(np.linalg.norm(sample.wi, axis=1), 1, rtol=1e-5)
+    # Uniform on the sphere: each coordinate has mean 0 and variance 1/3 (sd of the mean
+    # 0.0018 with 1e5 samples; 5 sd: false-alarm rate below 1e-5).
+    np.testing.assert_allclose(sample.wi.mean(axis=0), 0, atol=0.01)
+    np.testing.assert_allclose((sample.wi ** 2).mean(axis=0), 1 / 3, atol=0.01)
+    np.testing.assert_allclose(sample.pdf, 0.25 / (4 * np.pi), rtol=1e-6)
+    np.testing.assert_allclose(sample.radiance, np.broadcast_to([0.2, 0.4, 0.6], (N, 3)), rtol=1e-6)
+    np.testing.assert_allclose(sample.target, p + 10 * sample.wi, rtol=1e-5)
+
+
+def test_light_shares_by_power_with_half_for_the_sky():
+    assert light_shares(5.0, 0.0, sky=False) == (1.0, 0.0, 0.0)     # exactly: same numbers
+    assert light_shares(0.0, 0.0, sky=True) == (0.0, 0.0, 1.0)
+    assert light_shares(0.0, 7.0, sky=False) == (0.0, 1.0, 0.0)
+    area, points, sky = light_shares(1.0, 3.0, sky=True)
+    assert (area, points, sky) == pytest.approx((SKY_SHARE * 0.25, SKY_SHARE * 0.75, SKY_SHARE))
+
+
+def test_area_power_is_pi_area_radiance_and_its_share_scales_the_pdf():
+    lights = two_lights()
+    assert lights.power == pytest.approx(np.pi * 3.5)
+    halved = AreaLights(lights.v0, lights.v0 + lights.e1, lights.v0 + lights.e2,
+                        lights.radiance, np.zeros(2), share=0.5)
+    np.testing.assert_allclose(halved.pdf_area(halved.radiance),
+                               0.5 * lights.pdf_area(lights.radiance), rtol=1e-6)
+
+
+def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified():
+    kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
+    for kind, share in zip(kinds, (0.2, 0.3, 0.5), strict=True):
+        kind.share = share
+    sampler = LightSampler(kinds)
+    u = np.stack([(np.arange(1000) + 0.5) / 1000, np.full(1000, 0.25)]).T.astype(np.float32)
+    kind, stretched, scale = sampler.pick(u, np.array([True, True, True]))
+    assert scale == pytest.approx(1.0)
+    assert np.bincount(kind).tolist() == [200, 300, 500]
+    # Each kind's part of an evenly spaced u is stretched back to evenly spaced in [0, 1).
+    for k, count in enumerate((200, 300, 500)):
+        np.testing.assert_allclose(np.sort(stretched[kind == k, 0]),
+                                   (np.arange(count) + 0.5) / count, atol=1e-4)
+    np.testing.assert_array_equal(stretched[:, 1], u[:, 1])
+    kind, stretched, scale = sampler.pick(u, np.array([True, True, False]))
+    assert scale == pytest.approx(2.0) and np.bincount(kind).tolist() == [400, 600]
+    assert (stretched[:, 0] < 1).all() and (stretched[:, 0] >= 0).all()

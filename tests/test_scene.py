@@ -192,10 +192,105 @@ def test_bad_material_values_name_the_material(scene_dir, good, bad, key, proble
     assert key in str(error.value) and problem in str(error.value), str(error.value)
 
 
-def test_a_mesh_needs_a_file_or_a_sphere(scene_dir):
+def test_a_mesh_needs_a_file_a_sphere_or_a_quad(scene_dir):
     text = GOOD + '\n[[mesh]]\nmaterial = "grey"\n'
-    with pytest.raises(SceneError, match=r"mesh\[2\]: give exactly one of `file` and `sphere`"):
+    with pytest.raises(SceneError, match=r"mesh\[2\]: give exactly one of `file`, `sphere` and `quad`"):
         ptlab.load_scene(write_scene(scene_dir, text))
+
+
+UNLIT = GOOD.replace("emission = [1, 1, 1]", "")
+POINT_LIGHT = "\n[[point_light]]\nposition = [0.5, 0.5, 3]\nintensity = [1, 2, 3]\n"
+SKY = "\n[sky]\nradiance = [0.1, 0.2, 0.3]\n"
+
+
+@pytest.mark.parametrize("lights", [POINT_LIGHT, SKY, POINT_LIGHT + SKY])
+def test_point_lights_or_a_sky_light_a_scene_without_emission(scene_dir, lights):
+    scene = ptlab.load_scene(write_scene(scene_dir, UNLIT + lights))
+    assert scene.lights is None
+    kinds = [type(kind).__name__ for kind in scene.light_sampler.kinds]
+    assert kinds == [name for name, text in (("PointLights", POINT_LIGHT), ("Sky", SKY))
+                     if text in lights]
+    if scene.point_lights is not None:
+        np.testing.assert_allclose(scene.point_lights.intensity, [[1, 2, 3]])
+    if scene.sky is not None:
+        np.testing.assert_allclose(scene.sky.radiance, [0.1, 0.2, 0.3])
+    assert sum(kind.share for kind in scene.light_sampler.kinds) == pytest.approx(1)
+    assert np.isfinite(ptlab.render(scene, spp=1, res=8, workers=1)).all()
+
+
+BROKEN_LIGHTS_AND_MESHES = {
+    "negative intensity": (POINT_LIGHT.replace("[1, 2, 3]", "[1, -2, 3]"),
+                           "point_light[0].intensity", "must not be negative"),
+    "dark point light": (POINT_LIGHT.replace("[1, 2, 3]", "0"), "point_light[0].intensity",
+                         "must not be 0"),
+    "point light without intensity": (POINT_LIGHT.replace("intensity = [1, 2, 3]", ""),
+                                      "point_light[0].intensity", "missing"),
+    "point light far out": (POINT_LIGHT.replace("[0.5, 0.5, 3]", "[0.5, 0.5, 1e11]"),
+                            "point_light[0].position", "within"),
+    "point light typo": (POINT_LIGHT.replace("intensity", "intensty"), "point_light[0].intensty",
+                         "unknown key"),
+    "sky not a colour": (SKY.replace("[0.1, 0.2, 0.3]", '"blue"'), "sky.radiance", "colour"),
+    "sky of two numbers": (SKY.replace("[0.1, 0.2, 0.3]", "[0.1, 0.2]"), "sky.radiance",
+                           "3 numbers"),
+    "sky as a table": (SKY.replace("[0.1, 0.2, 0.3]", "{ r = 1 }"), "sky.radiance", "colour"),
+    "negative sky": (SKY.replace("[0.1, 0.2, 0.3]", "-1"), "sky.radiance", "negative"),
+    "quad uv of the wrong shape": (
+        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], '
+        'uv = [[0, 0], [1, 0], [1, 1]] }\nmaterial = "grey"\n', "mesh[2].quad.uv", "4 pairs"),
+    "quad uv of three numbers": (
+        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], '
+        'uv = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]] }\nmaterial = "grey"\n',
+        "mesh[2].quad.uv", "4 pairs"),
+    "quad of three corners": (
+        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0]] }\nmaterial = "grey"\n',
+        "mesh[2].quad.corners", "4 points"),
+    "flat quad": (
+        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]] }\n'
+        'material = "grey"\n', "mesh[2].quad.corners", "zero area"),
+    "scaled sphere": ('\n[[mesh]]\nsphere = { center = [0, 0, 0], radius = 1 }\nscale = 2\n'
+                      'material = "grey"\n', "mesh[2].scale", "mesh `file` only"),
+    "negative scale": ('\n[[mesh]]\nfile = "quad.obj"\nscale = -2\nmaterial = "grey"\n',
+                       "mesh[2].scale", "positive"),
+    "checkerboard of one colour": (
+        '\n[materials.board]\ntype = "diffuse"\nalbedo = { checkerboard = [[1, 0, 0]] }\n',
+        "materials.board.albedo.checkerboard", "two colours"),
+    "checkerboard too bright": (
+        '\n[materials.board]\ntype = "diffuse"\nalbedo = { checkerboard = [[1, 0, 0], 2] }\n',
+        "materials.board.albedo.checkerboard[1]", "at most 1"),
+    "bad render res": ("\n[render]\nres = [640]\n", "render.res", "[width, height]"),
+    "bad render depth": ("\n[render]\nmax_depth = -1\n", "render.max_depth", "integer"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(BROKEN_LIGHTS_AND_MESHES))
+def test_broken_lights_and_meshes_name_file_key_and_problem(scene_dir, case):
+    extra, key, problem = BROKEN_LIGHTS_AND_MESHES[case]
+    with pytest.raises(SceneError) as error:
+        ptlab.load_scene(write_scene(scene_dir, GOOD + extra))
+    message = str(error.value)
+    assert "\n" not in message
+    assert "scene.toml" in message and key in message and problem in message, message
+
+
+def test_a_scene_without_any_light_names_every_kind(scene_dir):
+    with pytest.raises(SceneError, match=r"no light.*emission.*point_light.*sky"):
+        ptlab.load_scene(write_scene(scene_dir, UNLIT))
+
+
+def test_scale_multiplies_a_mesh_files_coordinates(scene_dir):
+    scaled = GOOD.replace('file = "quad.obj"', 'file = "quad.obj"\nscale = 60')
+    np.testing.assert_allclose(ptlab.load_scene(write_scene(scene_dir, scaled)).triangles[:2],
+                               60 * ptlab.load_scene(write_scene(scene_dir, GOOD)).triangles[:2])
+
+
+def test_render_table_gives_the_resolution_and_depth_unless_the_render_does(scene_dir):
+    scene = ptlab.load_scene(write_scene(scene_dir, GOOD + "\n[render]\nres = [12, 8]\nmax_depth = 3\n"))
+    assert (scene.defaults.res, scene.defaults.max_depth) == ((12, 8), 3)
+    result = ptlab.render_result(scene, spp=1, workers=1)
+    assert result.image.shape == (8, 12, 3) and result.settings["max_depth"] == 3
+    result = ptlab.render_result(scene, spp=1, res=4, max_depth=1, workers=1)
+    assert result.image.shape == (4, 4, 3) and result.settings["max_depth"] == 1
+    assert ptlab.load_scene(write_scene(scene_dir, GOOD + "\n[render]\nres = 16\n")).defaults.res == (16, 16)
 
 
 def test_the_microfacet_cornell_box_loads():

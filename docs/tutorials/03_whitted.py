@@ -5,9 +5,10 @@ Fresnel reflectance and total internal reflection), then renders the Cornell box
 with a mirror sphere and a glass sphere with the Whitted ray tracer of Homework 5
 (``integrator="whitted"``), and again with the chapter's typical mistake: the index of
 refraction taken the wrong way up (eta_i / eta_t for eta_t / eta_i), so that glass bends
-light the wrong way and reflects it totally on the way in.
+light the wrong way and reflects it totally on the way in. Last, Homework 5's own scene
+(``games101-hw5``), with the Whitted tracer beside the path tracer.
 
-    python docs/tutorials/03_whitted.py                  # writes whitted.png, whitted-wrong.png
+    python docs/tutorials/03_whitted.py      # writes whitted.png, whitted-wrong.png, games101-hw5.png
     python docs/tutorials/03_whitted.py --res 64 --spp 1 --out /tmp/t
 """
 
@@ -17,6 +18,7 @@ import math
 
 import numpy as np
 
+import ptlab
 from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
 from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
@@ -66,6 +68,18 @@ def main() -> None:
     write_image(out / "whitted.png", right)
     write_image(out / "whitted-wrong.png", wrong)
     print(f"wrote {out / 'whitted.png'} and {out / 'whitted-wrong.png'}")
+
+    # Homework 5's scene at its 4:3 shape: its point lights, the glass sphere and the sky.
+    homework = dict(res=(args.res * 4 // 3, args.res), seed=0)
+    whitted = ptlab.render("games101-hw5", spp=args.spp, integrator="whitted", **homework)
+    path = ptlab.render("games101-hw5", spp=4 * args.spp, strategy="mis", **homework)
+    dark = whitted.max(axis=2) < 0.02
+    lit_by_sky = f"{path[dark].mean():.3f}" if dark.any() else "-"
+    print(f"games101-hw5, Whitted: {dark.mean():.1%} of the pixels black (no point light reaches "
+          f"them: the shadows, the big sphere's far side), as in the homework; the path tracer "
+          f"lights them with the sky (mean {lit_by_sky} there)")
+    write_image(out / "games101-hw5.png", np.concatenate([whitted, path], axis=1))
+    print(f"wrote {out / 'games101-hw5.png'}: Whitted (left) and path tracing with MIS (right)")
 
 
 if __name__ == "__main__":

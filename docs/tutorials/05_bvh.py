@@ -1,20 +1,21 @@
-"""Chapter 5 tutorial: what the SAH and front-to-back traversal save.
+"""Chapter 5 tutorial: the BVH of Homework 6's bunny, its boxes, and what the SAH saves.
 
-Builds the NumPy BVH over the Cornell box with a ball on the short block, twice: with the
-library's pieces (SAH splits, near child first) and with the homework's habits (split at
-the median of the longest axis, low child first). Both find the same hits; the script
-prints each tree's SAH cost and the boxes a camera ray enters on average, and writes a
-heat map per tree of the boxes each camera ray enters (same colour scale: brighter is
-more work).
+Builds the NumPy BVH over the Stanford bunny of ``games101-hw6`` (4968 triangles) twice:
+with the library's pieces (SAH splits, near child first) and with the homework's habits
+(split at the median of the longest axis, low child first). Both find the same hits; the
+script prints each tree's SAH cost and the boxes a camera ray enters on average, draws the
+SAH tree's boxes of its first levels over the bunny, and writes a heat map per tree of the
+boxes each camera ray enters (same colour scale: brighter is more work).
 
-    python docs/tutorials/05_bvh.py                  # writes bvh.png, bvh-wrong.png
+    python docs/tutorials/05_bvh.py                  # writes bvh-boxes.png, bvh.png, bvh-wrong.png
     python docs/tutorials/05_bvh.py --res 64 --out /tmp/t
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
-import trimesh
 
 import ptlab
 import ptlab.accel.numpy_bvh as numpy_bvh
@@ -24,7 +25,9 @@ from ptlab.exercises.plug import plugged
 from ptlab.exercises.tutorial import tutorial_options
 
 #: A ray's tag, carried in its tmin: ray i starts at t = i * TAG (see ``boxes_entered``).
-TAG = 1e-6
+TAG = 1e-7
+#: The tree levels whose boxes ``bvh-boxes.png`` draws (the root is level 0), one colour each.
+LEVELS = (1, 2, 3, 4)
 
 
 def median_split_costs(bin_count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost=1.0):
@@ -64,37 +67,82 @@ def boxes_entered(bvh: numpy_bvh.NumpyBVH, origins: np.ndarray, dirs: np.ndarray
     return count
 
 
+def node_levels(tree: numpy_bvh.FlatBVH) -> np.ndarray:
+    """(M,) the level of each node (the root's is 0): children come after their parent."""
+    level = np.zeros(len(tree.child), np.intp)
+    for node in np.flatnonzero(tree.child >= 0):
+        level[tree.child[node]:tree.child[node] + 2] = level[node] + 1
+    return level
+
+
+def box_edges(box_min: np.ndarray, box_max: np.ndarray) -> np.ndarray:
+    """(12, 2, 3) the edges of a box: pairs of corners that differ in one coordinate."""
+    corners = np.array([[(box_min, box_max)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+    return np.array([(corners[k], corners[k | 1 << a]) for k in range(8) for a in range(3)
+                     if not k & 1 << a])
+
+
+def project(camera, width: int, height: int, points: np.ndarray) -> np.ndarray:
+    """(..., 2) the pixel coordinates (x right, y down) where ``points`` (..., 3) appear."""
+    d = points - camera.position
+    z = d @ camera.forward
+    scale = math.tan(math.radians(camera.fov_y) / 2)
+    x = (d @ camera.right) / (z * scale * width / height)
+    y = (d @ camera.up) / (z * scale)
+    return np.stack([(x + 1) / 2 * width, (1 - y) / 2 * height], axis=-1)
+
+
 def main() -> None:
-    args, out = tutorial_options(__doc__, res=128, spp=1, spp_help="camera rays per pixel")
+    args, out = tutorial_options(__doc__, res=240, spp=1, spp_help="camera rays per pixel")
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    scene = ptlab.load_scene("cornell-box")
-    ball = trimesh.creation.icosphere(subdivisions=3, radius=60)
-    ball.apply_translation([185, 225, 170])
-    triangles = np.concatenate([scene.triangles, ball.vertices[ball.faces]])
-    print(f"{len(triangles)} triangles: the Cornell box and a ball of {len(ball.faces)}")
+    scene = ptlab.load_scene("games101-hw6")
+    print(f"{scene.triangle_count} triangles: the Stanford bunny of Homework 6, scaled by 60")
 
-    res, spp = args.res, args.spp
-    pixel = np.repeat(np.arange(res * res), spp)
+    height, spp = args.res, args.spp
+    width = height * 4 // 3                              # the homework's 1280 x 960 shape
+    pixel = np.repeat(np.arange(width * height), spp)
     u = np.random.default_rng(0).random((len(pixel), 2), dtype=np.float32)
-    origins, dirs = generate_rays(scene.camera, res, res, pixel % res, pixel // res, u)
+    origins, dirs = generate_rays(scene.camera, width, height, pixel % width, pixel // width, u)
 
-    counts = {}
+    counts, trees = {}, {}
     for name, pieces in [("bvh", {}), ("bvh-wrong", dict(split_costs=median_split_costs,
                                                          child_order=low_child_first))]:
         with plugged(numpy_bvh, **pieces):
-            bvh = numpy_bvh.NumpyBVH(triangles)
+            bvh = numpy_bvh.NumpyBVH(scene.triangles)
             entered = boxes_entered(bvh, origins, dirs)
-        counts[name] = np.bincount(pixel, weights=entered) / spp
+        trees[name] = bvh.bvh
+        counts[name] = np.bincount(pixel, weights=entered, minlength=width * height) / spp
         label = "SAH, near child first" if name == "bvh" else "median split, low child first"
         print(f"{label:30} SAH cost {sah_cost(bvh.bvh):5.1f}, {bvh.bvh.depth} levels, "
-              f"{entered.mean():5.1f} boxes entered per camera ray")
+              f"{entered.mean():5.1f} boxes entered per camera ray, "
+              f"{entered[entered > 0].mean():5.1f} per ray that enters the root's box")
     top = max(np.percentile(c, 99) for c in counts.values())   # a few grazing rays enter many more
     for name, per_pixel in counts.items():
-        plt.imsave(out / f"{name}.png", per_pixel.reshape(res, res), cmap="inferno", vmin=0,
+        plt.imsave(out / f"{name}.png", per_pixel.reshape(height, width), cmap="inferno", vmin=0,
                    vmax=top)
+
+    # The SAH tree's first levels, drawn over the bunny's normals.
+    normals = ptlab.render(scene, spp=4, res=(width, height), integrator="normals", workers=1)
+    tree, level = trees["bvh"], node_levels(trees["bvh"])
+    figure = plt.figure(figsize=(width / 100, height / 100), dpi=100)
+    axes = figure.add_axes([0, 0, 1, 1])
+    axes.imshow(np.clip(normals, 0, 1))
+    for k, colour in zip(LEVELS, ("white", "yellow", "orange", "red"), strict=True):
+        for node in np.flatnonzero(level == k):
+            for edge in project(scene.camera, width, height,
+                                box_edges(tree.box_min[node], tree.box_max[node])):
+                axes.plot(edge[:, 0], edge[:, 1], color=colour, linewidth=0.6)
+    axes.set_xlim(0, width)
+    axes.set_ylim(height, 0)
+    axes.axis("off")
+    figure.savefig(out / "bvh-boxes.png")
+    plt.close(figure)
+    print(f"wrote {out / 'bvh-boxes.png'}: the boxes of levels {', '.join(map(str, LEVELS))} "
+          f"(white, yellow, orange, red: {', '.join(str(int((level == k).sum())) for k in LEVELS)} "
+          f"boxes) over the bunny's normals")
     print(f"wrote {out / 'bvh.png'} and {out / 'bvh-wrong.png'}: boxes entered per camera ray, "
           f"inferno colours from black (0) to pale yellow ({top:.0f} or more)")
 

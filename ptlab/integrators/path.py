@@ -25,6 +25,11 @@ PathIntegrator; Veach's thesis, chapter 9):
   is counted once in total, mostly by the strategy that finds it more easily (sharp lobes:
   BSDF sampling; small lights: light sampling).
 
+Point lights and a sky (``ptlab.lights``) join in: a point light is found by light sampling
+only (no ray can hit a point, so its MIS weight is 1, and even ``"bsdf"`` samples it); the
+sky is what a ray that escapes the scene sees, added like the emission of a surface it hits
+(``add_sky``), and a light that step 2 samples like the others (``direct_light_all_kinds``).
+
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
 (compaction, scatter-adding into the film) live in the small helpers below it.
@@ -59,6 +64,9 @@ class PathSettings:
         max_depth: the most bounces a path makes (0 = emission only, 1 = direct light).
         strategy: ``"nee"``, ``"bsdf"`` or ``"mis"`` (module docstring).
         heuristic: the MIS weights, ``"power"`` (default) or ``"balance"``.
+        sample_sky: light sampling samples the sky (unless the strategy is ``"bsdf"``); if
+            False, rays find it only by escaping, and count it in full. (The Whitted tracer's
+            rays escape only from mirrors and glass, so there the sky lights nothing.)
     """
 
     rr: float | str = "throughput"
@@ -66,6 +74,7 @@ class PathSettings:
     max_depth: int = 100
     strategy: str = "nee"
     heuristic: str = "power"
+    sample_sky: bool = True
 
     @property
     def roulette_starts(self) -> int:
@@ -129,6 +138,8 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
     for depth in range(settings.max_depth + 1):
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
+        if scene.sky is not None:
+            add_sky(film, scene, paths, hits, settings)  # the paths that escape see the sky
         hit = surface_hit(scene, paths, hits)            # drops the paths that missed
         if len(hit.prim) == 0:
             break
@@ -137,7 +148,7 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         if depth == settings.max_depth:
             break
         u = BounceUniforms(sampler, hit.sample, depth)     # this bounce's random numbers
-        if settings.strategy != "bsdf" and scene.lights is not None:
+        if sampled_lights(scene, settings).any():
             rays += direct_light(film, scene, accel, hit, u.light(), settings)
         u_roulette = u.roulette() if depth >= settings.roulette_starts else None
         survive = russian_roulette(hit, depth, settings, u_roulette)
@@ -192,7 +203,8 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
     n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
-    materials = material_groups(scene, prim)
+    uv = scene.uv_at(prim, u[:, 0], v[:, 0]) if scene.triangle_uv is not None else None
+    materials = material_groups(scene, prim, uv)
     delta = np.zeros(len(prim), dtype=bool)
     for rows, material in materials:
         if material.is_delta:
@@ -248,6 +260,8 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     point's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
     u: (N, 2) uniforms (``AreaLights.sample``). Returns the shadow rays.
     """
+    if scene.point_lights is not None or scene.sky is not None:
+        return direct_light_all_kinds(film, scene, accel, hit, u, settings)
     light = scene.lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
@@ -272,6 +286,79 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     radiance *= geometry[:, None]
     add_to_film(film, hit.pixel, radiance)
     return len(facing)
+
+
+def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
+    """(K,) bool for each kind of light in ``scene.light_sampler.kinds``: does light sampling
+    sample it? Point lights always (no BSDF sample can reach a delta light, so every strategy
+    samples them); the triangles and the sky unless the strategy is ``"bsdf"``, and the sky
+    only with ``settings.sample_sky``."""
+    if scene.light_sampler is None:
+        return np.zeros(0, dtype=bool)
+    return np.array([kind.is_delta or (settings.strategy != "bsdf" and (
+        kind is not scene.sky or settings.sample_sky)) for kind in scene.light_sampler.kinds])
+
+
+def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
+                           u: np.ndarray, settings: PathSettings) -> int:
+    """``direct_light`` in a scene with point lights or a sky: one light sample of any kind
+    per path, and its shadow ray.
+
+    ``u[:, 0]`` picks the kind of light (``LightSampler.pick``, among the kinds that
+    ``sampled_lights`` names) and then, stretched, serves the kind's own ``sample_li``, which
+    gives the direction wi to the light, the radiance Li arriving along it and the pdf of
+    the choice. Adds throughput * f_r Li cos(theta) / pdf, times the MIS weight with
+    ``"mis"`` (1 for a point light, which BSDF sampling cannot find). Returns the shadow rays.
+    """
+    kinds = scene.light_sampler.kinds
+    kind, u, scale = scene.light_sampler.pick(u, sampled_lights(scene, settings))
+    n = len(hit.prim)
+    wi, radiance, target = (np.zeros((n, 3), np.float32, order="F") for _ in range(3))
+    pdf = np.zeros(n, np.float32)
+    delta = np.zeros(n, dtype=bool)
+    for k, light in enumerate(kinds):
+        rows = np.flatnonzero(kind == k)
+        if len(rows) == 0:
+            continue
+        sample = light.sample_li(take_rows(hit.p, rows), take_rows(u, rows))
+        wi[rows], radiance[rows], target[rows] = sample.wi, sample.radiance, sample.target
+        pdf[rows] = sample.pdf * np.float32(scale)     # (the share among the sampled kinds)
+        delta[rows] = light.is_delta
+    cos_theta = dot(hit.n, wi)
+    usable = np.flatnonzero((cos_theta > 0) & (pdf > 0) & np.isfinite(pdf)
+                            & (radiance.max(axis=1) > 0) & ~hit.delta)
+    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, usable)
+    visible = np.zeros(n, dtype=bool)
+    visible[usable] = ~accel.occluded(origin, take_rows(target, usable) - origin,
+                                      1.0 - SHADOW_EPSILON)
+    weight = np.where(visible, cos_theta / np.where(visible, pdf, 1), 0).astype(np.float32)
+    if settings.strategy == "mis":
+        bsdf_pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
+        weight *= np.where(delta, 1, mis_weight(pdf, bsdf_pdf, settings.heuristic)).astype(np.float32)
+    add_to_film(film, hit.pixel,
+                hit.throughput * shade(hit, "eval", hit.wo, wi, hit.n) * radiance * weight[:, None])
+    return len(usable)
+
+
+def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSettings) -> None:
+    """Add the sky's radiance L for the paths that escaped (``hits.prim`` < 0), weighted as
+    ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
+    and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
+    unless light sampling does not sample the sky (``sampled_lights``): then in full."""
+    sky = scene.sky
+    sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
+    escaped = hits.prim < 0
+    counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission
+    rows = np.flatnonzero(counted)
+    if len(rows) == 0:
+        return
+    weight = np.ones(len(rows), dtype=np.float32)
+    if settings.strategy == "mis" and sampled and paths.pdf is not None:
+        weight = np.where(paths.sees_emission.take(rows), 1.0,
+                          mis_weight(paths.pdf.take(rows), np.float32(sky.pdf),
+                                     settings.heuristic)).astype(np.float32)
+    add_to_film(film, paths.pixel.take(rows), take_rows(paths.throughput, rows)
+                * (sky.radiance.astype(np.float32) * weight[:, None]))
 
 
 def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
@@ -320,24 +407,32 @@ def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarr
     return p + side[:, None] * n
 
 
-def material_groups(scene: Scene, prim: np.ndarray) -> list:
+def material_groups(scene: Scene, prim: np.ndarray, uv: np.ndarray | None = None) -> list:
     """[(rows, material)]: the material that shades each group of hits.
 
     Materials of one kind (all ``Diffuse`` in the Cornell box) are stacked into one
     (``Scene.material_table``) whose parameters are taken per hit, so the common case is
-    one group over every row (``rows`` is None: no copying at all).
+    one group over every row (``rows`` is None: no copying at all). A textured material
+    looks its parameters up at the hits' texture coordinates ``uv`` (N, 2).
     """
     table = scene.material_table
     material_ids = scene.material_ids.take(prim)
     if len(table.groups) == 1:
-        return [(None, table.groups[0].take(table.row.take(material_ids)))]
+        return [(None, taken(table.groups[0], table.row.take(material_ids), uv))]
     group_of = table.group.take(material_ids)
     groups = []
     for g, stacked in enumerate(table.groups):
         rows = np.flatnonzero(group_of == g)
         if len(rows):
-            groups.append((rows, stacked.take(table.row.take(material_ids.take(rows)))))
+            groups.append((rows, taken(stacked, table.row.take(material_ids.take(rows)),
+                                       None if uv is None else take_rows(uv, rows))))
     return groups
+
+
+def taken(stacked, index: np.ndarray, uv: np.ndarray | None):
+    """``stacked.take(index)``: a stacked material's parameters for each hit, looked up at
+    the hits' uv for a textured one (``Material.take``)."""
+    return stacked.take(index, uv) if getattr(stacked, "textured", False) else stacked.take(index)
 
 
 def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):

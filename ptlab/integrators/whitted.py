@@ -17,14 +17,18 @@ directions in which mirrors reflect and glass reflects and refracts. Homework 5'
    (``ptlab.integrators.path``).
 
 Rays stop after ``max_depth`` bounces (the homework's ``maxDepth = 5``); rays that escape
-add nothing (the homework adds a background colour).
+see the scene's sky (the homework's background colour), or black. As in the homework, the
+sky lights nothing: the rays that could find its light, leaving diffuse surfaces, are the
+ones Whitted does not follow, and light sampling leaves it out (``sample_sky``).
 
 Two differences from the homework, so that Whitted and the path tracer render the same
 scenes and agree wherever they both apply:
 
-* the lights are the scene's emissive triangles, sampled at one random point per ray with a
-  shadow ray (the path tracer's ``direct_light``), instead of point lights; so the direct
-  light is noisy (soft shadows) where the homework's is exact (hard shadows);
+* the lights are sampled, one light and one point on it per ray, with a shadow ray (the path
+  tracer's ``direct_light``): emissive triangles give soft shadows, with noise, where the
+  homework's point lights give hard ones; point lights (``ptlab.lights.PointLights``) give
+  hard shadows too, but one light is picked per sample where the homework adds them all,
+  and their light falls off as 1 / r^2;
 * surfaces shade with their material's own BSDF (``Material.eval``) instead of the Phong
   model, and refracted radiance carries the material's 1 / eta_rel^2 factor
   (``ptlab.materials.dielectric``).
@@ -50,8 +54,10 @@ from ptlab.integrators.path import (
     PathSettings,
     SurfaceHit,
     add_emission,
+    add_sky,
     direct_light,
     leave_surface,
+    sampled_lights,
     surface_hit,
 )
 from ptlab.materials.dielectric import Dielectric, fresnel_dielectric, refract
@@ -60,8 +66,9 @@ from ptlab.scene import Scene
 from ptlab.vectors import dot, reflect, take_rows, vec3
 
 #: Direct light by light sampling only, and emission counted where the ray may see it: the
-#: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with).
-LIGHT_SAMPLING = PathSettings(strategy="nee")
+#: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with); the
+#: sky is only seen, as the homework's background colour is.
+LIGHT_SAMPLING = PathSettings(strategy="nee", sample_sky=False)
 
 #: Glass doubles its rays at every bounce. A batch that has grown beyond this many rays is
 #: traced in parts, so memory stays bounded whatever ``max_depth``; it is faster too, as
@@ -92,6 +99,8 @@ def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Pat
                               for part in batches(paths, MAX_BATCH))
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
+        if scene.sky is not None:
+            add_sky(film, scene, paths, hits, LIGHT_SAMPLING)   # the rays that escape see it
         hit = surface_hit(scene, paths, hits)            # drops the rays that missed
         if len(hit.prim) == 0:
             break
@@ -99,7 +108,7 @@ def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Pat
         if depth == settings.max_depth:
             break
         u = BounceUniforms(sampler, hit.sample, depth)
-        if scene.lights is not None:                   # diffuse and glossy: direct light only
+        if sampled_lights(scene, LIGHT_SAMPLING).any():  # diffuse and glossy: direct light only
             rays += direct_light(film, scene, accel, hit, u.light(), LIGHT_SAMPLING)
         if not hit.delta.any():                          # no mirror or glass: every ray ends
             break

@@ -19,6 +19,7 @@ import copy
 
 import numpy as np
 
+from ptlab.textures import Texture
 from ptlab.vectors import columns, dot, take_rows
 
 __all__ = ["DeltaMaterial", "Material", "dot"]
@@ -79,8 +80,14 @@ class Material:
 
     # Batching: the renderer shades all hits on materials of one kind with one call.
     #: The parameters that may differ between materials of one kind: ``stack`` makes them
-    #: rows (float32, like the renderer's arrays), ``take`` picks a row per hit.
+    #: rows (float32, like the renderer's arrays), ``take`` picks a row per hit. One of them
+    #: may also be a ``ptlab.textures.Texture``, which ``take`` looks up at each hit's uv.
     batched: tuple[str, ...] = ()
+
+    @property
+    def textured(self) -> bool:
+        """True if a parameter varies over the surface (a ``Texture``): it needs the hits' uv."""
+        return any(isinstance(getattr(self, name), Texture) for name in self.batched)
 
     def batch_key(self) -> object:
         """Materials with equal keys can be ``stack``ed into one; the default is none."""
@@ -88,8 +95,11 @@ class Material:
 
     @classmethod
     def stack(cls, materials: list[Material]) -> Material:
-        """One material whose ``batched`` parameters are rows, one per input material."""
-        if not cls.batched:
+        """One material whose ``batched`` parameters are rows, one per input material.
+
+        A textured material is alone in its group (its ``batch_key`` is its own): its
+        textures stay textures."""
+        if not cls.batched or materials[0].textured:
             if len(materials) != 1:
                 raise TypeError(f"{cls.__name__} cannot be batched")
             return materials[0]
@@ -99,11 +109,19 @@ class Material:
             setattr(stacked, name, columns(rows) if rows.ndim == 2 else rows)
         return stacked
 
-    def take(self, index: np.ndarray) -> Material:
-        """The stacked material's parameters for each hit: row ``index[k]`` for hit k."""
+    def take(self, index: np.ndarray, uv: np.ndarray | None = None) -> Material:
+        """The stacked material's parameters for each hit: row ``index[k]`` for hit k, or a
+        texture's value at ``uv[k]`` ((N, 2) texture coordinates of the hits)."""
         taken = copy.copy(self)
         for name in self.batched:
-            setattr(taken, name, take_rows(getattr(self, name), index))
+            value = getattr(self, name)
+            if isinstance(value, Texture):
+                if uv is None:
+                    raise ValueError(f"{type(self).__name__}.{name} is a texture: it needs the "
+                                     f"hits' uv coordinates")
+                setattr(taken, name, value(uv))
+            else:
+                setattr(taken, name, take_rows(value, index))
         return taken
 
 

@@ -20,6 +20,7 @@ import numpy as np
 
 from ptlab.materials.base import Material, dot
 from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around
+from ptlab.textures import Texture
 
 SAMPLINGS = ("cosine", "uniform")
 
@@ -28,7 +29,8 @@ class Diffuse(Material):
     """Lambertian reflection.
 
     Args:
-        albedo: (3,) reflectance in [0, 1] (or (N, 3) per hit after ``take``).
+        albedo: (3,) reflectance in [0, 1], or a ``ptlab.textures.Texture`` of them over the
+            surface's uv (either becomes (N, 3), one per hit, after ``take``).
         sampling: ``"cosine"`` (default) or ``"uniform"``.
         emission: (3,) emitted radiance, or None.
     """
@@ -39,12 +41,13 @@ class Diffuse(Material):
     def __init__(self, albedo=(0.8, 0.8, 0.8), sampling: str = "cosine", emission=None):
         if sampling not in SAMPLINGS:
             raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
-        self.albedo = np.asarray(albedo, dtype=np.float64)
+        self.albedo = albedo if isinstance(albedo, Texture) else np.asarray(albedo, dtype=np.float64)
         self.sampling = sampling
         self.emission = None if emission is None else np.asarray(emission, dtype=np.float64)
 
     def __repr__(self) -> str:
-        return f"Diffuse(albedo={self.albedo.tolist()}, sampling={self.sampling!r})"
+        albedo = self.albedo if isinstance(self.albedo, Texture) else self.albedo.tolist()
+        return f"Diffuse(albedo={albedo}, sampling={self.sampling!r})"
 
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
@@ -83,7 +86,8 @@ class Diffuse(Material):
             scale *= 2.0 * dot(wi, n)
         return wi, scale[:, None] * albedo
 
-    # Every Diffuse with the same sampling shades in one vectorized call.
+    # Every Diffuse with the same sampling shades in one vectorized call (a textured one in
+    # its own).
     def batch_key(self) -> object:
-        return ("diffuse", self.sampling)
+        return id(self) if self.textured else ("diffuse", self.sampling)
 

@@ -44,10 +44,13 @@ from ptlab.samplers import DEFAULT_SAMPLER, make_sampler
 from ptlab.scene import Scene, load_scene
 
 TILE_SIZE = 128
+#: The resolution of a render that gives none, of a scene whose file has no ``[render] res``.
+DEFAULT_RES = (512, 512)
 #: Samples per pixel in each pass (with 128 x 128 tiles, batches of 2^18 paths).
 SPP_PER_PASS = 16
-#: The most bounces by default: the Whitted tracer stops early, like the homework's
-#: ``maxDepth = 5``; a path tracer's paths end by Russian roulette long before 100.
+#: The most bounces by default (unless the scene file's ``[render]`` says): the Whitted
+#: tracer stops early, like the homework's ``maxDepth = 5``; a path tracer's paths end by
+#: Russian roulette long before 100.
 DEFAULT_MAX_DEPTH = {"whitted": 5}
 
 
@@ -85,7 +88,7 @@ class RenderResult:
         return self.samples / max(self.seconds, 1e-9)
 
 
-def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
+def render_result(scene: Scene | str, spp: int = 16, res=None, seed: int = 0,
                   workers: int | None = None, executor: Executor | None = None,
                   backend: str = "auto", integrator: str = "path", sampling: str = "cosine",
                   rr: float | str = "throughput", max_depth: int | None = None,
@@ -113,7 +116,9 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
     """
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
-    width, height = parse_resolution(res)
+    width, height = resolution(scene, res)
+    if max_depth is None:
+        max_depth = scene.defaults.max_depth
     if max_depth is None:
         max_depth = DEFAULT_MAX_DEPTH.get(integrator, 100)
     rr = check_settings(spp, seed, sampling, rr, max_depth, integrator, strategy, heuristic,
@@ -178,6 +183,14 @@ def render_result(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int =
                       workers=workers if executor is None else "executor"))
 
 
+def resolution(scene: Scene, res=None) -> tuple[int, int]:
+    """(width, height) of a render of ``scene``: ``res`` if given (checked), else the scene
+    file's ``[render] res``, else ``DEFAULT_RES``."""
+    if res is None:
+        res = scene.defaults.res or DEFAULT_RES
+    return parse_resolution(res)
+
+
 def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
     """Samples per pixel of each pass of a render (``SPP_PER_PASS`` by default)."""
     if spp_per_pass is None:
@@ -187,7 +200,7 @@ def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
     return pass_sizes(spp, min(spp, spp_per_pass))
 
 
-def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
+def render(scene: Scene | str, spp: int = 16, res=None, seed: int = 0,
            workers: int | None = None, backend: str = "auto", integrator: str = "path",
            sampling: str = "cosine", rr: float | str = "throughput",
            max_depth: int | None = None, executor: Executor | None = None,
@@ -198,7 +211,8 @@ def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
     Args:
         scene: a ``Scene``, a built-in scene name (``"cornell-box"``) or a scene file path.
         spp: samples (camera paths) per pixel.
-        res: ``N`` for N x N, ``(width, height)`` or ``"WxH"``.
+        res: ``N`` for N x N, ``(width, height)`` or ``"WxH"``; None for the scene file's
+            ``[render] res``, or 512 x 512.
         seed: the random seed; the same seed gives the same image, bit for bit, whatever
             ``workers`` or ``executor``.
         workers: processes rendering tiles at once; None for one per core, 1 for this
@@ -209,7 +223,8 @@ def render(scene: Scene | str, spp: int = 16, res=(512, 512), seed: int = 0,
             ``"albedo"``, ``"depth"`` (``ptlab.integrators.debug``).
         sampling: diffuse sampling, ``"cosine"`` or ``"uniform"`` (the homework's).
         rr: Russian roulette survival probability (the homework's 0.8) or ``"throughput"``.
-        max_depth: the most bounces per path (default 100; 5 for ``"whitted"``).
+        max_depth: the most bounces per path (default: the scene file's ``[render]
+            max_depth``, else 100; 5 for ``"whitted"``).
         strategy: direct light by light sampling (``"nee"``, the homework's), by BSDF
             sampling only (``"bsdf"``) or both with multiple importance sampling (``"mis"``).
         heuristic: MIS weights, ``"power"`` (default) or ``"balance"``.

@@ -27,12 +27,15 @@ FORMAT_VERSION = 3
 
 
 def scene_digest(scene) -> str:
-    """A fingerprint of the scene's geometry, materials and camera."""
+    """A fingerprint of the scene's geometry, materials, lights and camera."""
     digest = hashlib.sha256()
     for array in (scene.triangles, scene.material_ids, scene.camera.position,
                   scene.camera.forward, scene.camera.up):
         digest.update(np.ascontiguousarray(array).tobytes())
-    digest.update(repr((scene.camera.fov_y, [repr(m) for m in scene.materials])).encode())
+    if scene.uvs is not None:
+        digest.update(np.ascontiguousarray(scene.uvs).tobytes())
+    lights = [repr(light) for light in (scene.point_lights, scene.sky) if light is not None]
+    digest.update(repr((scene.camera.fov_y, [repr(m) for m in scene.materials], *lights)).encode())
     return digest.hexdigest()[:16]
 
 

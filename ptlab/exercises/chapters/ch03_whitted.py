@@ -256,7 +256,8 @@ def spheres_scene() -> Scene:
     back on the left and a glass sphere (eta 1.5) at the front on the right."""
     import ptlab
     from ptlab.materials import Dielectric, Mirror
-    from ptlab.scene import Scene, builtin_scenes_dir, read_mesh_triangles
+    from ptlab.meshes import read_mesh_triangles
+    from ptlab.scene import Scene, builtin_scenes_dir
 
     cornell = ptlab.load_scene("cornell-box")
     meshes = builtin_scenes_dir() / "cornell-box" / "meshes"
