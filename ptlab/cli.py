@@ -12,6 +12,7 @@ User errors (a bad scene, an absurd option) print one line and exit with code 2.
 from __future__ import annotations
 
 import argparse
+import os
 import signal
 import sys
 import threading
@@ -42,7 +43,13 @@ def _rr(value: str) -> str | float:
             f"{value!r} is neither 'throughput' nor a probability") from None
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: The commands, as ``main`` finds the one it is given.
+COMMANDS = ("render", "bench", "converge", "grade", "exercise", "scenes")
+
+
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """The ``ptlab`` command's parser; with ``command``, only that command's graders' options
+    are built (``None``: all of them, as ``--help`` shows)."""
     parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     from ptlab import __version__
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
@@ -173,19 +180,24 @@ def build_parser() -> argparse.ArgumentParser:
                           help="render the reference even if a cached one exists")
     converge.add_argument("--quiet", action="store_true", help="print nothing but errors")
 
-    from ptlab.grading.cli import add_grade_arguments
-    add_grade_arguments(commands.add_parser(
+    grade = commands.add_parser(
         "grade", help="check a material's sample / eval / pdf statistically",
         description="Load a material (anything with eval, pdf and sample) from a Python file "
                     "in a process of its own and run every check of ptlab.grading on it; exit 0 "
-                    "only if all pass (1 if any fails, 2 if the file cannot be loaded)."))
-
-    from ptlab.exercises.cli import add_exercise_arguments
-    add_exercise_arguments(commands.add_parser(
+                    "only if all pass (1 if any fails, 2 if the file cannot be loaded).")
+    exercise = commands.add_parser(
         "exercise", help="the step-by-step exercises: start, check, list, grade-all",
         description="Exercises from Whitted ray tracing to path tracing: `start NN` copies a "
                     "chapter's file, `check NN FILE` grades it, `list` shows your progress, "
-                    "`grade-all NN DIR` grades a whole class."))
+                    "`grade-all NN DIR` grades a whole class.")
+    # The graders' own arguments are added only for their command: importing ptlab.grading
+    # and ptlab.exercises costs every other command a tenth of a second of start-up.
+    if command in (None, "grade"):
+        from ptlab.grading.cli import add_grade_arguments
+        add_grade_arguments(grade)
+    if command in (None, "exercise"):
+        from ptlab.exercises.cli import add_exercise_arguments
+        add_exercise_arguments(exercise)
 
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
@@ -384,13 +396,23 @@ def _scenes(args) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
-    from ptlab.exercises.cli import run_exercise
-    from ptlab.grading.cli import run_grade
-    handler = {"render": _render, "bench": _bench, "grade": run_grade, "converge": _converge,
-               "exercise": run_exercise, "scenes": _scenes}[args.command]
+    argv = sys.argv[1:] if argv is None else argv
+    command = next((word for word in argv if not word.startswith("-")), None)
+    args = build_parser(command if command in COMMANDS else None).parse_args(argv)
+    if args.command == "grade":
+        from ptlab.grading.cli import run_grade as handler
+    elif args.command == "exercise":
+        from ptlab.exercises.cli import run_exercise as handler
+    else:
+        handler = {"render": _render, "bench": _bench, "converge": _converge,
+                   "scenes": _scenes}[args.command]
     try:
-        return handler(args)
+        code = handler(args)
+        sys.stdout.flush()
+        return code
+    except BrokenPipeError:     # the reader (head, a pager) stopped reading: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except PtlabError as error:
         print(f"ptlab: error: {error}", file=sys.stderr)
         return 2

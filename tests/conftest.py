@@ -66,6 +66,13 @@ def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine"
                  materials=[material], camera=camera, name="sphere-furnace")
 
 
+@pytest.fixture(autouse=True)
+def private_state_folder(tmp_path_factory, monkeypatch) -> None:
+    """Keep 'ptlab exercise start' from recording the tests' folders in the user's own
+    ~/.local/state/ptlab (where 'ptlab exercise list' would then look for them)."""
+    monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("state")))
+
+
 @pytest.fixture(scope="session")
 def cornell() -> Scene:
     return ptlab.load_scene("cornell-box")

@@ -71,6 +71,35 @@ def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
+def test_a_reader_that_stops_early_is_not_an_error(tmp_path):
+    # 'ptlab exercise list | head -1': the pipe closes before ptlab writes.
+    child = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "list"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path)
+    child.stdout.close()
+    errors = child.stderr.read().decode()
+    assert child.wait(timeout=60) == 0
+    assert errors == ""
+
+
+def test_listing_and_help_import_none_of_the_heavy_libraries():
+    # Start-up time: what 'ptlab scenes' and '--help' do must not wait for the grading
+    # harness, Embree, SciPy, trimesh, colour-science, matplotlib or OpenImageIO.
+    heavy = ("scipy", "matplotlib", "trimesh", "colour", "embreex", "OpenImageIO",
+             "ptlab.grading", "ptlab.untrusted", "ptlab.exercises")
+    code = ("import sys, contextlib, io\n"
+            "from ptlab.cli import main\n"
+            "with contextlib.redirect_stdout(io.StringIO()):\n"
+            "    main(['scenes'])\n"
+            "    try:\n"
+            "        main(['render', '--help'])\n"
+            "    except SystemExit:\n"
+            "        pass\n"
+            f"print([m for m in {heavy!r} if m in sys.modules])\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == "[]"
+
+
 def test_help_describes_every_render_option(capsys):
     with pytest.raises(SystemExit):
         main(["render", "--help"])

@@ -122,11 +122,7 @@ def _docs(args) -> int:
     if found is not None:
         lines += [f"-- its pictures: {docs_folder() / 'exercises'}",
                   f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR"]
-    try:
-        print("\n".join(lines))
-        sys.stdout.flush()
-    except BrokenPipeError:     # the reader (head, a pager) stopped reading: not an error
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    print("\n".join(lines))   # a reader that stops early (head): see ptlab.cli.main
     return 0
 
 
