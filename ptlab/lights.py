@@ -45,6 +45,8 @@ class LightSample:
         radiance: (N, 3) float32 emitted radiance Le.
         offset: (N, 1) float32 distance that rays aimed at the point stop short of it.
         pdf_area: (N,) float32 area density with which the point was chosen.
+        target: (N, 3) float32 ``points + offset * normals``, where shadow rays aim: just off
+            the light's front, so that the light itself does not block them.
     """
 
     points: np.ndarray
@@ -52,6 +54,7 @@ class LightSample:
     radiance: np.ndarray
     offset: np.ndarray
     pdf_area: np.ndarray
+    target: np.ndarray
 
 
 @dataclass
@@ -123,6 +126,10 @@ class AreaLights:
                       radiance=self.radiance.T, offset=np.asarray(offset, np.float32)[None],
                       pdf_area=self.pdf_area(self.radiance)[None], cdf_below=cdf_below[None],
                       stretch=(1 / width)[None])
+        # offset x normal per light, the step from a sampled point to its shadow ray's target:
+        # the same float32 product as per sample, made once (arithmetic between two of the
+        # broadcast views below is several times slower than with one array).
+        fields["lift"] = fields["offset"] * fields["normals"]
         # Fields that are the same for every light (in the Cornell box: the normal, Le, the
         # offset, pdf_area and the stretch) are kept as one column that broadcasts to every
         # sample; the others are packed in one table, gathered with one `take` per sample.
@@ -185,7 +192,8 @@ class AreaLights:
         b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
         points = field("v0") + b1[:, None] * field("e1") + b2[:, None] * field("e2")
         return LightSample(points=points, normals=field("normals"), radiance=field("radiance"),
-                           offset=field("offset"), pdf_area=field("pdf_area")[:, 0])
+                           offset=field("offset"), pdf_area=field("pdf_area")[:, 0],
+                           target=points + field("lift"))
 
     def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
         """A point on the triangles (``sample``) as seen from the points ``p`` (N, 3).
@@ -202,7 +210,7 @@ class AreaLights:
         return LightLiSample(wi=wi, radiance=light.radiance * front[:, None],
                              pdf=np.where(front, solid_angle_pdf(light.pdf_area, dist2,
                                                                  cos_theta_light), 0),
-                             target=light.points + light.offset * light.normals)
+                             target=light.target)
 
 
 def pick(weights: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -273,7 +273,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     # mirrors and glass, whose f_r is 0 for any direction but the one they choose.
     facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
     origin = take_rows(hit.p + hit.offset[:, None] * hit.n, facing)
-    target = take_rows(light.points + light.offset * light.normals, facing)
+    target = take_rows(light.target, facing)
     visible = np.zeros(len(hit.prim), dtype=bool)
     visible[facing] = ~accel.occluded(origin, target - origin, 1.0 - SHADOW_EPSILON)
     f = shade(hit, "eval", hit.wo, wi, hit.n)

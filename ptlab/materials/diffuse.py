@@ -52,7 +52,8 @@ class Diffuse(Material):
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
         # Multiplying by the 0/1 mask is several times faster than np.where here.
-        return (above * (1.0 / math.pi)).astype(wi.dtype)[:, None] * self.albedo.astype(wi.dtype)
+        albedo = self.albedo.astype(wi.dtype, copy=False)   # (a batch's is float32 already)
+        return (above * (1.0 / math.pi)).astype(wi.dtype)[:, None] * albedo
 
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         cos_theta_i = dot(wi, n)

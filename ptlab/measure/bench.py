@@ -69,8 +69,10 @@ def run_bench(backends: list[str], estimators: list[str], workers: list[int], re
               echo=print) -> list[BenchRow]:
     """Run every backend x estimator x sampler x worker count, print a table, return the rows."""
     loaded = load_scene(scene)
-    # A small warm-up render so that imports and first-call costs are not timed.
-    render_result(loaded, spp=1, res=32, backend=backends[0])
+    # A small warm-up render per backend in this process (where the one-worker rows run),
+    # so that imports, building the accelerator and first calls are not timed.
+    for backend in backends:
+        render_result(loaded, spp=1, res=32, backend=backend, workers=1)
     echo(f"{loaded.summary()}; {res}x{res}, {spp} spp")
     echo(f"{'backend':8} {'estimator':9} {'sampler':11} {'workers':>7} {'seconds':>8} "
          f"{'Msamples/s':>10} {'Mrays/s':>8} {'rays/path':>9} {'in queries':>10} "
