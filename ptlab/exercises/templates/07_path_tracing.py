@@ -72,9 +72,9 @@ def direct_light(film, scene, accel, hit, u):
         * The shadow ray: ``accel.occluded(origin, target - origin, 1 - SHADOW_EPSILON)`` is
           True where something lies between. Start it *off* the surface, at
           ``hit.p + hit.offset[:, None] * hit.n``, and aim it at the light point moved off
-          the light, ``light.points + light.offset * light.normals``: a ray that starts
-          exactly on its surface hits that surface again ("shadow acne") and one that ends
-          exactly on the light hits the light.
+          the light, ``light.points + light.offset * light.normals`` (``light.target``
+          holds it): a ray that starts exactly on its surface hits that surface again
+          ("shadow acne") and one that ends exactly on the light hits the light.
     """
     raise NotImplementedError("direct_light")
 
