@@ -629,8 +629,12 @@ class _SceneReader:
             kind = path_kind(mesh_path)
         except PtlabError as error:
             raise self.error(key, str(error)) from None
-        if kind != "file":
+        if kind is None:
             raise self.error(key, f"mesh file not found: {mesh_path}")
+        if kind == "folder":
+            raise self.error(key, f"{mesh_path} is a folder, not a mesh file")
+        if kind != "file":
+            raise self.error(key, f"{mesh_path} is not a regular file (a device or a pipe?)")
         triangles, uv = read_mesh(mesh_path, f"{self.path}: {key}", MAX_COORDINATE / scale)
         if scale == 1:
             return triangles, uv

@@ -86,6 +86,8 @@ def test_minimal_scene_loads(scene_dir):
 
 BROKEN = {
     "missing mesh file": (GOOD.replace('"quad.obj"', '"nope.obj"'), "mesh[0].file", "not found"),
+    "a folder as the mesh file": (GOOD.replace('"quad.obj"', '"."'), "mesh[0].file",
+                                  "is a folder, not a mesh file"),
     "unknown material type": (GOOD.replace('type = "diffuse"\nalbedo = 0.5',
                                            'type = "velvet"\nalbedo = 0.5'),
                               "materials.grey.type", "unknown material type"),
