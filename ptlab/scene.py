@@ -183,7 +183,7 @@ class Scene:
         # (A zero-area triangle is never hit nor sampled: it is no light.)
         emitters = np.flatnonzero(self.emits & (np.linalg.norm(cross, axis=1) > 0))
         area_share, point_share, sky_share = light_shares(
-            _area_light_power(tri[emitters], self.emission[emitters]),
+            math.pi * _area_times_radiance(tri[emitters], self.emission[emitters]),
             self.point_lights.power if self.point_lights is not None else 0.0,
             self.sky is not None)
         self.lights = AreaLights(v0[emitters], v1[emitters], v2[emitters],
@@ -237,13 +237,14 @@ class Scene:
                 f"{lights} emissive triangles, {points} point lights{sky}")
 
 
-def _area_light_power(triangles: np.ndarray, radiance: np.ndarray) -> float:
-    """The flux of emissive triangles, pi x area x mean(Le) (``AreaLights.power``)."""
+def _area_times_radiance(triangles: np.ndarray, radiance: np.ndarray) -> float:
+    """The sum of area x mean(Le) over (T, 3, 3) triangles with (T, 3) radiances: the
+    emissive triangles' power over pi (``AreaLights.total_power``, ``AreaLights.power``)."""
     if len(triangles) == 0:
         return 0.0
     area = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
                                          triangles[:, 2] - triangles[:, 0]), axis=1)
-    return math.pi * float(np.sum(area * radiance.mean(axis=1)))
+    return float(np.sum(area * radiance.mean(axis=1)))
 
 
 class MaterialTable:
@@ -713,11 +714,9 @@ class _SceneReader:
                           materials: list[Material], point_lights: PointLights | None) -> None:
         """The lights' total power (area x radiance, and 4 pi x intensity), which light
         sampling divides by in float32, must be a normal float32 number."""
-        emission = np.array([m.emission.mean() if m.emission is not None else 0.0
+        emission = np.array([m.emission if m.emission is not None else np.zeros(3)
                              for m in materials])[material_ids]
-        tri = np.concatenate(triangles)
-        area = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
-        power = float(np.sum(area * emission))
+        power = _area_times_radiance(np.concatenate(triangles), emission)
         float32 = np.finfo(np.float32)
         if power > 0 and not float32.tiny <= power <= float32.max:
             raise self.error(None, f"the lights' total power (area x radiance) is {power:g}, "
