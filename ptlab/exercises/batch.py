@@ -31,7 +31,7 @@ from tqdm import tqdm
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import Chapter
-from ptlab.exercises.grader import OVERALL_SLACK, one_line
+from ptlab.exercises.grader import one_line, overall_limit
 from ptlab.untrusted import ProcessGuard
 
 #: The largest report a grader process may print (a grade's JSON is a few kilobytes).
@@ -110,7 +110,7 @@ def grade_all(chapter: Chapter, folder: Path, csv_path: Path, workers: int = 1,
     """Grade every submission in ``folder`` not yet in ``csv_path``; all rows by student."""
     rows = read_rows(csv_path, chapter)
     todo = [work for work in find_work(folder, chapter) if work.student not in rows]
-    limit = sum(c.timeout for c in chapter.checks) * timeout_scale + OVERALL_SLACK + EXTRA_SECONDS
+    limit = overall_limit(chapter, timeout_scale) + EXTRA_SECONDS
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
     runner = _Runner(chapter, timeout_scale, limit)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:

@@ -37,6 +37,12 @@ MAX_MESSAGE = 1000
 TIMEOUT_HINT = "an endless loop, or a Python loop over every ray?"
 
 
+def overall_limit(chapter, timeout_scale: float = 1.0) -> float:
+    """Seconds the grading of one file for ``chapter`` may take in all: its checks' limits,
+    scaled, and ``OVERALL_SLACK``."""
+    return sum(check.timeout for check in chapter.checks) * timeout_scale + OVERALL_SLACK
+
+
 @dataclass
 class CheckResult:
     """How one check went."""
@@ -111,7 +117,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
         raise PtlabError(f"{path}: no such file")
     sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
     threading.Thread(target=_import_what_checks_use, daemon=True).start()
-    overall = sum(check.timeout for check in chapter.checks) * timeout_scale + OVERALL_SLACK
+    overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
     with ProcessGuard() as guard:

@@ -21,9 +21,7 @@ import numpy as np
 
 from ptlab.materials.base import Material
 from ptlab.untrusted import RemoteObject, submission_of
-
-#: What a material must have.
-REQUIRED = ("eval", "pdf", "sample")
+from ptlab.untrusted.ownership import MATERIAL_METHODS
 
 
 class NotAMaterialError(TypeError):
@@ -42,12 +40,12 @@ class AdaptedMaterial(Material):
     ``sample_weight``, ``is_delta``, ``emission``)."""
 
     def __init__(self, material):
-        missing = [name for name in REQUIRED if not callable(getattr(material, name, None))]
+        missing = [name for name in MATERIAL_METHODS if not callable(getattr(material, name, None))]
         if missing:
             raise NotAMaterialError(f"it has no {', '.join(missing)} (a material has eval, pdf "
                                     f"and sample)")
         self.material = material
-        self._eval, self._pdf, self._sample = (getattr(material, name) for name in REQUIRED)
+        self._eval, self._pdf, self._sample = (getattr(material, name) for name in MATERIAL_METHODS)
         weight = getattr(material, "sample_weight", None)
         self._sample_weight = weight if callable(weight) else None
         self._weight_takes_front = self._sample_weight is not None and _takes_front(weight)

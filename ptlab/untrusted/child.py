@@ -43,13 +43,13 @@ import numpy as np
 from ptlab.errors import PtlabError
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
+from ptlab.untrusted.ownership import MATERIAL_METHODS
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
 
 #: The ptlab package: code under it is the library's own, not a student's.
 PTLAB = Path(__file__).resolve().parent.parent
-#: A graded class is ptlab's own answer if these methods are all ptlab's (and not the
+#: A graded class is ptlab's own answer if its MATERIAL_METHODS are all ptlab's (and not the
 #: ``Material`` interface's, which only raise ``NotImplementedError``).
-MATERIAL_METHODS = ("eval", "pdf", "sample")
 INTERFACE = PTLAB / "materials" / "base.py"
 MAX_MESSAGE_TEXT = 2000
 PR_SET_PDEATHSIG = 1

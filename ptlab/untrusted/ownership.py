@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import ast
 
+#: The homework's three functions: what a material must have, and what is graded of it.
 MATERIAL_METHODS = ("eval", "pdf", "sample")
 #: ptlab classes that a student's material may subclass: they only declare the interface.
 INTERFACES = ("Material", "DeltaMaterial")
