@@ -102,14 +102,8 @@ class Channel:
         """``size`` bytes: small reads go through a read-ahead buffer (one system call for
         a whole small message), large ones straight into their own buffer."""
         if len(self._pending) >= size:
-            taken = self._pending[:size]
-            del self._pending[:size]
-            return taken
-        buffer = _buffer(size)
-        view = memoryview(buffer)
-        filled = len(self._pending)
-        view[:filled] = self._pending
-        self._pending.clear()
+            return _take(self._pending, size)
+        buffer, view, filled = _seeded_buffer(self._pending, size)
         while filled < size:
             self._wait(self.receive_fd, select.POLLIN, deadline)
             try:
@@ -213,11 +207,7 @@ class Reader:
         while len(self._pending) < size:
             want = size - len(self._pending)
             if want >= READ_AHEAD:
-                buffer = _buffer(size)
-                view = memoryview(buffer)
-                filled = len(self._pending)
-                view[:filled] = self._pending
-                self._pending.clear()
+                buffer, view, filled = _seeded_buffer(self._pending, size)
                 while filled < size:
                     got = os.readv(self.fd, [view[filled:]])
                     if got == 0:
@@ -228,9 +218,7 @@ class Reader:
             if not data:
                 raise ChannelClosedError
             self._pending += data
-        taken = self._pending[:size]
-        del self._pending[:size]
-        return taken
+        return _take(self._pending, size)
 
     def read_message(self) -> list[bytearray]:
         """The next message from the grader (blocking)."""
@@ -251,6 +239,25 @@ def _buffer(size: int) -> bytearray | np.ndarray:
     """A buffer to read ``size`` bytes into: a large one is not zeroed first (NumPy's
     ``empty``; a ``bytearray`` of 24 MB costs milliseconds of zeroing, every call)."""
     return bytearray(size) if size < READ_AHEAD else np.empty(size, np.uint8)
+
+
+def _seeded_buffer(pending: bytearray, size: int) -> tuple[bytearray | np.ndarray, memoryview, int]:
+    """A buffer for ``size`` bytes that begins with the bytes already read ahead,
+    ``pending`` (which it empties): the buffer, a view to read the rest into, and how many
+    bytes it holds already."""
+    buffer = _buffer(size)
+    view = memoryview(buffer)
+    filled = len(pending)
+    view[:filled] = pending
+    pending.clear()
+    return buffer, view, filled
+
+
+def _take(pending: bytearray, size: int) -> bytearray:
+    """The first ``size`` bytes of ``pending``, removed from it."""
+    taken = pending[:size]
+    del pending[:size]
+    return taken
 
 
 def _chunks(parts: list) -> list[memoryview]:
