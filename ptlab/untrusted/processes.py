@@ -116,13 +116,15 @@ class ProcessGuard:
             me = os.getpid()
             self._helpers = {pid for pid, parent in process_table().items() if parent == me}
 
-    def add_server(self, pid: int, started: int) -> None:
+    def add_server(self, pid: int, started: int, table: dict[int, int] | None = None) -> None:
         """Count ``pid``, the fork server that just ``started`` a process, as a helper whose
         later children are all ours to end (a student's code that asks it for a process of
         its own, through its socket, must not slip out of reach); its children of now but
-        ``started`` (the workers of a pool this process keeps) stay helpers."""
+        ``started`` (the workers of a pool this process keeps) stay helpers. ``table``: the
+        ``process_table`` the caller just took, if it has one."""
         self._servers.add(pid)
-        self._helpers |= {child for child, parent in process_table().items()
+        table = process_table() if table is None else table
+        self._helpers |= {child for child, parent in table.items()
                           if parent == pid and child != started}
 
     def end(self, *roots: int, keep: Iterable[int] = ()) -> None:

@@ -160,9 +160,10 @@ class Submission:
         finally:
             for end in ends:
                 end.close()
-        server = process_table().get(process.pid) if LINUX else None
+        table = process_table() if LINUX else {}     # (one snapshot for both questions)
+        server = table.get(process.pid)
         if server is not None and server != os.getpid():
-            self.guard.add_server(server, started=process.pid)
+            self.guard.add_server(server, started=process.pid, table=table)
         return process, Channel(request_w, reply_r, output_r, on_output)
 
     @property
