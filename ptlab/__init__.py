@@ -8,11 +8,36 @@ The concepts of light transport are the top-level modules and the folders ``mate
 ``accel`` and ``integrators``; running a render is ``ptlab.rendering`` (whose API is
 re-exported here), measuring it ``ptlab.measure``, grading ``ptlab.grading`` and
 ``ptlab.exercises`` (docs/architecture.md draws the layers).
+
+The names below are imported when first used (PEP 562), so that ``import ptlab.cli`` stays
+light until the command line has started its worker processes (``ptlab.rendering``).
 """
 
-from ptlab.rendering import RenderResult, render, render_result
-from ptlab.scene import Scene, load_scene
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from ptlab.rendering.api import RenderResult, render, render_result
+    from ptlab.scene import Scene, load_scene
 
 __version__ = "0.1.0"
 
 __all__ = ["Scene", "RenderResult", "load_scene", "render", "render_result", "__version__"]
+
+#: Where each lazily imported name lives.
+_HOMES = {"Scene": "ptlab.scene", "load_scene": "ptlab.scene",
+          "RenderResult": "ptlab.rendering.api", "render": "ptlab.rendering.api",
+          "render_result": "ptlab.rendering.api"}
+
+
+def __getattr__(name: str):
+    if name in _HOMES:
+        import importlib
+
+        return getattr(importlib.import_module(_HOMES[name]), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(list(globals()) + list(_HOMES))

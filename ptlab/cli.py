@@ -20,10 +20,9 @@ import time
 from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.rendering import render_result
-from ptlab.rendering.progress import ProgressBar
-from ptlab.rendering.settings import INTEGRATORS
-from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
+
+# NumPy and the rest of ptlab are imported where a command needs them, after ``main`` has
+# started the worker processes' server (``_start_workers_early``).
 
 
 class _Parser(argparse.ArgumentParser):
@@ -50,8 +49,11 @@ COMMANDS = ("render", "bench", "converge", "grade", "exercise", "scenes")
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The ``ptlab`` command's parser; with ``command``, only that command's graders' options
     are built (``None``: all of them, as ``--help`` shows)."""
-    parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     from ptlab import __version__
+    from ptlab.rendering.settings import INTEGRATORS
+    from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
+
+    parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
@@ -206,8 +208,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 def _render(args) -> int:
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
-    from ptlab.rendering import pass_schedule, resolution
+    from ptlab.rendering import pass_schedule, render_result, resolution
     from ptlab.rendering.executors import dask_executor
+    from ptlab.rendering.progress import ProgressBar
     from ptlab.rendering.settings import MAX_SPP, check_workers
     from ptlab.scene import load_scene
 
@@ -357,6 +360,7 @@ def _bench(args) -> int:
     from ptlab.measure.bench import ESTIMATORS, run_accuracy, run_bench
     from ptlab.measure.converge import default_cache_dir
     from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
+    from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
     if args.against is not None:
         from ptlab.measure.against import reject_options, run_against
@@ -395,9 +399,44 @@ def _scenes(args) -> int:
     return 0
 
 
+def _start_workers_early(argv: list[str]) -> None:
+    """For a ``render`` on worker processes, start their fork server before this process
+    imports NumPy: the server's imports (0.25-0.3 s) then run alongside ours instead of
+    after them (measured: 0.25-0.3 s sooner to the first tile with 2 workers).
+
+    Not for a render of one job (one tile, one pass), which runs in this process: there the
+    server's imports would only compete with ours (0.15 s later to the image). This is only
+    a glance at the options: a wrong guess costs nothing but that time, and the real parser
+    checks them afterwards.
+    """
+    from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
+
+    glance = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    glance.add_argument("--workers", type=int)
+    glance.add_argument("--res")
+    glance.add_argument("--spp", type=int, default=16)
+    glance.add_argument("--scheduler")
+    glance.add_argument("-h", "--help", action="store_true")
+    try:
+        options, _ = glance.parse_known_args(argv)
+    except SystemExit:      # (an unreadable number: the real parser says so)
+        return
+    size = [int(n) for n in (options.res or "").lower().split("x") if n.isdigit()]
+    one_tile = bool(size) and max(size) <= TILE_SIZE
+    if (options.help or options.scheduler is not None
+            or one_tile and options.spp <= SPP_PER_PASS):
+        return
+    from ptlab.rendering.executors import default_workers, start_worker_server
+
+    if (default_workers() if options.workers is None else options.workers) > 1:
+        start_worker_server()
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = sys.argv[1:] if argv is None else argv
     command = next((word for word in argv if not word.startswith("-")), None)
+    if command == "render":
+        _start_workers_early(argv)
     args = build_parser(command if command in COMMANDS else None).parse_args(argv)
     if args.command == "grade":
         from ptlab.grading.cli import run_grade as handler

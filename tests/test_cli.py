@@ -10,6 +10,7 @@ import sys
 import numpy as np
 import pytest
 
+from ptlab import cli
 from ptlab.cli import main
 from ptlab.image import read_image
 
@@ -98,6 +99,38 @@ def test_listing_and_help_import_none_of_the_heavy_libraries():
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                             check=True)
     assert result.stdout.strip() == "[]"
+
+
+def test_the_command_imports_no_numpy_before_it_can_start_the_workers_server():
+    # ``ptlab render`` starts the workers' fork server first, so that its imports run
+    # alongside the command's; a heavy import at the top of ptlab, ptlab.rendering or
+    # ptlab.cli would put them back in a row.
+    code = ("import sys\nimport ptlab.cli, ptlab.rendering.executors\n"
+            "print('numpy' in sys.modules)\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == "False"
+
+
+@pytest.mark.parametrize("args, starts", [
+    (["render", "cornell-box", "--workers", "2"], True),
+    (["render", "cornell-box", "--res", "784", "--workers", "2"], True),
+    (["render", "cornell-box", "--res", "64", "--spp", "32", "--workers", "2"], True),  # 2 passes
+    (["render", "cornell-box", "--workers", "1"], False),
+    (["render", "cornell-box", "--res", "16", "--spp", "1", "--workers", "2"], False),  # one job
+    (["render", "cornell-box", "--res", "100x128", "--workers", "2"], False),
+    (["render", "cornell-box", "--workers", "2", "--scheduler", "tcp://host:8786"], False),
+    (["render", "--help"], False),
+    (["render", "cornell-box", "--workers", "two"], False),
+])
+def test_render_starts_the_workers_server_early_only_when_it_will_use_it(monkeypatch, args,
+                                                                          starts):
+    import ptlab.rendering.executors as executors
+
+    started = []
+    monkeypatch.setattr(executors, "start_worker_server", lambda: started.append(True))
+    cli._start_workers_early(args)
+    assert bool(started) == starts
 
 
 def test_help_describes_every_render_option(capsys):

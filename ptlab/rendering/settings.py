@@ -2,13 +2,12 @@
 
 from __future__ import annotations
 
-import os
-
 import numpy as np
 
 from ptlab.errors import PtlabError
 from ptlab.integrators.path import HEURISTICS, STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
+from ptlab.rendering.executors import default_workers
 from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
 INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
@@ -82,14 +81,6 @@ def check_seed(seed: int) -> int:
     if not _is_int(seed) or seed < 0:
         raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
     return int(seed)
-
-
-def default_workers() -> int:
-    """The number of cores this process may run on."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
 
 
 def check_workers(workers: int | None) -> int:

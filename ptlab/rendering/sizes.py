@@ -1,0 +1,16 @@
+"""How big a render's jobs are: tiles of ``TILE_SIZE`` x ``TILE_SIZE`` pixels, passes of
+``SPP_PER_PASS`` samples per pixel (``jobs`` cuts the image and the samples so).
+
+Batches of about 2^18 paths are the fastest here (measured: 10-15% faster than 2^16):
+large enough that NumPy's per-call overhead vanishes, small enough that memory stays
+modest: 128 x 128 tiles of 16 samples per pixel per pass. The pass size is fixed, not
+derived from the tile size, so that an image does not depend on its tiles.
+
+(A module of its own, importing nothing, so that the command line can judge a render's
+size before it imports NumPy.)
+"""
+
+#: Tile edge in pixels.
+TILE_SIZE = 128
+#: Samples per pixel in each pass (with 128 x 128 tiles, batches of 2^18 paths).
+SPP_PER_PASS = 16
