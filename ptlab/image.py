@@ -31,10 +31,25 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
                     1.055 * np.power(linear, 1 / 2.4) - 0.055)
 
 
+#: Values that ``encode_srgb8`` encodes at a time.
+ENCODE_CHUNK = 1 << 16
+
+
 def encode_srgb8(linear: np.ndarray) -> np.ndarray:
-    """(H, W, 3) linear RGB -> (H, W, 3) uint8 sRGB (clipped to [0, 1] first)."""
-    clipped = np.clip(np.nan_to_num(np.asarray(linear, dtype=np.float64)), 0.0, 1.0)
-    return np.round(srgb_encode(clipped) * 255.0).astype(np.uint8)
+    """(H, W, 3) linear RGB -> (H, W, 3) uint8 sRGB (clipped to [0, 1] first).
+
+    Encoded in chunks of ``ENCODE_CHUNK`` values, whose float64 temporaries stay in the
+    cache and are reused: whole-image ones cost the command 0.1-0.25 s more at 784 x 784,
+    mostly in touching fresh memory. (The chunks change no value.)
+    """
+    linear = np.asarray(linear)
+    encoded = np.empty(linear.shape, dtype=np.uint8)
+    values, out = linear.reshape(-1), encoded.reshape(-1)
+    for start in range(0, values.size, ENCODE_CHUNK):
+        chunk = values[start:start + ENCODE_CHUNK].astype(np.float64)
+        clipped = np.clip(np.nan_to_num(chunk), 0.0, 1.0)
+        out[start:start + ENCODE_CHUNK] = np.round(srgb_encode(clipped) * 255.0)
+    return encoded
 
 
 def check_output_path(path: str | Path) -> Path:
