@@ -21,7 +21,7 @@ import trimesh
 
 from ptlab.accel.base import Hits
 from ptlab.accel.embree import EmbreeAccelerator
-from ptlab.accel.numpy_bvh import NumpyBVH, build_bvh, slab_test
+from ptlab.accel.numpy_bvh import SMALL_SCENE, NumpyBVH, build_bvh, slab_test
 from ptlab.accel.triangle import ray_triangle
 
 F32_EPS = float(np.finfo(np.float32).eps)
@@ -109,8 +109,8 @@ def assert_hits_match(ref: Hits, hits: Hits, origins: np.ndarray, dirs: np.ndarr
 
 
 def check_against_embree(tris: np.ndarray, origins: np.ndarray, dirs: np.ndarray,
-                         rng: np.random.Generator):
-    embree, bvh = EmbreeAccelerator(tris), NumpyBVH(tris)
+                         rng: np.random.Generator, every_triangle: bool | None = None):
+    embree, bvh = EmbreeAccelerator(tris), NumpyBVH(tris, every_triangle=every_triangle)
     ref = embree.intersect(origins, dirs)
     assert_hits_match(ref, bvh.intersect(origins, dirs), origins, dirs, tris)
 
@@ -246,10 +246,36 @@ def test_build_invariants(max_leaf_size):
         assert np.all(bvh.box_max[c] <= bvh.box_max[inner])
 
 
-def test_cornell_like_matches_embree():
+# Both ways of answering a query: walking the tree, and (the default for a scene this small)
+# testing every triangle, plane first.
+BOTH_WAYS = pytest.mark.parametrize("every_triangle", [False, True], ids=["tree", "every"])
+
+
+@BOTH_WAYS
+def test_cornell_like_matches_embree(every_triangle):
     rng = np.random.default_rng(3)
     origins, dirs = random_rays(rng, 20000, (1, 555), (-300, 856))
-    check_against_embree(cornell_like(), origins, dirs, rng)
+    check_against_embree(cornell_like(), origins, dirs, rng, every_triangle)
+
+
+def test_a_small_scene_tests_every_triangle_and_a_large_one_walks_the_tree():
+    assert NumpyBVH(cornell_like()).every_triangle
+    assert not NumpyBVH(cornell_like()[:1].repeat(SMALL_SCENE + 1, axis=0)).every_triangle
+
+
+def test_both_ways_find_the_same_hits_ray_by_ray():
+    rng = np.random.default_rng(6)
+    origins, dirs = random_rays(rng, 20000, (1, 555), (-300, 856))
+    tris = cornell_like()
+    tree, every = NumpyBVH(tris, every_triangle=False), NumpyBVH(tris, every_triangle=True)
+    a, b = tree.intersect(origins, dirs), every.intersect(origins, dirs)
+    np.testing.assert_array_equal(a.hit, b.hit)
+    assert np.mean(a.prim == b.prim) > 0.999          # another triangle only where two meet
+    assert_hits_match(a, b, origins, dirs, tris)      # t, u, v up to float32 rounding
+    tmax = rng.uniform(0, 1000, len(dirs)).astype(np.float32)
+    clear = ~a.hit | (np.abs(tmax - a.t) > 1e-4 * a.t)
+    np.testing.assert_array_equal(tree.occluded(origins, dirs, tmax)[clear],
+                                  every.occluded(origins, dirs, tmax)[clear])
 
 
 def test_big_mesh_matches_embree():
@@ -258,21 +284,23 @@ def test_big_mesh_matches_embree():
     check_against_embree(big_mesh(), origins, dirs, rng)
 
 
-def test_float64_rays_give_the_same_hits():
+@BOTH_WAYS
+def test_float64_rays_give_the_same_hits(every_triangle):
     rng = np.random.default_rng(5)
     origins, dirs = random_rays(rng, 2000, (1, 555), (1, 555))
-    bvh = NumpyBVH(cornell_like())
+    bvh = NumpyBVH(cornell_like(), every_triangle=every_triangle)
     h32 = bvh.intersect(origins, dirs)
     h64 = bvh.intersect(origins.astype(np.float64), dirs.astype(np.float64))
     for name in ("t", "prim", "u", "v"):
         np.testing.assert_array_equal(getattr(h64, name), getattr(h32, name))
 
 
-@pytest.mark.parametrize("max_leaf_size", [1, 4])
-def test_single_axis_aligned_quad(max_leaf_size):
+@pytest.mark.parametrize("max_leaf_size, every_triangle", [(1, False), (4, False), (4, True)])
+def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
     """A flat tree: the quad z = 1, 0 <= x, y <= 1 (with max_leaf_size 1, a flat root
     over two flat leaves), hit by rays along z and rays with zero components."""
-    bvh = NumpyBVH(quad([0, 0, 1], [1, 0, 0], [0, 1, 0]), max_leaf_size=max_leaf_size)
+    bvh = NumpyBVH(quad([0, 0, 1], [1, 0, 0], [0, 1, 0]), max_leaf_size=max_leaf_size,
+                   every_triangle=every_triangle)
     assert bvh.bvh.box_min[0, 2] == bvh.bvh.box_max[0, 2] == 1.0
     xy = np.stack(np.meshgrid(np.linspace(0.05, 0.95, 7), np.linspace(0.05, 0.95, 7)),
                   axis=-1).reshape(-1, 2)
@@ -292,11 +320,12 @@ def test_single_axis_aligned_quad(max_leaf_size):
     assert not in_plane.hit.any()
 
 
-def test_tmin_and_tmax():
+@BOTH_WAYS
+def test_tmin_and_tmax(every_triangle):
     """Two quads, at z = 1 and z = 2, and rays along +z from z = 0."""
     tris = np.concatenate([quad([0, 0, 1], [1, 0, 0], [0, 1, 0]),
                            quad([0, 0, 2], [1, 0, 0], [0, 1, 0])])
-    bvh = NumpyBVH(tris)
+    bvh = NumpyBVH(tris, every_triangle=every_triangle)
     o = np.tile([0.3, 0.6, 0.0], (5, 1))
     d = np.tile([0.0, 0.0, 1.0], (5, 1))
     assert np.all(bvh.intersect(o, d).t == 1)
@@ -313,6 +342,8 @@ def test_tmin_and_tmax():
     assert np.all(bvh.intersect(o, 2 * d).t == 0.5)          # t in units of |d|
 
 
-def test_no_rays():
-    hits = NumpyBVH(cornell_like()).intersect(np.zeros((0, 3)), np.zeros((0, 3)))
+@BOTH_WAYS
+def test_no_rays(every_triangle):
+    hits = NumpyBVH(cornell_like(), every_triangle=every_triangle).intersect(
+        np.zeros((0, 3)), np.zeros((0, 3)))
     assert hits.t.shape == hits.prim.shape == (0,)

@@ -19,6 +19,12 @@ small enough to be an exercise:
   (``ptlab.accel.triangle.ray_triangle``) or pushes the two children, near one on top
   (``child_order``).
 
+A scene of at most ``SMALL_SCENE`` triangles (the Cornell box has 32) skips the walk:
+every ray is tested against every triangle, one triangle at a time for all the rays
+(``NumpyBVH._test_every_triangle``). Each step is then mostly plain arithmetic on whole
+arrays, with the triangle's data broadcast, where a walk gathers every ray's node, box
+and triangles before it can compute anything, and gathering is the slow part of NumPy.
+
 ``slab_test``, ``ray_triangle``, ``split_costs``, ``best_split`` and ``child_order`` are
 looked up in this module by name when they are called, so an exercise can swap any of
 them for a student's own (``ptlab.exercises.plug``).
@@ -37,7 +43,15 @@ from dataclasses import dataclass
 import numpy as np
 
 from ptlab.accel.base import Hits
-from ptlab.accel.triangle import ray_triangle
+from ptlab.accel.triangle import cross, dot, ray_triangle
+
+#: The most triangles for which testing all of them surely beats walking the tree
+#: (measured, 262k random rays in the Cornell box, intersect + occluded: 7.4x faster with
+#: its 32 triangles, 4.7x with 52, 1.3x with 112-152, none with 232; smaller batches of rays
+#: gain less, since each triangle costs some 25 NumPy calls whatever their size). Read
+#: when a ``NumpyBVH`` is built, so the exercises can set it to 0 to render through a
+#: student's tree.
+SMALL_SCENE = 64
 
 # pbrt-v4's gamma(3) for float32: the relative rounding error of t computed by the slab test.
 _GAMMA3 = 3 * np.finfo(np.float32).eps / (1 - 3 * np.finfo(np.float32).eps)
@@ -295,25 +309,40 @@ class NumpyBVH:
 
     Rays may be float32 or float64; the traversal runs in float32, like Embree.
 
-    Speed on the 2-core test machine, batches of 100k-500k rays in the Cornell box
-    (38 triangles): about 1 us per ray for ``intersect`` and 0.7 us for ``occluded``
-    (Embree: 0.16 and 0.10); 4-5 us per ray on meshes of 100k-300k triangles. The
-    defaults were measured best on the Cornell box: wider leaves mean fewer steps but
-    more triangle tests, and were slower, from 10% (up to 8 per leaf) to 2x (all 38 in
+    Speed on the 2-core test machine, batches of 262k random rays in the Cornell box
+    (32 triangles): about 0.4 us per ray for ``intersect`` and 0.25 us for ``occluded``
+    testing every triangle (the default there), 2 us walking the tree (Embree: 0.16 and
+    0.10); 4-5 us per ray on meshes of 100k-300k triangles, which walk the tree. The
+    defaults were measured best on the Cornell box's tree: wider leaves mean fewer steps
+    but more triangle tests, and were slower, from 10% (up to 8 per leaf) to 2x (all 38 in
     one leaf), because a triangle test costs more here than a node visit.
 
     Args:
         triangles: (T, 3, 3) array, vertex k of triangle i at ``triangles[i, k]``.
         max_leaf_size, traversal_cost: see ``build_bvh``.
+        every_triangle: test every ray against every triangle instead of walking the tree;
+            None (default) for ``SMALL_SCENE`` triangles or fewer (module docstring).
     """
 
     name = "numpy"
 
     def __init__(self, triangles: np.ndarray, max_leaf_size: int = 4,
-                 traversal_cost: float = 1.0):
+                 traversal_cost: float = 1.0, every_triangle: bool | None = None):
         tris = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
         self.bvh = bvh = build_bvh(tris, max_leaf_size=max_leaf_size,
                                    traversal_cost=traversal_cost)
+        self.every_triangle = (len(tris) <= SMALL_SCENE if every_triangle is None
+                               else bool(every_triangle))
+        # For testing every triangle: each one's index, v0, edges and plane (normal . x =
+        # offset), largest first: a ray that finds a near hit early has fewer planes ahead
+        # of it to pass.
+        self._triangles = []
+        tris32 = tris.astype(np.float32)
+        normals = np.cross(tris32[:, 1] - tris32[:, 0], tris32[:, 2] - tris32[:, 0])
+        for k in np.argsort(-np.linalg.norm(normals, axis=1), kind="stable"):
+            v0, v1, v2 = tris32[k]
+            self._triangles.append((int(k), v0, v1 - v0, v2 - v0, normals[k],
+                                    float(normals[k] @ v0)))
         # Everything the traversal reads is float32, like the rays, and stored
         # component-major, (3, M): see `_traverse`.
         self._box_min = _component_major(bvh.box_min)
@@ -358,12 +387,15 @@ class NumpyBVH:
             raise ValueError(f"origins and dirs must both be (N, 3), not {o.T.shape} "
                              f"and {d.T.shape}")
         n = o.shape[1]
-        with np.errstate(divide="ignore"):
-            inv_d = 1 / d                      # ±inf for zero components: see slab_test
         t_lo = np.broadcast_to(np.asarray(tmin, dtype=np.float32), n).copy()
         t_best = np.broadcast_to(np.asarray(tmax, dtype=np.float32), n).copy()
         hits = Hits(t=np.full(n, np.inf, np.float32), prim=np.full(n, -1, np.intp),
                     u=np.zeros(n, np.float32), v=np.zeros(n, np.float32))
+        if self.every_triangle:
+            self._test_every_triangle(o, d, t_lo, t_best, any_hit, hits)
+            return hits
+        with np.errstate(divide="ignore"):
+            inv_d = 1 / d                      # ±inf for zero components: see slab_test
 
         ray = np.arange(n)
         # stack[k, j]: the k-th node on ray j's stack; every ray starts at the root, 0.
@@ -398,6 +430,41 @@ class NumpyBVH:
                 k = np.flatnonzero(done)
                 t_lo[k], t_best[k] = np.inf, -np.inf
         return hits
+
+    def _test_every_triangle(self, o: np.ndarray, d: np.ndarray, t_lo: np.ndarray,
+                             t_best: np.ndarray, any_hit: bool, hits: Hits) -> None:
+        """``_traverse`` without the tree: every ray against every triangle, one triangle
+        at a time, each ray keeping its nearest hit with ``t_lo < t < t_best`` (the first
+        of equal ones, largest triangle first), written into ``hits``.
+
+        The test is Möller-Trumbore's (``ptlab.accel.triangle``) rearranged around the
+        triangle's normal n = e1 x e2, which is computed once: with det = -d . n and
+        s = o - v0, Cramer's rule gives t = s . n / det first, a dozen operations on whole
+        arrays that need nothing gathered (t is where the ray meets the triangle's plane).
+        Only the rays that meet the plane between ``t_lo`` and their nearest hit so far
+        (about a third, in the Cornell box) are gathered for the rest: with w = s x d,
+        u = w . e2 / det and v = -w . e1 / det.
+        """
+        ox, oy, oz = o
+        dx, dy, dz = d
+        for k, v0, e1, e2, (nx, ny, nz), offset in self._triangles:
+            with np.errstate(divide="ignore", invalid="ignore"):   # (rays in the plane)
+                along = dx * nx + dy * ny + dz * nz                # d . n = -det
+                t = (offset - (ox * nx + oy * ny + oz * nz)) / along
+            rows = np.flatnonzero((t > t_lo) & (t < t_best))       # (never NaN or inf)
+            if rows.size == 0:
+                continue
+            w = cross(o.take(rows, axis=1).T - v0, d.take(rows, axis=1).T)
+            inv_det = -1 / along.take(rows)
+            u, v = dot(w, e2) * inv_det, -dot(w, e1) * inv_det
+            inside = (u >= 0) & (v >= 0) & (u + v <= 1)
+            rows = rows.compress(inside)
+            hits.prim[rows] = k
+            if any_hit:
+                t_best[rows] = -np.inf      # found (only hit or not matters): test no more
+                continue
+            t_best[rows] = hits.t[rows] = t.take(rows)
+            hits.u[rows], hits.v[rows] = u.compress(inside), v.compress(inside)
 
     def _intersect_leaf(self, j: np.ndarray, node: np.ndarray, o: np.ndarray,
                         d: np.ndarray, t_lo: np.ndarray, t_best: np.ndarray,

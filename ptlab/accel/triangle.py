@@ -27,9 +27,12 @@ def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """(..., 3) cross products of (..., 3) vectors."""
     ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
     bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
-    # Stacked along a new first axis and moved last: each component stays contiguous.
-    c = np.stack([ay * bz - az * by, az * bx - ax * bz, ax * by - ay * bx])
-    return np.moveaxis(c, 0, -1)
+    # Column-major ("F") order keeps each component contiguous (ptlab.vectors).
+    c = np.empty(np.broadcast_shapes(a.shape, b.shape), np.result_type(a, b), order="F")
+    np.subtract(ay * bz, az * by, out=c[..., 0])
+    np.subtract(az * bx, ax * bz, out=c[..., 1])
+    np.subtract(ax * by, ay * bx, out=c[..., 2])
+    return c
 
 
 def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
