@@ -87,7 +87,7 @@ def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
     Basis, Revisited" (JCGT 2017): continuous everywhere except where n.z flips sign.
     """
     nx, ny, nz = n[:, 0], n[:, 1], n[:, 2]
-    sign = np.where(nz >= 0, 1.0, -1.0).astype(n.dtype)
+    sign = np.where(nz >= 0, n.dtype.type(1), n.dtype.type(-1))
     a = -1.0 / (sign + nz)
     b = nx * ny * a
     x, y, z = local[:, 0], local[:, 1], local[:, 2]

@@ -198,7 +198,7 @@ class Scene:
             self.sky = Sky(self.sky.radiance, share=sky_share, distance=2 * diagonal)
         kinds = [kind for kind in (self.lights, self.point_lights, self.sky) if kind is not None]
         self.light_sampler = LightSampler(kinds) if kinds else None
-        self.material_table = MaterialTable(self.materials)
+        self.material_table = MaterialTable(self.materials, self.material_ids)
         self.triangle_uv = None
         if self.uvs is not None:
             uvs = np.asarray(self.uvs, dtype=np.float64)
@@ -254,9 +254,11 @@ class MaterialTable:
         groups: one stacked material per kind (``Material.stack``).
         group: (M,) intp, the group of each scene material.
         row: (M,) intp, each scene material's row inside its stacked group.
+        triangle_group, triangle_row: (T,) intp, the same for each triangle's material (one
+            lookup per hit instead of two), given the triangles' ``material_ids``.
     """
 
-    def __init__(self, materials: list[Material]):
+    def __init__(self, materials: list[Material], material_ids: np.ndarray | None = None):
         members: dict[object, list[int]] = {}
         for k, material in enumerate(materials):
             members.setdefault(material.batch_key(), []).append(k)
@@ -268,6 +270,9 @@ class MaterialTable:
             self.groups.append(kind.stack([materials[k] for k in indices]))
             self.group[indices] = g
             self.row[indices] = np.arange(len(indices))
+        if material_ids is not None:
+            self.triangle_group = self.group.take(material_ids)
+            self.triangle_row = self.row.take(material_ids)
 
 
 def find_scene_file(name_or_path: str | Path) -> Path:

@@ -70,7 +70,8 @@ class EmbreeAccelerator:
         t = out["tfar"]
         if shifted:
             t = t + tmin
-        t[missed] = np.inf
+        if missed.any():       # (none do in a closed room: spare the masked write)
+            t[missed] = np.inf
         return Hits(t=t, prim=prim, u=out["u"], v=out["v"])
 
     def occluded(self, origins: np.ndarray, dirs: np.ndarray,

@@ -416,15 +416,14 @@ def material_groups(scene: Scene, prim: np.ndarray, uv: np.ndarray | None = None
     looks its parameters up at the hits' texture coordinates ``uv`` (N, 2).
     """
     table = scene.material_table
-    material_ids = scene.material_ids.take(prim)
     if len(table.groups) == 1:
-        return [(None, taken(table.groups[0], table.row.take(material_ids), uv))]
-    group_of = table.group.take(material_ids)
+        return [(None, taken(table.groups[0], table.triangle_row.take(prim), uv))]
+    group_of = table.triangle_group.take(prim)
     groups = []
     for g, stacked in enumerate(table.groups):
         rows = np.flatnonzero(group_of == g)
         if len(rows):
-            groups.append((rows, taken(stacked, table.row.take(material_ids.take(rows)),
+            groups.append((rows, taken(stacked, table.triangle_row.take(prim.take(rows)),
                                        None if uv is None else take_rows(uv, rows))))
     return groups
 

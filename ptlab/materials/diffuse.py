@@ -53,7 +53,7 @@ class Diffuse(Material):
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
         # Multiplying by the 0/1 mask is several times faster than np.where here.
         albedo = self.albedo.astype(wi.dtype, copy=False)   # (a batch's is float32 already)
-        return (above * (1.0 / math.pi)).astype(wi.dtype)[:, None] * albedo
+        return (above * wi.dtype.type(1.0 / math.pi))[:, None] * albedo
 
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         cos_theta_i = dot(wi, n)
