@@ -399,6 +399,13 @@ def _scenes(args) -> int:
     return 0
 
 
+class _Glance(argparse.ArgumentParser):
+    """A parser that says nothing of a bad option (it raises ValueError): the real one will."""
+
+    def error(self, message: str):
+        raise ValueError(message)
+
+
 def _start_workers_early(argv: list[str]) -> None:
     """For a ``render`` on worker processes, start their fork server before this process
     imports NumPy: the server's imports (0.25-0.3 s) then run alongside ours instead of
@@ -411,7 +418,7 @@ def _start_workers_early(argv: list[str]) -> None:
     """
     from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
 
-    glance = argparse.ArgumentParser(add_help=False, allow_abbrev=False)
+    glance = _Glance(add_help=False, allow_abbrev=False)
     glance.add_argument("--workers", type=int)
     glance.add_argument("--res")
     glance.add_argument("--spp", type=int, default=16)
@@ -419,7 +426,7 @@ def _start_workers_early(argv: list[str]) -> None:
     glance.add_argument("-h", "--help", action="store_true")
     try:
         options, _ = glance.parse_known_args(argv)
-    except SystemExit:      # (an unreadable number: the real parser says so)
+    except ValueError:      # (an unreadable number: the real parser says so)
         return
     size = [int(n) for n in (options.res or "").lower().split("x") if n.isdigit()]
     one_tile = bool(size) and max(size) <= TILE_SIZE

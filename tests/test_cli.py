@@ -122,15 +122,18 @@ def test_the_command_imports_no_numpy_before_it_can_start_the_workers_server():
     (["render", "cornell-box", "--workers", "2", "--scheduler", "tcp://host:8786"], False),
     (["render", "--help"], False),
     (["render", "cornell-box", "--workers", "two"], False),
+    (["render", "cornell-box", "--spp", ""], False),
+    (["render", "cornell-box", "--res"], False),
 ])
-def test_render_starts_the_workers_server_early_only_when_it_will_use_it(monkeypatch, args,
-                                                                          starts):
+def test_render_starts_the_workers_server_early_only_when_it_will_use_it(monkeypatch, capsys,
+                                                                          args, starts):
     import ptlab.rendering.executors as executors
 
     started = []
     monkeypatch.setattr(executors, "start_worker_server", lambda: started.append(True))
     cli._start_workers_early(args)
     assert bool(started) == starts
+    assert capsys.readouterr() == ("", "")    # a bad option is the real parser's to report
 
 
 def test_help_describes_every_render_option(capsys):
