@@ -328,3 +328,18 @@ def test_a_later_failure_replaces_a_pass_in_the_record(tmp_path):
     entry = read_record(tmp_path)["01"]
     assert entry["score"] == 4 and entry["full_marks"] is False
     assert entry["sha256"] == hashlib.sha256(answer.read_bytes()).hexdigest()
+
+
+def test_replacing_materials_keeps_the_scenes_lights_sky_uvs_and_defaults():
+    # Homework 5's scene has all four: point lights, a sky, a textured floor's uvs and its
+    # own resolution; a render check that swaps in a student's material must keep them.
+    import ptlab
+    from ptlab.exercises.renders import replace_materials
+
+    scene = ptlab.load_scene("games101-hw5")
+    swapped = replace_materials(scene, lambda m: None if m.emission is not None else m)
+    assert swapped.point_lights is not None and scene.point_lights is not None
+    np.testing.assert_array_equal(swapped.point_lights.positions, scene.point_lights.positions)
+    assert swapped.sky is not None and np.array_equal(swapped.sky.radiance, scene.sky.radiance)
+    np.testing.assert_array_equal(swapped.uvs, scene.uvs)
+    assert swapped.defaults == scene.defaults

@@ -56,7 +56,7 @@ def replace_materials(scene, replace: Callable):
             new.emission = material.emission
         materials.append(new)
     return Scene(scene.triangles, scene.material_ids, materials, scene.camera, scene.name,
-                 scene.material_names)
+                 scene.material_names, scene.point_lights, scene.sky, scene.uvs, scene.defaults)
 
 
 def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
