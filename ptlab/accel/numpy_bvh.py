@@ -337,12 +337,13 @@ class NumpyBVH:
         # offset), largest first: a ray that finds a near hit early has fewer planes ahead
         # of it to pass.
         self._triangles = []
-        tris32 = tris.astype(np.float32)
-        normals = np.cross(tris32[:, 1] - tris32[:, 0], tris32[:, 2] - tris32[:, 0])
-        for k in np.argsort(-np.linalg.norm(normals, axis=1), kind="stable"):
-            v0, v1, v2 = tris32[k]
-            self._triangles.append((int(k), v0, v1 - v0, v2 - v0, normals[k],
-                                    float(normals[k] @ v0)))
+        if self.every_triangle:
+            tris32 = tris.astype(np.float32)
+            normals = np.cross(tris32[:, 1] - tris32[:, 0], tris32[:, 2] - tris32[:, 0])
+            for k in np.argsort(-np.linalg.norm(normals, axis=1), kind="stable"):
+                v0, v1, v2 = tris32[k]
+                self._triangles.append((int(k), v0, v1 - v0, v2 - v0, normals[k],
+                                        float(normals[k] @ v0)))
         # Everything the traversal reads is float32, like the rays, and stored
         # component-major, (3, M): see `_traverse`.
         self._box_min = _component_major(bvh.box_min)
