@@ -272,10 +272,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     # 30% in the Cornell box; Embree costs ~100 ns even for a ray of length 0). Nor do
     # mirrors and glass, whose f_r is 0 for any direction but the one they choose.
     facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
-    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, facing)
-    target = take_rows(light.target, facing)
-    visible = np.zeros(len(hit.prim), dtype=bool)
-    visible[facing] = ~accel.occluded(origin, target - origin, 1.0 - SHADOW_EPSILON)
+    visible = sees(accel, hit, facing, take_rows(light.target, facing))
     f = shade(hit, "eval", hit.wo, wi, hit.n)
     geometry = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
     if settings.strategy == "mis":
@@ -286,6 +283,20 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     radiance *= geometry[:, None]
     add_to_film(film, hit.pixel, radiance)
     return len(facing)
+
+
+def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """(N,) bool: which vertices see their light sample, by one shadow ray each from the
+    vertices ``rows`` (the others count as not seeing it) to ``targets`` (len(rows), 3).
+
+    The ray starts ``offset`` off the surface on the side of the normal (``leave_surface``;
+    only rows whose light lies on that side come here) and stops ``SHADOW_EPSILON`` short of
+    the target, so that neither the surface it leaves nor the light blocks it.
+    """
+    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, rows)
+    visible = np.zeros(len(hit.prim), dtype=bool)
+    visible[rows] = ~accel.occluded(origin, targets - origin, 1.0 - SHADOW_EPSILON)
+    return visible
 
 
 def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
@@ -327,10 +338,7 @@ def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, h
     cos_theta = dot(hit.n, wi)
     usable = np.flatnonzero((cos_theta > 0) & (pdf > 0) & np.isfinite(pdf)
                             & (radiance.max(axis=1) > 0) & ~hit.delta)
-    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, usable)
-    visible = np.zeros(n, dtype=bool)
-    visible[usable] = ~accel.occluded(origin, take_rows(target, usable) - origin,
-                                      1.0 - SHADOW_EPSILON)
+    visible = sees(accel, hit, usable, take_rows(target, usable))
     weight = np.where(visible, cos_theta / np.where(visible, pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
         bsdf_pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
