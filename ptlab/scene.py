@@ -687,8 +687,7 @@ class _SceneReader:
         if np.abs(center).max() + radius > MAX_COORDINATE:
             raise self.error(f"{key}.radius", f"the sphere reaches beyond +-{MAX_COORDINATE:g} "
                                               f"(float32 rays), radius {radius:g}")
-        if not isinstance(subdivisions, int) or isinstance(subdivisions, bool) or not (
-                0 <= subdivisions <= 7):
+        if not (_is_int(subdivisions) and 0 <= subdivisions <= 7):
             raise self.error(f"{key}.subdivisions", f"must be an integer from 0 to 7, "
                                                     f"got {_shown(subdivisions)}")
         mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
