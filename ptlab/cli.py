@@ -42,6 +42,9 @@ def _rr(value: str) -> str | float:
             f"{value!r} is neither 'throughput' nor a probability") from None
 
 
+#: ``ptlab render``'s samples per pixel unless told.
+RENDER_SPP = 16
+
 #: The commands, as ``main`` finds the one it is given.
 COMMANDS = ("render", "bench", "converge", "grade", "exercise", "scenes")
 
@@ -62,7 +65,8 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         description="Render a scene (a built-in name such as cornell-box, or a scene file) "
                     "and write .png (8-bit sRGB) or .exr (linear float).")
     render.add_argument("scene", help="built-in scene name or path to a scene .toml")
-    render.add_argument("--spp", type=int, default=16, help="samples per pixel (default 16)")
+    render.add_argument("--spp", type=int, default=RENDER_SPP,
+                        help=f"samples per pixel (default {RENDER_SPP})")
     render.add_argument("--res", help="N (square) or WxH (default: the scene file's [render] "
                                       "res, else 512)")
     render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
@@ -421,7 +425,7 @@ def _start_workers_early(argv: list[str]) -> None:
     glance = _Glance(add_help=False, allow_abbrev=False)
     glance.add_argument("--workers", type=int)
     glance.add_argument("--res")
-    glance.add_argument("--spp", type=int, default=16)
+    glance.add_argument("--spp", type=int, default=RENDER_SPP)
     glance.add_argument("--scheduler")
     glance.add_argument("-h", "--help", action="store_true")
     try:
