@@ -39,10 +39,10 @@ Dimensions (``BounceUniforms``, used by every integrator): the camera's pixel ji
 first coordinate picks the light triangle and, stretched back to [0, 1) inside the chosen
 interval, becomes the point's first coordinate; in a scene with point lights or a sky it
 first picks the kind of light, stretched the same way: ``ptlab.lights.LightSampler``),
-Russian roulette (one), and the BSDF
-direction (a pair: a material that also chooses a lobe does it with the first coordinate,
-stretched the same way). Pairs are stratified together; the warps that turn them into
-directions and points are bijective so that the stratification survives (``ptlab.sampling``).
+Russian roulette (one), and the BSDF direction (a pair: a material that also chooses a lobe
+does it with the first coordinate, stretched the same way). Pairs are stratified together;
+the warps that turn them into directions and points are bijective so that the
+stratification survives (``ptlab.sampling``).
 Only the camera's pair and the first two bounces are spread evenly (``PATTERNED_DIMENSIONS``):
 later bounces take independent numbers from every sampler.
 
