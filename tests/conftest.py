@@ -37,13 +37,8 @@ def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -
     Its normals point inward, so every face emits into the box. The exact radiance
     everywhere inside is Le / (1 - albedo) (the "furnace").
     """
-    box = trimesh.creation.box(extents=(2.0, 3.0, 4.0))
-    box.invert()                                    # outward normals -> inward
-    triangles = box.vertices[box.faces]
-    material = Diffuse(albedo=[albedo] * 3, sampling=sampling, emission=[emission] * 3)
-    camera = Camera.look_at((0.1, -0.2, -1.0), (0.3, 0.1, 1.0), fov_y=100.0)
-    return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
-                 materials=[material], camera=camera, name="furnace")
+    return _furnace(trimesh.creation.box(extents=(2.0, 3.0, 4.0)), albedo, emission, sampling,
+                    eye=(0.1, -0.2, -1.0), name="furnace")
 
 
 def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
@@ -57,13 +52,20 @@ def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine"
     so a mean over seeds is far from normal and a test in standard errors fails far more
     often than it says, all the more with samplers that stratify the rest of the noise away.
     """
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=2.0)
-    sphere.invert()                                  # outward normals -> inward
-    triangles = sphere.vertices[sphere.faces]
+    return _furnace(trimesh.creation.icosphere(subdivisions=3, radius=2.0), albedo, emission,
+                    sampling, eye=(0.1, -0.2, -0.5), name="sphere-furnace")
+
+
+def _furnace(mesh: trimesh.Trimesh, albedo: float, emission: float, sampling: str,
+             eye: tuple[float, float, float], name: str) -> Scene:
+    """The inside of the closed ``mesh``, every face of one grey that emits ``emission``,
+    seen from ``eye`` inside it."""
+    mesh.invert()                                   # outward normals -> inward
+    triangles = mesh.vertices[mesh.faces]
     material = Diffuse(albedo=[albedo] * 3, sampling=sampling, emission=[emission] * 3)
-    camera = Camera.look_at((0.1, -0.2, -0.5), (0.3, 0.1, 1.0), fov_y=100.0)
+    camera = Camera.look_at(eye, (0.3, 0.1, 1.0), fov_y=100.0)
     return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
-                 materials=[material], camera=camera, name="sphere-furnace")
+                 materials=[material], camera=camera, name=name)
 
 
 @pytest.fixture(autouse=True)
