@@ -137,3 +137,23 @@ def bad_contributions(monkeypatch) -> list[int]:
 
     monkeypatch.setattr(ptlab.integrators.path, "add_to_film", recording_add_to_film)
     return bad
+
+
+def _is_multiprocessing_helper(pid: int) -> bool:
+    """The fork server and resource tracker that the graders share for the whole session."""
+    try:
+        command = Path(f"/proc/{pid}/cmdline").read_bytes()
+    except OSError:
+        return True        # gone meanwhile
+    return b"multiprocessing.forkserver" in command or b"multiprocessing.resource_tracker" in command
+
+
+@pytest.fixture
+def nothing_left_behind():
+    """After the test: no process below this one but multiprocessing's own helpers."""
+    from ptlab.untrusted.processes import descendants, process_table
+
+    yield
+    below = descendants({os.getpid()}, process_table(alive_only=True)) - {os.getpid()}
+    left = [pid for pid in below if not _is_multiprocessing_helper(pid)]
+    assert left == [], [Path(f"/proc/{pid}/cmdline").read_bytes()[:200] for pid in left]

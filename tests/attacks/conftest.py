@@ -1,0 +1,26 @@
+"""Fixtures of the attack tests: every test here leaves no process behind, and runs its
+hostile submission from a fresh folder of its own."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from hostile import SUBMISSIONS
+
+
+@pytest.fixture(autouse=True)
+def _nothing_left_behind(nothing_left_behind):
+    yield
+
+
+@pytest.fixture
+def attack(tmp_path):
+    """Copy a hostile submission into a fresh folder (where it writes its markers) and
+    return its path."""
+    def copy(name: str, as_name: str | None = None) -> Path:
+        target = tmp_path / (as_name or name)
+        shutil.copyfile(SUBMISSIONS / name, target)
+        return target
+    return copy

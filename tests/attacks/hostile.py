@@ -1,0 +1,25 @@
+"""Helpers of the attack tests (``tests/attacks/test_*.py``): where the hostile submissions
+are, and what an honest failure looks like."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from ptlab.untrusted.processes import process_table
+
+#: The hostile submissions, one file per attack (each docstring says what it does).
+SUBMISSIONS = Path(__file__).parent / "submissions"
+
+
+def alive(pids) -> list[int]:
+    """Those of ``pids`` that are still running (not ended, not zombies)."""
+    running = process_table(alive_only=True)
+    return [pid for pid in pids if pid in running]
+
+
+def assert_honest_failure(result, reason: str = "") -> None:
+    """Every check of the ``Grade`` failed, with ``reason`` in its message and no traceback."""
+    assert result.score == 0, result.table()
+    for check in result.results:
+        assert not check.passed and reason in check.message, result.table()
+        assert "Traceback" not in check.message
