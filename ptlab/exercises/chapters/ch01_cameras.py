@@ -7,11 +7,13 @@ Cornell box's normals, which must match the library's picture.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, require_finite
 
 
 def _camera():
@@ -20,19 +22,27 @@ def _camera():
 
 
 def _rays(module, camera, width, height, pixel_x, pixel_y, u):
-    """The student's rays, checked for shape, type and length."""
+    """The student's rays, checked for shape, type, length and NaN. The student's function
+    gets copies of the camera and the arrays: what the check computes from them afterwards
+    is the grader's own."""
     (generate_rays,) = require(module, "generate_rays")
-    result = generate_rays(camera, width, height, np.asarray(pixel_x), np.asarray(pixel_y),
-                           np.asarray(u, dtype=np.float32))
+    pixel_x, pixel_y = np.atleast_1d(pixel_x), np.atleast_1d(pixel_y)
+    result = generate_rays(copy.deepcopy(camera), width, height, pixel_x.copy(), pixel_y.copy(),
+                           np.array(u, dtype=np.float32))
     if not (isinstance(result, tuple) and len(result) == 2):
         raise CheckFailed("generate_rays must return two arrays: (origins, dirs)")
     origins, dirs = (np.asarray(a, dtype=np.float64) for a in result)
-    n = len(np.atleast_1d(pixel_x))
+    n = len(pixel_x)
     if origins.shape != (n, 3) or dirs.shape != (n, 3):
         raise CheckFailed(f"expected origins and dirs of shape ({n}, 3), got {origins.shape} "
                           f"and {dirs.shape}")
-    if not (np.isfinite(origins).all() and np.isfinite(dirs).all()):
-        raise CheckFailed("the rays contain NaN or infinite numbers")
+
+    def ray(index, shape) -> str:
+        return (f"row {index[0]} (the ray through pixel x={pixel_x[index[0]]}, "
+                f"y={pixel_y[index[0]]})")
+
+    require_finite(origins, "the origins generate_rays returned", ray)
+    require_finite(dirs, "the directions generate_rays returned", ray)
     return origins, dirs
 
 
@@ -53,7 +63,7 @@ def check_unit_length(module) -> str:
                     rng.random((500, 2)))
     length = np.linalg.norm(dirs, axis=1)
     worst = np.argmax(np.abs(length - 1))
-    if abs(length[worst] - 1) > 1e-5:
+    if not abs(length[worst] - 1) <= 1e-5:
         raise CheckFailed(f"directions must have length 1; one has length {length[worst]:.4f} "
                           "(normalise them)")
     return "every direction has length 1"
@@ -66,12 +76,12 @@ def check_field_of_view(module) -> str:
     _, dirs = _rays(module, camera, width, height, [20, 0], [0, 10], [[0.0, 0.0], [0.0, 0.0]])
     half_fov = math.radians(camera.fov_y) / 2
     top_angle = math.acos(np.clip(dirs[0] @ camera.forward, -1, 1))
-    if abs(top_angle - half_fov) > 1e-4:
+    if not abs(top_angle - half_fov) <= 1e-4:
         raise CheckFailed(f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
                           f"degrees off forward, yours is {math.degrees(top_angle):.2f}")
     expected_side = math.atan(math.tan(half_fov) * width / height)
     side_angle = math.acos(np.clip(dirs[1] @ camera.forward, -1, 1))
-    if abs(side_angle - expected_side) > 1e-4:
+    if not abs(side_angle - expected_side) <= 1e-4:
         raise CheckFailed(f"the left edge should be atan(tan(fov_y / 2) * width / height) = "
                           f"{math.degrees(expected_side):.2f} degrees off forward, yours is "
                           f"{math.degrees(side_angle):.2f} (the aspect ratio?)")
@@ -81,9 +91,9 @@ def check_field_of_view(module) -> str:
 def check_orientation(module) -> str:
     camera = _camera()
     _, dirs = _rays(module, camera, 10, 10, [0], [0], [[0.0, 0.0]])
-    if dirs[0] @ camera.up <= 0:
+    if not dirs[0] @ camera.up > 0:
         raise CheckFailed("pixel (0, 0) should be at the top of the image (rows go down, y up)")
-    if dirs[0] @ camera.right >= 0:
+    if not dirs[0] @ camera.right < 0:
         raise CheckFailed("pixel (0, 0) should be on the left of the image (x grows to the right)")
     return "pixel (0, 0) is the top-left corner"
 
@@ -93,10 +103,10 @@ def check_known_rays(module) -> str:
     camera = _camera()
     rng = np.random.default_rng(7)
     pixel_x, pixel_y, u = rng.integers(0, 32, 200), rng.integers(0, 24, 200), rng.random((200, 2))
-    _, dirs = _rays(module, camera, 32, 24, pixel_x, pixel_y, u)
     _, expected = generate_rays(camera, 32, 24, pixel_x, pixel_y, u.astype(np.float32))
+    _, dirs = _rays(module, camera, 32, 24, pixel_x, pixel_y, u)
     worst = np.abs(dirs - expected).max()
-    if worst > 1e-4:
+    if not worst <= 1e-4:
         raise CheckFailed(f"rays through jittered points differ from the pinhole model's by up "
                           f"to {worst:.4f} (is u added to the pixel coordinates?)")
     return "200 jittered rays match the pinhole model"
@@ -116,8 +126,10 @@ def check_render(module) -> str:
     expected = ptlab.render("cornell-box", **options)
     with plugged(ptlab.rendering.jobs, generate_rays=student_rays):
         image = ptlab.render("cornell-box", **options)
+    require_finite(image, "the Cornell box's normals seen through your rays", at_pixel,
+                   hint="rays too long for float32, the renderer's precision?")
     difference = np.abs(image - expected).mean()
-    if difference > 1e-3:
+    if not difference <= 1e-3:
         raise CheckFailed(f"the Cornell box's normals seen through your rays differ from the "
                           f"library's by {difference:.4f} on average")
     return "the Cornell box seen through your rays matches"

@@ -18,12 +18,14 @@ float rounding: a deterministic check.
 
 from __future__ import annotations
 
+import copy
 import math
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, checked_array, require
+from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, finite_array, require_finite
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -46,9 +48,11 @@ def _directions(theta: np.ndarray, n=(0.0, 0.0, 1.0), phi: float = 0.3) -> np.nd
 
 
 def _call(function, name: str, *args, shape) -> np.ndarray:
-    """``function(*args)`` as float64, checked for its shape and for NaN."""
-    return checked_array(function(*args), name, shape, nan_hint="a square root of a negative "
-                         "number? clamp with np.maximum(0, ...)")
+    """``function(*args)`` as float64, checked for its shape and for NaN (the row of the
+    first is named). The function gets copies of the arguments: what the check computes
+    from them is the grader's own."""
+    return finite_array(function(*copy.deepcopy(args)), name, shape,
+                        nan_hint="a square root of a negative number? clamp with np.maximum(0, ...)")
 
 
 def _random_cases(seed: int, count: int = 500):
@@ -76,8 +80,8 @@ def check_reflect(module) -> str:
         raise CheckFailed(f"at normal incidence the mirror sends the ray straight back: "
                           f"reflect(n, n) must be n = {n[0]}, not {np.round(straight[0], 4)}")
     wo, n = _random_cases(31)
-    wi = _call(reflect, "reflect", wo, n, shape=wo.shape)
     expected = 2 * np.sum(wo * n, axis=1, keepdims=True) * n - wo
+    wi = _call(reflect, "reflect", wo, n, shape=wo.shape)
     if np.allclose(wi, -expected, atol=1e-5):
         raise CheckFailed("your reflected directions point into the surface: wo and the result "
                           "both point away from it (2 (wo . n) n - wo), where GAMES101's "
@@ -135,15 +139,16 @@ def check_refract(module) -> str:
             raise CheckFailed(f"Snell's law: at {degrees:g} degrees with eta = {eta:.3f}, "
                               f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
                               f"{sin_t:.4f}{hint}")
-        if wt[0] @ n[0] >= 0:
+        if not wt[0] @ n[0] < 0:
             raise CheckFailed("the refracted direction must go through the surface (wt . n < 0): "
                               "it points away from the surface on the other side")
     wo, n = _random_cases(32)
     for eta in (GLASS, 1 / GLASS, np.where(np.arange(len(wo)) % 2, GLASS, 1 / GLASS)):
         column = eta[:, None] if np.ndim(eta) else eta
         refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column ** 2)   # not totally reflected
+        expected = snell(wo, n, column)
         wt = _call(refract, "refract", wo, n, eta, shape=wo.shape)
-        ok = np.all(np.abs(wt - snell(wo, n, column)) < 1e-5, axis=1) | ~refracts
+        ok = np.all(np.abs(wt - expected) < 1e-5, axis=1) | ~refracts
         if not ok.all():
             per_row = " (eta given as an (N,) array, one per row: use eta[:, None])" if np.ndim(eta) else ""
             raise CheckFailed(f"{(~ok).sum()} of {ok.size} random directions refract differently "
@@ -179,14 +184,14 @@ def check_fresnel(module) -> str:
             raise CheckFailed(f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
                               f"for eta = {eta:.3f}; yours is {normal:.5f}")
     grazing = _call(fresnel, "fresnel", np.array([1e-4]), GLASS, shape=(1,))[0]
-    if grazing < 0.99:
+    if not grazing >= 0.99:
         raise CheckFailed(f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
                           f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4")
     cos_i = np.linspace(0.02, 1, 200)
     for eta in (GLASS, 1 / GLASS, DIAMOND, np.linspace(1.1, 2.0, 200)):
-        F = _call(fresnel, "fresnel", cos_i, eta, shape=cos_i.shape)  # noqa: N806 (the usual name)
         expected = fresnel_reference(cos_i, eta)
-        if np.abs(F - expected).max() > 1e-5:
+        F = _call(fresnel, "fresnel", cos_i, eta, shape=cos_i.shape)  # noqa: N806 (the usual name)
+        if not np.abs(F - expected).max() <= 1e-5:
             worst = int(np.argmax(np.abs(F - expected)))
             schlick_r0 = ((eta - 1) / (eta + 1)) ** 2
             schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
@@ -212,7 +217,7 @@ def check_total_internal_reflection(module) -> str:
     critical = math.degrees(math.asin(eta))
     degrees = np.array([critical + 0.5, 50.0, 60.0, 75.0, 89.0])
     F = _call(fresnel, "fresnel", np.cos(np.radians(degrees)), eta, shape=degrees.shape)  # noqa: N806
-    if np.abs(F - 1).max() > 1e-6:
+    if not np.abs(F - 1).max() <= 1e-6:
         bad = int(np.argmax(np.abs(F - 1)))
         raise CheckFailed(f"leaving glass (eta = 1 / {GLASS}) beyond the critical angle "
                           f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
@@ -293,10 +298,9 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
 def check_render(module) -> str:
     reflect, refract, fresnel = require(module, "reflect", "refract", "fresnel")
     scene = spheres_scene()
-    image = whitted_image(scene, reflect, refract, fresnel)
     expected = whitted_image(scene)
-    if not np.isfinite(image).all():
-        raise CheckFailed("the render has NaN or infinite pixels")
+    image = whitted_image(scene, reflect, refract, fresnel)
+    require_finite(image, "the render", at_pixel)
     # Float rounding may send a ray that grazes an edge to the other side of it: allow a few
     # pixels to differ, none of the others by more than 0.1%.
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)

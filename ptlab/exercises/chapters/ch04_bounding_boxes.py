@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, require_finite
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))          # the square z = 1, 0 <= x, y <= 1
@@ -30,7 +31,7 @@ def _slab(module, origins, dirs, box_min, box_max, tmin=0.0, tmax=np.inf):
     box_min = np.broadcast_to(np.asarray(box_min, dtype=np.float32), (n, 3)).copy()
     box_max = np.broadcast_to(np.asarray(box_max, dtype=np.float32), (n, 3)).copy()
     with np.errstate(all="ignore"):       # NaN and inf are judged below, not warned about
-        result = slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax)
+        result = slab_test(origins, inv_dirs, box_min, box_max, np.copy(tmin), np.copy(tmax))
     return _checked(result, n)
 
 
@@ -45,9 +46,11 @@ def _checked(result, n: int) -> tuple[np.ndarray, np.ndarray]:
     if hit.dtype != bool:
         raise CheckFailed(f"hit must be a bool array, not {hit.dtype} (a comparison such as "
                           f"t_enter <= t_exit gives one)")
-    if np.isnan(t_enter[hit]).any():
-        raise CheckFailed("t_enter is NaN for a ray that hits: 0 * inf somewhere (a ray "
-                          "parallel to a slab, starting on its plane)?")
+    nan = np.flatnonzero(hit & np.isnan(t_enter))
+    if len(nan):
+        raise CheckFailed(f"t_enter is NaN for {len(nan)} rays that hit, the first in row "
+                          f"{nan[0]} of {n}: 0 * inf somewhere (a ray parallel to a slab, "
+                          f"starting on its plane)?")
     return hit, t_enter
 
 
@@ -166,16 +169,17 @@ def check_render(module) -> str:
                    backend="numpy")
     # SMALL_SCENE = 0: through the tree (a scene as small as the Cornell box would otherwise
     # be tested triangle by triangle, without boxes).
+    expected = ptlab.render("cornell-box", **options)
     with plugged(ptlab.accel.numpy_bvh, slab_test=student_slab_test, SMALL_SCENE=0):
         image = ptlab.render("cornell-box", **options)
-    expected = ptlab.render("cornell-box", **options)
+    require_finite(image, "the Cornell box's normals through your slab test", at_pixel)
     missing = (image.max(axis=2) == 0) & (expected.max(axis=2) > 0)
     if missing.mean() > 0.01:
         raise CheckFailed(f"through your slab test the camera sees nothing in "
                           f"{missing.mean():.0%} of the pixels where the library sees a wall "
                           f"(flat boxes around the axis-aligned walls missed?)")
     difference = np.abs(image - expected).mean()
-    if difference > 1e-3:
+    if not difference <= 1e-3:
         raise CheckFailed(f"the Cornell box's normals through your slab test differ from the "
                           f"library's by {difference:.4f} on average (boxes missed?)")
     return "the Cornell box seen through your slab test matches"

@@ -13,9 +13,12 @@ as few boxes as the library's; and the Cornell box must look the same.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, require_finite
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test
@@ -126,18 +129,17 @@ def _pieces(module, *names: str) -> dict:
 
 def _checked_split_costs(split_costs):
     def checked(bin_count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost=1.0):
-        with np.errstate(all="ignore"):
-            cost = np.asarray(split_costs(bin_count, bin_lo, bin_hi, node_lo, node_hi,
-                                          traversal_cost), dtype=np.float64)
         b, k, _ = bin_count.shape
+        left = np.cumsum(bin_count, axis=0)[:-1]
+        empty = (left == 0) | (left == bin_count.sum(axis=0))
+        with np.errstate(all="ignore"):
+            cost = np.asarray(split_costs(*copy.deepcopy((bin_count, bin_lo, bin_hi, node_lo,
+                                                          node_hi)), traversal_cost),
+                              dtype=np.float64)
         if cost.shape != (b - 1, k, 3):
             raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {(b - 1, k, 3)} costs "
                               f"(one per split plane, node and axis), not {cost.shape}")
-        if np.isnan(cost).any():
-            raise CheckFailed("split_costs returned NaN: 0 * inf from the box of an empty side "
-                              "(its bounds are inf, -inf)? Such splits must cost inf")
-        left = np.cumsum(bin_count, axis=0)[:-1]
-        empty = (left == 0) | (left == bin_count.sum(axis=0))
+        _require_no_nan(cost)
         if not np.isinf(cost[empty]).all():
             raise CheckFailed("a split with no triangle on one side must cost inf: it does not "
                               "divide the node (and the build could pick it forever)")
@@ -145,13 +147,24 @@ def _checked_split_costs(split_costs):
     return checked
 
 
+def _require_no_nan(cost: np.ndarray) -> None:
+    """Costs may be inf (a split that does not divide its node), never NaN."""
+    nan = np.argwhere(np.isnan(cost))
+    if len(nan):
+        plane, node, axis = nan[0]
+        raise CheckFailed(f"split_costs returned NaN for {len(nan)} splits, the first plane "
+                          f"{plane} along {'xyz'[axis]} of node {node}: 0 * inf from the box of "
+                          f"an empty side (its bounds are inf, -inf)? Such splits must cost inf")
+
+
 def _checked_best_split(best_split):
     def checked(cost, size, max_leaf_size):
-        result = best_split(cost, size, max_leaf_size)
+        planes, k, _ = cost.shape
+        must_split, single = size > max_leaf_size, size < 2
+        result = best_split(cost.copy(), size.copy(), max_leaf_size)
         if not (isinstance(result, tuple) and len(result) == 3):
             raise CheckFailed("best_split must return three arrays: (split_bin, split_axis, "
                               "make_leaf)")
-        k = cost.shape[1]
         split_bin, split_axis, make_leaf = (np.asarray(a) for a in result)
         if not split_bin.shape == split_axis.shape == make_leaf.shape == (k,):
             raise CheckFailed(f"best_split must return three ({k},) arrays, one entry per node, "
@@ -160,13 +173,13 @@ def _checked_best_split(best_split):
             raise CheckFailed("split_bin and split_axis must be integer arrays")
         if make_leaf.dtype != bool:
             raise CheckFailed("make_leaf must be a bool array")
-        if not (np.all((split_bin >= 0) & (split_bin < len(cost)))
+        if not (np.all((split_bin >= 0) & (split_bin < planes))
                 and np.all((split_axis >= 0) & (split_axis < 3))):
-            raise CheckFailed(f"split_bin must lie in 0..{len(cost) - 1} and split_axis in 0..2")
-        if np.any(make_leaf & (size > max_leaf_size)):
+            raise CheckFailed(f"split_bin must lie in 0..{planes - 1} and split_axis in 0..2")
+        if np.any(make_leaf & must_split):
             raise CheckFailed(f"a node of more than max_leaf_size = {max_leaf_size} triangles "
                               f"was made a leaf: such nodes must be split")
-        if np.any(~make_leaf & (size < 2)):
+        if np.any(~make_leaf & single):
             raise CheckFailed("a node of one triangle must be a leaf: it cannot be split")
         return split_bin.astype(np.intp), split_axis.astype(np.intp), make_leaf
     return checked
@@ -174,7 +187,8 @@ def _checked_best_split(best_split):
 
 def _checked_child_order(child_order):
     def checked(first_child, axis, dirs):
-        result = child_order(first_child, axis, dirs)
+        first_child = first_child.copy()      # the grader's own, for the test below
+        result = child_order(first_child.copy(), axis.copy(), dirs.copy())
         if not (isinstance(result, tuple) and len(result) == 2):
             raise CheckFailed("child_order must return two arrays: (near, far)")
         near, far = (np.asarray(a) for a in result)
@@ -278,18 +292,19 @@ def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
 def check_split_costs(module) -> str:
     split_costs = _pieces(module, "split_costs")["split_costs"]
     example = _binned_example(seed=1)
+    want = _expected_costs(*example, traversal_cost=0.5)
     got = split_costs(*example, traversal_cost=0.5)
-    _compare_costs(got, _expected_costs(*example, traversal_cost=0.5),
-                   "0.5 + (N_L S_L + N_R S_R) / S")
+    _compare_costs(got, want, "0.5 + (N_L S_L + N_R S_R) / S")
     return "the SAH costs of the 24 candidate splits of two nodes are right"
 
 
 def check_empty_sides(module) -> str:
     (split_costs,) = require(module, "split_costs")
     example = _binned_example(seed=2, flat_node=True)
-    with np.errstate(all="ignore"):
-        got = np.asarray(split_costs(*example, traversal_cost=1.0), dtype=np.float64)
     want = _expected_costs(*example, traversal_cost=1.0)
+    with np.errstate(all="ignore"):
+        got = np.asarray(split_costs(*copy.deepcopy(example), traversal_cost=1.0),
+                         dtype=np.float64)
     if got.shape != want.shape:
         raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {want.shape} costs, not "
                           f"{got.shape}")
@@ -342,8 +357,8 @@ def check_child_order(module) -> str:
     axis = np.array([0, 0, 1, 1, 2, 2, 0, 1])
     dirs = np.array([[1, -1, -1], [-1, 1, 1], [-1, 2, -1], [1, -2, 1], [-1, -1, 0.5],
                      [1, 1, -0.5], [0.2, -1, -1], [1, -0.3, 1]], dtype=np.float32)
-    near, far = child_order(first_child, axis, dirs)
     want = first_child + (dirs[np.arange(8), axis] < 0)
+    near, far = child_order(first_child, axis, dirs)
     wrong = np.flatnonzero(near != want)
     if wrong.size:
         i = wrong[0]
@@ -363,12 +378,12 @@ def check_closest_hits(module) -> str:
 
     tris = uneven_mesh()
     origins, dirs = _random_rays(3000)
-    with plugged(numpy_bvh, **_pieces(module, *PIECES)):
-        bvh = numpy_bvh.NumpyBVH(tris)
-        hits = bvh.intersect(origins, dirs)
-        tmax = np.random.default_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
-        occluded = bvh.occluded(origins, dirs, tmax)
+    tmax = np.random.default_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
     t_all = _brute_force(tris, origins, dirs)
+    with plugged(numpy_bvh, **_pieces(module, *PIECES)):
+        bvh = numpy_bvh.NumpyBVH(tris.copy())
+        hits = bvh.intersect(origins.copy(), dirs.copy())
+        occluded = bvh.occluded(origins.copy(), dirs.copy(), tmax.copy())
     t_want = t_all.min(axis=1)
     # Equal up to float32 rounding: where two triangles meet, the one a box test lets
     # through first may be an ulp farther, whatever the order (pbrt-v4's slab test alike).
@@ -398,7 +413,7 @@ def check_tree_quality(module) -> str:
     pieces = _pieces(module, "split_costs", "best_split")
     library = _tree_cost(tris)
     student = _tree_cost(tris, **pieces)
-    if student > library * (1 + SAH_TOLERANCE):
+    if not student <= library * (1 + SAH_TOLERANCE):
         # Which piece makes the tree worse: each of the student's two with the library's other.
         with_costs = _tree_cost(tris, split_costs=pieces["split_costs"])
         with_choice = _tree_cost(tris, best_split=pieces["best_split"])
@@ -450,7 +465,7 @@ def check_traversal_order(module) -> str:
         with plugged(numpy_bvh, **_pieces(module, "child_order")):
             bvh.intersect(origins, dirs)
     student = entered[0]
-    if student > library * (1 + VISIT_TOLERANCE):
+    if not student <= library * (1 + VISIT_TOLERANCE):
         raise CheckFailed(f"rays along a row of eight balls enter {student / len(dirs):.0f} boxes "
                           f"each with your child order, {library / len(dirs):.0f} with the "
                           f"library's: visit the near child first, so its hit culls the far "
@@ -469,11 +484,12 @@ def check_render(module) -> str:
                    backend="numpy")
     # SMALL_SCENE = 0: through the tree (a scene as small as the Cornell box would otherwise
     # be tested triangle by triangle, without one).
+    expected = ptlab.render("cornell-box", **options)
     with plugged(numpy_bvh, SMALL_SCENE=0, **_pieces(module, *PIECES)):
         image = ptlab.render("cornell-box", **options)
-    expected = ptlab.render("cornell-box", **options)
+    require_finite(image, "the Cornell box's normals through your BVH", at_pixel)
     difference = np.abs(image - expected).mean()
-    if difference > 1e-3:
+    if not difference <= 1e-3:
         raise CheckFailed(f"the Cornell box's normals through your BVH differ from the "
                           f"library's by {difference:.4f} on average")
     return "the Cornell box seen through your BVH matches"

@@ -26,6 +26,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, require_finite
 from ptlab.untrusted import submission_of
 
 if TYPE_CHECKING:
@@ -104,14 +105,26 @@ def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
     return sums, pid
 
 
+def at_pixel_of(tile):
+    """``finite.at_pixel`` for the sums of ``tile``: the pixel named in the whole image."""
+    def where(index, shape) -> str:
+        y, x, channel = index
+        return at_pixel((tile.y0 + y, tile.x0 + x, channel), shape)
+    return where
+
+
 def check_tile_job(module) -> str:
     from ptlab.accel import make_accelerator
     from ptlab.rendering.jobs import Job, Tile, run_job
 
     (render_tile,) = require(module, "render_tile")
-    setup = _setup(_scene())
     first, second = Tile(5, 16, 16, 32, 32), Tile(8, 32, 32, 48, 40)
+    library = _setup(_scene())        # the grader's own: the student's setup is another
+    expected = run_job(library, Job(first, 0, 4),
+                       make_accelerator(library.scene.triangles, library.backend)).sums
+    setup = _setup(_scene())
     sums, pid = _tile_result(render_tile, setup, first, 4)
+    require_finite(sums, "the tile's sums", at_pixel_of(first))
     here = submission_of(module).pid
     if pid != here:
         raise CheckFailed(f"render_tile must return the pid of the process that ran it "
@@ -124,12 +137,10 @@ def check_tile_job(module) -> str:
                           "process did before (one generator per process, or a global one?). "
                           "Take every random number from setup.sampler, by the paths' keys "
                           "sampler.keys(pixel ids, sample indices)")
-    accel = make_accelerator(setup.scene.triangles, setup.backend)
-    expected = run_job(setup, Job(first, 0, 4), accel).sums
     if not np.array_equal(sums, expected):
-        if not np.isfinite(sums).all() or np.abs(sums).max() == 0:
-            raise CheckFailed("the tile's sums are empty or not finite: return the film the "
-                              "tile's paths were traced into, reshaped to (h, w, 3)")
+        if np.abs(sums).max() == 0:
+            raise CheckFailed("the tile's sums are empty: return the film the tile's paths "
+                              "were traced into, reshaped to (h, w, 3)")
         raise CheckFailed("the tile's sums are not the library's: a tile's job takes every "
                           "random number from setup.sampler: keys = sampler.keys(pixel_y * "
                           "setup.width + pixel_x, sample index) for paths in sample-major order, "
@@ -168,8 +179,7 @@ def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
     if image.shape != (RES[1], RES[0], 3):
         raise CheckFailed(f"the image must have shape (height, width, 3) = ({RES[1]}, {RES[0]}, "
                           f"3), not {image.shape}")
-    if not np.isfinite(image).all():
-        raise CheckFailed("the image has NaN or infinite pixels")
+    require_finite(image, "the image", at_pixel)
     if np.abs(image).max() == 0:
         raise CheckFailed("the image is black: the tiles' sums never reached it. Each worker "
                           "has its own copy of anything you pass it, so writing into an "
@@ -219,9 +229,9 @@ def check_worker_count(module) -> str:
 def check_library(module) -> str:
     from ptlab.rendering import render_result
 
-    image, _ = _render(importable(module), workers=2)
     expected = render_result(_scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE,
                              spp_per_pass=SPP).image
+    image, _ = _render(importable(module), workers=2)
     empty = image.max(axis=2) == 0
     if empty.any():
         y, x = np.argwhere(empty)[0]

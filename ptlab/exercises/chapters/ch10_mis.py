@@ -15,13 +15,14 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.finite import at_pixel, require_finite
 
 
 def _weights(function, pdf, other, *heuristic) -> np.ndarray:
     """``function(pdf, other, *heuristic)`` as float64, checked for shape and NaN."""
-    pdf, other = np.asarray(pdf, dtype=np.float32), np.asarray(other, dtype=np.float32)
+    pdf, other = np.array(pdf, dtype=np.float32), np.array(other, dtype=np.float32)
     with np.errstate(all="ignore"):
-        weight = np.asarray(function(pdf, other, *heuristic), dtype=np.float64)
+        weight = np.asarray(function(pdf.copy(), other.copy(), *heuristic), dtype=np.float64)
     name = function.__name__ + (f"(..., {heuristic[0]!r})" if heuristic else "")
     if weight.shape != pdf.shape:
         raise CheckFailed(f"{name} must return one weight per sample, shape {pdf.shape}; yours "
@@ -31,13 +32,17 @@ def _weights(function, pdf, other, *heuristic) -> np.ndarray:
         raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g} "
                           f"(0 / 0: where both pdfs are 0 the sample cannot happen; give it "
                           f"weight 0)")
+    if np.isinf(weight).any():
+        bad = np.flatnonzero(np.isinf(weight))[0]
+        raise CheckFailed(f"{name} returned {weight[bad]:g} for pdf = {pdf[bad]:g}, other = "
+                          f"{other[bad]:g}: a weight lies between 0 and 1")
     return weight
 
 
 def _known_values(function, cases, formula: str) -> str:
     pdf, other, expected = (np.array(column, dtype=np.float64) for column in zip(*cases, strict=True))
     weight = _weights(function, pdf, other)
-    wrong = np.flatnonzero(np.abs(weight - expected) > 1e-5)
+    wrong = np.flatnonzero(~(np.abs(weight - expected) <= 1e-5))
     if len(wrong):
         k = wrong[0]
         raise CheckFailed(f"{function.__name__}(pdf = {pdf[k]:g}, other = {other[k]:g}) should be "
@@ -64,11 +69,12 @@ def check_sum_to_one(module) -> str:
     rng = np.random.default_rng(101)
     pdf_light, pdf_bsdf = 10.0 ** rng.uniform(-3, 4, (2, 1000))
     for heuristic in ("power", "balance"):
+        expected = _heuristic(heuristic, pdf_light, pdf_bsdf)
         light = _weights(mis_weight, pdf_light, pdf_bsdf, heuristic)
         bsdf = _weights(mis_weight, pdf_bsdf, pdf_light, heuristic)
         total = light + bsdf
         worst = np.argmax(np.abs(total - 1))
-        if abs(total[worst] - 1) > 1e-5:
+        if not abs(total[worst] - 1) <= 1e-5:
             hint = ""
             if np.allclose(total, 2, atol=1e-5):
                 hint = (": both strategies weighted 1, so every light path found by both is "
@@ -78,7 +84,6 @@ def check_sum_to_one(module) -> str:
             raise CheckFailed(f"with heuristic={heuristic!r}, the weights of the two strategies "
                               f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
                               f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}")
-        expected = _heuristic(heuristic, pdf_light, pdf_bsdf)
         if not np.allclose(light, expected, rtol=1e-4, atol=1e-6):
             other_heuristic = "balance" if heuristic == "power" else "power"
             if np.allclose(light, _heuristic(heuristic, pdf_bsdf, pdf_light), rtol=1e-4, atol=1e-6):
@@ -112,7 +117,7 @@ def check_zero_pdfs(module) -> str:
     expected = np.array([1.0, 0.0, 0.0, 1.0, 0.0])
     for heuristic in ("power", "balance"):
         weight = _weights(mis_weight, pdf, other, heuristic)
-        wrong = np.flatnonzero(np.abs(weight - expected) > 1e-6)
+        wrong = np.flatnonzero(~(np.abs(weight - expected) <= 1e-6))
         if len(wrong):
             k = wrong[0]
             why = ("the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for "
@@ -154,14 +159,23 @@ def check_render(module) -> str:
 
     (mis_weight,) = require(module, "mis_weight")
     _weights(mis_weight, np.array([1.0, 2.0]), np.array([1.0, 0.5]), "power")  # fail fast
+
+    def checked_mis_weight(pdf, other, heuristic="power"):
+        """The student's weights, failing on NaN or inf with the pdfs that gave them (the
+        film would drop such samples without a word, and the picture come out darker)."""
+        pdf, other = np.broadcast_arrays(pdf, other)
+        return _weights(mis_weight, pdf, other, heuristic).astype(np.float32)
+
     scene = veach_scene()
-    with plugged(ptlab.integrators.path, mis_weight=mis_weight):
-        student = regions_of(ptlab.render(scene, **render_options()).astype(np.float64))
     library = regions_of(ptlab.render(scene, **render_options()).astype(np.float64))
+    with plugged(ptlab.integrators.path, mis_weight=checked_mis_weight):
+        image = ptlab.render(scene, **render_options())
+    require_finite(image, "veach-mis with your MIS weights", at_pixel)
+    student = regions_of(image.astype(np.float64))
     difference = np.abs(student - library)
     allowed = TOLERANCE * (library + 0.1 * library.mean())
     overall = student.mean() / library.mean()
-    if (difference > allowed).any():
+    if not (difference <= allowed).all():
         worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
         ratio = student[worst] / max(library[worst], 1e-12)
         raise CheckFailed(f"veach-mis with your MIS weights differs from the library's render "
