@@ -41,8 +41,8 @@ def _rays(module, camera, width, height, pixel_x, pixel_y, u):
         return (f"row {index[0]} (the ray through pixel x={pixel_x[index[0]]}, "
                 f"y={pixel_y[index[0]]})")
 
-    require_finite(origins, "the origins generate_rays returned", ray)
-    require_finite(dirs, "the directions generate_rays returned", ray)
+    require_finite(origins, "the origin array generate_rays returned", ray)
+    require_finite(dirs, "the direction array generate_rays returned", ray)
     return origins, dirs
 
 

@@ -29,9 +29,10 @@ def _weights(function, pdf, other, *heuristic) -> np.ndarray:
                           f"has shape {weight.shape}")
     if np.isnan(weight).any():
         bad = np.flatnonzero(np.isnan(weight))[0]
-        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g} "
-                          f"(0 / 0: where both pdfs are 0 the sample cannot happen; give it "
-                          f"weight 0)")
+        hint = (" (0 / 0: where both pdfs are 0 the sample cannot happen; give it weight 0)"
+                if pdf[bad] == 0 and other[bad] == 0 else "")
+        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g}"
+                          f"{hint}")
     if np.isinf(weight).any():
         bad = np.flatnonzero(np.isinf(weight))[0]
         raise CheckFailed(f"{name} returned {weight[bad]:g} for pdf = {pdf[bad]:g}, other = "
