@@ -18,6 +18,7 @@ the grader refuses to start rather than fail every student's import.
 
 from __future__ import annotations
 
+import argparse
 import ctypes
 import os
 import pwd
@@ -66,6 +67,15 @@ def student_user(name: str | None = None) -> StudentUser | None:
     user = StudentUser(entry.pw_name, entry.pw_uid, entry.pw_gid)
     _check_can_run_ptlab(user)
     return user
+
+
+def add_student_user_argument(parser: argparse.ArgumentParser) -> None:
+    """The graders' ``--student-user`` option."""
+    parser.add_argument("--student-user", metavar="USER",
+                        help=f"run the student's code as USER (a name or a number); only root "
+                             f"may, and by default root runs it as {DEFAULT_STUDENT_USER!r}. "
+                             f"'--student-user root' runs it as root: never for grades that "
+                             f"count (docs/grading-security.md)")
 
 
 def _password_entry(name: str) -> pwd.struct_passwd:
