@@ -30,16 +30,18 @@ from ptlab.untrusted import (
     GradeLoadError,
     ImportFailed,
     ProcessGuard,
+    RefusedSubmission,
     RemoteFunction,
     Rules,
     StudentError,
     Submission,
     SubmissionFailed,
-    copied_answer,
     library_answer,
     make_undumpable,
     student_user,
+    take_in,
 )
+from ptlab.untrusted.copies import copies_in, describe_copies, is_a_copy
 from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
@@ -82,18 +84,23 @@ def run_grade(args: argparse.Namespace) -> int:
     except PtlabError as error:
         raise GradeLoadError(str(error)) from None
     make_undumpable()
-    MATERIALS.fingerprints   # noqa: B018 (made before the student's process starts)
+    try:
+        taken = take_in(path)
+    except RefusedSubmission as refused:
+        raise GradeLoadError(str(refused)) from None
+    copied = copies_in(taken.tree, MATERIALS.fingerprints)
+    if is_a_copy(copied):       # (its process would refuse to compile it: say so first)
+        print(f"{args.target}: FAILED: {taken.name} holds {describe_copies(copied, taken.name)}, "
+              f"not yours")
+        return 1
     with ProcessGuard() as guard:
         try:
-            with Submission(path, guard, time_limit=args.time_limit,
+            with Submission(taken, guard, time_limit=args.time_limit,
                             call_time_limit=CALL_TIME_LIMIT, on_output=_show_output,
                             rules=MATERIALS, user=args.student_user) as submission:
                 origin = library_answer(submission.module, name)
-                copied = copied_answer(submission.module)
                 if origin is not None:
                     failure = f"{name} is ptlab's own answer ({origin}), not yours"
-                elif copied is not None:
-                    failure = f"{submission.path.name} holds {copied}, not yours"
                 else:
                     material = load_material(submission, name, keywords)
                     report = check_material(material, seed=args.seed, samples=args.samples)

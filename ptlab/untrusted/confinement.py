@@ -71,7 +71,20 @@ def confine(folder: Path, answers: dict[str, Answer], programs: bool) -> None:
     """Add the hook: from now on this process keeps the rules above. ``folder`` is its
     private folder, ``answers`` the fingerprints of the answers it may not compile (the
     chapter's), ``programs`` whether it may start programs."""
+    if not programs:
+        # multiprocessing starts its fork server, resource tracker and "spawn" workers with
+        # a C call that raises no audit event; where the kernel would refuse them anyway,
+        # the student reads why instead of a broken pipe.
+        import multiprocessing.util
+
+        multiprocessing.util.spawnv_passfds = _no_programs
     sys.addaudithook(_Rules(folder, answers, programs))
+
+
+def _no_programs(*args, **kwargs):
+    raise Refused("your code may not start programs while it is graded (a process pool that "
+                  "starts new interpreters, 'forkserver' or 'spawn', is one; in this chapter "
+                  "your code has no need of one)")
 
 
 class _Rules:

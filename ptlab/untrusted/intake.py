@@ -61,6 +61,8 @@ def take_in(path: str | Path, with_folder: bool = False, library: bool = False) 
         RefusedSubmission: a link, not a regular file, inside ptlab, too large, or not Python.
     """
     path = Path(path)
+    if path.is_symlink():
+        raise RefusedSubmission(f"{path} is a symbolic link: hand in the file itself")
     if not library and Path(os.path.realpath(path)).is_relative_to(PTLAB):
         raise RefusedSubmission(f"{path} is part of ptlab itself, not a submission: copy the "
                                 f"exercise with 'ptlab exercise start' and write your own")
