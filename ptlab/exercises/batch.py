@@ -43,7 +43,7 @@ from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import Chapter
 from ptlab.exercises.grader import OVERALL_SLACK, one_line, overall_limit
 from ptlab.exercises.progress import private_state
-from ptlab.untrusted import ProcessGuard, make_undumpable, student_user
+from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, student_user
 
 #: The largest report a grader process may print (a grade's JSON is a few kilobytes).
 MAX_REPORT = 1 << 20
@@ -179,6 +179,7 @@ def grade_all(chapter: Chapter, folder: Path, csv_path: Path, workers: int = 1,
     (``--student-user``)."""
     student_user(user)          # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
+    import_nothing_from_here()
     work = find_work(folder, chapter)
     record = Record(csv_path, chapter)
     rows = record.vouched(read_rows(csv_path, chapter), work)

@@ -36,6 +36,7 @@ from ptlab.untrusted import (
     Submission,
     SubmissionFailed,
     Taken,
+    import_nothing_from_here,
     make_undumpable,
     student_user,
     take_in,
@@ -141,6 +142,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
         raise PtlabError(f"{path}: not chapter {chapter.number}'s own answer file")
     student_user(user)      # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
+    import_nothing_from_here()
     rules = chapter.library_rules if library_answer else chapter.rules
     _import_what_checks_use(rules)
     try:

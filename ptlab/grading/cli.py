@@ -6,11 +6,10 @@
 ready-made material object in the file: anything with ``eval``, ``pdf`` and ``sample``
 (``ptlab.grading.material.as_material``). The file is imported, and every method of the
 material runs, in a process of its own (``ptlab.untrusted``: as ``nobody`` when the grader
-is root, with ptlab's own materials turned into traps); the statistics and the verdict are
-computed here. The exit code is 0 when every check passes, 1 when one fails (or the
-material is ptlab's own or a copy of it, or its process hangs or ends), 2 when the file or
-the name cannot be loaded, or the import takes longer than a minute (one line on stderr,
-no traceback).
+is root); the statistics and the verdict are computed here. The exit code is 0 when every
+check passes, 1 when one fails (or the material is ptlab's own or a copy of it, or its
+process hangs or ends), 2 when the file or the name cannot be loaded, or the import takes
+longer than a minute (one line on stderr, no traceback).
 
 ``ptlab.cli`` wires it in with ``add_grade_arguments(subparser)`` and the handler
 ``run_grade(args)``.
@@ -36,17 +35,19 @@ from ptlab.untrusted import (
     StudentError,
     Submission,
     SubmissionFailed,
+    import_nothing_from_here,
     library_answer,
     make_undumpable,
     student_user,
     take_in,
 )
-from ptlab.untrusted.copies import copies_in, describe_copies, is_a_copy
+from ptlab.untrusted.copies import copied_class, describe_copies, is_a_copy
 from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
 CALL_TIME_LIMIT = 120.0
-#: ptlab's own materials: traps in the student's process, and no copy of them is the student's.
+#: ptlab's own materials, whose copies are not the student's. (They are no traps: a student's
+#: material may inherit some of its methods from one, as long as it writes one itself.)
 MATERIALS = Rules(answers=("ptlab.materials.Diffuse", "ptlab.materials.Microfacet",
                            "ptlab.materials.Mirror", "ptlab.materials.Dielectric"))
 
@@ -84,20 +85,20 @@ def run_grade(args: argparse.Namespace) -> int:
     except PtlabError as error:
         raise GradeLoadError(str(error)) from None
     make_undumpable()
+    import_nothing_from_here()
     try:
         taken = take_in(path)
     except RefusedSubmission as refused:
         raise GradeLoadError(str(refused)) from None
-    copied = copies_in(taken.tree, MATERIALS.fingerprints)
-    if is_a_copy(copied):       # (its process would refuse to compile it: say so first)
-        print(f"{args.target}: FAILED: {taken.name} holds {describe_copies(copied, taken.name)}, "
-              f"not yours")
+    copied = copied_class(taken.tree, name, MATERIALS.fingerprints)
+    if is_a_copy(copied):
+        print(f"{args.target}: FAILED: {name} is {describe_copies(copied, taken.name)}, not yours")
         return 1
     with ProcessGuard() as guard:
         try:
             with Submission(taken, guard, time_limit=args.time_limit,
                             call_time_limit=CALL_TIME_LIMIT, on_output=_show_output,
-                            rules=MATERIALS, user=args.student_user) as submission:
+                            user=args.student_user) as submission:
                 origin = library_answer(submission.module, name)
                 if origin is not None:
                     failure = f"{name} is ptlab's own answer ({origin}), not yours"

@@ -52,6 +52,7 @@ from ptlab.untrusted.submission import (
     SubmissionFailed,
     UnreadableResultError,
     copied_answer,
+    import_nothing_from_here,
     library_answer,
 )
 
@@ -59,4 +60,5 @@ __all__ = ["IMPORT_TIME_LIMIT", "ArgumentChanged", "Arguments", "GradeLoadError"
            "Limits", "ProcessGuard", "RefusedSubmission", "RemoteFunction", "RemoteModule",
            "RemoteObject", "Rules", "StudentError", "StudentUser", "Submission",
            "SubmissionFailed", "Taken", "UnreadableResultError", "copied_answer",
-           "library_answer", "make_undumpable", "student_user", "submission_of", "take_in"]
+           "import_nothing_from_here", "library_answer", "make_undumpable", "student_user",
+           "submission_of", "take_in"]

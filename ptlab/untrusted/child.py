@@ -54,6 +54,7 @@ from ptlab.untrusted.copies import Answer
 from ptlab.untrusted.no_exec import forbid_programs
 from ptlab.untrusted.ownership import MATERIAL_METHODS
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
+from ptlab.untrusted.processes import make_undumpable
 from ptlab.untrusted.student_user import StudentUser, become, isolate_network
 from ptlab.untrusted.traps import set_traps
 
@@ -150,6 +151,9 @@ def serve(path: str, receive: Connection, send: Connection, output: Connection,
     """
     _leave_the_grader(output.fileno(), keep={receive.fileno(), send.fileno()})
     keep_freed_memory()     # every call's arrays arrive in new buffers: no page faults for them
+    # All of ptlab, before reading its files is refused: done already if the fork server was
+    # started for the graders, not if a render of this process started it first.
+    importlib.import_module("ptlab.untrusted.fork_server")
     _confine(confinement)
     requests = Reader(receive.fileno())
     server = _Server(Path(path), send.fileno())
@@ -188,6 +192,8 @@ def _confine(confinement: Confinement) -> None:
     if confinement.user is not None:
         isolate_network()
         become(confinement.user)
+    make_undumpable()       # (a change of user does it too, where fs.suid_dumpable is 0): two
+    # students graded at once as the same user cannot ptrace each other
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     _move_into(Path(confinement.folder))

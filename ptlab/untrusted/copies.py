@@ -179,6 +179,17 @@ def copies_in(tree: ast.AST, answers: dict[str, Answer]) -> list[tuple[int, Answ
     return found
 
 
+def copied_class(tree: ast.Module, name: str, answers: dict[str, Answer]) -> list[tuple[int, Answer]]:
+    """The copies among the ``ANSWER_METHODS`` that the top-level class ``name`` defines, if
+    every one it defines is a copy; else [] (a class that writes some of them itself is the
+    student's, as a subclass that overrides some is)."""
+    classes = [node for node in tree.body if isinstance(node, ast.ClassDef) and node.name == name]
+    methods = [node for node in classes[-1].body if isinstance(node, FunctionNode)
+               and node.name in ANSWER_METHODS] if classes else []
+    found = copies_in(ast.Module(body=methods, type_ignores=[]), answers)
+    return found if methods and len(found) == len(methods) else []
+
+
 def is_a_copy(found: list[tuple[int, Answer]]) -> bool:
     """Whether the copies ``copies_in`` found add up to a copied answer."""
     return sum(answer.nodes for _, answer in found) >= MIN_COPIED_NODES

@@ -2,7 +2,8 @@
 
 ``take_in(path)`` reads the submission before anything of it runs: a regular file (not a
 symbolic link, not inside the installed ptlab), and, for a submission that is a folder of
-its own (``with_folder``), the other regular Python files beside it. Its bytes are kept:
+its own (``with_folder``), the other regular Python files beside it (at most ``MAX_FILES``
+of them). Its bytes are kept:
 every check's process gets a fresh private folder holding exactly them
 (``private_folder``), owned by the student's user and closed to everyone else, so a file
 changed while grading goes on, a link to the library's answers, or another student's file
@@ -23,7 +24,7 @@ from pathlib import Path
 from ptlab.untrusted.child import PTLAB
 from ptlab.untrusted.student_user import StudentUser
 
-#: Files and bytes a folder submission may hold, at most.
+#: Files and bytes beside the graded one that are taken with it, at most.
 MAX_FILES = 64
 MAX_BYTES = 16 << 20
 
@@ -69,16 +70,25 @@ def take_in(path: str | Path, with_folder: bool = False, library: bool = False) 
     source = _read_regular(path)
     files = {path.name: source}
     if with_folder:
-        for other in sorted(path.parent.iterdir()):
-            if other.name != path.name and other.suffix == ".py" and not other.name.startswith("."):
-                try:
-                    files[other.name] = _read_regular(other)
-                except RefusedSubmission:
-                    continue            # a link or a special file beside it: not handed in
-        if len(files) > MAX_FILES or sum(map(len, files.values())) > MAX_BYTES:
-            raise RefusedSubmission(f"{path.parent}: more than {MAX_FILES} Python files or "
-                                    f"{MAX_BYTES >> 20} MiB; hand in the exercise's files only")
+        files.update(_beside(path))
     return Taken(path, files, hashlib.sha256(source).hexdigest(), _parse(path, source))
+
+
+def _beside(path: Path) -> dict[str, bytes]:
+    """The regular Python files beside ``path`` (not links, not hidden), or none if there are
+    more than ``MAX_FILES`` or ``MAX_BYTES`` of them: a folder like that is not one
+    student's exercise, and the file goes alone."""
+    found: dict[str, bytes] = {}
+    for other in sorted(path.parent.iterdir()):
+        if other.name == path.name or other.suffix != ".py" or other.name.startswith("."):
+            continue
+        try:
+            found[other.name] = _read_regular(other)
+        except RefusedSubmission:
+            continue                # a link or a special file beside it: not handed in
+        if len(found) >= MAX_FILES or sum(map(len, found.values())) > MAX_BYTES:
+            return {}
+    return found
 
 
 def _read_regular(path: Path) -> bytes:

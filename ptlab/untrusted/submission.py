@@ -32,6 +32,7 @@ import multiprocessing.forkserver
 import os
 import pickle
 import signal
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import fields, is_dataclass
@@ -536,6 +537,14 @@ def library_answer(module: RemoteModule, name: str) -> str | None:
         value = getattr(module, name, None)
         found = value.origin if isinstance(value, RemoteFunction) else None
     return found
+
+
+def import_nothing_from_here() -> None:
+    """Take the current folder off ``sys.path`` (``python -m`` puts it first), so that
+    nothing the grader imports later, nor its fork server, can come from a module planted
+    there. ptlab itself, if it was imported from there, keeps finding its own modules."""
+    here = os.getcwd()
+    sys.path[:] = [entry for entry in sys.path if entry not in ("", here)]
 
 
 def copied_answer(module: RemoteModule) -> str | None:

@@ -10,8 +10,8 @@ import sys
 import time
 
 import pytest
-from hostile import alive, assert_honest_failure, printed_pids
 
+from attacks.hostile import alive, assert_honest_failure, printed_pids
 from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade, run_check

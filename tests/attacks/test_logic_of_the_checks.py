@@ -7,9 +7,9 @@ from __future__ import annotations
 import time
 
 import numpy as np
-from hostile import assert_honest_failure
 
 import ptlab.untrusted.submission
+from attacks.hostile import assert_honest_failure
 from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade

@@ -13,8 +13,8 @@ import shutil
 import textwrap
 
 import pytest
-from hostile import assert_honest_failure
 
+from attacks.hostile import assert_honest_failure
 from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade

@@ -17,8 +17,8 @@ import sys
 from pathlib import Path
 
 import pytest
-from hostile import SUBMISSIONS
 
+from attacks.hostile import SUBMISSIONS
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.untrusted.student_user import become, student_user
