@@ -165,8 +165,12 @@ class Record:
 
 
 def _sha256(file: Path | None) -> str:
+    """The SHA-256 of a submission's file ("" for none, or a link: graded again)."""
+    if file is None or file.is_symlink():
+        return ""
     try:
-        return hashlib.sha256(file.read_bytes()).hexdigest() if file is not None else ""
+        with file.open("rb") as data:
+            return hashlib.file_digest(data, "sha256").hexdigest()
     except OSError:
         return ""
 

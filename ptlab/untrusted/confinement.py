@@ -182,7 +182,11 @@ class _Rules:
                           f"is not allowed while your code is graded")
 
     def decode(self, event: str, arguments: tuple) -> None:
-        if sys._getframe(2).f_code.co_filename not in IMPORT_SYSTEM:
+        try:
+            caller = sys._getframe(2).f_code.co_filename     # (this method, the hook, its caller)
+        except ValueError:      # called from C with no Python frame above
+            caller = None
+        if caller not in IMPORT_SYSTEM:
             raise Refused(f"making code from bytes ({event}) is not allowed while your code is "
                           f"graded")
 
