@@ -145,7 +145,7 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
     def f(lobe, w):
         return np.column_stack([1.0 + lobe, w[np.arange(len(w)), lobe] ** 2])
 
-    totals, errors = grid.integrate(f, lambda fine, area: 1e-12 + 0 * fine, lobes=2)
+    totals, errors = grid.integrate_lobes(f, lambda fine, area: 1e-12 + 0 * fine, 2)
     assert totals.shape == (2, grid.cells, 2) and errors.shape == (2, 2)
     np.testing.assert_allclose(totals[0, :, 0], 4 * math.pi / grid.cells, rtol=1e-12)
     np.testing.assert_allclose(totals[1, :, 0], 8 * math.pi / grid.cells, rtol=1e-12)

@@ -45,7 +45,8 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
             ``ptlab.materials.base.Material``; ``sample_weight`` (else derived from the
             three), ``is_delta`` (mirrors and glass; else False) and ``emission`` are optional
             (``ptlab.grading.material.as_material``).
-        seed: seeds every random choice (the normal, the wo azimuths, the samples).
+        seed: seeds every random choice (the samples, the rotation of every row, the
+            order of the rows).
         samples: directions drawn per wo for the statistical checks (default 10^6; fewer
             make the tests weaker, not wrong).
         wo_degrees: angles of wo from the normal for the statistical checks.

@@ -4,10 +4,13 @@ Every check is deterministic for a given seed. The statistical ones are tuned to
 documented false-alarm rate (the chance that a correct material fails), the others are
 exact up to floating point (rate 0). ``check_material`` in ``ptlab.grading`` runs them all.
 
-For each ``wo`` (by default at 0, 45 and 80 degrees from a random normal ``n``), ``measure``
-draws N = 10^6 directions from ``sample``, evaluates ``pdf`` and ``eval`` at them, and
-integrates ``pdf`` and ``eval`` |cos theta_i| over every cell of an equal-area grid on the
-sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
+For each ``wo`` (by default at 0, 45 and 80 degrees from the normal), ``measure`` draws
+N = 10^6 directions from ``sample``, evaluates ``pdf`` and ``eval`` at them, and integrates
+``pdf`` and ``eval`` |cos theta_i| over every cell of an equal-area grid on the sphere
+(64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). No call shows the material
+one wo or one n on every row, as no render does: every row is turned by a random rotation
+of its own, and the rows of the three wo's are interleaved in every call
+(``ptlab.grading.probes``), so the grid is the checks' own frame. From these:
 
 * **chi-square**: the samples' histogram against the expected counts N integral(pdf) per
   cell, plus one category for failed samples (where ``pdf`` is 0, or ``sample`` gave NaN)
@@ -42,6 +45,11 @@ sphere (64 x 128 cells for 10^6 samples; ``SphereGrid.integrate``). From these:
 * **float32**: the renderer passes float32 arrays stored column by column: the results
   must agree with float64 ones (relative 1e-2) and be finite; a float64 result is a
   warning (it works, slowly). Deterministic.
+* **row independence**: the first 32 rows of the first large calls of ``sample``, ``pdf``,
+  ``eval`` and (if the material has its own) ``sample_weight``, in float64 and in float32,
+  asked again one row at a time and as one shuffled batch, give the batch's answers to a
+  relative 1e-3 (``ROW_RTOL``): a material whose answer for a row depends on the other
+  rows could tell a probe from a render. Deterministic.
 
 All together a correct material fails with probability at most about 1.2e-3 by chance;
 ``scripts/false_alarm_rate.py`` measures it: 0 failures in 200 runs (its default), and 0 in
@@ -277,7 +285,7 @@ class _Moments:
 def _integrals(material, grid: SphereGrid, wos: np.ndarray, samples: int,
                rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """(L, cells, 4) integrals of pdf and f_rgb |cos theta_i| over every cell for each of
-    the (L, 3) ``wos``, and their (L, 4) error bounds. ``SphereGrid.integrate`` interleaves
+    the (L, 3) ``wos``, and their (L, 4) error bounds. ``SphereGrid.integrate_lobes`` interleaves
     the lobes' points itself, so the rows need no shuffling."""
 
     def integrand(lobe: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -292,13 +300,13 @@ def _integrals(material, grid: SphereGrid, wos: np.ndarray, samples: int,
         tol[:, 1:] = F_TOLERANCE * (np.abs(fine[:, 1:]) + (area / (4 * math.pi))[:, None])
         return tol
 
-    return grid.integrate(integrand, tolerance, lobes=len(wos))
+    return grid.integrate_lobes(integrand, tolerance, len(wos))
 
 
 def _ask_for_lobes(material, methods: tuple, wos: np.ndarray, lobe: np.ndarray, w: np.ndarray,
                    n: np.ndarray, rng: np.random.Generator) -> list[np.ndarray]:
     """``ask_at`` for the quadrature's points: (P, 3) directions ``w``, each with the wo of its
-    (P,) ``lobe`` (``wos`` (L, 3)), in ``SphereGrid.integrate``'s order, which interleaves
+    (P,) ``lobe`` (``wos`` (L, 3)), in ``SphereGrid.integrate_lobes``' order, which interleaves
     the lobes. When one lobe is left to refine, each point is asked for another lobe too
     (that answer dropped), so that wo . n still varies over the call's rows."""
     if len(wos) > 1 and (lobe == lobe[0]).all():
@@ -488,7 +496,7 @@ def _candidate_integrals(material, lobes: list[Lobe], rng: np.random.Generator) 
     def tolerance(fine, area):
         return (0.05 * np.sqrt(samples * np.maximum(fine, 0)) + 0.01) / samples
 
-    integrals, _ = grid.integrate(integrand, tolerance, lobes=len(lobes), max_levels=5)
+    integrals, _ = grid.integrate_lobes(integrand, tolerance, len(lobes), max_levels=5)
     return [dict(zip(CANDIDATES, model.T, strict=True)) for model in integrals]
 
 

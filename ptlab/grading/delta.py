@@ -5,7 +5,10 @@ to chi-square test. Instead, for ``wo`` at 0, 30, 60, 80, 89 and 90 degrees on b
 the surface (``n`` is the outward normal: ``wo . n < 0`` is inside, pbrt's convention), the
 checks draw 2^14 stratified ``u`` (a Hammersley point set: both coordinates of it are
 evenly spaced, so a choice made by ``u[:, 0] < R`` happens for a fraction R of them to
-within 1/2^14) and look at what ``sample_weight`` returns:
+within 1/2^14) and look at what ``sample_weight`` returns. All 12 wo's go out in one call,
+their rows shuffled together and each turned by a rotation of its own (exactly, for wo in
+the tangent plane; ``ptlab.grading.probes``), and the directions come back into the
+checks' frame (+z the normal) before they are looked at:
 
 * **consistency**: unit, finite directions; ``sample`` and ``sample_weight`` agree; weights
   finite and >= 0, and 0 from below for a material that does not transmit; ``eval`` and
@@ -21,6 +24,8 @@ within 1/2^14) and look at what ``sample_weight`` returns:
   (either is accepted and reported), to 5e-3.
 * **energy**: no more light out than in: the mean weight (mirror) or c_r and c_t (glass)
   at most 1 + 1e-3.
+* **row independence**: as for other materials (``ptlab.grading.checks``), on the first
+  rows of the calls above.
 
 Every check is deterministic (false-alarm rate 0).
 """

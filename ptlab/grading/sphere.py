@@ -6,10 +6,11 @@ angle element is d(cos theta) d(phi), every cell has the same solid angle
 material's pdf is smooth inside every cell. (This is the binning of Mitsuba 3's
 ``chi2`` test and of Nori's; Jakob, "Nori: an educational ray tracer", warptest.)
 
-``SphereGrid.integrate`` computes the integral of a function over every cell with a tensor
-3 x 3 Gauss-Legendre rule in (theta, phi), refining a region into 2 x 2 children (halving
-theta and phi) for as long as the children's
-sum differs from the parent's estimate by more than a tolerance: peaky lobes (a GGX with
+``SphereGrid.integrate`` computes the integral of a function over every cell (and
+``integrate_lobes`` those of several at once, one per lobe, so that one call to a material
+serves every lobe) with a tensor 3 x 3 Gauss-Legendre rule in (theta, phi), refining a
+region into 2 x 2 children (halving theta and phi) for as long as the children's sum
+differs from the parent's estimate by more than a tolerance: peaky lobes (a GGX with
 alpha = 0.05 concentrates its pdf in a few cells) get subdivided where they are, and
 smooth ones cost 45 evaluations a cell.
 """
@@ -90,9 +91,20 @@ class SphereGrid:
         """(cells,) number of the (N, 3) unit vectors in each cell."""
         return np.bincount(self.cell_of(w), minlength=self.cells)
 
-    def integrate(self, f: Callable[[np.ndarray, np.ndarray], np.ndarray], tolerance: Callable,
-                  lobes: int = 1, max_levels: int = 7,
-                  max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+    def integrate(self, f: Callable[[np.ndarray], np.ndarray], tolerance: Callable,
+                  max_levels: int = 7, max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+        """Integrals of one vector-valued function over every cell, and their error bounds:
+        ``integrate_lobes`` with one lobe, ``f`` mapping (P, 3) directions to (P, K) values.
+
+        Returns:
+            (cells, K) integrals and (K,) total error estimates.
+        """
+        totals, errors = self.integrate_lobes(lambda lobe, w: f(w), tolerance, 1, max_levels, max_regions)
+        return totals[0], errors[0]
+
+    def integrate_lobes(self, f: Callable[[np.ndarray, np.ndarray], np.ndarray], tolerance: Callable,
+                        lobes: int, max_levels: int = 7,
+                        max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
         """Integrals of ``lobes`` vector-valued functions over every cell, and their error bounds.
 
         The functions are integrated together, so that each step asks ``f`` about the
