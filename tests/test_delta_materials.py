@@ -139,3 +139,31 @@ def test_bad_parameters_are_refused():
     for make in (lambda: Mirror((1.2, 0, 0)), lambda: Dielectric(0.0), lambda: Dielectric(1.5, (2, 0, 0))):
         with pytest.raises(ValueError):
             make()
+
+
+# -- the probes cannot be told from a render ---------------------------------------------------
+
+class BrightUnlessRowsRepeat(Mirror):
+    """A white mirror that weighs its reflection 1 when every row of a call has the same wo and
+    n (as the delta checks' probes once did) and 1.5 otherwise, as in every render."""
+
+    def sample_weight(self, wo, n, u, front=None):
+        wi, weight = super().sample_weight(wo, n, u, front)
+        repeated = bool((wo == wo[:1]).all() and (n == n[:1]).all())
+        return wi, weight * (1.0 if repeated else 1.5)
+
+
+def test_a_mirror_right_only_for_repeated_rows_fails():
+    report = check_material(BrightUnlessRowsRepeat())
+    assert report["energy"].verdict == "FAIL"
+    assert report["row independence"].verdict == "FAIL"
+    assert "depends on the other rows of the batch" in report["row independence"].hint
+
+
+@pytest.mark.parametrize("material", [Mirror((0.9, 0.6, 0.3), fresnel=True), Dielectric(1.5)], ids=repr)
+def test_no_delta_probe_repeats_one_wo_or_n_on_every_row(material):
+    from test_grading import Recording, assert_every_call_mixes_its_rows
+
+    recording = Recording(material)
+    assert check_material(recording).passed
+    assert_every_call_mixes_its_rows(recording.calls)

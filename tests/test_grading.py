@@ -50,7 +50,8 @@ def test_default_run_is_the_issues_and_reproducible():
     b = check_material(material, seed=3, samples=20_000)
     assert [c.statistic for c in a.checks] == [c.statistic for c in b.checks]
     assert {c.name for c in a.checks} == {"consistency", "chi-square", "pdf normalisation", "energy",
-                                          "estimator agreement", "sample_weight", "reciprocity", "float32"}
+                                          "estimator agreement", "sample_weight", "reciprocity", "float32",
+                                          "row independence"}
     text = str(a)
     for column in ("check", "statistic", "threshold", "verdict", "hint"):
         assert column in text.splitlines()[1]
@@ -72,6 +73,10 @@ MISTAKES = [
     ("AlbedoAboveOne", "energy", "albedo or F0 above 1"),
     ("MissingOneOverPi", "energy", "without the 1/pi"),
     ("NanAtGrazing", "consistency", "NaN at grazing angles"),
+    ("RightOnlyForRepeatedRows", "energy", "without the 1/pi"),
+    ("DependsOnCallSize", "row independence", "depends on the other rows of the batch"),
+    ("DependsOnRowOrder", "row independence", "depends on the other rows of the batch"),
+    ("DependsOnMeanWo", "row independence", "depends on the other rows of the batch"),
     ("HalfVectorPdfWithoutJacobian", "chi-square", "Jacobian 1 / (4 |wo . h|)"),
     ("MirrorOfIncomingDirection", "directions", "neither the mirror reflection"),
     ("MirrorWithEval", "consistency", "both return 0"),
@@ -102,6 +107,7 @@ def test_each_wrong_material_fails_only_where_it_is_wrong(reports):
     assert reports["MissingCosineInWeight"].failed == ["sample_weight"]
     assert reports["AlbedoAboveOne"].failed == ["energy"]
     assert reports["NanAtGrazing"].failed == ["consistency"]
+    assert reports["DependsOnCallSize"].failed == ["row independence"]
 
 
 def test_a_material_that_raises_fails_instead_of_crashing():
@@ -135,10 +141,15 @@ def test_chi_square_p_value_is_scipys_and_pooling_keeps_totals():
 
 def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_functions():
     grid = SphereGrid(np.array([0.3, -0.4, 0.866]) / np.linalg.norm([0.3, -0.4, 0.866]), 16, 32)
-    totals, errors = grid.integrate(lambda w: np.column_stack([np.ones(len(w)), w[:, 0] ** 2]),
-                                    lambda fine, area: 1e-12 + 0 * fine)
-    np.testing.assert_allclose(totals[:, 0], 4 * math.pi / grid.cells, rtol=1e-12)
-    assert totals[:, 1].sum() == pytest.approx(4 * math.pi / 3, rel=1e-10)
+    # Two lobes at once: 1 and x^2, then 2 and y^2.
+    def f(lobe, w):
+        return np.column_stack([1.0 + lobe, w[np.arange(len(w)), lobe] ** 2])
+
+    totals, errors = grid.integrate_lobes(f, lambda fine, area: 1e-12 + 0 * fine, 2)
+    assert totals.shape == (2, grid.cells, 2) and errors.shape == (2, 2)
+    np.testing.assert_allclose(totals[0, :, 0], 4 * math.pi / grid.cells, rtol=1e-12)
+    np.testing.assert_allclose(totals[1, :, 0], 8 * math.pi / grid.cells, rtol=1e-12)
+    np.testing.assert_allclose(totals[:, :, 1].sum(axis=1), 4 * math.pi / 3, rtol=1e-10)
     rng = np.random.default_rng(0)
     w = rng.normal(size=(10_000, 3))
     w /= np.linalg.norm(w, axis=1, keepdims=True)
@@ -240,3 +251,70 @@ def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
     assert time.monotonic() - start < 30
     out = capsys.readouterr().out
     assert "FAILED: took longer than 3 s and was stopped (in Slow.pdf)" in out
+
+
+# -- the probes cannot be told from a render ---------------------------------------------------
+
+class Recording:
+    """A right material (the library's, called through) that records the wo and n of every
+    call: any object with the methods is a material to the graders."""
+
+    def __init__(self, material):
+        self.material, self.calls = material, []
+
+    def __getattr__(self, name: str):       # is_delta, eta: the material's
+        if name in ("material", "calls"):
+            raise AttributeError(name)
+        return getattr(self.material, name)
+
+    def _record(self, method: str, wo, n):
+        self.calls.append((method, np.array(wo, dtype=np.float64), np.array(n, dtype=np.float64)))
+        return getattr(self.material, method)
+
+    def eval(self, wo, wi, n):
+        return self._record("eval", wo, n)(wo, wi, n)
+
+    def pdf(self, wo, wi, n):
+        return self._record("pdf", wo, n)(wo, wi, n)
+
+    def sample(self, wo, n, u):
+        return self._record("sample", wo, n)(wo, n, u)
+
+    def sample_weight(self, wo, n, u, front=None):
+        method = self._record("sample_weight", wo, n)
+        return method(wo, n, u) if front is None else method(wo, n, u, front)
+
+
+def assert_every_call_mixes_its_rows(calls):
+    """No call of two rows or more has one wo, one n, or one angle between them on every row;
+    and some calls have a single row (the row-independence check)."""
+    for method, wo, n in calls:
+        if len(wo) < 2:
+            continue
+        assert not (wo == wo[0]).all(), f"{method}: every row has the same wo ({len(wo)} rows)"
+        assert not (n == n[0]).all(), f"{method}: every row has the same n ({len(wo)} rows)"
+        cos_theta_o = np.sum(wo * n, axis=1)
+        assert np.ptp(cos_theta_o) > 1e-6, f"{method}: every row has the same wo . n ({len(wo)} rows)"
+    assert any(len(wo) == 1 for _, wo, _ in calls)
+    assert {method for method, _, _ in calls} >= {"eval", "pdf", "sample", "sample_weight"}
+
+
+def test_no_probe_repeats_one_wo_or_n_on_every_row():
+    material = Recording(Microfacet("gold", roughness=0.4))
+    assert check_material(material, samples=20_000).passed
+    assert len(material.calls) > 100
+    assert_every_call_mixes_its_rows(material.calls)
+
+
+def test_a_material_right_only_for_repeated_rows_fails_in_process():
+    report = check_material(wrong.RightOnlyForRepeatedRows(), samples=SAMPLES)
+    assert report["energy"].verdict == "FAIL" and "without the 1/pi" in report["energy"].hint
+    assert report["row independence"].verdict == "FAIL"
+
+
+def test_row_independence_holds_for_float32_arithmetic_and_a_student_process(capsys):
+    # The float32 Lambertian of the exercises, graded in its own process: every row asked
+    # again alone and shuffled, in float64 and in float32, gives the same answer.
+    assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000"]) == 0
+    out = capsys.readouterr().out
+    assert "row independence" in out and "PASSED" in out

@@ -17,7 +17,7 @@ import pytest
 
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
-from ptlab.untrusted import ProcessGuard, StudentError, Submission, SubmissionFailed
+from ptlab.untrusted import Arguments, ProcessGuard, Rules, StudentError, Submission, SubmissionFailed
 from ptlab.untrusted.channel import Channel, ChannelError, ChannelTimeoutError
 from ptlab.untrusted.ownership import library_answer
 from ptlab.untrusted.plain_data import Decoder, Encoder, MalformedError, UnsendableError
@@ -128,7 +128,9 @@ def test_calls_change_the_graders_arguments_as_they_would_in_its_own_process(tmp
                   pixel=np.arange(2), sees_emission=np.ones(2, dtype=bool),
                   sample=np.arange(2, dtype=np.uint64))
     expected = np.random.default_rng(1).random()
-    with ProcessGuard() as guard, Submission(path, guard, time_limit=30) as submission:
+    rules = Rules(arguments={"add_into": Arguments(("film", "paths", "rng"),
+                                                    writes=("film", "paths", "rng"))})
+    with ProcessGuard() as guard, Submission(path, guard, time_limit=30, rules=rules) as submission:
         module = submission.module
         assert module.add_into(film, paths, rng) == expected
         assert (film == 1).all() and (paths.throughput == 2).all() and paths.pixel[0] == 7
@@ -214,7 +216,7 @@ def test_materials_that_are_ptlabs_own(source, origin):
 
 
 def test_the_library_solutions_are_graded_as_themselves():
-    result = grade(chapter(10), chapter(10).solution)
+    result = grade(chapter(10), chapter(10).solution, library_answer=True)
     assert result.full_marks, result.table()
 
 

@@ -103,6 +103,49 @@ class MissingOneOverPi(_Lambertian):
         return super().eval(wo, wi, n) * math.pi
 
 
+class RightOnlyForRepeatedRows:
+    """Right only when every row of a call holds the same wo and the same n (as the grader's
+    probes once did), and pi times too bright otherwise, as in every render. A plain class,
+    as a student writes it."""
+
+    def eval(self, wo, wi, n):
+        above = (np.sum(wo * n, axis=1) > 0) & (np.sum(wi * n, axis=1) > 0)
+        repeated = bool((wo == wo[:1]).all() and (n == n[:1]).all())
+        return np.outer(above * (1.0 if repeated else math.pi) * 0.8 / math.pi, np.ones(3))
+
+    def pdf(self, wo, wi, n):
+        cos_theta = np.sum(wi * n, axis=1)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0), cos_theta / math.pi, 0.0)
+
+    def sample(self, wo, n, u):
+        return to_world(cosine_hemisphere(u), n)
+
+
+class DependsOnCallSize(_Lambertian):
+    """eval is pi times too bright in calls of fewer than 1000 rows: the answer for a row
+    depends on how many rows the call has."""
+
+    def eval(self, wo, wi, n):
+        return super().eval(wo, wi, n) * (math.pi if len(wo) < 1000 else 1.0)
+
+
+class DependsOnRowOrder(_Lambertian):
+    """sample turns row k's u into row k-1's direction (np.roll): the right distribution,
+    but each row's answer depends on its neighbour."""
+
+    def sample(self, wo, n, u):
+        return super().sample(wo, n, np.roll(u, 1, axis=0))
+
+
+class DependsOnMeanWo(_Lambertian):
+    """eval's brightness follows the batch's mean cos(theta_o), computed once from the mean
+    of wo over the rows (a shortcut that holds only when every row has the same wo)."""
+
+    def eval(self, wo, wi, n):
+        mean_cos_theta_o = float(np.mean(dot(wo, n)))
+        return super().eval(wo, wi, n) * (0.5 + 0.5 * max(mean_cos_theta_o, 0.0))
+
+
 class NonReciprocal(Microfacet):
     """A GGX metal masked by G1(wo) only, instead of G2(wo, wi): not symmetric in wo, wi."""
 
@@ -231,6 +274,7 @@ class GlassWeightedByFresnel(_Glass):
 
 __all__ = ["MissingCosineInPdf", "MissingCosineInWeight", "CosineTwice", "PdfOffByConstant",
            "UniformSamplingCosinePdf", "CosineSamplingUniformPdf", "WrongHemisphere", "AlbedoAboveOne",
-           "MissingOneOverPi", "NonReciprocal", "NanAtGrazing", "WalterSampling",
+           "MissingOneOverPi", "RightOnlyForRepeatedRows", "DependsOnCallSize", "DependsOnRowOrder",
+           "DependsOnMeanWo", "NonReciprocal", "NanAtGrazing", "WalterSampling",
            "HalfVectorPdfWithoutJacobian", "MirrorOfIncomingDirection", "MirrorWithEval",
            "GlassWithoutInversion", "GlassWeightedByFresnel"]

@@ -1,23 +1,28 @@
 """What a chapter of the exercises is: its graded checks, and the helpers checks use.
 
 A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``,
-a list of ``Check``s. A check is a plain function of the student's module (a stand-in for
-it, whose functions run in the student's own process: ``ptlab.untrusted``): it returns a
-short note of what it measured, or raises ``CheckFailed`` with a message for the student.
-``ptlab.exercises.grader`` runs the checks; this module only describes them.
+a list of ``Check``s, and the library's own answers to what the student writes (which are
+traps in the student's process, and whose copies earn nothing) and what each function may
+do to its arguments (``Chapter.rules``). A check is a plain function of the student's
+module (a stand-in for it, whose functions run in the student's own process:
+``ptlab.untrusted``): it returns a short note of what it measured, or raises
+``CheckFailed`` with a message for the student. ``ptlab.exercises.grader`` runs the checks;
+this module only describes them.
 """
 
 from __future__ import annotations
 
+import ast
 import shlex
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
+from functools import cached_property
 from pathlib import Path
 from types import ModuleType
 
 import numpy as np
 
-from ptlab.untrusted import library_answer
+from ptlab.untrusted import Arguments, Rules, copied_answer, library_answer
 
 #: The exercises package: templates/ and solutions/ are beside this file.
 HERE = Path(__file__).parent
@@ -54,6 +59,12 @@ class Chapter:
         title: the chapter's title.
         functions: what the student writes (for ``ptlab exercise list`` and the docs).
         checks: the graded checks, in order.
+        answers: the library's own answers to ``functions`` (dotted names of functions, or of
+            classes whose ``eval``, ``pdf``, ``sample`` and ``sample_weight`` are).
+        writes: {function: the arguments it fills in} (the film ``trace_paths`` adds to);
+            every other argument of the exercise's functions is read-only.
+        scratch: {function: the arguments it may change for its own use}.
+        programs: the student's code may start programs (its worker processes).
     """
 
     number: int
@@ -61,6 +72,10 @@ class Chapter:
     title: str
     functions: tuple[str, ...]
     checks: tuple[Check, ...]
+    answers: tuple[str, ...] = ()
+    writes: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    scratch: dict[str, tuple[str, ...]] = field(default_factory=dict)
+    programs: bool = False
 
     @property
     def stem(self) -> str:
@@ -74,6 +89,26 @@ class Chapter:
     @property
     def solution(self) -> Path:
         return HERE / "solutions" / f"{self.stem}.py"
+
+    @cached_property
+    def rules(self) -> Rules:
+        """What the grader asks of a student's file for this chapter (``ptlab.untrusted.rules``):
+        the answers, and the arguments of every function of the exercise file, by the
+        parameter names the exercise file gives them."""
+        tree = ast.parse(self.template.read_bytes())
+        arguments = {}
+        for node in tree.body:
+            if isinstance(node, ast.FunctionDef):
+                names = tuple(a.arg for a in node.args.posonlyargs + node.args.args)
+                arguments[node.name] = Arguments(names, self.writes.get(node.name, ()),
+                                                 self.scratch.get(node.name, ()))
+        return Rules(answers=self.answers, solution=self.solution, arguments=arguments,
+                     programs=self.programs)
+
+    @property
+    def library_rules(self) -> Rules:
+        """The rules for grading the library's own answer file (``solution``) as itself."""
+        return replace(self.rules, library=True)
 
     @property
     def doc(self) -> str:
@@ -110,7 +145,8 @@ def student_file(module: ModuleType) -> str:
 
 def require(module: ModuleType, *names: str) -> list[Callable]:
     """The functions ``names`` of the student's module; a clear failure if one is missing,
-    or is ptlab's own answer under the student's name (``ptlab.untrusted.ownership``)."""
+    is ptlab's own answer under the student's name (``ptlab.untrusted.ownership``), or the
+    file holds a copy of ptlab's answers with the names changed (``ptlab.untrusted.copies``)."""
     missing = [name for name in names if not callable(getattr(module, name, None))]
     if missing:
         raise CheckFailed(f"your file has no function {', '.join(missing)} (keep the names of "
@@ -120,4 +156,7 @@ def require(module: ModuleType, *names: str) -> list[Callable]:
         if origin is not None:
             raise CheckFailed(f"{name}: this is ptlab's own answer ({origin}), not yours: "
                               f"write it in your file")
+    copied = copied_answer(module)
+    if copied is not None:
+        raise CheckFailed(f"your file holds {copied}: write your own")
     return [getattr(module, name) for name in names]

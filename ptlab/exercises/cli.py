@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
+from ptlab.untrusted.student_user import add_student_user_argument, student_user
 
 
 def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
@@ -40,8 +41,10 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
                     "otherwise, 2 if FILE cannot be read.")
     check.add_argument("chapter", metavar="NN", help="the chapter number")
     check.add_argument("file", metavar="FILE", help="your exercise file")
-    check.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT")
+    check.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT "
+                       "(removed at the start, written when every check is done)")
     _add_timeout_scale(check)
+    add_student_user_argument(check)
 
     listing = actions.add_parser(
         "list", help="list the chapters and which you have passed",
@@ -75,6 +78,7 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     batch.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) // 2),
                        metavar="K", help="students graded at once (default: half the cores)")
     _add_timeout_scale(batch)
+    add_student_user_argument(batch)
 
 
 def _add_timeout_scale(parser: argparse.ArgumentParser) -> None:
@@ -142,12 +146,14 @@ def _check(args) -> int:
     path = Path(args.file)
     if path.suffix != ".py":
         raise PtlabError(f"{path}: expected a Python file (.py)")
-    if args.json and not Path(args.json).parent.is_dir():
-        raise PtlabError(f"--json {args.json}: folder {Path(args.json).parent} does not exist")
+    student_user(args.student_user)         # (a bad user: exit 2 before anything is removed)
+    if args.json:
+        _remove_old_result(Path(args.json))
     # A line per check as it finishes, on a terminal (a course's scripts get the table only).
     echo = (lambda line: print(line, file=sys.stderr)) if sys.stderr.isatty() else None
     result = grade(found, path, timeout_scale=scale, echo=echo,
-                   on_output=lambda line: print(f"    | {line}", file=sys.stderr))
+                   on_output=lambda line: print(f"    | {line}", file=sys.stderr),
+                   user=args.student_user)
     # grade() has ended every process of the student's code: nothing can change what follows.
     print(result.table())
     if args.json:
@@ -155,6 +161,20 @@ def _check(args) -> int:
         write_atomically(args.json, lambda temporary: Path(temporary).write_text(text))
     remember(result)
     return 0 if result.full_marks else 1
+
+
+def _remove_old_result(path: Path) -> None:
+    """Remove whatever is at the ``--json`` path before grading starts: a grader stopped
+    midway then leaves no result at all, never an older one (or one written there by
+    anybody else) that would pass for this grading's."""
+    if not path.parent.is_dir():
+        raise PtlabError(f"--json {path}: folder {path.parent} does not exist")
+    if path.is_dir() and not path.is_symlink():
+        raise PtlabError(f"--json {path}: is a folder")
+    try:
+        path.unlink(missing_ok=True)
+    except OSError as error:
+        raise PtlabError(f"--json {path}: cannot replace it: {error.strerror}") from None
 
 
 def _list(args) -> int:
@@ -180,7 +200,7 @@ def _list(args) -> int:
         entry = progress.get(f"{found.number:02d}")
         state, where = "-", ""
         if entry is not None:
-            state = status(*entry)
+            state = status(*entry, f"{found.number:02d}")
             where = _shown(entry[1] / str(entry[0].get("file", "")))
         print(f"{found.number:02d}  {found.title:52}  {state:26}  {where:30}  "
               f"{', '.join(found.functions)}")
@@ -207,7 +227,7 @@ def _grade_all(args) -> int:
     if not csv_path.parent.is_dir():
         raise PtlabError(f"--csv {csv_path}: folder {csv_path.parent} does not exist")
     rows = grade_all(found, Path(args.dir), csv_path, workers=args.workers, timeout_scale=scale,
-                     progress=sys.stderr.isatty())
+                     progress=sys.stderr.isatty(), user=args.student_user)
     full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
     print(f"{len(rows)} students in {csv_path}: {full} with full marks")
     return 0

@@ -1,10 +1,12 @@
 """Running a chapter's checks on a student's file, like a course autograder.
 
 Student code only computes; trusted code judges. Every check runs here, in the grader's
-process, on a stand-in for the student's module: the student's file is imported, and each
-of its functions runs, in a process of its own (``ptlab.untrusted.Submission``, a fresh one
-per check), which sends back plain data only. So nothing the student's code does (patching
-NumPy or the checks, writing to the grader's pipes, exiting early) can touch a verdict.
+process, on a stand-in for the student's module: the student's file is read once, then
+imported, and each of its functions runs, in a process of its own
+(``ptlab.untrusted.Submission``, a fresh one per check, in a private folder, as the student
+user when the grader is root), which sends back plain data only. So nothing the student's
+code does (patching NumPy or the checks, writing to the grader's pipes, exiting early) can
+touch a verdict.
 
 Every check is worth some points and has a time limit: a student's function that loops
 forever, crashes its process or sends nonsense costs that check's points, and the grader
@@ -17,8 +19,6 @@ code started is ended before ``grade`` returns, and so before any result is writ
 
 from __future__ import annotations
 
-import hashlib
-import threading
 import time
 import unicodedata
 from collections.abc import Callable
@@ -27,7 +27,19 @@ from pathlib import Path
 
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import CheckFailed
-from ptlab.untrusted import ProcessGuard, StudentError, Submission, SubmissionFailed
+from ptlab.untrusted import (
+    ImportFailed,
+    ProcessGuard,
+    RefusedSubmission,
+    StudentError,
+    Submission,
+    SubmissionFailed,
+    Taken,
+    import_nothing_from_here,
+    make_undumpable,
+    student_user,
+    take_in,
+)
 
 #: Seconds the whole grading may take beyond the sum of its checks' limits (starting the
 #: fork server, the library's own renders).
@@ -104,59 +116,92 @@ class Grade:
 
 def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
           echo: Callable[[str], None] | None = None,
-          on_output: Callable[[str], None] | None = None) -> Grade:
+          on_output: Callable[[str], None] | None = None, user: str | None = None,
+          with_folder: bool = True, library_answer: bool = False) -> Grade:
     """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
 
     Args:
         timeout_scale: multiplies every check's time limit (slow machines).
         echo: called with a line per check as it finishes.
         on_output: called with each line the student's code prints (default: dropped).
+        user: the user the student's code runs as (``--student-user``; None: ``nobody`` when
+            this process is root, else its own user).
+        with_folder: the Python files beside ``path`` are the student's too (a folder of
+            their own), and are copied with it; else ``path`` alone.
+        library_answer: ``path`` is the chapter's own answer file, graded as itself (the
+            tests and the graders' measurements; never a student's file).
+
+    Raises:
+        PtlabError: no such file, or no such ``user`` (or one that cannot run ptlab).
     """
     path = Path(path)
     if not path.is_file():
         raise PtlabError(f"{path}: no such file")
-    sha256 = hashlib.sha256(path.read_bytes()).hexdigest()
-    threading.Thread(target=_import_what_checks_use, daemon=True).start()
+    if library_answer and path.resolve() != chapter.solution.resolve():
+        raise PtlabError(f"{path}: not chapter {chapter.number}'s own answer file")
+    student_user(user)      # (an unknown user, or one that cannot run ptlab: before anything)
+    make_undumpable()
+    import_nothing_from_here()
+    rules = chapter.library_rules if library_answer else chapter.rules
+    _import_what_checks_use(rules)
+    try:
+        taken: Taken | str = take_in(path, with_folder=with_folder, library=library_answer)
+        sha256 = taken.sha256
+    except RefusedSubmission as refused:      # (its bytes are not read: it may be a link)
+        taken, sha256 = str(refused), ""
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
     with ProcessGuard() as guard:
         for check in chapter.checks:
             left = deadline - time.monotonic()
-            if left <= 0:
+            if isinstance(taken, str):
+                result = CheckResult(check.name, 0, check.points, False, one_line(taken), 0.0)
+            elif left <= 0:
                 result = CheckResult(check.name, 0, check.points, False,
                                      f"not run: grading reached its overall limit of {overall:.0f} s", 0.0)
             else:
-                result = run_check(check, path, min(check.timeout * timeout_scale, left),
-                                   guard, on_output)
+                result, hung = run_check(check, taken, min(check.timeout * timeout_scale, left),
+                                         guard, on_output, rules, user)
+                if hung:        # every later check would wait as long again for nothing
+                    taken = f"not run: {result.message}"
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
     return Grade(chapter.number, chapter.title, str(path), results, sha256)
 
 
-def _import_what_checks_use() -> None:
-    """Import the renderer and the mesh and statistics libraries the checks use (trimesh
-    and SciPy take a second or more) while the first student's process starts, instead of
-    in the first check that needs them."""
+def _import_what_checks_use(rules) -> None:
+    """Import now what the checks would import lazily: the renderer, the mesh and statistics
+    libraries (trimesh and SciPy take a second or more), and the answers' fingerprints.
+    Nothing is imported once a student's process runs, which could plant modules where an
+    import would look (the current folder, were it on ``sys.path``)."""
     import scipy.special  # noqa: F401
+    import scipy.stats  # noqa: F401
     import trimesh  # noqa: F401
 
     import ptlab.rendering  # noqa: F401
 
+    rules.fingerprints  # noqa: B018 (computed and kept)
 
-def run_check(check, path: Path, timeout: float, guard: ProcessGuard,
-              on_output: Callable[[str], None] | None = None) -> CheckResult:
-    """Run one check on a fresh process of the student's file, stopped after ``timeout`` s."""
+
+def run_check(check, submission: str | Path | Taken, timeout: float, guard: ProcessGuard,
+              on_output: Callable[[str], None] | None = None, rules=None,
+              user: str | None = None) -> tuple[CheckResult, bool]:
+    """Run one check on a fresh process of the student's submission, stopped after
+    ``timeout`` s. Returns the result, and whether importing the file took too long."""
     start = time.perf_counter()
-    passed = False
+    passed, hung = False, False
     try:
-        with Submission(path, guard, time_limit=timeout, on_output=on_output) as submission:
-            message, passed = str(check.run(submission.module)), True
+        with Submission(submission, guard, time_limit=timeout, on_output=on_output, rules=rules,
+                        user=user) as running:
+            message, passed = str(check.run(running.module)), True
     except CheckFailed as failure:
         message = str(failure)
     except StudentError as error:
         message = error.describe()
+    except ImportFailed as failure:
+        message, hung = str(failure), failure.kind == "import timeout"
     except SubmissionFailed as failure:
         message = str(failure)
         if failure.kind == "timeout":
@@ -167,7 +212,7 @@ def run_check(check, path: Path, timeout: float, guard: ProcessGuard,
     except Exception as error:  # the checks' code failed on what the student's code returned
         message = f"{type(error).__name__}: {error} (raised outside your file)"
     return CheckResult(check.name, check.points if passed else 0, check.points, passed,
-                       one_line(message), time.perf_counter() - start)
+                       one_line(message), time.perf_counter() - start), hung
 
 
 def one_line(text: str) -> str:

@@ -7,11 +7,15 @@ file's folder (after every process of the student's code has ended, atomically),
 ``ptlab exercise list`` reads the records of the current folder, its subfolders and the
 remembered folders, and says where it looked.
 
-The record is a convenience, not proof: the student's code runs as the student and could
-write the file itself. So the grader never reads it, each check replaces its chapter's
-entry (a pass is not kept once the file fails), and an entry keeps the SHA-256 of the file
-it graded: ``list`` says "passed" only while the file is still the one that passed. A
-course grades by running the checks itself (``ptlab exercise grade-all``).
+The record beside the file is a convenience, not proof: whoever may write that folder may
+write it. So the grader never reads it; each check replaces its chapter's entry (a pass is
+not kept once the file fails); an entry keeps the SHA-256 of the file it graded; and the
+grader keeps its own copy of every entry it wrote, in its user's private state
+(``$XDG_STATE_HOME/ptlab/results.json``, a folder only that user may enter): ``list`` says
+"passed" only for an entry the grader's copy vouches for, while the file is still the one
+that passed. A student's code that writes the record (it cannot when the grader is root:
+it runs as another user), or a record copied from elsewhere, shows as "not vouched for".
+A course grades by running the checks itself (``ptlab exercise grade-all``).
 """
 
 from __future__ import annotations
@@ -25,6 +29,8 @@ from pathlib import Path
 from ptlab.atomic import write_atomically
 
 RECORD = ".ptlab-exercises.json"
+#: The grader's own copy of the entries it wrote, in its private state.
+VOUCHED = "results.json"
 #: How deep below the folder ``list`` looks, and how many folders it reads at most.
 SEARCH_DEPTH = 3
 SEARCH_FOLDERS = 2000
@@ -44,19 +50,56 @@ def read_record(folder: Path) -> dict:
 
 
 def remember(grade) -> Path | None:
-    """Record a ``Grade`` in its file's folder; the path written, or None if not written."""
+    """Record a ``Grade`` in its file's folder, and vouch for it in the grader's own state;
+    the path written, or None if not written."""
     folder = Path(grade.file).resolve().parent
     if folder.is_relative_to(Path(__file__).resolve().parent):
         return None         # the library's own answers are not a student's progress
+    entry = dict(score=grade.score, max_score=grade.max_score, full_marks=grade.full_marks,
+                 file=Path(grade.file).name, sha256=grade.sha256,
+                 when=time.strftime("%Y-%m-%d %H:%M:%S"))
+    key = f"{grade.chapter:02d}"
+    _vouch(folder / entry["file"], key, entry)
     record = read_record(folder)
-    record[f"{grade.chapter:02d}"] = dict(
-        score=grade.score, max_score=grade.max_score, full_marks=grade.full_marks,
-        file=Path(grade.file).name, sha256=grade.sha256, when=time.strftime("%Y-%m-%d %H:%M:%S"))
+    record[key] = entry
     try:
         return _write_json(folder / RECORD, record)
     except OSError as error:        # a read-only folder: the grade itself still stands
         print(f"ptlab: note: could not record the result in {folder / RECORD}: {error}")
         return None
+
+
+# -- the grader's own copy --------------------------------------------------------------
+
+def private_state() -> Path:
+    """The grader's own state folder, made if need be, that only its user may enter."""
+    base = os.environ.get("XDG_STATE_HOME") or Path.home() / ".local" / "state"
+    folder = Path(base) / "ptlab"
+    folder.mkdir(parents=True, exist_ok=True, mode=0o700)
+    folder.chmod(0o700)
+    return folder
+
+
+def _vouched() -> dict:
+    try:
+        found = json.loads((private_state() / VOUCHED).read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return {}
+    return found if isinstance(found, dict) else {}
+
+
+def _vouch(file: Path, key: str, entry: dict) -> None:
+    try:
+        vouched = _vouched()
+        vouched.setdefault(str(file), {})[key] = entry
+        _write_json(private_state() / VOUCHED, vouched)
+    except OSError:             # no state folder here: the record shows as not vouched for
+        pass
+
+
+def vouched_for(entry: dict, folder: Path, key: str) -> bool:
+    """Whether the grader's own copy holds exactly ``entry`` for chapter ``key`` there."""
+    return _vouched().get(str(folder / str(entry.get("file", ""))), {}).get(key) == entry
 
 
 def _write_json(path: Path, value) -> Path:
@@ -134,9 +177,12 @@ def find_progress(folders: list[Path]) -> tuple[dict[str, tuple[dict, Path]], li
     return latest, read
 
 
-def status(entry: dict, folder: Path) -> str:
-    """How a recorded entry stands: passed (if the file is unchanged), points, or changed."""
+def status(entry: dict, folder: Path, key: str) -> str:
+    """How chapter ``key``'s recorded entry stands: passed (if the file is unchanged),
+    points, changed, or not vouched for by this user's grader."""
     points = f"{entry.get('score')}/{entry.get('max_score')}"
+    if not vouched_for(entry, folder, key):
+        return f"{points}, not vouched for"
     file = folder / str(entry.get("file", ""))
     try:
         unchanged = hashlib.sha256(file.read_bytes()).hexdigest() == entry.get("sha256")

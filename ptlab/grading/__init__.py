@@ -45,7 +45,8 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
             ``ptlab.materials.base.Material``; ``sample_weight`` (else derived from the
             three), ``is_delta`` (mirrors and glass; else False) and ``emission`` are optional
             (``ptlab.grading.material.as_material``).
-        seed: seeds every random choice (the normal, the wo azimuths, the samples).
+        seed: seeds every random choice (the samples, the rotation of every row, the
+            order of the rows).
         samples: directions drawn per wo for the statistical checks (default 10^6; fewer
             make the tests weaker, not wrong).
         wo_degrees: angles of wo from the normal for the statistical checks.
@@ -58,12 +59,11 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
     material = as_material(material)
     root = np.random.SeedSequence(seed)
     streams = [np.random.default_rng(s) for s in root.spawn(8)]
-    n = checks.normalize(streams[0].normal(size=(1, 3)))[0]
     if material.is_delta:
-        results = _delta_checks(material, n, streams)
+        results = _delta_checks(material, streams)
         samples = delta.SAMPLES
     else:
-        results = _checks(material, n, streams, samples, tuple(wo_degrees))
+        results = _checks(material, streams, samples, tuple(wo_degrees))
     return Report(_describe(material), results, seed, samples, time.perf_counter() - start)
 
 
@@ -75,43 +75,50 @@ def _describe(material) -> str:
     return f"{type(material).__name__} object" if " object at 0x" in text else text
 
 
-def _checks(material, n, streams, samples: int, wo_degrees: tuple) -> list[Check]:
+def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
     results = [_guard("consistency", checks.check_consistency, material, streams[1])]
-    grid = SphereGrid.for_samples(n, samples)
+    # The grid's frame is the checks' own: every row the material sees is turned by a
+    # rotation of its own (ptlab.grading.probes), so no normal of the seed is needed.
+    grid = SphereGrid.for_samples(checks.Z, samples)
+    kept = []
     try:
-        lobes = [checks.measure(material, grid, degrees, samples, streams[2 + k % 3])
-                 for k, degrees in enumerate(wo_degrees)]
+        lobes, pointwise = checks.measure(material, grid, wo_degrees, samples, streams[2], kept)
     except checks.MaterialError as error:
         lobes, failure = None, str(error)
-    for name, check in (("chi-square", lambda: checks.check_chi_square(material, lobes)),
+    for name, check in (("chi-square", lambda: checks.check_chi_square(material, lobes, streams[3])),
                         ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
                         ("energy", lambda: checks.check_energy(lobes)),
                         ("estimator agreement", lambda: checks.check_estimator(lobes)),
-                        ("sample_weight", lambda: checks.check_sample_weight(lobes))):
+                        ("sample_weight", lambda: checks.check_sample_weight(pointwise))):
         results.append(_guard(name, check) if lobes is not None else _failure(name, failure))
     results.append(_guard("reciprocity", checks.check_reciprocity, material, streams[5]))
-    results.append(_guard("float32", checks.check_float32, material, streams[6]))
+    results.append(_guard("float32", checks.check_float32, material, streams[6], kept=kept))
+    results.append(_guard("row independence", checks.check_row_independence, material, kept, streams[4]))
     return results
 
 
-def _delta_checks(material, n, streams) -> list[Check]:
+def _delta_checks(material, streams) -> list[Check]:
+    kept = []
     try:
-        scatters = delta.scatter_all(material, n, streams[1])
+        scattering = delta.scatter_all(material, streams[1], kept)
     except checks.MaterialError as error:
         return [_failure(name, str(error)) for name in ("consistency", "directions", "energy")]
-    results = [_guard("consistency", delta.check_delta_consistency, material, scatters, streams[2]),
+    scatters = scattering.scatters
+    results = [_guard("consistency", delta.check_delta_consistency, material, scattering, kept),
                _guard("directions", delta.check_directions, material, scatters)]
     if delta.transmits(scatters) and delta.relative_eta(material, scatters) is not None:
         results.append(_guard("Fresnel weights", delta.check_fresnel, material, scatters))
     results.append(_guard("energy", delta.check_delta_energy, material, scatters))
-    front = _guard("front", delta.check_front, material, scatters)
-    return results + ([front] if front is not None else [])
+    front = _guard("front", delta.check_front, material, scattering)
+    results += [front] if front is not None else []
+    results.append(_guard("row independence", checks.check_row_independence, material, kept, streams[2]))
+    return results
 
 
-def _guard(name: str, check, *args) -> Check | None:
+def _guard(name: str, check, *args, **keywords) -> Check | None:
     """Run one check; a material that raises fails it with the error as the hint."""
     try:
-        return check(*args)
+        return check(*args, **keywords)
     except checks.MaterialError as error:
         return _failure(name, str(error))
 

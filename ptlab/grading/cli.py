@@ -5,10 +5,11 @@
 ``Name`` is a class (constructed with the ``--args`` JSON object as keyword arguments) or a
 ready-made material object in the file: anything with ``eval``, ``pdf`` and ``sample``
 (``ptlab.grading.material.as_material``). The file is imported, and every method of the
-material runs, in a process of its own (``ptlab.untrusted``); the statistics and the
-verdict are computed here. The exit code is 0 when every check passes, 1 when one fails
-(or the material is ptlab's own, or its process hangs or ends), 2 when the file or the
-name cannot be loaded (one line on stderr, no traceback).
+material runs, in a process of its own (``ptlab.untrusted``: as ``nobody`` when the grader
+is root); the statistics and the verdict are computed here. The exit code is 0 when every
+check passes, 1 when one fails (or the material is ptlab's own or a copy of it, or its
+process hangs or ends), 2 when the file or the name cannot be loaded, or the import takes
+longer than a minute (one line on stderr, no traceback).
 
 ``ptlab.cli`` wires it in with ``add_grade_arguments(subparser)`` and the handler
 ``run_grade(args)``.
@@ -21,20 +22,34 @@ import json
 import sys
 from pathlib import Path
 
+from ptlab.errors import PtlabError
 from ptlab.grading.material import NotAMaterialError, as_material
 from ptlab.untrusted import (
+    IMPORT_TIME_LIMIT,
     GradeLoadError,
     ImportFailed,
     ProcessGuard,
+    RefusedSubmission,
     RemoteFunction,
+    Rules,
     StudentError,
     Submission,
     SubmissionFailed,
+    import_nothing_from_here,
     library_answer,
+    make_undumpable,
+    student_user,
+    take_in,
 )
+from ptlab.untrusted.copies import copied_class, describe_copies, is_a_copy
+from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
 CALL_TIME_LIMIT = 120.0
+#: ptlab's own materials, whose copies are not the student's. (They are no traps: a student's
+#: material may inherit some of its methods from one, as long as it writes one itself.)
+MATERIALS = Rules(answers=("ptlab.materials.Diffuse", "ptlab.materials.Microfacet",
+                           "ptlab.materials.Mirror", "ptlab.materials.Dielectric"))
 
 
 def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
@@ -49,8 +64,10 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentPar
     parser.add_argument("--samples", type=int, default=1_000_000,
                         help="directions sampled per wo (default 10^6)")
     parser.add_argument("--time-limit", type=float, default=900.0, metavar="SECONDS",
-                        help="stop the material's process after this long (default 900; one "
-                             f"call may take {CALL_TIME_LIMIT:.0f})")
+                        help="stop the material's process after this long (default 900; its "
+                             f"import may take {IMPORT_TIME_LIMIT:.0f}, one call "
+                             f"{CALL_TIME_LIMIT:.0f})")
+    add_student_user_argument(parser)
     return parser
 
 
@@ -63,10 +80,25 @@ def run_grade(args: argparse.Namespace) -> int:
     if not args.time_limit > 0:
         raise GradeLoadError(f"--time-limit {args.time_limit:g}: must be a positive number of seconds")
     path, name, keywords = parse_target(args.target, args.args)
+    try:
+        student_user(args.student_user)
+    except PtlabError as error:
+        raise GradeLoadError(str(error)) from None
+    make_undumpable()
+    import_nothing_from_here()
+    try:
+        taken = take_in(path)
+    except RefusedSubmission as refused:
+        raise GradeLoadError(str(refused)) from None
+    copied = copied_class(taken.tree, name, MATERIALS.fingerprints)
+    if is_a_copy(copied):
+        print(f"{args.target}: FAILED: {name} is {describe_copies(copied, taken.name)}, not yours")
+        return 1
     with ProcessGuard() as guard:
         try:
-            with Submission(path, guard, time_limit=args.time_limit,
-                            call_time_limit=CALL_TIME_LIMIT, on_output=_show_output) as submission:
+            with Submission(taken, guard, time_limit=args.time_limit,
+                            call_time_limit=CALL_TIME_LIMIT, on_output=_show_output,
+                            user=args.student_user) as submission:
                 origin = library_answer(submission.module, name)
                 if origin is not None:
                     failure = f"{name} is ptlab's own answer ({origin}), not yours"

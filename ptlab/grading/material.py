@@ -94,6 +94,11 @@ class AdaptedMaterial(Material):
         return repr(self.material)
 
 
+def derives_sample_weight(material) -> bool:
+    """Whether ``material``'s sample_weight is the graders' own, made of its three functions."""
+    return isinstance(material, AdaptedMaterial) and material._sample_weight is None
+
+
 def _takes_front(method) -> bool:
     try:
         parameters = inspect.signature(method).parameters.values()

@@ -6,10 +6,11 @@ angle element is d(cos theta) d(phi), every cell has the same solid angle
 material's pdf is smooth inside every cell. (This is the binning of Mitsuba 3's
 ``chi2`` test and of Nori's; Jakob, "Nori: an educational ray tracer", warptest.)
 
-``SphereGrid.integrate`` computes the integral of a function over every cell with a tensor
-3 x 3 Gauss-Legendre rule in (theta, phi), refining a region into 2 x 2 children (halving
-theta and phi) for as long as the children's
-sum differs from the parent's estimate by more than a tolerance: peaky lobes (a GGX with
+``SphereGrid.integrate`` computes the integral of a function over every cell (and
+``integrate_lobes`` those of several at once, one per lobe, so that one call to a material
+serves every lobe) with a tensor 3 x 3 Gauss-Legendre rule in (theta, phi), refining a
+region into 2 x 2 children (halving theta and phi) for as long as the children's sum
+differs from the parent's estimate by more than a tolerance: peaky lobes (a GGX with
 alpha = 0.05 concentrates its pdf in a few cells) get subdivided where they are, and
 smooth ones cost 45 evaluations a cell.
 """
@@ -92,49 +93,76 @@ class SphereGrid:
 
     def integrate(self, f: Callable[[np.ndarray], np.ndarray], tolerance: Callable,
                   max_levels: int = 7, max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
-        """Integrals of a vector-valued function over every cell, and their error bounds.
-
-        Args:
-            f: maps (P, 3) unit directions to (P, K) values.
-            tolerance: maps a region's (R, K) integrals and its (R,) solid angles to the
-                (R, K) errors accepted for it.
-            max_levels: how many times a cell may be halved in each direction.
-            max_regions: regions refined at once at most; beyond, the rest is accepted.
+        """Integrals of one vector-valued function over every cell, and their error bounds:
+        ``integrate_lobes`` with one lobe, ``f`` mapping (P, 3) directions to (P, K) values.
 
         Returns:
-            (cells, K) integrals and (K,) total error estimates (the sum of |fine - coarse|
-            over the accepted regions: an overestimate for smooth functions).
+            (cells, K) integrals and (K,) total error estimates.
+        """
+        totals, errors = self.integrate_lobes(lambda lobe, w: f(w), tolerance, 1, max_levels, max_regions)
+        return totals[0], errors[0]
+
+    def integrate_lobes(self, f: Callable[[np.ndarray, np.ndarray], np.ndarray], tolerance: Callable,
+                        lobes: int, max_levels: int = 7,
+                        max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+        """Integrals of ``lobes`` vector-valued functions over every cell, and their error bounds.
+
+        The functions are integrated together, so that each step asks ``f`` about the
+        points of all of them at once (one call to a material for every lobe).
+
+        Args:
+            f: maps (P,) lobe indices and (P, 3) unit directions to (P, K) values, each row
+                the value of its lobe's function.
+            tolerance: maps a region's (R, K) integrals and its (R,) solid angles to the
+                (R, K) errors accepted for it.
+            lobes: how many functions ``f`` holds.
+            max_levels: how many times a cell may be halved in each direction.
+            max_regions: regions of one lobe refined at once at most; beyond, the rest of
+                that lobe is accepted.
+
+        Returns:
+            (lobes, cells, K) integrals and (lobes, K) total error estimates (the sum of
+            |fine - coarse| over the accepted regions: an overestimate for smooth functions).
         """
         rows, columns = np.divmod(np.arange(self.cells), self.n_phi)
         # Regions are spans of theta (not cos theta) so that halving one near a pole halves its size.
         theta0 = np.arccos(np.clip(-1.0 + (rows + 1) * self.d_cos, -1.0, 1.0))
         d_theta = np.arccos(np.clip(-1.0 + rows * self.d_cos, -1.0, 1.0)) - theta0
-        regions = (theta0, columns * self.d_phi, d_theta, np.full(self.cells, self.d_phi),
-                   np.arange(self.cells))
-        coarse = self._rule(f, *regions[:4])
-        totals = np.zeros((self.cells, coarse.shape[1]))
-        error = np.zeros(coarse.shape[1])
+        # Every region: theta0, phi0, d_theta, d_phi, its cell and its lobe; the lobes of a
+        # cell side by side, so that every call of f has the points of all lobes interleaved.
+        regions = (np.repeat(theta0, lobes), np.repeat(columns * self.d_phi, lobes),
+                   np.repeat(d_theta, lobes), np.full(lobes * self.cells, self.d_phi),
+                   np.repeat(np.arange(self.cells), lobes), np.tile(np.arange(lobes), self.cells))
+        coarse = self._rule(f, *regions[:4], regions[5])
+        values = coarse.shape[1]
+        totals = np.zeros((lobes * self.cells, values))
+        error = np.zeros((lobes, values))
         for level in range(max_levels + 1):
             children = _split(*regions)
-            fine_parts = self._rule(f, *children[:4])
-            fine = fine_parts.reshape(-1, 4, fine_parts.shape[1]).sum(axis=1)
+            fine_parts = self._rule(f, *children[:4], children[5])
+            fine = fine_parts.reshape(-1, 4, values).sum(axis=1)
             difference = np.abs(fine - coarse)
             area = (np.cos(regions[0]) - np.cos(regions[0] + regions[2])) * regions[3]
             done = (difference <= tolerance(fine, area)).all(axis=1)
-            if level == max_levels or (~done).sum() * 4 > max_regions:
+            lobe = regions[5]
+            if level == max_levels:
                 done[:] = True
-            for k in range(totals.shape[1]):
-                totals[:, k] += np.bincount(regions[4][done], weights=fine[done, k], minlength=self.cells)
-            error += difference[done].sum(axis=0)
+            else:
+                done |= (np.bincount(lobe[~done], minlength=lobes) * 4 > max_regions)[lobe]
+            slot = lobe[done] * self.cells + regions[4][done]
+            for k in range(values):
+                totals[:, k] += np.bincount(slot, weights=fine[done, k], minlength=lobes * self.cells)
+                error[:, k] += np.bincount(lobe[done], weights=difference[done, k], minlength=lobes)
             if done.all():
                 break
             refine = np.repeat(~done, 4)
             regions = tuple(a[refine] for a in children)
             coarse = fine_parts[refine]
-        return totals, error
+        return totals.reshape(lobes, self.cells, values), error
 
-    def _rule(self, f, theta0, phi0, d_theta, d_phi) -> np.ndarray:
-        """(R, K) 3 x 3 Gauss-Legendre estimates of the integrals over R regions.
+    def _rule(self, f, theta0, phi0, d_theta, d_phi, lobe) -> np.ndarray:
+        """(R, K) 3 x 3 Gauss-Legendre estimates of the integrals over R regions, each of the
+        function of its (R,) ``lobe``.
 
         The rule runs over (theta, phi) with the weight sin theta: a function smooth on the
         sphere is smooth in (theta, phi) even at the poles, where as a function of
@@ -143,16 +171,18 @@ class SphereGrid:
         x = (_NODES + 1.0) / 2.0
         theta = (theta0[:, None, None] + d_theta[:, None, None] * x[None, :, None]).repeat(3, axis=2)
         phi = (phi0[:, None, None] + d_phi[:, None, None] * x[None, None, :]).repeat(3, axis=1)
-        values = np.asarray(f(self.directions(np.cos(theta).ravel(), phi.ravel())), dtype=np.float64)
+        values = np.asarray(f(np.repeat(lobe, 9), self.directions(np.cos(theta).ravel(), phi.ravel())),
+                            dtype=np.float64)
         values = values.reshape(len(theta0), 9, -1) * np.sin(theta).reshape(len(theta0), 9, 1)
         weights = np.outer(_WEIGHTS, _WEIGHTS).ravel() / 4.0
         return np.einsum("rpk,p->rk", values, weights) * (d_theta * d_phi)[:, None]
 
 
-def _split(theta0, phi0, d_theta, d_phi, cell):
-    """The 2 x 2 children of each region, the four of region r at rows 4r .. 4r + 3."""
+def _split(theta0, phi0, d_theta, d_phi, *labels):
+    """The 2 x 2 children of each region, the four of region r at rows 4r .. 4r + 3; the
+    ``labels`` (the cell, the lobe) are the parent's."""
     half_theta, half_phi = d_theta / 2.0, d_phi / 2.0
     theta_children = np.stack([theta0, theta0, theta0 + half_theta, theta0 + half_theta], axis=1).ravel()
     phi_children = np.stack([phi0, phi0 + half_phi, phi0, phi0 + half_phi], axis=1).ravel()
     return (theta_children, phi_children, np.repeat(half_theta, 4), np.repeat(half_phi, 4),
-            np.repeat(cell, 4))
+            *(np.repeat(label, 4) for label in labels))

@@ -3,8 +3,10 @@ trusted code judges.
 
 The graders (``ptlab grade``, ``ptlab exercise check``) never import a student's file.
 A ``Submission`` imports it in a process of its own, started from a fork server, with
-resource limits and a session of its own; the grader's checks run in the grader's process
-and get ``submission.module``, a stand-in whose functions run in the student's process::
+resource limits and a session of its own, in a private folder, as an unprivileged user
+when the grader is root, unable to start programs, with ptlab's own answers turned into
+traps and an audit hook's rules; the grader's checks run in the grader's process and get
+``submission.module``, a stand-in whose functions run in the student's process::
 
     with ProcessGuard() as guard:
         with Submission("06_diffuse.py", guard, time_limit=30) as submission:
@@ -16,33 +18,47 @@ What crosses back is plain data only (JSON and ``.npy`` arrays, ``plain_data``),
 pickle; a reply that is late, missing or malformed ends the check (``SubmissionFailed``).
 The ``ProcessGuard`` keeps every process the student's code starts, even one in a session
 of its own, where it can be ended, and ends them all before the grader writes a result.
-What this cannot stop without an operating-system boundary (another user, a container) is
-written down in docs/grading-security.md.
+What is left open, and what the operating system closes, is written down in
+docs/grading-security.md.
 
-Modules: ``submission`` (the grader's side), ``child`` (the student's process), ``proxies``
-(stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on pipes),
-``processes`` (the subreaper), ``ownership`` (is a name the student's code or ptlab's?).
+Modules: ``submission`` (the grader's side), ``intake`` (the submission, read once, and its
+private folders), ``rules`` (what the grader asks of it), ``child`` (the student's process),
+``student_user`` (as whom it runs), ``no_exec`` (no programs), ``traps`` (ptlab's answers
+made unusable), ``confinement`` (the audit hook), ``fork_server`` (its preload),
+``proxies`` (stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on
+pipes), ``processes`` (the subreaper), ``ownership`` (is a name the student's code or
+ptlab's?), ``copies`` (is a function a renamed copy of ptlab's?).
 """
 
 from __future__ import annotations
 
 from ptlab.untrusted.child import GradeLoadError, Limits
-from ptlab.untrusted.processes import ProcessGuard
+from ptlab.untrusted.intake import RefusedSubmission, Taken, take_in
+from ptlab.untrusted.processes import ProcessGuard, make_undumpable
 from ptlab.untrusted.proxies import (
+    ArgumentChanged,
     RemoteFunction,
     RemoteModule,
     RemoteObject,
     StudentError,
     submission_of,
 )
+from ptlab.untrusted.rules import Arguments, Rules
+from ptlab.untrusted.student_user import StudentUser, student_user
 from ptlab.untrusted.submission import (
+    IMPORT_TIME_LIMIT,
     ImportFailed,
     Submission,
     SubmissionFailed,
     UnreadableResultError,
+    copied_answer,
+    import_nothing_from_here,
     library_answer,
 )
 
-__all__ = ["GradeLoadError", "ImportFailed", "Limits", "ProcessGuard", "RemoteFunction",
-           "RemoteModule", "RemoteObject", "StudentError", "Submission", "SubmissionFailed",
-           "UnreadableResultError", "library_answer", "submission_of"]
+__all__ = ["IMPORT_TIME_LIMIT", "ArgumentChanged", "Arguments", "GradeLoadError", "ImportFailed",
+           "Limits", "ProcessGuard", "RefusedSubmission", "RemoteFunction", "RemoteModule",
+           "RemoteObject", "Rules", "StudentError", "StudentUser", "Submission",
+           "SubmissionFailed", "Taken", "UnreadableResultError", "copied_answer",
+           "import_nothing_from_here", "library_answer", "make_undumpable", "student_user",
+           "submission_of", "take_in"]

@@ -4,11 +4,16 @@ It is started by ``ptlab.untrusted.submission`` from a fork server, and everythi
 is the student's to change: the grader trusts nothing it says beyond the schema of
 ``ptlab.untrusted.plain_data``. It
 
-1. leaves the grader's session and process group, asks to be killed if the fork server
-   goes, closes the fork server's pipe it inherited, points its stdout and stderr at the
-   grader's output pipe, and lowers its own resource limits (``Limits``);
-2. imports the student's file (``import_file``) and says whether that worked;
-3. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
+1. leaves the grader's session and process group, closes the fork server's pipes it
+   inherited and points its stdout and stderr at the grader's output pipe;
+2. becomes the student's user, when the grader is root, in a network of its own
+   (``ptlab.untrusted.student_user``); asks to be killed if the fork server goes; moves into
+   its private folder, with an environment of its own; lowers its resource limits
+   (``Limits``); cannot start programs from then on (``ptlab.untrusted.no_exec``, unless the
+   chapter's code must); sets the traps on ptlab's answers (``ptlab.untrusted.traps``) and
+   the rules of its audit hook (``ptlab.untrusted.confinement``);
+3. imports the student's file (``import_file``) and says whether that worked;
+4. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
    an object it holds (object 0 is the student's module), ``call`` a function or method,
    ``call_each`` a method of several objects on their rows, ``repr`` an object,
    ``import_by_stem`` the file again under its own name.
@@ -33,6 +38,7 @@ import pickle
 import resource
 import signal
 import sys
+import tempfile
 import traceback
 from dataclasses import dataclass, fields, is_dataclass
 from multiprocessing.connection import Connection
@@ -43,8 +49,14 @@ import numpy as np
 from ptlab.errors import PtlabError
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
+from ptlab.untrusted.confinement import Refused, confine
+from ptlab.untrusted.copies import Answer
+from ptlab.untrusted.no_exec import forbid_programs
 from ptlab.untrusted.ownership import MATERIAL_METHODS
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
+from ptlab.untrusted.processes import make_undumpable
+from ptlab.untrusted.student_user import StudentUser, become, isolate_network
+from ptlab.untrusted.traps import set_traps
 
 #: The ptlab package: code under it is the library's own, not a student's.
 PTLAB = Path(__file__).resolve().parent.parent
@@ -53,6 +65,9 @@ PTLAB = Path(__file__).resolve().parent.parent
 INTERFACE = PTLAB / "materials" / "base.py"
 MAX_MESSAGE_TEXT = 2000
 PR_SET_PDEATHSIG = 1
+#: Environment variables the student's process keeps (the rest may hold the grader's secrets).
+KEPT_ENVIRONMENT = ("PATH", "LANG", "LC_ALL", "LC_CTYPE", "TZ", "OMP_NUM_THREADS",
+                    "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
 
 
 class GradeLoadError(PtlabError):
@@ -78,6 +93,28 @@ class Limits:
     processes: int = 512
 
 
+@dataclass(frozen=True)
+class Confinement:
+    """Where and as whom the student's process runs, and what it may not reach (the
+    grader's side makes it from the ``ptlab.untrusted.rules.Rules`` of the check).
+
+    Attributes:
+        folder: its private folder, which holds the submission's files.
+        user: the user it becomes (the grader is root), or None to stay the grader's.
+        traps: dotted names of ptlab's answers to trap (``ptlab.untrusted.traps``).
+        answers: fingerprints of the answers it may not compile (``ptlab.untrusted.copies``).
+        programs: it may start programs.
+        limits: its resource limits.
+    """
+
+    folder: str
+    user: StudentUser | None
+    traps: tuple[str, ...]
+    answers: dict[str, Answer]
+    programs: bool
+    limits: Limits
+
+
 def import_file(path: Path):
     """Import a Python file as a module of its own; its folder is importable while it loads."""
     module_name = f"ptlab_graded_{abs(hash(str(path.resolve())))}"
@@ -92,10 +129,13 @@ def import_file(path: Path):
         spec.loader.exec_module(module)
     except SyntaxError as error:
         del sys.modules[module_name]
-        raise GradeLoadError(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
+        raise GradeLoadError(f"{path.name}:{error.lineno}: syntax error: {error.msg}") from None
+    except Refused as error:    # one of the grader's rules (ptlab.untrusted.confinement)
+        sys.modules.pop(module_name, None)
+        raise GradeLoadError(f"{path.name}: {_text(error)}") from None
     except BaseException as error:  # anything the student's module raises on import  # noqa: B036
         sys.modules.pop(module_name, None)
-        raise GradeLoadError(f"{path}: importing it raised {type(error).__name__}: "
+        raise GradeLoadError(f"{path.name}: importing it raised {type(error).__name__}: "
                              f"{_text(error)}") from None
     finally:
         sys.path.remove(folder)
@@ -103,14 +143,18 @@ def import_file(path: Path):
 
 
 def serve(path: str, receive: Connection, send: Connection, output: Connection,
-          limits: Limits) -> None:
+          confinement: Confinement) -> None:
     """The child's whole life: set up, import the student's file, answer until told to stop.
 
     ``receive``, ``send`` and ``output`` are the pipes' ends (as ``Connection`` objects,
     which the fork server passes to a new process; only their file descriptors are used).
     """
-    _leave_the_grader(output.fileno(), limits, keep={receive.fileno(), send.fileno()})
+    _leave_the_grader(output.fileno(), keep={receive.fileno(), send.fileno()})
     keep_freed_memory()     # every call's arrays arrive in new buffers: no page faults for them
+    # All of ptlab, before reading its files is refused: done already if the fork server was
+    # started for the graders, not if a render of this process started it first.
+    importlib.import_module("ptlab.untrusted.fork_server")
+    _confine(confinement)
     requests = Reader(receive.fileno())
     server = _Server(Path(path), send.fileno())
     try:
@@ -127,10 +171,8 @@ def serve(path: str, receive: Connection, send: Connection, output: Connection,
         server.answer(parts)
 
 
-def _leave_the_grader(output_fd: int, limits: Limits, keep: set[int]) -> None:
+def _leave_the_grader(output_fd: int, keep: set[int]) -> None:
     os.setsid()     # a session and process group of its own: the grader's terminal signals stay there
-    if sys.platform.startswith("linux"):
-        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     _close_inherited(keep | {output_fd})
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)
@@ -140,28 +182,59 @@ def _leave_the_grader(output_fd: int, limits: Limits, keep: set[int]) -> None:
     for stream in (sys.stdout, sys.stderr):
         if stream is not None:
             stream.reconfigure(line_buffering=True)
+
+
+def _confine(confinement: Confinement) -> None:
+    """Step 2 of the module docstring, in an order that matters: the network and the user
+    are changed while the process is still root; the parent-death signal after the change
+    of user (which clears it); the limits when the user's process count is known; the
+    traps before the audit hook (setting them makes code objects, which the hook refuses)."""
+    if confinement.user is not None:
+        isolate_network()
+        become(confinement.user)
+    make_undumpable()       # (a change of user does it too, where fs.suid_dumpable is 0): two
+    # students graded at once as the same user cannot ptrace each other
+    if sys.platform.startswith("linux"):
+        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+    _move_into(Path(confinement.folder))
+    limits = confinement.limits
     for name, value in ((resource.RLIMIT_CPU, limits.cpu_seconds),
                         (resource.RLIMIT_AS, limits.memory_bytes),
                         (resource.RLIMIT_FSIZE, limits.file_bytes),
                         (resource.RLIMIT_CORE, 0),
                         (resource.RLIMIT_NPROC, _user_tasks() + limits.processes)):
         _lower_limit(name, value)
+    if not confinement.programs:
+        forbid_programs()
+    set_traps(confinement.traps)
+    confine(Path(confinement.folder), confinement.answers, confinement.programs)
+
+
+def _move_into(folder: Path) -> None:
+    """Work in ``folder``: the current folder, HOME and the temporary folder (for this
+    process's own pools too), with only ``KEPT_ENVIRONMENT`` of the grader's variables."""
+    import multiprocessing
+
+    os.chdir(folder)
+    kept = {name: os.environ[name] for name in KEPT_ENVIRONMENT if name in os.environ}
+    os.environ.clear()
+    os.environ.update(kept, HOME=str(folder), TMPDIR=str(folder))
+    tempfile.tempdir = str(folder)
+    multiprocessing.current_process()._config.pop("tempdir", None)   # (the grader's, else)
 
 
 def _close_inherited(keep: set[int]) -> None:
-    """Close every file descriptor but stdin, stdout, stderr, ``keep`` and the resource
-    tracker's.
+    """Close every file descriptor but stdin, stdout, stderr and ``keep``.
 
     A process from multiprocessing's fork server inherits the grader's end of the fork
-    server's "alive" pipe (so that it could start processes through that server); written
-    to, it crashes the grader's fork server, so it goes, and the student's code gets a fork
-    server of its own should it start processes. The resource tracker's pipe stays: what
-    the student's code can do with it (register names for the tracker to unlink at its exit)
-    it can do anyway as the same user, and its pools need no tracker of their own.
+    server's "alive" pipe (so that it could start processes through that server), and the
+    resource tracker's pipe. Written to, the first crashes the grader's fork server; the
+    second would have the grader's tracker remove shared memory of the student's naming
+    when the grader ends. Both go: the student's code gets a fork server and a tracker of
+    its own should it start processes (where the chapter lets it).
     """
     from multiprocessing import forkserver, resource_tracker
 
-    keep = keep | {resource_tracker._resource_tracker._fd}
     try:
         open_fds = [int(name) for name in os.listdir("/proc/self/fd")]
     except OSError:
@@ -175,6 +248,8 @@ def _close_inherited(keep: set[int]) -> None:
     # Forget them: multiprocessing's own records of the inherited ends just closed.
     forkserver._forkserver._forkserver_alive_fd = None
     forkserver._forkserver._inherited_fds = None
+    resource_tracker._resource_tracker._fd = None
+    resource_tracker._resource_tracker._pid = None
 
 
 def _lower_limit(name: int, value: int) -> None:
@@ -315,10 +390,11 @@ class _Server:
                 "not_implemented": isinstance(error, NotImplementedError)}
 
     def where(self, error: BaseException) -> str | None:
-        """``file.py:line`` of the deepest frame of the student's file in the traceback."""
-        graded = self.path.resolve()
-        lines = [frame.lineno for frame in traceback.extract_tb(error.__traceback__)
-                 if Path(frame.filename).resolve() == graded]
+        """``file.py:line`` of the deepest frame of the student's file in the traceback
+        (from the frames alone: reading the source lines of ptlab's files is refused)."""
+        graded = str(self.path.resolve())
+        lines = [line for frame, line in traceback.walk_tb(error.__traceback__)
+                 if os.path.realpath(frame.f_code.co_filename) == graded]
         return f"{self.path.name}:{lines[-1]}" if lines else None
 
 

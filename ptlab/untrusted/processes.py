@@ -24,6 +24,7 @@ import time
 from collections.abc import Iterable
 from pathlib import Path
 
+PR_SET_DUMPABLE = 4
 PR_SET_CHILD_SUBREAPER = 36
 PR_GET_CHILD_SUBREAPER = 37
 #: Stop-and-look sweeps before giving up on a tree that keeps growing (a fork bomb is
@@ -45,6 +46,15 @@ def _prctl(option: int, value: int = 0) -> int:
     if libc.prctl(option, ctypes.c_ulong(value), 0, 0, 0) != 0:
         raise OSError(ctypes.get_errno(), "prctl failed")
     return 0
+
+
+def make_undumpable() -> None:
+    """Make this process non-dumpable (prctl(2) ``PR_SET_DUMPABLE`` 0): no process without
+    CAP_SYS_PTRACE can attach to it or read its memory and file descriptors through
+    ``/proc``, not even one of its own user (a student's process when the grader is not
+    root). It also writes no core file. Nothing elsewhere than Linux."""
+    if LINUX:
+        _prctl(PR_SET_DUMPABLE, 0)
 
 
 def _scan() -> dict[int, tuple[int, bool]]:

@@ -17,7 +17,10 @@ from __future__ import annotations
 
 import inspect
 from pathlib import Path
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
+
+if TYPE_CHECKING:
+    from ptlab.untrusted.rules import Rules
 
 #: Longest name of a student's class or exception shown as such.
 MAX_NAME = 60
@@ -27,6 +30,7 @@ class Submission(Protocol):
     """What a stand-in needs of the student's process (``ptlab.untrusted.submission``)."""
 
     path: Path
+    rules: Rules
 
     def request(self, operation: str, *arguments, during: str): ...
 
@@ -56,7 +60,20 @@ class StudentError(Exception):
         if self.not_implemented:
             name = f"{self} " if str(self) else ""
             return f"{name}is not written yet: it still raises NotImplementedError ({place})"
+        if self.type_name == "LibraryAnswerCalled":     # a trap (ptlab.untrusted.traps)
+            return f"{self} ({place})"
         return f"{self.type_name}: {self} ({place})"
+
+
+class ArgumentChanged(StudentError):  # noqa: N818 (a verdict, like the errors it stands beside)
+    """The student's function changed an argument it may only read (the grader's verdict,
+    ``ptlab.untrusted.rules.Arguments``)."""
+
+    def __init__(self, message: str):
+        super().__init__("ArgumentChanged", message, None, False)
+
+    def describe(self) -> str:
+        return str(self)
 
 
 _error_classes: dict[str, type] = {}
@@ -80,12 +97,16 @@ class RemoteFunction:
         kind: ``"function"``, ``"method"`` or ``"class"``.
         origin: the dotted name of ptlab's own function or class this is, according to the
             student's process (``ptlab.untrusted.ownership`` looks at the file itself).
+        arguments: what it may do to its arguments (see ``__init__``).
     """
 
     def __init__(self, submission: Submission, tag: dict):
         self._submission, self._handle = submission, tag["function"]
         self.__name__ = self.__qualname__ = tag["name"]
         self.kind, self.origin = tag["kind"], tag["origin"]
+        #: What it may do to its arguments (``ptlab.untrusted.rules.Arguments``): set by the
+        #: module it was taken from, for the graded functions; None drops every change.
+        self.arguments = None
         if tag["parameters"] is not None:
             try:
                 self.__signature__ = inspect.Signature(
@@ -155,10 +176,17 @@ def remote_object(submission: Submission, handle: int, type_name: str) -> Remote
 
 
 class RemoteModule(RemoteObject):
-    """The student's module (object 0 of its process)."""
+    """The student's module (object 0 of its process). Its functions get the grader's
+    rules for their arguments, looked up by the name the grader asked for."""
 
     def __init__(self, submission: Submission, handle: int = 0):
         super().__init__(submission, handle, "module")
+
+    def __getattr__(self, name: str):
+        value = super().__getattr__(name)
+        if isinstance(value, RemoteFunction):
+            value.arguments = self._submission.rules.arguments.get(name)
+        return value
 
     def _name_of(self, attribute: str) -> str:
         return attribute

@@ -1,10 +1,13 @@
 """A student's file, imported in a process of its own, and the grader's end of the talk.
 
-``Submission(path, ...)`` reads the file's source (a syntax error is reported without
-running anything), starts a process from a fork server (a clean interpreter that has
-already imported NumPy and the renderer, so a check's process starts in milliseconds and
-inherits no Embree threads), waits for it to import the file, and gives the grader
-``submission.module``, a stand-in for the student's module (``ptlab.untrusted.proxies``).
+``Submission(path, ...)`` reads the submission once (``ptlab.untrusted.intake``: a syntax
+error is reported without running anything), starts a process from a fork server (a clean
+interpreter that has already imported NumPy and the whole of ptlab, so a check's process
+starts in milliseconds and inherits no Embree threads) in a private folder holding the
+submission's files, as the student's user when the grader is root, with ptlab's answers
+trapped and its rules kept (``ptlab.untrusted.child``); waits, at most the import's own
+time limit, for it to import the file; and gives the grader ``submission.module``, a
+stand-in for the student's module (``ptlab.untrusted.proxies``).
 
 Every request is pickled to the student's process (which may unpickle the grader's data:
 it is the grader's), and every reply is plain data (``ptlab.untrusted.plain_data``), by a
@@ -21,7 +24,6 @@ Embree structure cannot be pickled and is rebuilt there from its triangles.
 
 from __future__ import annotations
 
-import ast
 import io
 import json
 import multiprocessing
@@ -30,6 +32,7 @@ import multiprocessing.forkserver
 import os
 import pickle
 import signal
+import sys
 import time
 from collections.abc import Callable
 from dataclasses import fields, is_dataclass
@@ -39,12 +42,15 @@ import numpy as np
 
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import Channel, ChannelClosedError, ChannelError, ChannelTimeoutError, enlarge
-from ptlab.untrusted.child import PTLAB, Limits, serve
+from ptlab.untrusted.child import Confinement, Limits, serve
+from ptlab.untrusted.copies import copies_in, describe_copies, is_a_copy
+from ptlab.untrusted.intake import RefusedSubmission, Taken, private_folder, remove_folder, take_in
 from ptlab.untrusted.ownership import library_answer as borrowed_answer
 from ptlab.untrusted.plain_data import RECORDS, Decoder, MalformedError
 from ptlab.untrusted.processes import LINUX, ProcessGuard, process_table
 from ptlab.untrusted.proxies import (
     STAND_INS,
+    ArgumentChanged,
     RemoteFunction,
     RemoteModule,
     RemoteObject,
@@ -53,13 +59,17 @@ from ptlab.untrusted.proxies import (
     student_error,
     submission_of,
 )
+from ptlab.untrusted.rules import Arguments, Rules
+from ptlab.untrusted.student_user import student_user
 
-#: Imported once in the fork server, not again in every check's process.
-PRELOAD = ["numpy", "ptlab.rendering", "ptlab.untrusted.child"]
+#: Imported once in the fork server: it makes the server non-dumpable and imports all of
+#: ptlab (``ptlab.untrusted.fork_server``).
+PRELOAD = ["ptlab.untrusted.fork_server"]
 #: The largest reply, in bytes (a few renders' worth of arrays).
 MAX_REPLY = 1 << 30
-#: The library's own answers, which are graded as themselves (not as re-exports).
-SOLUTIONS = PTLAB / "exercises" / "solutions"
+#: Seconds the import of the student's file may take, at most (less if the check's whole
+#: limit is less): a file that hangs at import fails within it.
+IMPORT_TIME_LIMIT = 60.0
 
 
 class SubmissionFailed(BaseException):  # noqa: N818 (ends a check, like KeyboardInterrupt)
@@ -76,10 +86,12 @@ class SubmissionFailed(BaseException):  # noqa: N818 (ends a check, like Keyboar
 
 
 class ImportFailed(SubmissionFailed):
-    """The student's file cannot be imported (a syntax error, an exception at import)."""
+    """The student's file cannot be imported (a syntax error, an exception at import, a
+    submission that is refused, or an import that took longer than its limit: ``kind``
+    ``"import"``, or ``"import timeout"``)."""
 
-    def __init__(self, message: str):
-        super().__init__(message, "import")
+    def __init__(self, message: str, kind: str = "import"):
+        super().__init__(message, kind)
 
 
 class UnreadableResultError(StudentError):
@@ -100,43 +112,64 @@ def shared_types() -> frozenset[type]:
 
 
 class Submission:
-    """The student's file at ``path``, imported in a process of its own.
+    """The student's submission, imported in a process of its own.
 
     Args:
-        path: the student's Python file.
+        submission: the student's Python file, or the ``Taken`` submission read already
+            (``ptlab.untrusted.intake.take_in``, once for all the checks of a grading).
         guard: the ``ProcessGuard`` that ends the process and all it starts.
         time_limit: seconds, from when the process has started, by which everything asked
             of it must be done.
         call_time_limit: seconds any one request may take (default: the whole ``time_limit``).
         on_output: called with each line the student's code prints (default: dropped).
         limits: the process's resource limits.
+        rules: what the grader asks of the submission (``ptlab.untrusted.rules``).
+        user: the user the student's code runs as, by name (``--student-user``); None for
+            the default: ``nobody`` when the grader is root, else the grader's own user.
+        import_time_limit: seconds the import may take (default ``IMPORT_TIME_LIMIT``, or
+            ``time_limit`` if that is less).
 
     Raises:
-        ImportFailed: the file has a syntax error, or importing it raised or timed out.
+        ImportFailed: the submission is refused, has a syntax error, or importing it raised
+            or took too long.
     """
 
-    def __init__(self, path: str | Path, guard: ProcessGuard, time_limit: float,
+    def __init__(self, submission: str | Path | Taken, guard: ProcessGuard, time_limit: float,
                  call_time_limit: float | None = None,
                  on_output: Callable[[str], None] | None = None,
-                 limits: Limits | None = None):
-        self.path = Path(path)
+                 limits: Limits | None = None, *, rules: Rules | None = None,
+                 user: str | None = None, import_time_limit: float | None = None):
+        self.rules = rules or Rules()
+        try:
+            self.taken = submission if isinstance(submission, Taken) else \
+                take_in(submission, library=self.rules.library)
+        except RefusedSubmission as refused:
+            raise ImportFailed(str(refused)) from None
+        self.path = self.taken.path
+        self.tree = self.taken.tree
+        self.library_answers_allowed = self.rules.library
+        self.user = student_user(user)
         self.guard = guard
         self.time_limit = time_limit
         self.call_time_limit = call_time_limit
-        self.tree = parse(self.path)
-        self.library_answers_allowed = self.path.resolve().is_relative_to(SOLUTIONS)
         self._requests = 0
         self._failure: SubmissionFailed | None = None
         self._shared: dict[int, tuple[int, object]] = {}
         self._shared_types = shared_types()
         self._special: tuple[int, frozenset[type]] | None = None
-        self.process, self.channel = self._start(on_output, limits or Limits(
-            cpu_seconds=int(time_limit) + 10))
+        self.folder = private_folder(self.taken, self.user)
+        try:
+            self.process, self.channel = self._start(on_output, limits or Limits(
+                cpu_seconds=int(time_limit) + 10))
+        except BaseException:
+            remove_folder(self.folder)
+            raise
         # From here: starting the fork server (the first time, a second or two) is not the
         # student's time.
-        self.deadline = time.monotonic() + time_limit
+        started = time.monotonic()
+        self.deadline = started + time_limit
         self.module = RemoteModule(self)
-        self._wait_until_imported()
+        self._wait_until_imported(started + min(import_time_limit or IMPORT_TIME_LIMIT, time_limit))
 
     # -- starting and ending -------------------------------------------------------------
 
@@ -152,9 +185,12 @@ class Submission:
         for fd in (request_w, reply_w):
             enlarge(fd)
         ends = [multiprocessing.connection.Connection(fd) for fd in (request_r, reply_w, output_w)]
+        confinement = Confinement(folder=str(self.folder), user=self.user, traps=self.rules.traps,
+                                  answers=self.rules.fingerprints, programs=self.rules.programs,
+                                  limits=limits)
         # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
-        process = context.Process(target=serve, args=(str(self.path), *ends, limits),
-                                  name="ptlab-student")
+        process = context.Process(target=serve, args=(str(self.folder / self.taken.name), *ends,
+                                                      confinement), name="ptlab-student")
         try:
             process.start()
         finally:
@@ -172,12 +208,14 @@ class Submission:
         return self.process.pid
 
     def close(self) -> None:
-        """End the student's process and every process below it; close the pipes."""
+        """End the student's process and every process below it; close the pipes; remove
+        its private folder."""
         self.guard.end(self.process.pid)
         self.process.join(5)
         self.channel.close()
         if self.process.exitcode is not None:
             self.process.close()
+        remove_folder(self.folder)
 
     def __enter__(self) -> Submission:
         return self
@@ -203,14 +241,15 @@ class Submission:
             return found["taken_by"]
         self._fail("malformed", f"importing {self.path.name} by name", "not a module")
 
-    def _wait_until_imported(self) -> None:
+    def _wait_until_imported(self, deadline: float) -> None:
         try:
-            envelope, _ = self._receive(0, "importing your file")
+            envelope, _ = self._receive(0, "importing your file", deadline)
         except SubmissionFailed as failure:
             self.close()
             if failure.kind == "timeout":
-                raise ImportFailed(f"importing {self.path.name} took longer than "
-                                   f"{self.time_limit:g} s (does it run something at import?)") from None
+                limit = deadline - (self.deadline - self.time_limit)
+                raise ImportFailed(f"importing {self.path.name} took longer than {limit:.3g} s "
+                                   f"(does it run something at import?)", "import timeout") from None
             raise ImportFailed(str(failure)) from None
         if "import_failed" in envelope and type(envelope["import_failed"]) is str:
             self.close()
@@ -222,13 +261,14 @@ class Submission:
     # -- requests ------------------------------------------------------------------------
 
     def call(self, function: RemoteFunction, args: tuple, kwargs: dict):
-        """Run the student's ``function`` on the grader's arguments; a plain function's
-        changes to its arguments (arrays written into, ...) are copied into them here."""
-        writeback = function.kind == "function"
-        value, changes = self.request("call", function._handle, args, kwargs, writeback,
-                                      during=function.__name__, changes=True)
-        if writeback:
-            self._write_back((args, kwargs), changes, function.__name__)
+        """Run the student's ``function`` on the grader's arguments. A graded function's
+        changes to the arguments it writes (``Rules.arguments``) are copied into them here;
+        a change to one it may only read fails the check (``ArgumentChanged``)."""
+        arguments = function.arguments if function.kind == "function" else None
+        value, changes = self.request("call", function._handle, args, kwargs,
+                                      arguments is not None, during=function.__name__, changes=True)
+        if arguments is not None:
+            self._take_changes((args, kwargs), changes, arguments, function.__name__)
         return value
 
     def call_each(self, objects: list[RemoteObject], which: np.ndarray, method: str, *args):
@@ -362,31 +402,44 @@ class Submission:
                 entry[1] not in ("array", "state", "value"):
             raise MalformedError("a change that is not [path, how, value]")
         path = entry[0]
-        if not path or not all(type(step) is list and len(step) == 2 and
-                               step[0] in ("item", "key", "field") for step in path):
+        if len(path) < 2 or not all(type(step) is list and len(step) == 2 and
+                                    step[0] in ("item", "key", "field") for step in path) \
+                or path[0] not in (["item", 0], ["item", 1]):
             raise MalformedError("a change with a bad path")
         return path, entry[1], decoder.decode(entry[2])
 
-    def _write_back(self, arguments, changes: list, during: str) -> None:
+    def _take_changes(self, call: tuple, changes: list, arguments: Arguments, during: str) -> None:
+        """Copy the changes to the arguments ``arguments.writes`` into the grader's; drop
+        those to its scratch arguments; fail on any other."""
+        for path, how, value in changes:
+            (_, part), (_, key) = path[0], path[1]
+            name = arguments.name(key) if part == 0 and type(key) is int else str(key)
+            if name in arguments.scratch:
+                continue
+            if name not in arguments.writes:
+                raise ArgumentChanged(f"{during} changed its argument {name}, which it must only "
+                                      f"read (change a copy: {name}.copy(), or make a new array)")
+            self._write_back(call, path, how, value, during)
+
+    def _write_back(self, call: tuple, path: list, how: str, value, during: str) -> None:
         try:
-            for path, how, value in changes:
-                container = arguments
-                for step in path[:-1]:
-                    container = _step(container, *step)
-                kind, key = path[-1]
-                target = _step(container, kind, key)
-                if how == "array":
-                    if not (isinstance(target, np.ndarray) and isinstance(value, np.ndarray)
-                            and target.shape == value.shape):
-                        raise MalformedError("an array change that does not fit the argument")
-                    if target.flags.writeable:
-                        np.copyto(target, value, casting="unsafe")
-                elif how == "state":
-                    if not isinstance(target, np.random.Generator):
-                        raise MalformedError("a generator state for something else")
-                    target.bit_generator.state = value
-                else:
-                    _rebind(container, kind, key, value)
+            container = call
+            for step in path[:-1]:
+                container = _step(container, *step)
+            kind, key = path[-1]
+            target = _step(container, kind, key)
+            if how == "array":
+                if not (isinstance(target, np.ndarray) and isinstance(value, np.ndarray)
+                        and target.shape == value.shape):
+                    raise MalformedError("an array change that does not fit the argument")
+                if target.flags.writeable:
+                    np.copyto(target, value, casting="unsafe")
+            elif how == "state":
+                if not isinstance(target, np.random.Generator):
+                    raise MalformedError("a generator state for something else")
+                target.bit_generator.state = value
+            else:
+                _rebind(container, kind, key, value)
         except MalformedError as error:
             self._fail("malformed", during, str(error))
         except (TypeError, ValueError, KeyError) as error:   # a state numpy refuses, ...
@@ -472,20 +525,6 @@ def _rebind(container, kind: str, key, value) -> None:
         raise MalformedError(f"a new value at {kind} {key!r}, which cannot be given one")
 
 
-def parse(path: Path) -> ast.Module:
-    """The file's syntax tree; ``ImportFailed`` for a syntax error (nothing is run)."""
-    try:
-        source = path.read_bytes()
-    except OSError as error:
-        raise ImportFailed(f"{path}: cannot read it: {error.strerror}") from None
-    try:
-        return ast.parse(source, filename=str(path))
-    except SyntaxError as error:
-        raise ImportFailed(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
-    except (ValueError, RecursionError, MemoryError) as error:
-        raise ImportFailed(f"{path}: not a Python file Python can read ({type(error).__name__})") from None
-
-
 def library_answer(module: RemoteModule, name: str) -> str | None:
     """The ptlab answer that the student's ``name`` is (``ptlab.integrators.path.trace_paths``),
     or None if it is the student's own code; the library's own answers (``solutions/``)
@@ -498,6 +537,22 @@ def library_answer(module: RemoteModule, name: str) -> str | None:
         value = getattr(module, name, None)
         found = value.origin if isinstance(value, RemoteFunction) else None
     return found
+
+
+def import_nothing_from_here() -> None:
+    """Take the current folder off ``sys.path`` (``python -m`` puts it first), so that
+    nothing the grader imports later, nor its fork server, can come from a module planted
+    there. ptlab itself, if it was imported from there, keeps finding its own modules."""
+    here = os.getcwd()
+    sys.path[:] = [entry for entry in sys.path if entry not in ("", here)]
+
+
+def copied_answer(module: RemoteModule) -> str | None:
+    """"a copy of ptlab's own answer (...)" if the student's file holds copies of the
+    rules' answers that add up to one (``ptlab.untrusted.copies``), else None."""
+    submission = submission_of(module)
+    found = copies_in(submission.tree, submission.rules.fingerprints)
+    return describe_copies(found, submission.path.name) if is_a_copy(found) else None
 
 
 def _exit_cause(code: int | None) -> str:

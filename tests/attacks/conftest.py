@@ -7,7 +7,8 @@ import shutil
 from pathlib import Path
 
 import pytest
-from hostile import SUBMISSIONS
+
+from attacks.hostile import SUBMISSIONS
 
 
 @pytest.fixture(autouse=True)

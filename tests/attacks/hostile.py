@@ -17,6 +17,12 @@ def alive(pids) -> list[int]:
     return [pid for pid in pids if pid in running]
 
 
+def printed_pids(output: str) -> list[int]:
+    """The pids a hostile submission printed, from the grader's stderr (``    | 1234``)."""
+    return [int(line.split("|", 1)[1]) for line in output.splitlines()
+            if "|" in line and line.split("|", 1)[1].strip().isdigit()]
+
+
 def assert_honest_failure(result, reason: str = "") -> None:
     """Every check of the ``Grade`` failed, with ``reason`` in its message and no traceback."""
     assert result.score == 0, result.table()

@@ -6,18 +6,27 @@ mirror or glass, add the emission they see: ``hit.sees_emission``.)"""
 
 import numpy as np
 
-from ptlab.integrators import path
-from ptlab.integrators.path import PathSettings, add_to_film, surface_hit
-from ptlab.integrators.path import direct_light as library_direct_light
+from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms
-from ptlab.vectors import take_rows
+from ptlab.vectors import dot, take_rows
 
 EXPECTED_FAILURES = ("white furnace", "Cornell box")
 
 
 def direct_light(film, scene, accel, hit, u):
-    rays = library_direct_light(film, scene, accel, hit, u, PathSettings(strategy="nee"))
-    return rays
+    light = scene.lights.sample(u)
+    to_light = light.points - hit.p
+    dist2 = dot(to_light, to_light)
+    wi = to_light / np.sqrt(dist2)[:, None]
+    cos_theta = np.maximum(dot(hit.n, wi), 0)
+    cos_theta_light = np.maximum(-dot(light.normals, wi), 0)
+    origin = hit.p + hit.offset[:, None] * hit.n
+    target = light.points + light.offset * light.normals
+    visible = ~accel.occluded(origin, target - origin, 1 - SHADOW_EPSILON)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    scale = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    add_to_film(film, hit.pixel, hit.throughput * f * light.radiance * scale[:, None])
+    return len(wi)
 
 
 def russian_roulette(throughput, p_rr, u):
@@ -25,9 +34,18 @@ def russian_roulette(throughput, p_rr, u):
 
 
 def scatter(scene, hit, u, survive):
-    """The library's indirect bounce (this file is about another mistake)."""
-    paths = path.scatter(scene, hit, u, survive)
-    return paths
+    wi = shade(hit, "sample", hit.wo, hit.n, u)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
+    cos_theta = np.abs(dot(wi, hit.n))
+    weight = np.where(pdf > 1e-8, cos_theta / np.maximum(pdf, 1e-8), 0).astype(np.float32)
+    throughput = hit.throughput * f * weight[:, None]
+    side = np.where(dot(wi, hit.n) >= 0, hit.offset, -hit.offset)
+    origins = hit.p + side[:, None] * hit.n
+    rows = np.flatnonzero(survive)
+    return Paths(origins=take_rows(origins, rows), dirs=take_rows(wi, rows),
+                 throughput=take_rows(throughput, rows), pixel=hit.pixel[rows],
+                 sees_emission=hit.delta[rows], sample=hit.sample[rows])
 
 
 def trace_paths(film, scene, accel, paths, sampler, settings):

@@ -5,8 +5,7 @@ too dark, speckled where a few shadow rays get through."""
 
 import numpy as np
 
-from ptlab.integrators import path
-from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, shade, surface_hit
+from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms
 from ptlab.vectors import dot, take_rows
 
@@ -32,9 +31,18 @@ def russian_roulette(throughput, p_rr, u):
 
 
 def scatter(scene, hit, u, survive):
-    """The library's indirect bounce (this file is about another mistake)."""
-    paths = path.scatter(scene, hit, u, survive)
-    return paths
+    wi = shade(hit, "sample", hit.wo, hit.n, u)
+    f = shade(hit, "eval", hit.wo, wi, hit.n)
+    pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
+    cos_theta = np.abs(dot(wi, hit.n))
+    weight = np.where(pdf > 1e-8, cos_theta / np.maximum(pdf, 1e-8), 0).astype(np.float32)
+    throughput = hit.throughput * f * weight[:, None]
+    side = np.where(dot(wi, hit.n) >= 0, hit.offset, -hit.offset)
+    origins = hit.p + side[:, None] * hit.n
+    rows = np.flatnonzero(survive)
+    return Paths(origins=take_rows(origins, rows), dirs=take_rows(wi, rows),
+                 throughput=take_rows(throughput, rows), pixel=hit.pixel[rows],
+                 sees_emission=hit.delta[rows], sample=hit.sample[rows])
 
 
 def trace_paths(film, scene, accel, paths, sampler, settings):

@@ -10,9 +10,11 @@ from concurrent.futures import ProcessPoolExecutor, as_completed
 import numpy as np
 
 from ptlab.accel import make_accelerator, resolve_backend
-from ptlab.integrators.path import PathSettings
-from ptlab.rendering.jobs import Job, RenderSetup, Tile, run_job
+from ptlab.camera import generate_rays
+from ptlab.integrators.path import Paths, PathSettings, trace_paths
+from ptlab.rendering.jobs import RenderSetup, Tile
 from ptlab.rendering.settings import parse_resolution
+from ptlab.samplers import BounceUniforms
 
 EXPECTED_FAILURES = ("tiles", "matches the library")
 #: The black rows are reported by the check of the image, not by the check of parallelism
@@ -31,25 +33,31 @@ def make_tiles(width, height, size):
 _accelerators: dict = {}
 
 
-def render_tile(setup: RenderSetup, tile, spp: int) -> tuple[np.ndarray, int]:
-    """One tile's job, in whichever process runs it: (sums (h, w, 3) float64, this pid)."""
+def render_tile(setup, tile, spp):
     if setup.token not in _accelerators:
         _accelerators.clear()
         _accelerators[setup.token] = make_accelerator(setup.scene.triangles, setup.backend)
-    result = run_job(setup, Job(tile, 0, spp), _accelerators[setup.token])
-    return result.sums, os.getpid()
+    height, width = tile.y1 - tile.y0, tile.x1 - tile.x0
+    n = height * width
+    pixel = np.tile(np.arange(n), spp)
+    pixel_x, pixel_y = tile.x0 + pixel % width, tile.y0 + pixel // width
+    sample = setup.sampler.keys(pixel_y * setup.width + pixel_x, np.repeat(np.arange(spp), n))
+    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x,
+                                  pixel_y, setup.sampler.get(sample, BounceUniforms.PIXEL, 2))
+    paths = Paths(origins, dirs, np.ones((len(pixel), 3), np.float32, order="F"), pixel,
+                  np.ones(len(pixel), dtype=bool), sample)
+    film = np.zeros((n, 3))
+    trace_paths(film, setup.scene, _accelerators[setup.token], paths, setup.sampler, setup.settings)
+    return film.reshape(height, width, 3), os.getpid()
 
 
-def render_parallel(scene, spp: int, res, seed: int = 0, workers: int = 2,
-                    tile_size: int = 32) -> tuple[np.ndarray, set[int]]:
-    """The image ((H, W, 3) float32) and the pids of the processes that rendered its tiles."""
+def render_parallel(scene, spp, res, seed=0, workers=2, tile_size=32):
     width, height = parse_resolution(res)
     setup = RenderSetup(scene=scene, backend=resolve_backend("auto"), width=width,
                         height=height, seed=seed, settings=PathSettings())
     sums = np.zeros((height, width, 3))
     pids = set()
-    context = multiprocessing.get_context("forkserver")
-    with ProcessPoolExecutor(workers, mp_context=context) as pool:
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver")) as pool:
         jobs = {pool.submit(render_tile, setup, tile, spp): tile
                 for tile in make_tiles(width, height, tile_size)}
         for done in as_completed(jobs):

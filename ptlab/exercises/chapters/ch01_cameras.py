@@ -138,6 +138,7 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=1, slug="cameras", title="Cameras and primary rays",
     functions=("generate_rays",),
+    answers=("ptlab.camera.generate_rays",),
     checks=(
         Check("centre ray", 2, check_centre_ray, timeout=30),
         Check("unit directions", 1, check_unit_length, timeout=30),

@@ -283,6 +283,7 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=2, slug="ray_triangle", title="Ray-triangle intersection (Möller–Trumbore)",
     functions=("ray_triangle",),
+    answers=("ptlab.accel.triangle.ray_triangle",),
     checks=(
         Check("known hits", 2, check_known_hits, timeout=30),
         Check("outside each edge", 2, check_edges, timeout=30),

@@ -188,6 +188,7 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=4, slug="bounding_boxes", title="Bounding boxes: the slab test",
     functions=("slab_test",),
+    answers=("ptlab.accel.numpy_bvh.slab_test",),
     checks=(
         Check("entering a box", 2, check_entering, timeout=30),
         Check("going backwards", 1, check_backwards, timeout=30),

@@ -498,6 +498,8 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=5, slug="bvh", title="The BVH: building with the SAH, and traversal",
     functions=PIECES,
+    answers=("ptlab.accel.numpy_bvh.split_costs", "ptlab.accel.numpy_bvh.best_split",
+             "ptlab.accel.numpy_bvh.child_order"),
     checks=(
         Check("SAH costs", 2, check_split_costs, timeout=30),
         Check("empty sides", 1, check_empty_sides, timeout=30),

@@ -233,6 +233,7 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=6, slug="diffuse", title="Monte Carlo and the diffuse material",
     functions=("Lambertian.eval", "Lambertian.pdf", "Lambertian.sample"),
+    answers=("ptlab.materials.Diffuse",),
     checks=(
         Check("eval", 2, check_eval, timeout=30),
         Check("sample", 1, check_sample, timeout=30),

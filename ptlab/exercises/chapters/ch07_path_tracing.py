@@ -590,6 +590,10 @@ def check_cornell(module) -> str:
 CHAPTER = Chapter(
     number=7, slug="path_tracing", title="Path tracing: the homework's castRay",
     functions=("direct_light", "russian_roulette", "scatter", "trace_paths"),
+    answers=tuple(f"ptlab.integrators.path.{name}" for name in (
+        "direct_light", "direct_light_all_kinds", "russian_roulette", "scatter", "trace_paths")),
+    writes={"direct_light": ("film",), "trace_paths": ("film",)},
+    scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},
     checks=(
         Check("direct light", 2, check_direct_light, timeout=30),
         Check("roulette unbiased", 2, check_russian_roulette, timeout=45),

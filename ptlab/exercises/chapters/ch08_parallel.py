@@ -266,6 +266,12 @@ def check_library(module) -> str:
 CHAPTER = Chapter(
     number=8, slug="parallel", title="Parallel rendering over tiles",
     functions=("make_tiles", "render_tile", "render_parallel"),
+    # The workers may be new interpreters (forkserver, as ptlab's own are), so this chapter's
+    # code may start programs (docs/grading-security.md says what that leaves open).
+    answers=("ptlab.rendering.jobs.make_tiles", "ptlab.rendering.jobs.run_job",
+             "ptlab.rendering.jobs.run_job_in_worker", "ptlab.rendering.api.render",
+             "ptlab.rendering.api.render_result"),
+    programs=True,
     checks=(
         Check("tiles", 2, check_tiles, timeout=20),
         Check("tile job", 2, check_tile_job, timeout=30),

@@ -191,6 +191,7 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=10, slug="mis", title="Multiple importance sampling",
     functions=("balance_heuristic", "power_heuristic", "mis_weight"),
+    answers=("ptlab.integrators.path.mis_weight",),
     checks=(
         Check("balance heuristic", 2, check_balance, timeout=30),
         Check("power heuristic", 2, check_power, timeout=30),

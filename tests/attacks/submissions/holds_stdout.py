@@ -1,28 +1,28 @@
-"""An attack: at import, start processes in sessions of their own that keep the grader's
-output open (the inherited stdout, and the grader's stdout reached through the parent
-process's file descriptors): whoever reads the grader's output (a course's script, a pipe)
-then waits until they end. Each writes its pid to ``holds_stdout.pids`` beside this file."""
+"""An attack: at import, fork processes into sessions of their own that keep open the
+output the student's process was given, and the grader's stdout reached through the parent
+process's file descriptors (/proc/<parent>/fd/1): whoever reads the grader's output (a
+course's script, a pipe) would then wait until they end. Each prints its pid, which the
+test reads from the student's output."""
 
 import os
-import subprocess
 import sys
 import time
-from pathlib import Path
 
-PIDS = Path(__file__).resolve().with_suffix(".pids")
-HOLD = f"import os, time; open({str(PIDS)!r}, 'a').write(str(os.getpid()) + chr(10)); time.sleep(60)"
-
-subprocess.Popen([sys.executable, "-c", HOLD], start_new_session=True)
 try:
     _parents_stdout = os.open(f"/proc/{os.getppid()}/fd/1", os.O_WRONLY)
-    subprocess.Popen([sys.executable, "-c", HOLD], start_new_session=True,
-                     stdout=_parents_stdout, stderr=_parents_stdout)
 except OSError:
-    pass
-for _ in range(500):        # until they have started (so that the test knows them)
-    if PIDS.exists() and len(PIDS.read_text().split()) >= 2:
-        break
-    time.sleep(0.01)
+    _parents_stdout = None
+for _ in range(2):
+    if os.fork() == 0:
+        os.setsid()
+        if _parents_stdout is not None:
+            os.dup2(_parents_stdout, 1)
+        print(os.getpid(), flush=True)
+        os.write(2, f"{os.getpid()}\n".encode())
+        time.sleep(60)
+        os._exit(0)
+time.sleep(0.2)
+sys.stdout.flush()
 
 
 def generate_rays(camera, width, height, pixel_x, pixel_y, u):

@@ -1,0 +1,167 @@
+"""The rows the checks send to a material: every row turned by a rotation of its own.
+
+A renderer never asks a material about one ``wo`` and one ``n`` repeated on every row of a
+batch, so a grader that did could be recognised, and a material could be right only then.
+The checks therefore think in a frame of their own (the grid's, or the local frame with
++z = n) and turn every row they send by its own random rotation: an isotropic material
+(whose answers depend on wo, wi and n only through the angles between them, as every
+material of the homework) answers the same, and the checks turn what it returns back
+(``Rotations.undo``) before they bin or compare it. Rows of different probes (the three wo
+of the lobe measurements, the special directions of consistency, the angles of the delta
+checks) are shuffled into one batch (``Probe``), so that neither wo, n nor the angle
+between them is the same on every row of a call.
+
+The rotations cost rounding: a turned unit vector is off by about 1e-16, which is far
+below every tolerance of the checks. Where a probe needs an exact value (wo exactly in the
+tangent plane, wi exactly 1e-8 above it), ``Rotations.draw`` gives its rows ``exact``
+rotations instead: a random twist about +z, then one of the 24 rotations that take the
+axes to axes. They keep every cosine to +z exactly (n lands on an axis, and its one
+nonzero component multiplies the z component alone).
+
+``Kept`` holds a few rows of a large call, so that ``check_row_independence`` can ask them
+again one by one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ptlab.vectors import vec3
+
+#: The permutations of the three axes and their signs (the determinants of their matrices).
+_PERMUTATIONS = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1], [0, 2, 1], [2, 1, 0], [1, 0, 2]])
+_PARITY = np.array([1.0, 1.0, 1.0, -1.0, -1.0, -1.0])
+
+
+class Rotations:
+    """One rotation per row: ``m[i][j]`` is the (rows,) array of the matrices' entries (i, j).
+
+    Nine arrays rather than one (3, 3, rows) block: a block of 10^6 rows takes 72 MB, which
+    glibc maps fresh (and the kernel faults in page by page) on every allocation, about
+    three times the cost of computing it; arrays of 8 MB reuse the heap.
+    """
+
+    def __init__(self, m: list[list[np.ndarray]]):
+        self.m = m
+
+    @classmethod
+    def draw(cls, rng: np.random.Generator, rows: int, exact: np.ndarray | None = None) -> Rotations:
+        """``rows`` rotations, uniformly random (Haar) except where the (rows,) bool ``exact``
+        is set: there a twist about +z and an axes-to-axes rotation (see the module's text)."""
+        m = _uniform(rng, rows)
+        if exact is not None and exact.any():
+            for row, exact_row in zip(m, _exact(rng, int(exact.sum())), strict=True):
+                for entry, exact_entry in zip(row, exact_row, strict=True):
+                    entry[exact] = exact_entry
+        return cls(m)
+
+    def apply(self, v: np.ndarray) -> np.ndarray:
+        """(rows, 3) column-major: each row's rotation of ``v``, (3,) or (rows, 3)."""
+        m = self.m
+        if v.ndim == 1:      # one unit vector for every row: its zero components cost nothing
+            return vec3(*(sum(m[i][j] * v[j] for j in np.flatnonzero(v)) for i in range(3)))
+        x, y, z = v[:, 0], v[:, 1], v[:, 2]
+        return vec3(*(m[i][0] * x + m[i][1] * y + m[i][2] * z for i in range(3)))
+
+    def undo(self, w: np.ndarray) -> np.ndarray:
+        """(rows, 3) column-major: each row of ``w`` (rows, 3) turned back (by the transpose)."""
+        m = self.m
+        x, y, z = w[:, 0], w[:, 1], w[:, 2]
+        return vec3(*(m[0][j] * x + m[1][j] * y + m[2][j] * z for j in range(3)))
+
+
+def _uniform(rng: np.random.Generator, rows: int) -> list[list[np.ndarray]]:
+    """Uniformly random rotations (3 x 3 lists of (rows,) entries), from unit quaternions: a
+    normal vector in R^4, normalised, is uniform on the unit sphere S^3 (Shoemake, Graphics
+    Gems III)."""
+    w, x, y, z = (rng.standard_normal(rows) for _ in range(4))
+    scale = np.sqrt(2.0 / (w * w + x * x + y * y + z * z))   # |q| = sqrt(2): the 2s of the formula
+    for part in (w, x, y, z):
+        part *= scale
+    xx, yy, zz = x * x, y * y, z * z
+    xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
+    return [[1.0 - (yy + zz), xy - wz, xz + wy],
+            [xy + wz, 1.0 - (xx + zz), yz - wx],
+            [xz - wy, yz + wx, 1.0 - (xx + yy)]]
+
+
+def _exact(rng: np.random.Generator, rows: int) -> list[list[np.ndarray]]:
+    """Rotations (3 x 3 lists of (rows,) entries) that keep every z component: a twist about +z
+    by a random angle, then a random one of the 24 rotations taking axes to axes (signed
+    permutations, det 1)."""
+    phi = rng.uniform(0, 2 * np.pi, rows)
+    c, s, zero, one = np.cos(phi), np.sin(phi), np.zeros(rows), np.ones(rows)
+    twist = np.array([[c, -s, zero], [s, c, zero], [zero, zero, one]])
+    which = rng.integers(0, len(_PERMUTATIONS), rows)
+    signs = rng.choice([-1.0, 1.0], size=(3, rows))
+    signs[2] = signs[0] * signs[1] * _PARITY[which]
+    # Row i of the result is row permutation[i] of the twist, times its sign.
+    picked = np.take_along_axis(twist, _PERMUTATIONS[which].T[:, None, :], axis=0) * signs[:, None, :]
+    return [list(row) for row in picked]
+
+
+class Probe:
+    """How the checks' rows go out in one call: each turned by a rotation of its own, and
+    shuffled (sent row k is the checks' row ``order[k]``) unless the checks' order already
+    mixes them."""
+
+    def __init__(self, rng: np.random.Generator, rows: int, exact: np.ndarray | None = None,
+                 shuffle: bool = True):
+        """``exact``: (rows,) bool in the checks' order, rows that need exact cosines to +z."""
+        self.order = rng.permutation(rows) if shuffle else None
+        if exact is not None and shuffle:
+            exact = exact[self.order]
+        self.rotations = Rotations.draw(rng, rows, exact)
+
+    def send(self, v: np.ndarray) -> np.ndarray:
+        """(rows, 3) column-major: the vectors ``v`` ((rows, 3) in the checks' order and frame,
+        or one (3,) for every row) as the material receives them."""
+        return self.rotations.apply(self.send_rows(v) if v.ndim == 2 else v)
+
+    def send_rows(self, a: np.ndarray) -> np.ndarray:
+        """(rows, ...) the rows of ``a`` (the checks' order) in the sent order."""
+        return a if self.order is None else a[self.order]
+
+    def receive(self, w: np.ndarray) -> np.ndarray:
+        """(rows, 3) the material's directions ``w`` (sent order) in the checks' order and frame."""
+        return self.receive_rows(self.rotations.undo(w))
+
+    def receive_rows(self, a: np.ndarray) -> np.ndarray:
+        """(rows, ...) the material's answers ``a`` (sent order) in the checks' order."""
+        if self.order is None:
+            return a
+        back = np.empty_like(a)
+        back[self.order] = a
+        return back
+
+
+@dataclass
+class Kept:
+    """The first rows of one call of a material: its arguments and its answer (a tuple of
+    arrays for ``sample_weight``), with the number of rows the call had."""
+
+    method: str
+    arguments: tuple
+    answer: tuple
+    batch_rows: int
+
+    @classmethod
+    def first_rows(cls, method: str, arguments: tuple, answer, rows: int) -> Kept:
+        parts = answer if isinstance(answer, tuple) else (answer,)
+        return cls(method, tuple(rows_of(a, slice(0, rows)) for a in arguments),
+                   tuple(rows_of(np.asarray(p), slice(0, rows)) for p in parts), len(arguments[0]))
+
+    @property
+    def rows(self) -> int:
+        return len(self.arguments[0])
+
+
+def rows_of(a: np.ndarray, index) -> np.ndarray:
+    """The rows ``index`` (a slice or an index array) of ``a``, copied in ``a``'s memory layout
+    (column-major stays column-major: the material sees the arrays it saw in the batch)."""
+    taken = a[index]
+    if a.ndim == 2 and a.flags.f_contiguous and not a.flags.c_contiguous:
+        return np.asfortranarray(taken)
+    return np.ascontiguousarray(taken)

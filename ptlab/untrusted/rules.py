@@ -1,0 +1,76 @@
+"""What a grader asks of a submission: which answers are ptlab's, what functions may do to
+their arguments, whether the student's code may start programs.
+
+A chapter of the exercises (``ptlab.exercises.chapter.Chapter.rules``) or ``ptlab grade``
+makes ``Rules`` and gives them to ``ptlab.untrusted.Submission``:
+
+* ``answers``: ptlab's own answers to what the student writes. In the student's process
+  they are traps (``ptlab.untrusted.traps``), and a file holding a copy of them, names
+  changed or not, is refused (``ptlab.untrusted.copies``).
+* ``arguments``: for each graded function, which of its arguments it writes (``film``: the
+  grader takes those changes back) or may use as scratch space; any other argument is
+  read-only, and changing it fails the check. Changes made anywhere else never reach the
+  grader: it computes its references from arrays the student's code never had.
+* ``programs``: whether the student's code may start programs (``ptlab.untrusted.no_exec``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
+
+from ptlab.untrusted.copies import Answer, answers_of
+
+
+@dataclass(frozen=True)
+class Arguments:
+    """What one graded function may do to its arguments (by parameter name).
+
+    Attributes:
+        parameters: its parameters in order (to name the positional arguments).
+        writes: the arguments it fills in for its caller (changes are copied back).
+        scratch: the arguments it may change for its own use (changes are dropped).
+    """
+
+    parameters: tuple[str, ...]
+    writes: tuple[str, ...] = ()
+    scratch: tuple[str, ...] = ()
+
+    def name(self, position: int) -> str:
+        """The parameter at ``position`` (0-based), or "argument N" past the known ones."""
+        return self.parameters[position] if position < len(self.parameters) else f"argument {position + 1}"
+
+
+@dataclass(frozen=True)
+class Rules:
+    """What a grader asks of a submission (see the module docstring).
+
+    Attributes:
+        answers: dotted names of ptlab's own answers (a function, or a class whose
+            ``eval``, ``pdf``, ``sample`` and ``sample_weight`` are).
+        solution: the chapter's answer file, whose functions count as answers too.
+        arguments: {function name: Arguments}; a function without an entry has its
+            changes to its arguments dropped.
+        programs: the student's code may start programs (chapter 8's worker processes).
+        library: the submission is ptlab's own answer file, graded as itself (tests and
+            measurements of the graders use this; nothing a student runs can set it).
+    """
+
+    answers: tuple[str, ...] = ()
+    solution: Path | None = None
+    arguments: dict[str, Arguments] = field(default_factory=dict)
+    programs: bool = False
+    library: bool = False
+
+    @cached_property
+    def fingerprints(self) -> dict[str, Answer]:
+        """{digest: Answer} of every answer (``ptlab.untrusted.copies``); none for ptlab's own file."""
+        if self.library:
+            return {}
+        return answers_of(self.answers, self.solution)
+
+    @property
+    def traps(self) -> tuple[str, ...]:
+        """The answers to trap in the student's process."""
+        return () if self.library else self.answers

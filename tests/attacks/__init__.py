@@ -1,0 +1,1 @@
+"""The attacks on the graders (docs/grading-security.md), one module per kind."""
