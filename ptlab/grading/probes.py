@@ -165,3 +165,29 @@ def rows_of(a: np.ndarray, index) -> np.ndarray:
     if a.ndim == 2 and a.flags.f_contiguous and not a.flags.c_contiguous:
         return np.asfortranarray(taken)
     return np.ascontiguousarray(taken)
+
+
+class Turned:
+    """``material`` asked with every row of every call turned by a rotation of its own (drawn
+    anew for each call), and the directions it samples turned back: an isotropic material
+    gives the answers it would give unturned (to rounding), and no call it gets repeats a
+    row. For checks written in one frame (the exercises' known answers) that must not look
+    like probes."""
+
+    def __init__(self, material, rng: np.random.Generator):
+        self.material, self.rng = material, rng
+
+    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray):
+        turn = Rotations.draw(self.rng, len(wo))
+        return self.material.eval(turn.apply(wo), turn.apply(wi), turn.apply(n))
+
+    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray):
+        turn = Rotations.draw(self.rng, len(wo))
+        return self.material.pdf(turn.apply(wo), turn.apply(wi), turn.apply(n))
+
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray):
+        turn = Rotations.draw(self.rng, len(wo))
+        wi = np.asarray(self.material.sample(turn.apply(wo), turn.apply(n), u))
+        if wi.shape != (len(wo), 3) or wi.dtype.kind != "f":
+            return wi           # (for the check to report as it is)
+        return turn.undo(wi.astype(np.float64))

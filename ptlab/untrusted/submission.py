@@ -449,8 +449,8 @@ class Submission:
 class _Pickler(pickle.Pickler):
     """Pickles the grader's data for the student's process: stand-ins as the handles of the
     objects they stand for, shared objects once, arrays as their raw bytes in a part of
-    their own (``arrays``), and large arrays whose rows are all the same (the graders'
-    ``batch(wo, rows)``) as one row."""
+    their own (``arrays``), and large arrays whose rows are all the same (one triangle or
+    box tested against many rays) as one row."""
 
     def __init__(self, stream, submission: Submission, arrays: list, top=None):
         super().__init__(stream, protocol=pickle.HIGHEST_PROTOCOL)

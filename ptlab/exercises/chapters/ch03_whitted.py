@@ -223,8 +223,10 @@ def check_total_internal_reflection(module) -> str:
                           f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
                           f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
                           f"eta > 1 has no solution: return 1 there)")
-    wo = _directions(np.radians(degrees), (0.0, 1.0, 0.0))
-    _call(refract, "refract", wo, np.tile([0.0, 1.0, 0.0], (len(wo), 1)), eta, shape=wo.shape)
+    n = _unit(np.random.default_rng(34).normal(size=(len(degrees), 3)))   # (no row repeats n)
+    wo = np.concatenate([_directions(np.radians(d)[None], normal)
+                         for d, normal in zip(degrees, n, strict=True)])
+    _call(refract, "refract", wo, n, eta, shape=wo.shape)
     return (f"beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract "
             f"returns no NaN")
 

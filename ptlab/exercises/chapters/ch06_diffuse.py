@@ -19,6 +19,7 @@ import numpy as np
 from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require, student_file
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
+from ptlab.grading.probes import Turned
 
 ALBEDO = (0.8, 0.5, 0.2)
 
@@ -39,6 +40,7 @@ def probe(material) -> None:
     written yet, one that raises, or one that returns the wrong shape, is reported as itself
     (once, with the shapes) before a long check starts."""
     rows = 5                    # not 3: a (3, 3) result would hide rows and colours swapped
+    material = Turned(material, np.random.default_rng(60))     # (no row repeats n: see below)
     n = np.tile([0.0, 0.0, 1.0], (rows, 1))
     wo = _unit(np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96], [-0.3, 0.4, 0.5], [0.1, 0.1, 1.0],
                          [0.9, -0.2, 0.3]]))
@@ -108,8 +110,10 @@ def check_eval(module) -> str:
 
 
 def check_sample(module) -> str:
-    material = _material(module)
     rng = np.random.default_rng(62)
+    # Every row turned by a rotation of its own (and the samples turned back): a material
+    # cannot tell these repeated directions from a render's.
+    material = Turned(_material(module), rng)
     normals = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0]], dtype=np.float64)
     normals = np.concatenate([normals, _unit(rng.normal(size=(4, 3)))])
     count = 2000
@@ -146,7 +150,7 @@ def _sphere_integral(function, n: np.ndarray, rows: int = 400, cols: int = 64) -
 
 
 def check_pdf_normalisation(module) -> str:
-    material = _material(module)
+    material = Turned(_material(module), np.random.default_rng(63))   # (see check_sample)
     n = _unit(np.array([0.3, -0.5, 0.8]))
     wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
     rows = 400 * 64

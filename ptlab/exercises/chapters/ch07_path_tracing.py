@@ -318,10 +318,13 @@ def _check_pdf_near_zero(scatter) -> None:
 
     rng = np.random.default_rng(75)
     count = 4000
-    n = np.asfortranarray(np.tile(np.float32([0, 1, 0]), (count, 1)))
-    wo = rng.normal(size=(count, 3)).astype(np.float32)
-    wo[:, 1] = np.abs(wo[:, 1]) + 0.05
-    wo = np.asfortranarray(wo / np.linalg.norm(wo, axis=1, keepdims=True))
+    n = rng.normal(size=(count, 3))         # a normal of its own on every row, like hits
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    wo = rng.normal(size=(count, 3))
+    wo *= np.sign(np.sum(wo * n, axis=1))[:, None]       # on n's side, not grazing:
+    wo += 0.05 * n
+    n, wo = (np.asfortranarray((a / np.linalg.norm(a, axis=1, keepdims=True)).astype(np.float32))
+             for a in (n, wo))
     p = np.asfortranarray(rng.random((count, 3), dtype=np.float32))
     hit = SurfaceHit(prim=np.zeros(count, dtype=np.intp), p=p, n=n, wo=wo,
                      front=np.ones(count, dtype=bool), offset=np.full(count, 1e-4, np.float32),
