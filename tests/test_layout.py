@@ -128,3 +128,14 @@ def test_top_level_holds_concepts_not_machinery():
     top = {p.stem for p in PACKAGE.glob("*.py")}
     assert top <= {"__init__", "cli", "vectors", "errors", "atomic", "sampling", "samplers",
                    "camera", "image", "lights", "meshes", "scene", "textures"}, top
+
+
+def test_the_version_is_written_once():
+    """pyproject.toml reads the version from ptlab/__init__.py (hatch's dynamic version): the
+    installed package's metadata and ``ptlab.__version__`` cannot disagree."""
+    from importlib.metadata import version
+
+    import ptlab
+
+    assert version("ptlab") == ptlab.__version__
+    assert "version =" not in (PACKAGE.parent / "pyproject.toml").read_text().split("[tool")[0]
