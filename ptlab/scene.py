@@ -42,7 +42,7 @@ import numpy as np
 from ptlab.atomic import path_kind
 from ptlab.camera import Camera
 from ptlab.errors import PtlabError, SceneError
-from ptlab.lights import AreaLights, LightSampler, PointLights, Sky, light_shares
+from ptlab.lights import PointLights, Sky, area_times_radiance, build_lights, triangle_areas, triangle_normals
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
 from ptlab.meshes import drop_zero_area, has_area, read_mesh
 from ptlab.textures import Checkerboard
@@ -135,9 +135,10 @@ class Scene:
             materials need them.
         defaults: the scene file's ``[render]`` defaults.
 
-    After construction, ``lights`` holds the emissive triangles (``AreaLights``, or None) and
-    ``light_sampler`` picks among all the lights (None for a scene without light); the
-    point lights and the sky then carry their share of the light samples.
+    After construction, ``light_sampler`` picks among all the lights (``build_lights``; None
+    for a scene without light) and ``lights`` holds the emissive triangles among them
+    (``AreaLights``, or None). ``point_lights`` and ``sky`` stay as given: the light sampler
+    holds the ones it samples, which carry their share of the light samples.
     """
 
     triangles: np.ndarray
@@ -156,12 +157,11 @@ class Scene:
         self.triangles = tri
         self.material_ids = np.asarray(self.material_ids, dtype=np.intp)
         v0, v1, v2 = tri[:, 0], tri[:, 1], tri[:, 2]
-        cross = np.cross(v1 - v0, v2 - v0)
         # Per-triangle data the renderer looks up by triangle id, in float32 like the rays.
         self.v0 = v0.astype(np.float32)
         self.e1 = (v1 - v0).astype(np.float32)
         self.e2 = (v2 - v0).astype(np.float32)
-        self.normals = (cross / np.linalg.norm(cross, axis=1, keepdims=True)).astype(np.float32)
+        self.normals = triangle_normals(tri).astype(np.float32)
         # How far a ray leaving the triangle starts off it, so that float32 rounding of the
         # hit point cannot put its origin behind the surface ("shadow acne"). The rounding
         # error of a point interpolated from the vertices is a few ulps of the largest vertex
@@ -180,24 +180,14 @@ class Scene:
         self.emission = emission.astype(np.float32).take(self.material_ids, axis=0)
         #: (T,) bool: the triangle emits light.
         self.emits = self.emission.max(axis=1) > 0
-        # (A zero-area triangle is never hit nor sampled: it is no light.)
-        emitters = np.flatnonzero(self.emits & (np.linalg.norm(cross, axis=1) > 0))
-        area_share, point_share, sky_share = light_shares(
-            math.pi * _area_times_radiance(tri[emitters], self.emission[emitters]),
-            self.point_lights.power if self.point_lights is not None else 0.0,
-            self.sky is not None)
-        self.lights = AreaLights(v0[emitters], v1[emitters], v2[emitters],
-                                 self.emission[emitters], offset[emitters],
-                                 share=area_share) if len(emitters) else None
-        if self.point_lights is not None:
-            self.point_lights = PointLights(self.point_lights.positions,
-                                            self.point_lights.intensity, share=point_share)
-        if self.sky is not None:
-            # Shadow rays toward the sky go twice the scene's diagonal: out of it from anywhere.
-            diagonal = float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
-            self.sky = Sky(self.sky.radiance, share=sky_share, distance=2 * diagonal)
-        kinds = [kind for kind in (self.lights, self.point_lights, self.sky) if kind is not None]
-        self.light_sampler = LightSampler(kinds) if kinds else None
+        emitting = np.flatnonzero(self.emits)
+        # Shadow rays toward the sky go twice the scene's diagonal: out of it from anywhere.
+        sky_distance = (2 * float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
+                        if self.sky is not None else None)
+        self.light_sampler = build_lights(tri[emitting], self.emission[emitting],
+                                          offset[emitting], self.point_lights, self.sky,
+                                          sky_distance)
+        self.lights = self.light_sampler.area_lights if self.light_sampler is not None else None
         self.material_table = MaterialTable(self.materials, self.material_ids)
         self.triangle_uv = None
         if self.uvs is not None:
@@ -235,16 +225,6 @@ class Scene:
         sky = ", a sky" if self.sky is not None else ""
         return (f"{self.name}: {self.triangle_count} triangles, {len(self.materials)} materials, "
                 f"{lights} emissive triangles, {points} point lights{sky}")
-
-
-def _area_times_radiance(triangles: np.ndarray, radiance: np.ndarray) -> float:
-    """The sum of area x mean(Le) over (T, 3, 3) triangles with (T, 3) radiances: the
-    emissive triangles' power over pi (``AreaLights.total_power``, ``AreaLights.power``)."""
-    if len(triangles) == 0:
-        return 0.0
-    area = 0.5 * np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
-                                         triangles[:, 2] - triangles[:, 0]), axis=1)
-    return float(np.sum(area * radiance.mean(axis=1)))
 
 
 class MaterialTable:
@@ -720,7 +700,8 @@ class _SceneReader:
         sampling divides by in float32, must be a normal float32 number."""
         emission = np.array([m.emission if m.emission is not None else np.zeros(3)
                              for m in materials])[material_ids]
-        power = _area_times_radiance(np.concatenate(triangles), emission)
+        power = float(np.sum(area_times_radiance(triangle_areas(np.concatenate(triangles)),
+                                                 emission)))
         float32 = np.finfo(np.float32)
         if power > 0 and not float32.tiny <= power <= float32.max:
             raise self.error(None, f"the lights' total power (area x radiance) is {power:g}, "

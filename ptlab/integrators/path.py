@@ -304,10 +304,11 @@ def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
     sample it? Point lights always (no BSDF sample can reach a delta light, so every strategy
     samples them); the triangles and the sky unless the strategy is ``"bsdf"``, and the sky
     only with ``settings.sample_sky``."""
-    if scene.light_sampler is None:
+    light_sampler = scene.light_sampler
+    if light_sampler is None:
         return np.zeros(0, dtype=bool)
     return np.array([kind.is_delta or (settings.strategy != "bsdf" and (
-        kind is not scene.sky or settings.sample_sky)) for kind in scene.light_sampler.kinds])
+        kind is not light_sampler.sky or settings.sample_sky)) for kind in light_sampler.kinds])
 
 
 def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
@@ -353,7 +354,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
     and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
     unless light sampling does not sample the sky (``sampled_lights``): then in full."""
-    sky = scene.sky
+    sky = scene.light_sampler.sky     # (its pdf holds its share of the light samples)
     sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
     escaped = hits.prim < 0
     counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission
