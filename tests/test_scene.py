@@ -40,6 +40,18 @@ def test_scene_loads_by_name_by_folder_and_by_file():
         assert ptlab.load_scene(ref).triangle_count == 32
 
 
+@pytest.mark.parametrize("name", ["load_scene", "find_scene_file", "builtin_scenes_dir",
+                                  "builtin_scene_names", "SCENE_FILE_NAME", "MAX_COORDINATE"])
+def test_the_scene_files_names_are_still_found_in_ptlab_scene(name):
+    import ptlab.scene
+    import ptlab.scene_file
+
+    assert getattr(ptlab.scene, name) is getattr(ptlab.scene_file, name)
+    assert ptlab.load_scene is ptlab.scene_file.load_scene
+    with pytest.raises(AttributeError, match="no attribute 'read_scene'"):
+        ptlab.scene.read_scene      # noqa: B018 (an attribute it never had)
+
+
 @pytest.fixture
 def scene_dir(tmp_path):
     """A folder with a valid minimal scene; tests break one thing at a time."""
