@@ -36,8 +36,10 @@ from ptlab.vectors import dot
 
 
 @dataclass
-class LightSample:
-    """Points sampled on the lights, one per shading point.
+class ShapeSample:
+    """Points sampled on the emissive triangles, one per shading point, with the density of
+    each (pbrt-v4's ``ShapeSample``: a point on a shape and its pdf), and what the light
+    there sends.
 
     Attributes (where every light has the same value, a read-only broadcast view):
         points: (N, 3) float32 positions on the lights.
@@ -55,6 +57,10 @@ class LightSample:
     offset: np.ndarray
     pdf_area: np.ndarray
     target: np.ndarray
+
+
+#: ``ShapeSample`` by its first name, for code written when chapter 7 used it.
+LightSample = ShapeSample
 
 
 @dataclass
@@ -178,7 +184,7 @@ class AreaLights:
         return (radiance.mean(axis=1) / np.float32(self.total_power / self.share)).astype(np.float32)
 
 
-    def sample(self, u: np.ndarray) -> LightSample:
+    def sample(self, u: np.ndarray) -> ShapeSample:
         """Points on the lights from (N, 2) uniforms.
 
         ``u[:, 0]`` picks the triangle and is then stretched back to [0, 1) inside the
@@ -212,7 +218,7 @@ class AreaLights:
         np.minimum(stretched, np.float32(1 - 2.0 ** -24), out=stretched)
         b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
         points = field("v0") + b1[:, None] * field("e1") + b2[:, None] * field("e2")
-        return LightSample(points=points, normals=field("normals"), radiance=field("radiance"),
+        return ShapeSample(points=points, normals=field("normals"), radiance=field("radiance"),
                            offset=field("offset"), pdf_area=field("pdf_area")[:, 0],
                            target=points + field("lift"))
 

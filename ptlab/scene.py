@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ptlab.camera import Camera
-from ptlab.lights import PointLights, Sky, build_lights, triangle_normals
+from ptlab.lights import AreaLights, PointLights, Sky, build_lights, triangle_normals
 from ptlab.materials import Diffuse, Material
 
 #: Rays start this fraction of a triangle's largest coordinate off it (see ``Scene``).
@@ -53,7 +53,7 @@ class Scene:
         defaults: the scene file's ``[render]`` defaults.
 
     After construction, ``light_sampler`` picks among all the lights (``build_lights``; None
-    for a scene without light) and ``lights`` holds the emissive triangles among them
+    for a scene without light) and ``area_lights`` holds the emissive triangles among them
     (``AreaLights``, or None). ``point_lights`` and ``sky`` stay as given: the light sampler
     holds the ones it samples, which carry their share of the light samples.
     """
@@ -104,7 +104,8 @@ class Scene:
         self.light_sampler = build_lights(tri[emitting], self.emission[emitting],
                                           offset[emitting], self.point_lights, self.sky,
                                           sky_distance)
-        self.lights = self.light_sampler.area_lights if self.light_sampler is not None else None
+        self.area_lights = (self.light_sampler.area_lights if self.light_sampler is not None
+                            else None)
         self.material_table = MaterialTable(self.materials, self.material_ids)
         self.triangle_uv = None
         if self.uvs is not None:
@@ -132,12 +133,18 @@ class Scene:
         return (data[0:2] + b1 * data[2:4] + b2 * data[4:6]).T
 
     @property
+    def lights(self) -> AreaLights | None:
+        """``area_lights``, by the name that chapter 7's first students' files used
+        (``scene.lights.sample(u)``), read-only, so that those files still run."""
+        return self.area_lights
+
+    @property
     def triangle_count(self) -> int:
         return len(self.triangles)
 
     def summary(self) -> str:
         """One line: name, triangles, materials, lights."""
-        lights = len(self.lights) if self.lights is not None else 0
+        lights = len(self.area_lights) if self.area_lights is not None else 0
         points = len(self.point_lights) if self.point_lights is not None else 0
         sky = ", a sky" if self.sky is not None else ""
         return (f"{self.name}: {self.triangle_count} triangles, {len(self.materials)} materials, "

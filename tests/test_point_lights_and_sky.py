@@ -159,7 +159,7 @@ def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
     scene = ptlab.Scene(triangles, np.array([0, 0, 1, 1]),
                         [Diffuse(ALBEDO), Diffuse([0, 0, 0], emission=[5.0, 4.0, 3.0])],
                         plane.camera, name="lamp-point-sky", point_lights=point_lights, sky=sky)
-    assert scene.lights.normals[0, 1] == -1                 # the lamp shines down
+    assert scene.area_lights.normals[0, 1] == -1                 # the lamp shines down
     # The scene keeps the lights it was given; the light sampler samples copies with shares.
     assert scene.point_lights is point_lights and scene.sky is sky and sky.share == 1
     assert scene.light_sampler.sky.share == 0.5

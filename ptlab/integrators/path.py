@@ -233,7 +233,7 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     if settings.strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
         t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
-        pdf_light = solid_angle_pdf(scene.lights.pdf_area(emitted), t * t, dot(n, wo))
+        pdf_light = solid_angle_pdf(scene.area_lights.pdf_area(emitted), t * t, dot(n, wo))
         weight = np.where(hit.sees_emission.take(rows), 1.0,
                           mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic))
         emitted *= weight.astype(np.float32)[:, None]
@@ -262,7 +262,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     """
     if scene.point_lights is not None or scene.sky is not None:
         return direct_light_all_kinds(film, scene, accel, hit, u, settings)
-    light = scene.lights.sample(u)
+    light = scene.area_lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
     wi = to_light / np.sqrt(dist2)[:, None]
