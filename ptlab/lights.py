@@ -448,8 +448,8 @@ def build_lights(triangles: np.ndarray, radiance: np.ndarray, offset: np.ndarray
     """
     areas = triangle_areas(triangles)
     lit = areas > 0
-    # (mean(Le) in float32 here, in float64 in AreaLights' own power: they differ in the last
-    # bits, and either one changed would change the images of scenes with several kinds.)
+    # (mean(Le) in float32 here but in float64 in AreaLights' power: they differ in the last
+    # bits, and changing either would change the images of scenes with two kinds of light.)
     area_share, point_share, sky_share = light_shares(
         math.pi * float(np.sum(area_times_radiance(areas[lit], radiance[lit]))),
         point_lights.power if point_lights is not None else 0.0, sky is not None)
