@@ -36,8 +36,10 @@ from ptlab.vectors import dot
 
 
 @dataclass
-class LightSample:
-    """Points sampled on the lights, one per shading point.
+class ShapeSample:
+    """Points sampled on the emissive triangles, one per shading point, with the density of
+    each (pbrt-v4's ``ShapeSample``: a point on a shape and its pdf), and what the light
+    there sends.
 
     Attributes (where every light has the same value, a read-only broadcast view):
         points: (N, 3) float32 positions on the lights.
@@ -57,6 +59,10 @@ class LightSample:
     target: np.ndarray
 
 
+#: ``ShapeSample`` by its first name, for code written when chapter 7 used it.
+LightSample = ShapeSample
+
+
 @dataclass
 class LightLiSample:
     """One light sample per shading point, seen from the point (pbrt-v4's ``LightLiSample``).
@@ -73,6 +79,28 @@ class LightLiSample:
     radiance: np.ndarray
     pdf: np.ndarray
     target: np.ndarray
+
+
+def triangle_areas(triangles: np.ndarray) -> np.ndarray:
+    """(T,) float64 areas of (T, 3, 3) ``triangles``: half the length of (v1 - v0) x (v2 - v0)
+    (0 for a triangle whose corners lie on a line)."""
+    v0, v1, v2 = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    return 0.5 * np.linalg.norm(np.cross(v1 - v0, v2 - v0), axis=1)
+
+
+def triangle_normals(triangles: np.ndarray) -> np.ndarray:
+    """(T, 3) float64 unit normals of (T, 3, 3) ``triangles`` on their front face, the side
+    (v1 - v0) x (v2 - v0) points to (NaN for a triangle of zero area)."""
+    v0, v1, v2 = triangles[:, 0], triangles[:, 1], triangles[:, 2]
+    cross = np.cross(v1 - v0, v2 - v0)
+    return cross / np.linalg.norm(cross, axis=1, keepdims=True)
+
+
+def area_times_radiance(areas: np.ndarray, radiance: np.ndarray) -> np.ndarray:
+    """(L,) area x mean(Le) of L emissive triangles of (L,) ``areas`` and (L, 3) radiances
+    ``radiance``: each one's power over pi (pbrt-v4's ``DiffuseAreaLight::Phi`` for lights
+    that emit from one face), the mean taken in ``radiance``'s float type."""
+    return areas * radiance.mean(axis=1)
 
 
 def solid_angle_pdf(pdf_area: np.ndarray, dist2: np.ndarray,
@@ -101,12 +129,11 @@ class AreaLights:
     def __init__(self, v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, radiance: np.ndarray,
                  offset: np.ndarray, share: float = 1.0):
         v0, v1, v2 = (np.asarray(a, dtype=np.float64) for a in (v0, v1, v2))
-        cross = np.cross(v1 - v0, v2 - v0)
-        double_area = np.linalg.norm(cross, axis=1)
-        self.areas = 0.5 * double_area
+        triangles = np.stack([v0, v1, v2], axis=1)
+        self.areas = triangle_areas(triangles)
         self.total_area = float(self.areas.sum())
         radiance = np.asarray(radiance, dtype=np.float64)
-        power = self.areas * radiance.mean(axis=1)
+        power = area_times_radiance(self.areas, radiance)
         self.total_power = float(power.sum())
         self.share = float(share)
         # float32 like the renderer's random numbers: a search with mixed types converts
@@ -115,7 +142,7 @@ class AreaLights:
         self.v0 = v0.astype(np.float32)
         self.e1 = (v1 - v0).astype(np.float32)
         self.e2 = (v2 - v0).astype(np.float32)
-        self.normals = (cross / double_area[:, None]).astype(np.float32)
+        self.normals = triangle_normals(triangles).astype(np.float32)
         self.radiance = radiance.astype(np.float32)
         # What `sample` looks up per chosen triangle: v0, e1, e2, the unit normal, Le, the
         # offset, pdf_area, the cdf below the triangle's interval and 1 / the interval's width
@@ -157,7 +184,7 @@ class AreaLights:
         return (radiance.mean(axis=1) / np.float32(self.total_power / self.share)).astype(np.float32)
 
 
-    def sample(self, u: np.ndarray) -> LightSample:
+    def sample(self, u: np.ndarray) -> ShapeSample:
         """Points on the lights from (N, 2) uniforms.
 
         ``u[:, 0]`` picks the triangle and is then stretched back to [0, 1) inside the
@@ -191,7 +218,7 @@ class AreaLights:
         np.minimum(stretched, np.float32(1 - 2.0 ** -24), out=stretched)
         b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
         points = field("v0") + b1[:, None] * field("e1") + b2[:, None] * field("e2")
-        return LightSample(points=points, normals=field("normals"), radiance=field("radiance"),
+        return ShapeSample(points=points, normals=field("normals"), radiance=field("radiance"),
                            offset=field("offset"), pdf_area=field("pdf_area")[:, 0],
                            target=points + field("lift"))
 
@@ -369,12 +396,18 @@ class LightSampler:
     point or direction on it (``ptlab.samplers``: one pair of dimensions per light sample).
 
     Args:
-        kinds: the scene's ``AreaLights``, ``PointLights`` and ``Sky`` (those it has), each
-            with its ``share``; the shares add up to 1.
+        area_lights, point_lights, sky: the scene's ``AreaLights``, ``PointLights`` and
+            ``Sky``, each with its ``share`` (None for a kind it has not); the shares add up
+            to 1 (``build_lights`` makes them so).
+
+    Attributes:
+        kinds: the kinds given, in this order.
     """
 
-    def __init__(self, kinds: list):
-        self.kinds = list(kinds)
+    def __init__(self, area_lights: AreaLights | None = None,
+                 point_lights: PointLights | None = None, sky: Sky | None = None):
+        self.area_lights, self.point_lights, self.sky = area_lights, point_lights, sky
+        self.kinds = [kind for kind in (area_lights, point_lights, sky) if kind is not None]
         self.shares = np.array([kind.share for kind in self.kinds])
 
     def pick(self, u: np.ndarray, sampled: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
@@ -394,3 +427,38 @@ class LightSampler:
         shares = np.where(sampled, self.shares, 0.0)
         kind, stretched = pick(shares, u[:, 0])
         return kind, np.stack([stretched, u[:, 1]]).T, 1.0 / float(shares.sum())
+
+
+def build_lights(triangles: np.ndarray, radiance: np.ndarray, offset: np.ndarray,
+                 point_lights: PointLights | None = None, sky: Sky | None = None,
+                 sky_distance: float | None = None) -> LightSampler | None:
+    """The lights of a scene as light sampling picks them, each kind with its share of the
+    samples (``light_shares``); None for a scene without light.
+
+    The ``point_lights`` and ``sky`` given are left as they are: the lights sampled are new
+    ones made from them, which carry their share.
+
+    Args:
+        triangles: (L, 3, 3) float64, the scene's emissive triangles. Those of zero area are
+            no light: no ray hits them and no light sample lands on them.
+        radiance: (L, 3) float32, the radiance each emits.
+        offset: (L,) how far rays stay off each (``Scene`` computes it).
+        point_lights, sky: the scene's, or None.
+        sky_distance: with a sky, how far shadow rays toward it go: out of the whole scene.
+    """
+    areas = triangle_areas(triangles)
+    lit = areas > 0
+    # (mean(Le) in float32 here but in float64 in AreaLights' power: they differ in the last
+    # bits, and changing either would change the images of scenes with two kinds of light.)
+    area_share, point_share, sky_share = light_shares(
+        math.pi * float(np.sum(area_times_radiance(areas[lit], radiance[lit]))),
+        point_lights.power if point_lights is not None else 0.0, sky is not None)
+    emitters = triangles[lit]
+    sampler = LightSampler(
+        area_lights=AreaLights(emitters[:, 0], emitters[:, 1], emitters[:, 2], radiance[lit],
+                               offset[lit], share=area_share) if lit.any() else None,
+        point_lights=PointLights(point_lights.positions, point_lights.intensity,
+                                 share=point_share) if point_lights is not None else None,
+        sky=Sky(sky.radiance, share=sky_share, distance=sky_distance)
+        if sky is not None else None)
+    return sampler if sampler.kinds else None

@@ -19,7 +19,7 @@ LAYERS = [
     ("foundation", ["ptlab.vectors", "ptlab.errors", "ptlab.atomic"]),
     ("concepts", ["ptlab.sampling", "ptlab.samplers", "ptlab.camera", "ptlab.image",
                   "ptlab.accel", "ptlab.textures", "ptlab.materials", "ptlab.lights",
-                  "ptlab.meshes", "ptlab.scene"]),
+                  "ptlab.meshes", "ptlab.scene", "ptlab.scene_file"]),
     ("integrators", ["ptlab.integrators"]),
     ("rendering", ["ptlab.rendering", "ptlab"]),
     ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
@@ -127,7 +127,7 @@ def test_top_level_holds_concepts_not_machinery():
     # The machinery of a render and the measurements live in their subpackages.
     top = {p.stem for p in PACKAGE.glob("*.py")}
     assert top <= {"__init__", "cli", "vectors", "errors", "atomic", "sampling", "samplers",
-                   "camera", "image", "lights", "meshes", "scene", "textures"}, top
+                   "camera", "image", "lights", "meshes", "scene", "scene_file", "textures"}, top
 
 
 def test_the_version_is_written_once():

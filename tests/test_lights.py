@@ -7,7 +7,17 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from ptlab.lights import SKY_SHARE, AreaLights, LightSampler, PointLights, Sky, light_shares
+from ptlab.lights import (
+    SKY_SHARE,
+    AreaLights,
+    LightSampler,
+    PointLights,
+    Sky,
+    build_lights,
+    light_shares,
+    triangle_areas,
+    triangle_normals,
+)
 
 N = 100_000
 
@@ -19,6 +29,17 @@ def two_lights() -> AreaLights:
     v2 = np.array([[0.0, 1, 0], [6, 0, 0]])
     return AreaLights(v0, v1, v2, radiance=np.array([[1.0, 1, 1], [2, 2, 2]]),
                       offset=np.zeros(2))
+
+
+def test_triangle_areas_and_normals():
+    triangles = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]],      # area 1/2, facing +z
+                          [[5.0, 0, 0], [5, 3, 0], [6, 0, 0]],      # area 3/2, facing -z
+                          [[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]])     # on a line: area 0
+    np.testing.assert_array_equal(triangle_areas(triangles), [0.5, 1.5, 0.0])
+    with np.errstate(invalid="ignore"):
+        normals = triangle_normals(triangles)
+    np.testing.assert_array_equal(normals[:2], [[0, 0, 1], [0, 0, -1]])
+    assert np.isnan(normals[2]).all()
 
 
 def test_total_area_power_pdf_and_normals():
@@ -131,7 +152,7 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
     kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
     for kind, share in zip(kinds, (0.2, 0.3, 0.5), strict=True):
         kind.share = share
-    sampler = LightSampler(kinds)
+    sampler = LightSampler(*kinds)
     u = np.stack([(np.arange(1000) + 0.5) / 1000, np.full(1000, 0.25)]).T.astype(np.float32)
     kind, stretched, scale = sampler.pick(u, np.array([True, True, True]))
     assert scale == pytest.approx(1.0)
@@ -144,3 +165,24 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
     kind, stretched, scale = sampler.pick(u, np.array([True, True, False]))
     assert scale == pytest.approx(2.0) and np.bincount(kind).tolist() == [400, 600]
     assert (stretched[:, 0] < 1).all() and (stretched[:, 0] >= 0).all()
+
+
+def test_build_lights_shares_the_samples_and_leaves_the_given_lights_as_they_are():
+    # Two emissive triangles (power pi x 3.5, as two_lights) and one of zero area, which is no
+    # light; a point light and the sky.
+    area = two_lights()
+    triangles = np.stack([area.v0, area.v0 + area.e1, area.v0 + area.e2], axis=1).astype(float)
+    triangles = np.concatenate([triangles, [[[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]]])
+    radiance = np.array([[1, 1, 1], [2, 2, 2], [9, 9, 9]], dtype=np.float32)
+    points, sky = PointLights([[0.0, 1, 0]], [[1.0, 2, 3]]), Sky([1.0, 1, 1])
+    sampler = build_lights(triangles, radiance, np.zeros(3), points, sky, sky_distance=7.0)
+    assert sampler.kinds == [sampler.area_lights, sampler.point_lights, sampler.sky]
+    assert len(sampler.area_lights) == 2
+    shares = light_shares(np.pi * 3.5, points.power, sky=True)
+    assert [kind.share for kind in sampler.kinds] == pytest.approx(shares)
+    assert sampler.sky.distance == 7.0
+    # The lights given keep their own share (all of the samples) and are not the ones sampled.
+    assert points.share == 1.0 and sky.share == 1.0 and sky.distance == 1.0
+    assert sampler.point_lights is not points and sampler.sky is not sky
+    np.testing.assert_array_equal(sampler.point_lights.intensity, points.intensity)
+    assert build_lights(triangles[2:], radiance[2:], np.zeros(1)) is None     # no light at all

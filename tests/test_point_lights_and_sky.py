@@ -155,12 +155,14 @@ def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
     lamp = np.array([[-0.5, 1.5, -0.5], [0.5, 1.5, -0.5], [0.5, 1.5, 0.5], [-0.5, 1.5, 0.5]])
     plane = plane_scene()
     triangles = np.concatenate([plane.triangles, lamp[np.array([[0, 1, 2], [0, 2, 3]])]])
+    point_lights, sky = PointLights([[1.5, 2.0, 0.0]], [[10.0, 20.0, 30.0]]), Sky([0.3, 0.2, 0.1])
     scene = ptlab.Scene(triangles, np.array([0, 0, 1, 1]),
                         [Diffuse(ALBEDO), Diffuse([0, 0, 0], emission=[5.0, 4.0, 3.0])],
-                        plane.camera, name="lamp-point-sky",
-                        point_lights=PointLights([[1.5, 2.0, 0.0]], [[10.0, 20.0, 30.0]]),
-                        sky=Sky([0.3, 0.2, 0.1]))
-    assert scene.lights.normals[0, 1] == -1                 # the lamp shines down
+                        plane.camera, name="lamp-point-sky", point_lights=point_lights, sky=sky)
+    assert scene.area_lights.normals[0, 1] == -1                 # the lamp shines down
+    # The scene keeps the lights it was given; the light sampler samples copies with shares.
+    assert scene.point_lights is point_lights and scene.sky is sky and sky.share == 1
+    assert scene.light_sampler.sky.share == 0.5
     images = {strategy: ptlab.render(scene, spp=64, res=RES, max_depth=1, strategy=strategy,
                                      sampler="independent", seed=3, workers=1)
               for strategy in ("nee", "bsdf", "mis")}

@@ -25,7 +25,7 @@ def test_cornell_box_is_the_homework_scene(cornell):
                 + 15.6 * np.array([0.740 + 0.287, 0.740 + 0.160, 0.740])
                 + 18.4 * np.array([0.737 + 0.642, 0.737 + 0.159, 0.737]))
     np.testing.assert_allclose(cornell.materials[names.index("light")].emission, homework)
-    lights = cornell.lights
+    lights = cornell.area_lights
     assert lights.total_area == pytest.approx(130 * 105)
     np.testing.assert_allclose(lights.normals, [[0, -1, 0]] * 2, atol=1e-7)   # emits downward
     np.testing.assert_allclose(cornell.camera.position, [278, 273, -800])
@@ -38,6 +38,18 @@ def test_cornell_box_is_the_homework_scene(cornell):
 def test_scene_loads_by_name_by_folder_and_by_file():
     for ref in ("cornell-box", CORNELL, CORNELL / "scene.toml", str(CORNELL / "scene.toml")):
         assert ptlab.load_scene(ref).triangle_count == 32
+
+
+@pytest.mark.parametrize("name", ["load_scene", "find_scene_file", "builtin_scenes_dir",
+                                  "builtin_scene_names", "SCENE_FILE_NAME", "MAX_COORDINATE"])
+def test_the_scene_files_names_are_still_found_in_ptlab_scene(name):
+    import ptlab.scene
+    import ptlab.scene_file
+
+    assert getattr(ptlab.scene, name) is getattr(ptlab.scene_file, name)
+    assert ptlab.load_scene is ptlab.scene_file.load_scene
+    with pytest.raises(AttributeError, match="no attribute 'read_scene'"):
+        ptlab.scene.read_scene      # noqa: B018 (an attribute it never had)
 
 
 @pytest.fixture
@@ -81,7 +93,17 @@ def write_scene(folder: Path, text: str) -> Path:
 
 def test_minimal_scene_loads(scene_dir):
     scene = ptlab.load_scene(write_scene(scene_dir, GOOD))
-    assert scene.triangle_count == 3 and len(scene.lights) == 1
+    assert scene.triangle_count == 3 and len(scene.area_lights) == 1
+
+
+def test_students_files_written_with_the_old_names_still_run(cornell):
+    # Chapter 7 first told students to call scene.lights.sample(u), which gave a LightSample.
+    from ptlab.lights import LightSample, ShapeSample
+
+    assert cornell.lights is cornell.area_lights and LightSample is ShapeSample
+    with pytest.raises(AttributeError):
+        cornell.lights = None
+    assert cornell.area_lights is not None
 
 
 BROKEN = {
@@ -208,7 +230,7 @@ SKY = "\n[sky]\nradiance = [0.1, 0.2, 0.3]\n"
 @pytest.mark.parametrize("lights", [POINT_LIGHT, SKY, POINT_LIGHT + SKY])
 def test_point_lights_or_a_sky_light_a_scene_without_emission(scene_dir, lights):
     scene = ptlab.load_scene(write_scene(scene_dir, UNLIT + lights))
-    assert scene.lights is None
+    assert scene.area_lights is None
     kinds = [type(kind).__name__ for kind in scene.light_sampler.kinds]
     assert kinds == [name for name, text in (("PointLights", POINT_LIGHT), ("Sky", SKY))
                      if text in lights]

@@ -442,6 +442,6 @@ def test_whitted_has_the_path_tracers_mean_where_light_comes_through_glass_and_m
 def test_a_scene_without_lights_renders_black():
     # (Scene files must have a light, but a Scene built in Python need not.)
     scene = furnace_with(Mirror(), emission=0.0)
-    assert scene.lights is None
+    assert scene.area_lights is None
     image = ptlab.render(scene, integrator="whitted", spp=1, res=8, workers=1)
     assert (image == 0).all()

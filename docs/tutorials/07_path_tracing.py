@@ -43,7 +43,7 @@ def scatter_seeing_emission(scene, hit, u, survive, with_pdf=False):
 def direct_light_without_epsilon(film, scene, accel, hit, u, settings) -> int:
     """Light sampling whose shadow rays start exactly on the surface (no offset): in float32
     most of them hit the surface they start on, "shadow acne"."""
-    light = scene.lights.sample(u)
+    light = scene.area_lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
     wi = to_light / np.sqrt(dist2)[:, None]

@@ -233,7 +233,7 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     if settings.strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
         t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
-        pdf_light = solid_angle_pdf(scene.lights.pdf_area(emitted), t * t, dot(n, wo))
+        pdf_light = solid_angle_pdf(scene.area_lights.pdf_area(emitted), t * t, dot(n, wo))
         weight = np.where(hit.sees_emission.take(rows), 1.0,
                           mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic))
         emitted *= weight.astype(np.float32)[:, None]
@@ -262,7 +262,7 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     """
     if scene.point_lights is not None or scene.sky is not None:
         return direct_light_all_kinds(film, scene, accel, hit, u, settings)
-    light = scene.lights.sample(u)
+    light = scene.area_lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
     wi = to_light / np.sqrt(dist2)[:, None]
@@ -304,10 +304,11 @@ def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
     sample it? Point lights always (no BSDF sample can reach a delta light, so every strategy
     samples them); the triangles and the sky unless the strategy is ``"bsdf"``, and the sky
     only with ``settings.sample_sky``."""
-    if scene.light_sampler is None:
+    light_sampler = scene.light_sampler
+    if light_sampler is None:
         return np.zeros(0, dtype=bool)
     return np.array([kind.is_delta or (settings.strategy != "bsdf" and (
-        kind is not scene.sky or settings.sample_sky)) for kind in scene.light_sampler.kinds])
+        kind is not light_sampler.sky or settings.sample_sky)) for kind in light_sampler.kinds])
 
 
 def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
@@ -353,7 +354,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
     and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
     unless light sampling does not sample the sky (``sampled_lights``): then in full."""
-    sky = scene.sky
+    sky = scene.light_sampler.sky     # (its pdf holds its share of the light samples)
     sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
     escaped = hits.prim < 0
     counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission

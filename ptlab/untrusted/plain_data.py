@@ -32,11 +32,11 @@ import numpy as np
 
 from ptlab.accel.base import Hits
 from ptlab.integrators.path import Paths, PathSettings, SurfaceHit
-from ptlab.lights import LightSample
+from ptlab.lights import ShapeSample
 from ptlab.rendering.jobs import Job, JobResult, Tile
 
 #: The library's own dataclasses that cross as records (rebuilt by name, field by field).
-RECORDS = {cls.__name__: cls for cls in (Hits, Paths, PathSettings, SurfaceHit, LightSample,
+RECORDS = {cls.__name__: cls for cls in (Hits, Paths, PathSettings, SurfaceHit, ShapeSample,
                                          Tile, Job, JobResult)}
 #: The array element kinds that cross: bool, signed and unsigned integers, floats, complex.
 ARRAY_KINDS = "biufc"

@@ -15,7 +15,7 @@ EXPECTED_HINTS = {"lights one-sided": ("from behind", "front face only", "hit.fr
 
 
 def direct_light(film, scene, accel, hit, u):
-    light = scene.lights.sample(u)
+    light = scene.area_lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
     wi = to_light / np.sqrt(dist2)[:, None]

@@ -24,7 +24,7 @@ The library gives you (``ptlab.integrators.path``; read it):
   ``throughput``, ``pixel``, ``sees_emission``, ``sample``, ``prim`` (the triangle), ``delta``;
 * ``shade(hit, "eval" | "pdf" | "sample", *arrays)``: each hit's own material's method;
 * ``add_to_film(film, pixel, radiance)``: film[pixel[k]] += radiance[k] for every k;
-* ``scene.lights.sample(u)``: points on the lights (``ptlab.lights.LightSample``);
+* ``scene.area_lights.sample(u)``: points on the lights (``ptlab.lights.ShapeSample``);
 * ``BounceUniforms(sampler, hit.sample, depth)``: the random numbers of one bounce
   (``ptlab.samplers``: ``.light()``, ``.roulette()``, ``.bsdf()``);
 * ``accel.intersect(origins, dirs)`` and ``accel.occluded(origins, dirs, tmax)``.
@@ -44,8 +44,8 @@ from ptlab.vectors import dot, take_rows
 def direct_light(film, scene, accel, hit, u):
     """Direct light at every hit by sampling one point on the lights (next-event estimation).
 
-    For each row: pick a point x' on the lights with ``scene.lights.sample(u)``, and if the
-    shadow ray from the hit point x to x' is not blocked, add to the path's pixel
+    For each row: pick a point x' on the lights with ``scene.area_lights.sample(u)``, and if
+    the shadow ray from the hit point x to x' is not blocked, add to the path's pixel
 
         throughput * Le * f_r(wo, wi) * cos(theta) * cos(theta') / |x' - x|^2 / pdf_area
 
@@ -54,17 +54,17 @@ def direct_light(film, scene, accel, hit, u):
 
     Args:
         film: (P, 3) float64 per-pixel sums; add to it with ``add_to_film(film, hit.pixel, ...)``.
-        scene: the ``ptlab.scene.Scene`` (``scene.lights`` samples the lights).
+        scene: the ``ptlab.scene.Scene`` (``scene.area_lights`` samples the lights).
         accel: the ray-query structure (``accel.occluded`` traces shadow rays).
         hit: the ``SurfaceHit`` of N paths.
         u: (N, 2) uniforms in [0, 1) for the light samples (pass them to
-            ``scene.lights.sample`` as they are).
+            ``scene.area_lights.sample`` as they are).
 
     Returns:
         the number of shadow rays traced (an int).
 
     Hints:
-        * ``light = scene.lights.sample(u)`` gives ``light.points``, ``light.normals``,
+        * ``light = scene.area_lights.sample(u)`` gives ``light.points``, ``light.normals``,
           ``light.radiance`` (Le), ``light.pdf_area`` ((N,)) and ``light.offset``, all (N, 3)
           or (N,) arrays, one row per hit.
         * f_r is ``shade(hit, "eval", hit.wo, wi, hit.n)``: (N, 3).

@@ -11,7 +11,7 @@ from ptlab.vectors import dot, take_rows
 
 
 def direct_light(film, scene, accel, hit, u):
-    light = scene.lights.sample(u)
+    light = scene.area_lights.sample(u)
     to_light = light.points - hit.p
     dist2 = dot(to_light, to_light)
     wi = to_light / np.sqrt(dist2)[:, None]
