@@ -62,9 +62,9 @@ def normalize(v: np.ndarray) -> np.ndarray:
     return v / np.where(length > 0, length, 1)[..., None]
 
 
-def reflect(w: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """(N, 3) mirror image of ``w`` about the unit normal ``n``: 2 (w . n) n - w.
+def channels(colour: np.ndarray) -> np.ndarray:
+    """A (3,) or (N, 3) colour as (3, 1) or (3, N), to scale (N,) rows channel by channel.
 
-    Both ``w`` and the result point away from the surface (pbrt-v4 section 9.3).
+    ``(channels(c) * s).T`` is then an (N, 3) array in this module's column-major layout.
     """
-    return (2 * dot(w, n))[:, None] * n - w
+    return colour[:, None] if colour.ndim == 1 else colour.T
