@@ -20,11 +20,10 @@ radiance (pbrt-v4 section 9.5, ``TransportMode::Radiance``), as ptlab's camera p
 With the camera and the lights both outside the glass, every path enters as often as it
 leaves and the factors cancel; they matter when a light or the camera is inside.
 
-**Which side is outside.** The glass's outside is the side its geometric normal points to.
-``sample`` and ``sample_weight`` take ``front``, (N,) bool, True where ``wo`` is on that
-side (the renderer's ``SurfaceHit.front``); ``n`` may then face either way (the renderer
-turns it toward ``wo``). Without ``front``, ``n`` must be the outward normal and
-``wo . n > 0`` means ``wo`` is outside (pbrt's convention).
+**Which side is outside.** The glass's outside is the side its geometric normal points to:
+where ``sample`` and ``sample_weight`` are given ``front`` (``ptlab.materials.base``), ``n``
+may face either way (the renderer turns it toward ``wo``). Without ``front``, ``n`` must be
+the outward normal and ``wo . n > 0`` means ``wo`` is outside (pbrt's convention).
 """
 
 from __future__ import annotations
@@ -80,7 +79,6 @@ class Dielectric(DeltaMaterial):
             wo: (N, 3) unit directions toward the viewer.
             n: (N, 3) unit normals: outward when ``front`` is None, else either way.
             u: (N, 2) uniforms in [0, 1); only u[:, 0] is used.
-            front: (N,) bool, True where ``wo`` is outside the glass, or None.
         """
         cos_theta_o = dot(wo, n)
         outside = cos_theta_o > 0 if front is None else np.asarray(front, dtype=bool)

@@ -193,7 +193,8 @@ class Microfacet(Material):
         pdf_specular = G1(cos_o, alpha) * D(dot(h, n), alpha) / (4.0 * cos_o)
         return above * (p_specular * pdf_specular + (1.0 - p_specular) * pdf_diffuse)
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+               front: np.ndarray | None = None) -> np.ndarray:
         """(N, 3) unit directions with density ``pdf``; u: (N, 2) uniforms in [0, 1)."""
         u = u.astype(n.dtype, copy=False)
         if self.sampling == "hemisphere":
