@@ -17,11 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ptlab.vectors import dot, vec3
-
-
-def _normalize(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
+from ptlab.vectors import cross, normalize, vec3
 
 
 @dataclass(frozen=True)
@@ -44,15 +40,15 @@ class Camera:
     def look_at(cls, position, target, up=(0.0, 1.0, 0.0), fov_y: float = 40.0) -> Camera:
         """A camera at ``position`` looking at ``target``, ``up`` roughly up."""
         position = np.asarray(position, dtype=np.float64)
-        forward = _normalize(np.asarray(target, dtype=np.float64) - position)
-        right = _normalize(np.cross(forward, np.asarray(up, dtype=np.float64)))
-        true_up = np.cross(right, forward)
+        forward = normalize(np.asarray(target, dtype=np.float64) - position)
+        right = normalize(cross(forward, np.asarray(up, dtype=np.float64)))
+        true_up = cross(right, forward)
         return cls(position=position, forward=forward, up=true_up, fov_y=float(fov_y))
 
     @property
     def right(self) -> np.ndarray:
         """(3,) unit vector pointing to the right of the image."""
-        return np.cross(self.forward, self.up)
+        return cross(self.forward, self.up)
 
 
 def generate_rays(camera: Camera, width: int, height: int, pixel_x: np.ndarray,
@@ -75,6 +71,6 @@ def generate_rays(camera: Camera, width: int, height: int, pixel_x: np.ndarray,
     y = (1.0 - 2.0 * (pixel_y + u[:, 1]) / height) * scale
     f, r, up = camera.forward, camera.right, camera.up
     dirs = vec3(*(float(f[k]) + x * float(r[k]) + y * float(up[k]) for k in range(3)))
-    dirs = (dirs / np.sqrt(dot(dirs, dirs))[:, None]).astype(np.float32)
+    dirs = normalize(dirs).astype(np.float32)
     origins = np.broadcast_to(camera.position.astype(np.float32), dirs.shape)
     return origins, dirs

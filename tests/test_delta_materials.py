@@ -14,8 +14,8 @@ from ptlab.grading import check_material
 from ptlab.grading.checks import batch, direction_at
 from ptlab.grading.delta import hammersley
 from ptlab.materials import Dielectric, Mirror
-from ptlab.materials.dielectric import fresnel_dielectric
-from ptlab.vectors import dot, reflect
+from ptlab.scattering import fresnel_dielectric, reflect
+from ptlab.vectors import dot
 
 N_AXIS = np.array([0.0, 0.0, 1.0])
 ROWS = 2**14
@@ -41,23 +41,6 @@ def test_mirror_reflects_exactly_with_its_reflectance(fresnel):
         assert (material.eval(wo, wi, n) == 0).all() and (material.pdf(wo, wi, n) == 0).all()
     wo, n, u = setup(30, side=-1)
     assert (material.sample_weight(wo, n, u)[1] == 0).all(), "nothing is reflected from below"
-
-
-def test_fresnel_dielectric_known_values():
-    # Normal incidence: ((eta - 1) / (eta + 1))^2; grazing: 1; beyond the critical angle: 1.
-    assert fresnel_dielectric(np.array([1.0]), 1.5)[0] == pytest.approx(0.04)
-    assert fresnel_dielectric(np.array([0.0]), 1.5)[0] == pytest.approx(1.0)
-    critical = math.asin(1 / 1.5)
-    assert fresnel_dielectric(np.array([math.cos(critical + 0.01)]), 1 / 1.5)[0] == 1.0
-    # Brewster's angle tan(theta) = eta: the parallel part vanishes, R = r_perp^2 / 2.
-    brewster = math.atan(1.5)
-    cos_i, cos_t = math.cos(brewster), math.cos(math.pi / 2 - brewster)
-    r_perp = (cos_i - 1.5 * cos_t) / (cos_i + 1.5 * cos_t)
-    assert fresnel_dielectric(np.array([cos_i]), 1.5)[0] == pytest.approx(r_perp**2 / 2)
-    # The same light crossing back: reflectance is symmetric (Stokes relations).
-    cos_t_inside = math.sqrt(1 - math.sin(0.5) ** 2 / 1.5**2)
-    assert (fresnel_dielectric(np.array([math.cos(0.5)]), 1.5)[0]
-            == pytest.approx(fresnel_dielectric(np.array([cos_t_inside]), 1 / 1.5)[0]))
 
 
 @pytest.mark.parametrize("side", [1.0, -1.0])

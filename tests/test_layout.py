@@ -17,9 +17,9 @@ PACKAGE = Path(__file__).resolve().parent.parent / "ptlab"
 #: layer and those below it, never one above; within a layer, the no-cycle test keeps order.
 LAYERS = [
     ("foundation", ["ptlab.vectors", "ptlab.errors", "ptlab.atomic"]),
-    ("concepts", ["ptlab.sampling", "ptlab.samplers", "ptlab.camera", "ptlab.image",
-                  "ptlab.accel", "ptlab.textures", "ptlab.materials", "ptlab.lights",
-                  "ptlab.meshes", "ptlab.scene", "ptlab.scene_file"]),
+    ("concepts", ["ptlab.sampling", "ptlab.samplers", "ptlab.scattering", "ptlab.camera",
+                  "ptlab.image", "ptlab.accel", "ptlab.textures", "ptlab.materials",
+                  "ptlab.lights", "ptlab.meshes", "ptlab.scene", "ptlab.scene_file"]),
     ("integrators", ["ptlab.integrators"]),
     ("rendering", ["ptlab.rendering", "ptlab"]),
     ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
@@ -127,7 +127,8 @@ def test_top_level_holds_concepts_not_machinery():
     # The machinery of a render and the measurements live in their subpackages.
     top = {p.stem for p in PACKAGE.glob("*.py")}
     assert top <= {"__init__", "cli", "vectors", "errors", "atomic", "sampling", "samplers",
-                   "camera", "image", "lights", "meshes", "scene", "scene_file", "textures"}, top
+                   "scattering", "camera", "image", "lights", "meshes", "scene", "scene_file",
+                   "textures"}, top
 
 
 def test_the_version_is_written_once():

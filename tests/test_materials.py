@@ -1,13 +1,14 @@
-"""The diffuse material against its contract and its closed forms."""
+"""The diffuse material against its contract and its closed forms; the contract's one signature."""
 
 from __future__ import annotations
 
+import inspect
 import math
 
 import numpy as np
 import pytest
 
-from ptlab.materials import Diffuse, Material
+from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
 from ptlab.sampling import to_world, uniform_hemisphere
 
 N = 200_000
@@ -79,3 +80,40 @@ def test_stacked_materials_shade_each_row_with_its_own_albedo():
 def test_unknown_sampling_is_refused():
     with pytest.raises(ValueError, match="sampling"):
         Diffuse(sampling="importance")
+
+
+def test_with_sampling_returns_the_material_itself_when_nothing_changes():
+    material = Diffuse(ALBEDO, sampling="cosine")
+    assert material.with_sampling("cosine") is material
+    uniform = material.with_sampling("uniform")
+    assert uniform is not material and type(uniform) is Diffuse
+    assert (uniform.sampling, material.sampling) == ("uniform", "cosine")
+    with pytest.raises(ValueError, match="sampling"):
+        material.with_sampling("importance")
+
+
+def test_sample_takes_front_in_every_library_material():
+    for kind in (Material, Diffuse, Microfacet, Mirror, Dielectric):
+        for method in (kind.sample, kind.sample_weight):
+            parameters = list(inspect.signature(method).parameters)
+            assert parameters == ["self", "wo", "n", "u", "front"], (kind, method)
+
+
+def test_a_material_with_the_homeworks_three_argument_sample_gets_a_weight_with_front():
+    # A student's material overrides sample(wo, n, u) without front; the renderer passes front
+    # to sample_weight, which must not hand it on.
+    class Homework(Material):
+        def eval(self, wo, wi, n):
+            return Diffuse(ALBEDO).eval(wo, wi, n)
+
+        def pdf(self, wo, wi, n):
+            return Diffuse(ALBEDO).pdf(wo, wi, n)
+
+        def sample(self, wo, n, u):
+            return Diffuse(ALBEDO).sample(wo, n, u)
+
+    rng, n, wo = random_frame(100, 3)
+    u = rng.random((100, 2))
+    wi, weight = Homework().sample_weight(wo, n, u, np.ones(100, dtype=bool))
+    np.testing.assert_array_equal(wi, Diffuse(ALBEDO).sample(wo, n, u))
+    np.testing.assert_allclose(weight, np.broadcast_to(ALBEDO, weight.shape), rtol=1e-12)

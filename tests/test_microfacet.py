@@ -14,9 +14,10 @@ import pytest
 from ptlab.grading.checks import batch, chi2_sf, direction_at, pooled_chi_square
 from ptlab.grading.sphere import SphereGrid
 from ptlab.materials import METALS, Material, Microfacet
-from ptlab.materials.microfacet import G1, G2, D, F_schlick
+from ptlab.materials.microfacet import G1, G2, D
 from ptlab.sampling import ggx_visible_normals
-from ptlab.vectors import dot, reflect
+from ptlab.scattering import F_schlick, reflect
+from ptlab.vectors import dot
 
 N_AXIS = np.array([0.0, 0.0, 1.0])
 ALPHAS = [0.05, 0.2, 0.5, 1.0]
@@ -61,14 +62,6 @@ def test_g2_is_symmetric_and_at_most_the_product_of_the_g1():
         # Height correlation makes G2 >= G1 G1 (Heitz 2014 section 6); both in (0, 1].
         assert (G2(cos_o, cos_i, alpha) >= G1(cos_o, alpha) * G1(cos_i, alpha) - 1e-15).all()
         assert (G2(cos_o, cos_i, alpha) <= 1).all()
-
-
-def test_schlick_fresnel_runs_from_f0_to_one():
-    f0 = np.array([0.9, 0.5, 0.1])
-    fresnel = F_schlick(np.array([1.0, 0.0, 0.5]), f0)
-    np.testing.assert_allclose(fresnel[0], f0)
-    np.testing.assert_allclose(fresnel[1], 1.0)
-    np.testing.assert_allclose(fresnel[2], f0 + (1 - f0) * 0.5**5)
 
 
 @pytest.mark.parametrize("alpha", [0.05, 0.3, 1.0])

@@ -12,11 +12,11 @@ import math
 import numpy as np
 
 from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror
-from ptlab.materials.base import Material, dot
-from ptlab.materials.dielectric import fresnel_dielectric, refract
-from ptlab.materials.microfacet import G1, D, F_schlick
+from ptlab.materials.base import Material
+from ptlab.materials.microfacet import G1, D
 from ptlab.sampling import cosine_hemisphere, to_world, uniform_hemisphere
-from ptlab.vectors import normalize, reflect, vec3
+from ptlab.scattering import F_schlick, fresnel_dielectric, reflect, refract
+from ptlab.vectors import dot, normalize, vec3
 
 ALBEDO = (0.8, 0.6, 0.4)
 

@@ -22,8 +22,7 @@ import ptlab
 from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
 from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
-from ptlab.materials.dielectric import fresnel_dielectric, refract
-from ptlab.vectors import reflect
+from ptlab.scattering import fresnel_dielectric, reflect, refract
 
 
 def refract_inverted(wo, n, eta):

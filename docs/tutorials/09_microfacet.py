@@ -25,7 +25,8 @@ from ptlab.image import write_image
 from ptlab.materials import Material, Microfacet
 from ptlab.materials.microfacet import G1, D
 from ptlab.sampling import to_world
-from ptlab.vectors import dot, normalize, reflect, vec3
+from ptlab.scattering import reflect
+from ptlab.vectors import dot, normalize, vec3
 
 
 class HalfVectorPdf(Material):

@@ -43,7 +43,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ptlab.accel.base import Hits
-from ptlab.accel.triangle import cross, dot, ray_triangle
+from ptlab.accel.triangle import ray_triangle
+from ptlab.vectors import cross, dot
 
 #: The most triangles for which testing all of them surely beats walking the tree
 #: (measured, 262k random rays in the Cornell box, intersect + occluded: 7.4x faster with

@@ -17,22 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
-
-def dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(...) dot products of (..., 3) vectors, written out (faster than ``sum(-1)``)."""
-    return a[..., 0] * b[..., 0] + a[..., 1] * b[..., 1] + a[..., 2] * b[..., 2]
-
-
-def cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(..., 3) cross products of (..., 3) vectors."""
-    ax, ay, az = a[..., 0], a[..., 1], a[..., 2]
-    bx, by, bz = b[..., 0], b[..., 1], b[..., 2]
-    # Column-major ("F") order keeps each component contiguous (ptlab.vectors).
-    c = np.empty(np.broadcast_shapes(a.shape, b.shape), np.result_type(a, b), order="F")
-    np.subtract(ay * bz, az * by, out=c[..., 0])
-    np.subtract(az * bx, ax * bz, out=c[..., 1])
-    np.subtract(ax * by, ay * bx, out=c[..., 2])
-    return c
+from ptlab.vectors import cross, dot
 
 
 def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,

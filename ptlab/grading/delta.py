@@ -44,7 +44,7 @@ from ptlab.grading.checks import Z, call, direction_at
 from ptlab.grading.material import derives_sample_weight
 from ptlab.grading.probes import Probe, rows_of
 from ptlab.grading.report import Check, verdict
-from ptlab.materials.dielectric import fresnel_dielectric
+from ptlab.scattering import fresnel_dielectric
 from ptlab.vectors import normalize
 
 ANGLES = (0.0, 30.0, 60.0, 80.0, 89.0, 90.0)

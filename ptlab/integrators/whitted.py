@@ -60,10 +60,11 @@ from ptlab.integrators.path import (
     sampled_lights,
     surface_hit,
 )
-from ptlab.materials.dielectric import Dielectric, fresnel_dielectric, refract
+from ptlab.materials.dielectric import Dielectric
 from ptlab.samplers import BounceUniforms, Sampler
+from ptlab.scattering import fresnel_dielectric, reflect, refract
 from ptlab.scene import Scene
-from ptlab.vectors import dot, reflect, take_rows, vec3
+from ptlab.vectors import dot, take_rows, vec3
 
 #: Direct light by light sampling only, and emission counted where the ray may see it: the
 #: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with); the

@@ -1,4 +1,5 @@
-"""Materials (see ``ptlab.materials.base`` for the interface and its conventions)."""
+"""Materials (see ``ptlab.materials.base`` for the interface and its conventions, and
+``ptlab.materials.parameters`` for what the renderer does with their parameters)."""
 
 from ptlab.materials.base import Material
 from ptlab.materials.dielectric import Dielectric

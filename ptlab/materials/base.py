@@ -11,21 +11,30 @@ Conventions (the whole library's): every direction is a unit vector pointing *aw
 surface; ``wo`` toward the viewer, ``wi`` toward the light; ``n`` the unit shading normal.
 Arrays are (N, 3), colours (N, 3). (GAMES101 passes the incoming ray direction, which
 points *toward* the surface, as its first argument: its ``wi`` is our ``-wo``.)
+
+**front.** ``sample`` and ``sample_weight`` also take ``front``, (N,) bool or None: True
+where ``wo`` is on the side the surface's geometric normal points to (its outside), as the
+renderer knows it (``SurfaceHit.front``, with ``n`` turned toward ``wo``). Only materials
+that let light through (``Dielectric``) need it; the others ignore it, and a material may
+leave it out of its own ``sample``, as the homework's ``sample(wo, n, u)`` does: the
+renderer gives ``front`` to ``sample_weight`` only, and the ``sample_weight`` below calls
+``sample(wo, n, u)`` without it.
+
+A material's parameters (its sampling, its rows when the renderer shades many materials of
+one kind in one call, its textures) are ``ptlab.materials.parameters``'s business.
 """
 
 from __future__ import annotations
 
-import copy
-
 import numpy as np
 
-from ptlab.textures import Texture
-from ptlab.vectors import columns, dot, take_rows
+from ptlab.materials.parameters import MaterialParameters
+from ptlab.vectors import dot
 
-__all__ = ["DeltaMaterial", "Material", "dot"]
+__all__ = ["DeltaMaterial", "Material"]
 
 
-class Material:
+class Material(MaterialParameters):
     """Base class: subclasses implement ``eval``, ``pdf`` and ``sample``.
 
     Attributes:
@@ -35,8 +44,6 @@ class Material:
 
     emission: np.ndarray | None = None
     is_delta: bool = False
-    #: The sampling strategies a subclass offers (its ``sampling`` attribute picks one).
-    samplings: tuple[str, ...] = ()
 
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         """(N, 3) BSDF value f_r(wo, wi), cosine not included."""
@@ -46,7 +53,8 @@ class Material:
         """(N,) solid-angle density with which ``sample`` picks ``wi``."""
         raise NotImplementedError
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+               front: np.ndarray | None = None) -> np.ndarray:
         """(N, 3) unit directions drawn with density ``pdf``; u: (N, 2) in [0, 1)."""
         raise NotImplementedError
 
@@ -55,11 +63,9 @@ class Material:
         """Sample ``wi`` and return it with its Monte Carlo weight f_r cos / pdf.
 
         This is the factor by which a path's throughput is multiplied at a bounce
-        (pbrt-v4 ``Sample_f``). Where the pdf is 0 the weight is 0, never NaN.
-
-        ``front``, (N,) bool or None, says where ``wo`` is on the side the surface's
-        geometric normal points to (its outside). Only materials that let light through
-        (``Dielectric``) need it; the others ignore it.
+        (pbrt-v4 ``Sample_f``). Where the pdf is 0 the weight is 0, never NaN. Made of the
+        three functions, with ``sample(wo, n, u)``: a material whose directions depend on
+        ``front`` gives its own.
         """
         wi = self.sample(wo, n, u)
         f = self.eval(wo, wi, n)
@@ -68,61 +74,6 @@ class Material:
         ok = pdf > 0
         scale = np.where(ok, cos_theta_i / np.where(ok, pdf, 1), 0).astype(f.dtype)
         return wi, scale[:, None] * f
-
-    def with_sampling(self, sampling: str) -> Material:
-        """A copy of this material (of the same class) that samples by ``sampling``."""
-        if sampling not in self.samplings:
-            raise ValueError(f"unknown sampling {sampling!r} for {type(self).__name__}; "
-                             f"choose one of {', '.join(self.samplings) or 'none'}")
-        twin = copy.copy(self)
-        twin.sampling = sampling
-        return twin
-
-    # Batching: the renderer shades all hits on materials of one kind with one call.
-    #: The parameters that may differ between materials of one kind: ``stack`` makes them
-    #: rows (float32, like the renderer's arrays), ``take`` picks a row per hit. One of them
-    #: may also be a ``ptlab.textures.Texture``, which ``take`` looks up at each hit's uv.
-    batched: tuple[str, ...] = ()
-
-    @property
-    def textured(self) -> bool:
-        """True if a parameter varies over the surface (a ``Texture``): it needs the hits' uv."""
-        return any(isinstance(getattr(self, name), Texture) for name in self.batched)
-
-    def batch_key(self) -> object:
-        """Materials with equal keys can be ``stack``ed into one; the default is none."""
-        return id(self)
-
-    @classmethod
-    def stack(cls, materials: list[Material]) -> Material:
-        """One material whose ``batched`` parameters are rows, one per input material.
-
-        A textured material is alone in its group (its ``batch_key`` is its own): its
-        textures stay textures."""
-        if not cls.batched or materials[0].textured:
-            if len(materials) != 1:
-                raise TypeError(f"{cls.__name__} cannot be batched")
-            return materials[0]
-        stacked = copy.copy(materials[0])
-        for name in cls.batched:
-            rows = np.stack([np.asarray(getattr(m, name)) for m in materials]).astype(np.float32)
-            setattr(stacked, name, columns(rows) if rows.ndim == 2 else rows)
-        return stacked
-
-    def take(self, index: np.ndarray, uv: np.ndarray | None = None) -> Material:
-        """The stacked material's parameters for each hit: row ``index[k]`` for hit k, or a
-        texture's value at ``uv[k]`` ((N, 2) texture coordinates of the hits)."""
-        taken = copy.copy(self)
-        for name in self.batched:
-            value = getattr(self, name)
-            if isinstance(value, Texture):
-                if uv is None:
-                    raise ValueError(f"{type(self).__name__}.{name} is a texture: it needs the "
-                                     f"hits' uv coordinates")
-                setattr(taken, name, value(uv))
-            else:
-                setattr(taken, name, take_rows(value, index))
-        return taken
 
 
 class DeltaMaterial(Material):

@@ -1,11 +1,11 @@
 """Smooth glass: a delta material that reflects or refracts by the Fresnel equations.
 
 At a smooth boundary between air (outside, index 1) and glass (inside, index ``eta``) light
-either reflects, wi = reflect(wo, n), or refracts by Snell's law,
-eta_o sin(theta_o) = eta_i sin(theta_i) (pbrt-v4 sections 9.3 and 9.5; GAMES101 lecture 13,
-Whitted ray tracing). The fraction reflected is the exact Fresnel reflectance of unpolarised
-light, ``fresnel_dielectric`` (pbrt-v4 section 9.3 and ``FrDielectric``); from inside beyond the
-critical angle it is 1: total internal reflection.
+either reflects, wi = reflect(wo, n), or refracts by Snell's law, wi = refract(wo, n, eta_rel)
+(pbrt-v4 sections 9.3 and 9.5; GAMES101 lecture 13, Whitted ray tracing). The fraction
+reflected is the exact Fresnel reflectance of unpolarised light, ``fresnel_dielectric``; from
+inside beyond the critical angle it is 1: total internal reflection. (The three formulas are
+``ptlab.scattering``'s.)
 
 Like ``Mirror`` this is a delta material (pbrt-v4's convention for specular BxDFs): ``eval``
 and ``pdf`` return 0 and ``sample_weight`` does the work. It picks reflection with
@@ -20,51 +20,19 @@ radiance (pbrt-v4 section 9.5, ``TransportMode::Radiance``), as ptlab's camera p
 With the camera and the lights both outside the glass, every path enters as often as it
 leaves and the factors cancel; they matter when a light or the camera is inside.
 
-**Which side is outside.** The glass's outside is the side its geometric normal points to.
-``sample`` and ``sample_weight`` take ``front``, (N,) bool, True where ``wo`` is on that
-side (the renderer's ``SurfaceHit.front``); ``n`` may then face either way (the renderer
-turns it toward ``wo``). Without ``front``, ``n`` must be the outward normal and
-``wo . n > 0`` means ``wo`` is outside (pbrt's convention).
+**Which side is outside.** The glass's outside is the side its geometric normal points to:
+where ``sample`` and ``sample_weight`` are given ``front`` (``ptlab.materials.base``), ``n``
+may face either way (the renderer turns it toward ``wo``). Without ``front``, ``n`` must be
+the outward normal and ``wo . n > 0`` means ``wo`` is outside (pbrt's convention).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ptlab.materials.base import DeltaMaterial, dot
-from ptlab.materials.microfacet import channels
-
-
-def fresnel_dielectric(cos_theta_i: np.ndarray, eta_rel) -> np.ndarray:
-    """(N,) Fresnel reflectance of unpolarised light arriving at ``cos_theta_i`` in [0, 1].
-
-    ``eta_rel`` = eta_t / eta_i, the index beyond the boundary over the index on the side of
-    the light (a float or (N,)); 1 under total internal reflection (pbrt-v4 ``FrDielectric``).
-    """
-    sin2_theta_t = (1.0 - cos_theta_i * cos_theta_i) / (eta_rel * eta_rel)
-    cos_theta_t = np.sqrt(np.maximum(0.0, 1.0 - sin2_theta_t))
-    # 0 / 0 only at grazing incidence under total internal reflection, replaced below.
-    with np.errstate(invalid="ignore"):
-        r_parallel = (eta_rel * cos_theta_i - cos_theta_t) / (eta_rel * cos_theta_i + cos_theta_t)
-        r_perpendicular = (cos_theta_i - eta_rel * cos_theta_t) / (cos_theta_i + eta_rel * cos_theta_t)
-    reflectance = (r_parallel * r_parallel + r_perpendicular * r_perpendicular) / 2.0
-    return np.where(sin2_theta_t >= 1.0, 1.0, reflectance).astype(np.result_type(cos_theta_i), copy=False)
-
-
-def refract(wo: np.ndarray, n: np.ndarray, eta_rel) -> np.ndarray:
-    """(N, 3) refracted directions, for ``n`` facing ``wo`` (unit except under total internal reflection).
-
-    wi = -wo / eta_rel + (cos_theta_o / eta_rel - cos_theta_i) n with
-    cos_theta_i = sqrt(1 - sin^2(theta_o) / eta_rel^2) (pbrt-v4 section 9.3 and ``Refract``).
-    """
-    cos_theta_o = dot(wo, n)
-    sin2_theta_i = (1.0 - cos_theta_o * cos_theta_o) / (eta_rel * eta_rel)
-    cos_theta_i = np.sqrt(np.maximum(0.0, 1.0 - sin2_theta_i))
-    return -wo / _column(eta_rel) + (cos_theta_o / eta_rel - cos_theta_i)[:, None] * n
-
-
-def _column(value):
-    return value[:, None] if np.ndim(value) == 1 else value
+from ptlab.materials.base import DeltaMaterial
+from ptlab.scattering import fresnel_dielectric, reflect, refract
+from ptlab.vectors import channels, dot
 
 
 class Dielectric(DeltaMaterial):
@@ -111,7 +79,6 @@ class Dielectric(DeltaMaterial):
             wo: (N, 3) unit directions toward the viewer.
             n: (N, 3) unit normals: outward when ``front`` is None, else either way.
             u: (N, 2) uniforms in [0, 1); only u[:, 0] is used.
-            front: (N,) bool, True where ``wo`` is outside the glass, or None.
         """
         cos_theta_o = dot(wo, n)
         outside = cos_theta_o > 0 if front is None else np.asarray(front, dtype=bool)
@@ -123,7 +90,7 @@ class Dielectric(DeltaMaterial):
         eta_rel = np.where(outside, eta, 1.0 / eta).astype(n.dtype, copy=False)
         R = fresnel_dielectric(cos_theta_o, eta_rel)  # noqa: N806 (pbrt's name)
         reflected = u[:, 0] < R
-        wi = np.where(reflected[:, None], (2 * cos_theta_o)[:, None] * n - wo, refract(wo, n, eta_rel))
+        wi = np.where(reflected[:, None], reflect(wo, n), refract(wo, n, eta_rel))
         transmittance = channels(self.transmittance.astype(n.dtype, copy=False))
         refracted = ~reflected / (eta_rel * eta_rel)
         weight = reflected.astype(n.dtype) + transmittance * refracted

@@ -15,7 +15,8 @@ through Rough Surfaces", eq. 20; pbrt-v4 section 9.6; GAMES101 lecture 17):
   Masking-Shadowing Function in Microfacet-Based BRDFs", eqs. 72 and 99; pbrt-v4 9.6.2-9.6.3);
   ``G1(w) = 1 / (1 + Lambda(w))`` masks one direction;
 * ``F``: Schlick's approximation of the Fresnel reflectance with an RGB F0 (the metal's
-  colour at normal incidence), F = F0 + (1 - F0) (1 - wo . h)^5 (Schlick 1994).
+  colour at normal incidence), F = F0 + (1 - F0) (1 - wo . h)^5 (Schlick 1994;
+  ``ptlab.scattering.F_schlick``).
 
 **Roughness.** Users type a ``roughness`` in (0, 1]; the GGX parameter is
 alpha = roughness^2 (Burley 2012, "Physically Based Shading at Disney"; Karis 2013), which
@@ -51,9 +52,10 @@ import math
 
 import numpy as np
 
-from ptlab.materials.base import Material, dot
+from ptlab.materials.base import Material
 from ptlab.sampling import cosine_hemisphere, ggx_visible_normals, to_world
-from ptlab.vectors import normalize, reflect
+from ptlab.scattering import F_schlick, reflect
+from ptlab.vectors import channels, dot, normalize
 
 SAMPLINGS = ("vndf", "hemisphere")
 
@@ -97,22 +99,6 @@ def G1(cos_theta: np.ndarray, alpha) -> np.ndarray:  # noqa: N802 (the papers' n
 def G2(cos_theta_o: np.ndarray, cos_theta_i: np.ndarray, alpha) -> np.ndarray:  # noqa: N802 (the papers' name)
     """(N,) height-correlated masking-shadowing (Heitz 2014 eq. 99; pbrt-v4 section 9.6.3)."""
     return 1.0 / (1.0 + Lambda(cos_theta_o, alpha) + Lambda(cos_theta_i, alpha))
-
-
-def F_schlick(cos_theta: np.ndarray, f0: np.ndarray) -> np.ndarray:  # noqa: N802 (the papers' name)
-    """(N, 3) Schlick's Fresnel: F0 + (1 - F0) (1 - cos_theta)^5; f0: (3,) or (N, 3)."""
-    m = (1.0 - np.clip(cos_theta, 0.0, 1.0)) ** 5
-    f0 = channels(f0)
-    return (f0 + (1.0 - f0) * m).T
-
-
-def channels(colour: np.ndarray) -> np.ndarray:
-    """A (3,) or (N, 3) colour as (3, 1) or (3, N), to scale (N,) rows channel by channel.
-
-    ``(channels(c) * s).T`` is then an (N, 3) array in the column-major layout of
-    ``ptlab.vectors``.
-    """
-    return colour[:, None] if colour.ndim == 1 else colour.T
 
 
 def _rows(value, dtype) -> float | np.ndarray:
@@ -207,7 +193,8 @@ class Microfacet(Material):
         pdf_specular = G1(cos_o, alpha) * D(dot(h, n), alpha) / (4.0 * cos_o)
         return above * (p_specular * pdf_specular + (1.0 - p_specular) * pdf_diffuse)
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
+               front: np.ndarray | None = None) -> np.ndarray:
         """(N, 3) unit directions with density ``pdf``; u: (N, 2) uniforms in [0, 1)."""
         u = u.astype(n.dtype, copy=False)
         if self.sampling == "hemisphere":

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.materials.base import DeltaMaterial, dot
-from ptlab.materials.microfacet import F_schlick, channels
-from ptlab.vectors import reflect
+from ptlab.materials.base import DeltaMaterial
+from ptlab.scattering import F_schlick, reflect
+from ptlab.vectors import channels, dot
 
 
 class Mirror(DeltaMaterial):

@@ -84,9 +84,10 @@ def test_the_librarys_diffuse_copied_with_the_names_changed_earns_nothing(tmp_pa
         "n": "normal", "u": "random", "cos_theta_i": "cosine", "above": "visible",
         "density": "p", "scale": "factor", "SAMPLINGS": "WAYS", "sampling": "way"})
     path = tmp_path / "06_diffuse.py"
-    path.write_text("import math\nimport numpy as np\nfrom ptlab.materials.base import Material, dot\n"
+    path.write_text("import math\nimport numpy as np\nfrom ptlab.materials.base import Material\n"
                     "from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around\n"
-                    "from ptlab.textures import Texture\nWAYS = ('cosine', 'uniform')\n\n" + copy)
+                    "from ptlab.textures import Texture\nfrom ptlab.vectors import dot\n"
+                    "WAYS = ('cosine', 'uniform')\n\n" + copy)
     assert "class Lambertian(Material)" in path.read_text()
     result = grade(chapter(6), path, timeout_scale=0.5)
     assert_honest_failure(result, "a copy of ptlab's own answer, with the names changed")

@@ -11,7 +11,8 @@ import numpy as np
 
 from ptlab.materials import Material
 from ptlab.sampling import cosine_hemisphere, to_world
-from ptlab.vectors import dot, normalize, reflect
+from ptlab.scattering import reflect
+from ptlab.vectors import dot, normalize
 
 #: The flip makes the rough metals 1-2% too bright, which the render check sees too (at its
 #: fixed seeds, in one region, just beyond what a right answer reaches).

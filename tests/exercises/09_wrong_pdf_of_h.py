@@ -11,7 +11,8 @@ import numpy as np
 
 from ptlab.materials import Material
 from ptlab.sampling import cosine_hemisphere, to_world
-from ptlab.vectors import dot, normalize, reflect
+from ptlab.scattering import reflect
+from ptlab.vectors import dot, normalize
 
 EXPECTED_FAILURES = ("harness (importance)", "render (importance)")
 

@@ -317,8 +317,8 @@ def check_render(module) -> str:
 CHAPTER = Chapter(
     number=3, slug="whitted", title="Whitted ray tracing: reflection, refraction, Fresnel",
     functions=("reflect", "refract", "fresnel"),
-    answers=("ptlab.vectors.reflect", "ptlab.materials.dielectric.refract",
-             "ptlab.materials.dielectric.fresnel_dielectric"),
+    answers=("ptlab.scattering.reflect", "ptlab.scattering.refract",
+             "ptlab.scattering.fresnel_dielectric"),
     checks=(
         Check("reflect", 2, check_reflect, timeout=20),
         Check("refract", 2, check_refract, timeout=20),

@@ -256,7 +256,8 @@ CHAPTER = Chapter(
     functions=("D", "G1", "G2", "fresnel_schlick", "GGXMetal.eval", "GGXMetal.sample",
                "GGXMetal.pdf"),
     answers=tuple(f"ptlab.materials.microfacet.{name}" for name in (
-        "D", "G1", "G2", "F_schlick", "Lambda", "Microfacet")) + ("ptlab.sampling.ggx_visible_normals",),
+        "D", "G1", "G2", "Lambda", "Microfacet")) + ("ptlab.scattering.F_schlick",
+                                                      "ptlab.sampling.ggx_visible_normals"),
     checks=(
         Check("D normalisation", 2, check_d, timeout=30),
         Check("Smith G", 1, check_g, timeout=30),

@@ -1,8 +1,7 @@
-"""Chapter 3, the library's own answer: ``ptlab.vectors.reflect`` and, from
-``ptlab.materials.dielectric``, ``refract`` and ``fresnel_dielectric`` (the same signatures)."""
+"""Chapter 3, the library's own answer: ``reflect``, ``refract`` and ``fresnel_dielectric``
+from ``ptlab.scattering`` (the same signatures)."""
 
-from ptlab.materials.dielectric import fresnel_dielectric as fresnel
-from ptlab.materials.dielectric import refract
-from ptlab.vectors import reflect
+from ptlab.scattering import fresnel_dielectric as fresnel
+from ptlab.scattering import reflect, refract
 
 __all__ = ["reflect", "refract", "fresnel"]

@@ -1,14 +1,15 @@
 """Chapter 9, the library's own answer: ``ptlab.materials.microfacet``.
 
-``D``, ``G1``, ``G2`` and ``F_schlick`` are the library's; ``GGXMetal`` is its ``Microfacet``
-under the exercise's signature. Its importance sampling is the visible-normal sampling of
-Heitz 2018 (``"vndf"``), better than Walter's D(h) cos(theta_h) that the exercise suggests:
-the checks accept any sampling whose pdf is its density.
+``D``, ``G1``, ``G2`` and ``F_schlick`` (from ``ptlab.scattering``) are the library's;
+``GGXMetal`` is its ``Microfacet`` under the exercise's signature. Its importance sampling is
+the visible-normal sampling of Heitz 2018 (``"vndf"``), better than Walter's
+D(h) cos(theta_h) that the exercise suggests: the checks accept any sampling whose pdf is its
+density.
 """
 
 from ptlab.materials import Microfacet
 from ptlab.materials.microfacet import G1, G2, D
-from ptlab.materials.microfacet import F_schlick as fresnel_schlick
+from ptlab.scattering import F_schlick as fresnel_schlick
 
 __all__ = ["D", "G1", "G2", "fresnel_schlick", "GGXMetal"]
 

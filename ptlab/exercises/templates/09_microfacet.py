@@ -25,7 +25,8 @@ import numpy as np
 
 from ptlab.materials import Material
 from ptlab.sampling import cosine_hemisphere, to_world
-from ptlab.vectors import dot, normalize, reflect
+from ptlab.scattering import reflect
+from ptlab.vectors import dot, normalize
 
 
 def D(cos_theta_h, alpha):  # noqa: N802 (the papers' name)
