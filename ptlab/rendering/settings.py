@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.errors import PtlabError
+from ptlab.errors import PtlabError, is_integer
 from ptlab.integrators.path import HEURISTICS, STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
 from ptlab.rendering.executors import default_workers
@@ -44,14 +44,14 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
                    integrator: str, strategy: str = "nee", heuristic: str = "power",
                    rr_depth: int | None = None, sampler: str = DEFAULT_SAMPLER) -> float | str:
     """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
-    if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
+    if not is_integer(spp) or not 1 <= spp <= MAX_SPP:
         raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
     check_seed(seed)
     if sampler not in SAMPLERS:
         raise PtlabError(f"sampler {sampler!r}: choose one of {', '.join(SAMPLERS)}")
     if sampling not in SAMPLINGS:
         raise PtlabError(f"sampling {sampling!r}: choose one of {', '.join(SAMPLINGS)}")
-    if not _is_int(max_depth) or max_depth < 0:
+    if not is_integer(max_depth) or max_depth < 0:
         raise PtlabError(f"max depth {max_depth!r}: must be a non-negative integer")
     if integrator not in INTEGRATORS:
         raise PtlabError(f"integrator {integrator!r}: choose one of {', '.join(INTEGRATORS)}")
@@ -62,7 +62,7 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
     if integrator != "path" and (strategy, heuristic) != ("nee", "power"):
         raise PtlabError(f"strategy {strategy!r} / heuristic {heuristic!r}: these choose how the "
                          f"path integrator finds light; {integrator!r} has no such choice")
-    if rr_depth is not None and (not _is_int(rr_depth) or rr_depth < 0):
+    if rr_depth is not None and (not is_integer(rr_depth) or rr_depth < 0):
         raise PtlabError(f"russian roulette depth {rr_depth!r}: must be a non-negative integer")
     if rr == "throughput":
         return rr
@@ -78,7 +78,7 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
 
 def check_seed(seed: int) -> int:
     """A random seed: any non-negative integer."""
-    if not _is_int(seed) or seed < 0:
+    if not is_integer(seed) or seed < 0:
         raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
     return int(seed)
 
@@ -87,17 +87,13 @@ def check_workers(workers: int | None) -> int:
     """``None`` -> every core; otherwise a positive integer, checked."""
     if workers is None:
         return default_workers()
-    if not _is_int(workers) or not 1 <= workers <= MAX_WORKERS:
+    if not is_integer(workers) or not 1 <= workers <= MAX_WORKERS:
         raise PtlabError(f"workers {workers!r}: must be an integer from 1 to {MAX_WORKERS}")
     return int(workers)
 
 
 def check_tile_size(tile_size: int) -> int:
     """A tile edge in pixels, from 8 to 4096."""
-    if not _is_int(tile_size) or not 8 <= tile_size <= 4096:
+    if not is_integer(tile_size) or not 8 <= tile_size <= 4096:
         raise PtlabError(f"tile size {tile_size!r}: must be an integer from 8 to 4096")
     return int(tile_size)
-
-
-def _is_int(value) -> bool:
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
