@@ -25,7 +25,6 @@ from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
 
 if TYPE_CHECKING:
     from ptlab.rendering.api import (
-        DEFAULT_MAX_DEPTH,
         DEFAULT_RES,
         RenderResult,
         pass_schedule,
@@ -34,8 +33,8 @@ if TYPE_CHECKING:
         resolution,
     )
 
-__all__ = ["SPP_PER_PASS", "TILE_SIZE", "DEFAULT_MAX_DEPTH", "DEFAULT_RES", "RenderResult",
-           "pass_schedule", "render", "render_result", "resolution"]
+__all__ = ["SPP_PER_PASS", "TILE_SIZE", "DEFAULT_RES", "RenderResult", "pass_schedule", "render",
+           "render_result", "resolution"]
 #: The names that ``api`` defines.
 _API = __all__[2:]
 

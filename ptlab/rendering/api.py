@@ -19,6 +19,7 @@ import numpy as np
 
 from ptlab.accel import resolve_backend
 from ptlab.errors import PtlabError
+from ptlab.integrators import INTEGRATORS
 from ptlab.integrators.path import PathSettings
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
@@ -32,10 +33,6 @@ from ptlab.scene import Scene, load_scene
 
 #: The resolution of a render that gives none, of a scene whose file has no ``[render] res``.
 DEFAULT_RES = (512, 512)
-#: The most bounces by default (unless the scene file's ``[render]`` says): the Whitted
-#: tracer stops early, like the homework's ``maxDepth = 5``; a path tracer's paths end by
-#: Russian roulette long before 100.
-DEFAULT_MAX_DEPTH = {"whitted": 5}
 
 
 @dataclass
@@ -103,8 +100,8 @@ def render_result(scene: Scene | str, spp: int = 16, res=None, seed: int = 0,
     width, height = resolution(scene, res)
     if max_depth is None:
         max_depth = scene.defaults.max_depth
-    if max_depth is None:
-        max_depth = DEFAULT_MAX_DEPTH.get(integrator, 100)
+    if max_depth is None:   # the integrator's (an unknown one is check_settings' to report)
+        max_depth = INTEGRATORS[integrator].max_depth if integrator in INTEGRATORS else 0
     rr = check_settings(spp, seed, sampling, rr, max_depth, integrator, strategy, heuristic,
                         rr_depth, sampler)
     sampler_name, sampler = sampler, make_sampler(sampler, seed, spp)

@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.errors import PtlabError, is_integer
+from ptlab.integrators import INTEGRATORS
 from ptlab.integrators.path import HEURISTICS, STRATEGIES
 from ptlab.materials.diffuse import SAMPLINGS
 from ptlab.rendering.executors import default_workers
 from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
-INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
 MAX_PIXELS = 1 << 28
 MAX_WORKERS = 1024
