@@ -53,7 +53,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The ``ptlab`` command's parser; with ``command``, only that command's graders' options
     are built (``None``: all of them, as ``--help`` shows)."""
     from ptlab import __version__
-    from ptlab.rendering.settings import INTEGRATORS
+    from ptlab.integrators import INTEGRATORS
     from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
     parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
