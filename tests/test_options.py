@@ -11,11 +11,14 @@ import numpy as np
 import pytest
 
 import ptlab
+from ptlab.accel import BACKENDS
+from ptlab.cli import build_parser
 from ptlab.errors import PtlabError, is_integer
 from ptlab.integrators import INTEGRATORS
-from ptlab.integrators.path import PathSettings
+from ptlab.integrators.path import HEURISTICS, STRATEGIES, PathSettings
+from ptlab.materials.diffuse import SAMPLINGS
 from ptlab.rendering import RenderOptions, render_result
-from ptlab.samplers import DEFAULT_SAMPLER
+from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
 OPTIONS = [f.name for f in fields(RenderOptions)]
 
@@ -110,6 +113,26 @@ def test_checked_values_are_plain():
     assert options.spp == 4 and type(options.spp) is int
     assert options.res == (20, 10) and options.rr == 0.5
     assert type(options.seed) is int
+
+
+def render_actions(command: str = "render") -> dict:
+    parser = build_parser(command)
+    commands = next(a for a in parser._actions if a.dest == "command")
+    return {action.dest: action for action in commands.choices[command]._actions}
+
+
+def test_the_commands_options_are_render_options():
+    actions = render_actions()
+    for name in set(OPTIONS) - {"tile_size", "spp_per_pass"}:
+        assert actions[name].default == RenderOptions.default(name), name
+    for name, owner in [("integrator", tuple(INTEGRATORS)), ("backend", BACKENDS),
+                        ("sampling", SAMPLINGS), ("strategy", STRATEGIES),
+                        ("heuristic", HEURISTICS), ("sampler", SAMPLERS)]:
+        assert tuple(actions[name].choices) == owner, name
+    converge = render_actions("converge")
+    for name in ("seed", "backend", "workers", "sampler"):
+        assert converge[name].choices == actions[name].choices
+        assert converge[name].default == actions[name].default
 
 
 def test_the_header_records_every_option(cornell):
