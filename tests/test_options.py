@@ -19,6 +19,7 @@ from ptlab.integrators.path import HEURISTICS, STRATEGIES, PathSettings
 from ptlab.materials.diffuse import SAMPLINGS
 from ptlab.rendering import RenderOptions, render_result
 from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
+from ptlab.scene import Scene
 
 OPTIONS = [f.name for f in fields(RenderOptions)]
 
@@ -133,6 +134,17 @@ def test_the_commands_options_are_render_options():
     for name in ("seed", "backend", "workers", "sampler"):
         assert converge[name].choices == actions[name].choices
         assert converge[name].default == actions[name].default
+
+
+def test_a_scene_that_already_samples_so_is_not_rebuilt(cornell, monkeypatch):
+    rebuilt = []
+    original = Scene.with_sampling
+    monkeypatch.setattr(Scene, "with_sampling",
+                        lambda scene, sampling: rebuilt.append(sampling) or original(scene, sampling))
+    ptlab.render(cornell, spp=1, res=8, workers=1)
+    assert rebuilt == []
+    ptlab.render(cornell, spp=1, res=8, workers=1, sampling="uniform")
+    assert rebuilt == ["uniform"]
 
 
 def test_the_header_records_every_option(cornell):

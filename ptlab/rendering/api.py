@@ -18,6 +18,7 @@ from typing import Any
 
 import numpy as np
 
+from ptlab.materials.diffuse import Diffuse
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
@@ -92,7 +93,9 @@ def render_result(scene: Scene | str, *args, options: RenderOptions | None = Non
     options = options.for_scene(scene)
     workers = check_workers(options.workers)
     sampler = make_sampler(options.sampler, options.seed, options.spp)
-    scene = scene.with_sampling(options.sampling)
+    # A new Scene rebuilds its light and material tables: only when a material changes.
+    if any(isinstance(m, Diffuse) and m.sampling != options.sampling for m in scene.materials):
+        scene = scene.with_sampling(options.sampling)
     settings = options.path_settings()
     keep_freed_memory()
 
