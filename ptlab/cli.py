@@ -32,19 +32,6 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
-def _rr(value: str) -> str | float:
-    if value == "throughput":
-        return value
-    try:
-        return float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(
-            f"{value!r} is neither 'throughput' nor a probability") from None
-
-
-#: ``ptlab render``'s samples per pixel unless told.
-RENDER_SPP = 16
-
 #: The commands, as ``main`` finds the one it is given.
 COMMANDS = ("render", "bench", "converge", "grade", "exercise", "scenes")
 
@@ -53,139 +40,14 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """The ``ptlab`` command's parser; with ``command``, only that command's graders' options
     are built (``None``: all of them, as ``--help`` shows)."""
     from ptlab import __version__
-    from ptlab.rendering.settings import INTEGRATORS
-    from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
     parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-
-    render = commands.add_parser(
-        "render", help="render a scene to an image",
-        description="Render a scene (a built-in name such as cornell-box, or a scene file) "
-                    "and write .png (8-bit sRGB) or .exr (linear float).")
-    render.add_argument("scene", help="built-in scene name or path to a scene .toml")
-    render.add_argument("--spp", type=int, default=RENDER_SPP,
-                        help=f"samples per pixel (default {RENDER_SPP})")
-    render.add_argument("--res", help="N (square) or WxH (default: the scene file's [render] "
-                                      "res, else 512)")
-    render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
-    render.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    render.add_argument("--backend", choices=("auto", "embree", "numpy"), default="auto",
-                        help="ray queries: embree, the numpy BVH, or auto (embree if available)")
-    render.add_argument("--sampling", choices=("cosine", "uniform"), default="cosine",
-                        help="diffuse sampling (default cosine; uniform is the homework's)")
-    render.add_argument("--rr", type=_rr, default="throughput", metavar="throughput|P",
-                        help="Russian roulette: survival probability P (the homework's 0.8) "
-                             "or 'throughput' (default)")
-    render.add_argument("--rr-depth", type=int, metavar="N",
-                        help="bounces before Russian roulette starts (default 0 with a fixed "
-                             "P, like the homework; 2 with throughput)")
-    render.add_argument("--max-depth", type=int,
-                        help="most bounces per path (default: the scene file's [render] "
-                             "max_depth, else 100; 5 for whitted)")
-    render.add_argument("--integrator", choices=INTEGRATORS, default="path",
-                        help="path tracing (default), the Whitted ray tracer (mirrors, glass "
-                             "and direct light only) or a debug view")
-    render.add_argument("--strategy", choices=("nee", "bsdf", "mis"), default="nee",
-                        help="direct light by light sampling (nee, the homework's, default), "
-                             "BSDF sampling only, or both with multiple importance sampling")
-    render.add_argument("--heuristic", choices=("power", "balance"), default="power",
-                        help="MIS weights for --strategy mis (default power)")
-    render.add_argument("--sampler", choices=SAMPLERS, default=DEFAULT_SAMPLER,
-                        help=f"where the random numbers come from (default {DEFAULT_SAMPLER}; "
-                             "stratified and sobol spread them evenly, independent does not)")
-    render.add_argument("--workers", type=int, default=None,
-                        help="processes rendering tiles at once (default: one per core; 1: "
-                             "this process only); the image does not depend on it")
-    render.add_argument("--scheduler", metavar="ADDRESS",
-                        help="render on the Dask cluster whose scheduler is at ADDRESS "
-                             "(needs the dask extra)")
-    render.add_argument("--checkpoint", metavar="FILE",
-                        help="save the render's state to FILE after every pass")
-    render.add_argument("--resume", metavar="FILE",
-                        help="continue the render saved in checkpoint FILE (same options)")
-    render.add_argument("--preview-every", type=float, metavar="SECONDS",
-                        help="after a pass, rewrite the output image if SECONDS have passed")
-    render.add_argument("--quiet", action="store_true", help="print nothing but errors")
-
-    bench = commands.add_parser(
-        "bench", help="measure rendering speed, or accuracy per second",
-        description="Render the Cornell box with each backend, estimator, sampler and worker "
-                    "count; print wall seconds, samples/s, rays/s, the shares of time in ray "
-                    "queries and in the sampler, and the parallel speed-up. With --accuracy: "
-                    "render it with each sampler (alternately, --repeat times with other seeds) "
-                    "and print relMSE against a cached high-spp reference, seconds, their "
-                    "product and the sampler's share.")
-    bench.add_argument("--res", type=int, help="square resolution (default 512; 256 with "
-                                                 "--accuracy)")
-    bench.add_argument("--spp", type=int, help="samples per pixel (default 16; 64 with --accuracy)")
-    bench.add_argument("--sampler", action="append", choices=SAMPLERS,
-                       help=f"sampler to measure (repeatable; default {DEFAULT_SAMPLER}, all "
-                            "three with --accuracy)")
-    bench.add_argument("--accuracy", action="store_true",
-                       help="compare the samplers' error at equal spp and its product with time")
-    bench.add_argument("--repeat", type=int, default=3,
-                       help="--accuracy: renders per sampler, alternating, each with another "
-                            "seed; --against: runs of each program (default 3)")
-    bench.add_argument("--reference", metavar="REF.exr",
-                       help="--accuracy: the reference image (linear EXR at --res) instead of "
-                            "a rendered one")
-    bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
-                       help="--accuracy: spp of the reference (default 4096; cached in "
-                            "$PTLAB_CACHE or ~/.cache/ptlab/references)")
-    bench.add_argument("--backend", action="append", choices=("embree", "numpy"),
-                       help="backend to measure (repeatable; default both)")
-    bench.add_argument("--estimator", action="append", choices=("homework", "default"),
-                       help="estimator to measure (repeatable; default both)")
-    bench.add_argument("--workers", action="append", type=int,
-                       help="worker processes (repeatable; default one per core); one "
-                            "worker is always measured too, as the baseline of the speed-up")
-    bench.add_argument("--against", metavar="PATH",
-                       help="time PATH, a compiled C++ path tracer such as the GAMES101 Homework 7 "
-                            "build/RayTracing, against ptlab render with the homework's estimator "
-                            "at its image's size, alternately --repeat times, as whole processes")
-    bench.add_argument("--cpp-args", default="{spp}", metavar="ARGS",
-                       help="--against: the C++ program's arguments ({spp} is replaced by --spp; "
-                            "default '{spp}')")
-
-    converge = commands.add_parser(
-        "converge", help="chart error against time for several estimators",
-        description="Render the scene with each estimator at 1, 2, 4, ... spp until its time "
-                    "budget is spent, compare every render with a reference, and write "
-                    "convergence.csv (integrator, spp, seconds, rmse, relmse), a log-log chart "
-                    "convergence.png, an equal-time strip equal-time.png with error heat maps, "
-                    "and the reference.exr. Prints the time each needs to reach --target.")
-    converge.add_argument("scene", help="built-in scene name or path to a scene .toml")
-    converge.add_argument("--integrators", default="path:bsdf,path:nee,path:mis",
-                          metavar="LIST",
-                          help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
-                               "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
-                               "(default path:bsdf,path:nee,path:mis)")
-    converge.add_argument("--sampler", choices=SAMPLERS, default=DEFAULT_SAMPLER,
-                          help=f"the sampler of estimators without @SAMPLER (default "
-                               f"{DEFAULT_SAMPLER})")
-    source = converge.add_mutually_exclusive_group()
-    source.add_argument("--reference", metavar="REF.exr",
-                        help="the reference image (linear EXR at the same resolution)")
-    source.add_argument("--reference-spp", type=int, default=1024, metavar="N",
-                        help="without --reference: render one with path:mis at N spp (default "
-                             "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references")
-    converge.add_argument("--budget", type=float, default=30.0, metavar="SECONDS",
-                          help="render time per estimator (default 30)")
-    converge.add_argument("--res", default="256", help="N (square) or WxH (default 256)")
-    converge.add_argument("--out", metavar="DIR", help="output folder (default converge-SCENE)")
-    converge.add_argument("--target", type=float, default=0.01,
-                          help="report the time to reach this relMSE (default 0.01)")
-    converge.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
-    converge.add_argument("--backend", choices=("auto", "embree", "numpy"), default="auto",
-                          help="ray queries (default auto: embree if available)")
-    converge.add_argument("--workers", type=int, default=None,
-                          help="processes per render (default one per core)")
-    converge.add_argument("--no-cache", action="store_true",
-                          help="render the reference even if a cached one exists")
-    converge.add_argument("--quiet", action="store_true", help="print nothing but errors")
-
+    shared = _shared_arguments()
+    _add_render(commands, shared)
+    _add_bench(commands)
+    _add_converge(commands, shared)
     grade = commands.add_parser(
         "grade", help="check a material's sample / eval / pdf statistically",
         description="Load a material (anything with eval, pdf and sample) from a Python file "
@@ -204,46 +66,165 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     if command in (None, "exercise"):
         from ptlab.exercises.cli import add_exercise_arguments
         add_exercise_arguments(exercise)
-
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
 
 
+def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = None,
+                **overrides) -> None:
+    """Add ``--NAME``, the render option ``name`` (a field of ``RenderOptions``): its choices,
+    default, help and type, but for ``help`` and argparse's keywords in ``overrides``."""
+    from ptlab.rendering.options import RenderOptions, with_default
+
+    about = RenderOptions.about(name)
+    keywords = dict(choices=about.choices, default=RenderOptions.default(name), type=about.parse,
+                    metavar=about.metavar)
+    keywords.update(overrides)
+    if keywords.get("action") == "append":       # (a list of its own: no default to add to)
+        keywords["default"] = None
+    parser.add_argument("--" + name.replace("_", "-"), **keywords,
+                        help=with_default(help or about.help, keywords["default"]))
+
+
+def _shared_arguments() -> argparse.ArgumentParser:
+    """The arguments ``render`` and ``converge`` share (a parent of their parsers)."""
+    shared = argparse.ArgumentParser(add_help=False)
+    shared.add_argument("scene", help="built-in scene name or path to a scene .toml")
+    for name in ("seed", "backend", "workers"):
+        _add_option(shared, name)
+    shared.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    return shared
+
+
+def _add_render(commands, shared: argparse.ArgumentParser) -> None:
+    render = commands.add_parser(
+        "render", parents=[shared], help="render a scene to an image",
+        description="Render a scene (a built-in name such as cornell-box, or a scene file) "
+                    "and write .png (8-bit sRGB) or .exr (linear float).")
+    for name in ("spp", "res", "integrator", "strategy", "heuristic", "sampler", "sampling", "rr",
+                 "rr_depth", "max_depth"):
+        _add_option(render, name)
+    render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
+    render.add_argument("--scheduler", metavar="ADDRESS",
+                        help="render on the Dask cluster whose scheduler is at ADDRESS "
+                             "(needs the dask extra)")
+    render.add_argument("--checkpoint", metavar="FILE",
+                        help="save the render's state to FILE after every pass")
+    render.add_argument("--resume", metavar="FILE",
+                        help="continue the render saved in checkpoint FILE (same options)")
+    render.add_argument("--preview-every", type=float, metavar="SECONDS",
+                        help="after a pass, rewrite the output image if SECONDS have passed")
+
+
+def _add_bench(commands) -> None:
+    from ptlab.accel import BACKENDS
+    from ptlab.rendering.options import RenderOptions
+
+    bench = commands.add_parser(
+        "bench", help="measure rendering speed, or accuracy per second",
+        description="Render the Cornell box with each backend, estimator, sampler and worker "
+                    "count; print wall seconds, samples/s, rays/s, the shares of time in ray "
+                    "queries and in the sampler, and the parallel speed-up. With --accuracy: "
+                    "render it with each sampler (alternately, --repeat times with other seeds) "
+                    "and print relMSE against a cached high-spp reference, seconds, their "
+                    "product and the sampler's share.")
+    bench.add_argument("--res", type=int, help="square resolution (default 512; 256 with "
+                                                 "--accuracy)")
+    bench.add_argument("--spp", type=int, help="samples per pixel (default 16; 64 with --accuracy)")
+    _add_option(bench, "sampler", action="append",
+                help=f"sampler to measure (repeatable; default {RenderOptions.sampler}, all "
+                     "three with --accuracy)")
+    bench.add_argument("--accuracy", action="store_true",
+                       help="compare the samplers' error at equal spp and its product with time")
+    bench.add_argument("--repeat", type=int, default=3,
+                       help="--accuracy: renders per sampler, alternating, each with another "
+                            "seed; --against: runs of each program (default 3)")
+    bench.add_argument("--reference", metavar="REF.exr",
+                       help="--accuracy: the reference image (linear EXR at --res) instead of "
+                            "a rendered one")
+    bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
+                       help="--accuracy: spp of the reference (default 4096; cached in "
+                            "$PTLAB_CACHE or ~/.cache/ptlab/references)")
+    _add_option(bench, "backend", action="append",
+                choices=[name for name in BACKENDS if name != "auto"],
+                help="backend to measure (repeatable; default both)")
+    bench.add_argument("--estimator", action="append", choices=("homework", "default"),
+                       help="estimator to measure (repeatable; default both)")
+    _add_option(bench, "workers", action="append",
+                help="worker processes (repeatable; default one per core); one worker is "
+                     "always measured too, as the baseline of the speed-up")
+    bench.add_argument("--against", metavar="PATH",
+                       help="time PATH, a compiled C++ path tracer such as the GAMES101 Homework 7 "
+                            "build/RayTracing, against ptlab render with the homework's estimator "
+                            "at its image's size, alternately --repeat times, as whole processes")
+    bench.add_argument("--cpp-args", default="{spp}", metavar="ARGS",
+                       help="--against: the C++ program's arguments ({spp} is replaced by --spp; "
+                            "default '{spp}')")
+
+
+def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
+    converge = commands.add_parser(
+        "converge", parents=[shared], help="chart error against time for several estimators",
+        description="Render the scene with each estimator at 1, 2, 4, ... spp until its time "
+                    "budget is spent, compare every render with a reference, and write "
+                    "convergence.csv (integrator, spp, seconds, rmse, relmse), a log-log chart "
+                    "convergence.png, an equal-time strip equal-time.png with error heat maps, "
+                    "and the reference.exr. Prints the time each needs to reach --target.")
+    converge.add_argument("--integrators", default="path:bsdf,path:nee,path:mis",
+                          metavar="LIST",
+                          help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
+                               "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
+                               "(default path:bsdf,path:nee,path:mis)")
+    _add_option(converge, "sampler", help="the sampler of estimators without @SAMPLER")
+    source = converge.add_mutually_exclusive_group()
+    source.add_argument("--reference", metavar="REF.exr",
+                        help="the reference image (linear EXR at the same resolution)")
+    source.add_argument("--reference-spp", type=int, default=1024, metavar="N",
+                        help="without --reference: render one with path:mis at N spp (default "
+                             "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references")
+    converge.add_argument("--budget", type=float, default=30.0, metavar="SECONDS",
+                          help="render time per estimator (default 30)")
+    converge.add_argument("--res", default="256", help="N (square) or WxH (default 256)")
+    converge.add_argument("--out", metavar="DIR", help="output folder (default converge-SCENE)")
+    converge.add_argument("--target", type=float, default=0.01,
+                          help="report the time to reach this relMSE (default 0.01)")
+    converge.add_argument("--no-cache", action="store_true",
+                          help="render the reference even if a cached one exists")
+
+
 def _render(args) -> int:
+    from dataclasses import fields
+
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
-    from ptlab.rendering import pass_schedule, render_result, resolution
+    from ptlab.rendering import RenderOptions, pass_schedule, render_result, resolution
     from ptlab.rendering.executors import dask_executor
     from ptlab.rendering.progress import ProgressBar
-    from ptlab.rendering.settings import MAX_SPP, check_workers
+    from ptlab.rendering.settings import check_workers
     from ptlab.scene import load_scene
 
+    options = RenderOptions(**{f.name: getattr(args, f.name) for f in fields(RenderOptions)
+                               if hasattr(args, f.name)})
     scene = load_scene(args.scene)
-    width, height = resolution(scene, args.res)
+    width, height = resolution(scene, options.res)
     out = check_output_path(args.out or f"{scene.name}.png")
     checkpoint = args.checkpoint or args.resume
     if checkpoint is not None:
         check_writable_file(checkpoint)
     if args.preview_every is not None and not args.preview_every >= 0:   # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
-    workers = check_workers(args.workers)
-    # (render_result reports a bad --spp; the bar just must not choke on one first)
-    passes = len(pass_schedule(args.spp)) if 0 < args.spp <= MAX_SPP else 1
-    progress = ProgressBar(width * height * max(args.spp, 0), passes, quiet=args.quiet)
-    preview = _Preview(out, args.preview_every)
-    options = dict(spp=args.spp, res=(width, height), seed=args.seed, backend=args.backend,
-                   sampling=args.sampling, rr=args.rr, max_depth=args.max_depth,
-                   strategy=args.strategy, heuristic=args.heuristic, rr_depth=args.rr_depth,
-                   integrator=args.integrator, sampler=args.sampler,
-                   workers=workers, checkpoint=checkpoint, resume=args.resume,
-                   progress=progress, on_pass=preview)
+    workers = check_workers(options.workers)
+    progress = ProgressBar(width * height * options.spp, len(pass_schedule(options.spp)),
+                           quiet=args.quiet)
+    run = dict(options=options, checkpoint=checkpoint, resume=args.resume, progress=progress,
+               on_pass=_Preview(out, args.preview_every))
     with _StopOnSignal() as stop:
         try:
             if args.scheduler:
                 with dask_executor(args.scheduler) as executor:
-                    result = render_result(scene, executor=executor, stop=stop, **options)
+                    result = render_result(scene, executor=executor, stop=stop, **run)
             else:
-                result = render_result(scene, stop=stop, **options)
+                result = render_result(scene, stop=stop, **run)
         finally:
             progress.close()
     if not result.complete:
@@ -252,8 +233,8 @@ def _render(args) -> int:
     if not args.quiet:
         print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
               f"{result.samples_per_second / 1e6:.3f} M samples/s "
-              f"({result.settings['backend']}, {args.sampler} sampler, {args.sampling} sampling, "
-              f"rr {args.rr}, "
+              f"({result.settings['backend']}, {options.sampler} sampler, {options.sampling} "
+              f"sampling, rr {options.rr}, "
               f"{workers} workers{', dask' if args.scheduler else ''})")
         print(f"wrote {out.resolve()}")
     return 0
@@ -363,8 +344,10 @@ def _converge(args) -> int:
 def _bench(args) -> int:
     from ptlab.measure.bench import ESTIMATORS, run_accuracy, run_bench
     from ptlab.measure.converge import default_cache_dir
-    from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
-    from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
+    from ptlab.rendering import RenderOptions
+    from ptlab.rendering.executors import default_workers
+    from ptlab.rendering.settings import MAX_SPP, check_workers
+    from ptlab.samplers import SAMPLERS
 
     if args.against is not None:
         from ptlab.measure.against import reject_options, run_against
@@ -386,13 +369,14 @@ def _bench(args) -> int:
         workers = check_workers(args.workers[0]) if args.workers else 1
         run_accuracy(args.sampler or list(SAMPLERS), res=res, spp=spp, repeat=args.repeat,
                      reference=args.reference, reference_spp=args.reference_spp, workers=workers,
-                     cache_dir=default_cache_dir(), backend=(args.backend or ["auto"])[0],
+                     cache_dir=default_cache_dir(),
+                     backend=(args.backend or [RenderOptions.backend])[0],
                      **ESTIMATORS[(args.estimator or ["default"])[0]])
         return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
     run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
-              workers, res=res, spp=spp, samplers=tuple(args.sampler or [DEFAULT_SAMPLER]))
+              workers, res=res, spp=spp, samplers=tuple(args.sampler or [RenderOptions.sampler]))
     return 0
 
 
@@ -420,12 +404,12 @@ def _start_workers_early(argv: list[str]) -> None:
     a glance at the options: a wrong guess costs nothing but that time, and the real parser
     checks them afterwards.
     """
-    from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
+    from ptlab.rendering.sizes import DEFAULT_SPP, SPP_PER_PASS, TILE_SIZE
 
     glance = _Glance(add_help=False, allow_abbrev=False)
     glance.add_argument("--workers", type=int)
     glance.add_argument("--res")
-    glance.add_argument("--spp", type=int, default=RENDER_SPP)
+    glance.add_argument("--spp", type=int, default=DEFAULT_SPP)
     glance.add_argument("--scheduler")
     glance.add_argument("-h", "--help", action="store_true")
     try:

@@ -4,6 +4,15 @@ The command line prints these as one line and exits with code 2, without a trace
 anything else that goes wrong is a bug in ptlab and keeps its traceback.
 """
 
+from numbers import Integral
+
+
+def is_integer(value: object) -> bool:
+    """True for an ``int`` or a NumPy integer (both are ``numbers.Integral``), not for a bool:
+    ``spp=True`` is a mistake, not one sample. (No NumPy import: ``ptlab.cli`` imports this
+    module before NumPy.)"""
+    return isinstance(value, Integral) and not isinstance(value, bool)
+
 
 def one_line(text: str) -> str:
     """``text`` with line breaks and other unprintable characters escaped (``\\n``), so that

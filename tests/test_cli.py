@@ -39,6 +39,8 @@ def test_render_exr_is_linear_float_with_metadata(tmp_path):
     (["render", "cornell-box", "--spp", "0"], "spp"),
     (["render", "cornell-box", "--res", "-5"], "resolution"),
     (["render", "cornell-box", "--rr", "2"], "roulette"),
+    (["render", "cornell-box", "--rr", "sometimes"], "roulette"),
+    (["render", "cornell-box", "--integrator", "whitted", "--strategy", "mis"], "whitted"),
     (["render", "no-such-scene"], "no-such-scene"),
     (["render", "cornell-box", "--out", "image.jpg"], "format"),
     (["render", "cornell-box", "--backend", "optix"], "backend"),

@@ -6,6 +6,7 @@ process without interruption.
 
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -105,6 +106,25 @@ def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
     assert longer.complete and longer.spp == 8
     straight = render_result(cornell, workers=1, **dict(SMALL, spp=8))
     assert np.array_equal(longer.image, straight.image)
+
+
+def test_a_checkpoint_from_before_render_options_still_resumes(cornell, reference, tmp_path):
+    # Checkpoints written before RenderOptions kept the roulette and its depth as text
+    # ('throughput', 'None'); the identity they record is otherwise the same.
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=13)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
+                  stop=stopper, **SMALL)
+    with np.load(checkpoint) as data:
+        arrays = {name: data[name] for name in data.files}
+    identity = json.loads(str(arrays["identity"]))
+    assert identity["rr_depth"] is None
+    identity.update(rr="throughput", rr_depth="None")
+    np.savez(checkpoint, **dict(arrays, identity=json.dumps(identity)))
+    resumed = render_result(cornell, workers=1, resume=checkpoint, **SMALL)
+    assert resumed.complete and np.array_equal(resumed.image, reference.image)
+    with pytest.raises(ptlab.errors.PtlabError, match="rr_depth = 'None', this render has 1"):
+        render_result(cornell, workers=1, resume=checkpoint, rr_depth=1, **SMALL)
 
 
 class DieOnceDiffuse(Diffuse):

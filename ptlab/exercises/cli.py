@@ -26,6 +26,13 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     """Add ``start``, ``check``, ``list``, ``docs`` and ``grade-all`` to the ``ptlab exercise``
     subparser."""
     actions = parser.add_subparsers(dest="action", required=True, parser_class=type(parser))
+    # What check and grade-all share (a parent of their parsers).
+    graded = argparse.ArgumentParser(add_help=False)
+    graded.add_argument("chapter", metavar="NN", help="the chapter number")
+    graded.add_argument("--timeout-scale", type=float, default=1.0, metavar="X",
+                        help="multiply every check's time limit by X (slow machines)")
+    add_student_user_argument(graded)
+
     start = actions.add_parser(
         "start", help="copy a chapter's exercise file to write your functions in",
         description="Copy chapter NN's exercise file (signatures, docstrings, hints) into DIR.")
@@ -34,17 +41,14 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     start.add_argument("--force", action="store_true", help="overwrite an existing file")
 
     check = actions.add_parser(
-        "check", help="grade your functions for a chapter",
+        "check", parents=[graded], help="grade your functions for a chapter",
         description="Plug FILE's functions into the renderer in place of the library's own, "
                     "run the chapter's checks, print a score table. FILE runs in a process of "
                     "its own; what it prints is shown after '|'. Exit 0 only on full marks, 1 "
                     "otherwise, 2 if FILE cannot be read.")
-    check.add_argument("chapter", metavar="NN", help="the chapter number")
     check.add_argument("file", metavar="FILE", help="your exercise file")
     check.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT "
                        "(removed at the start, written when every check is done)")
-    _add_timeout_scale(check)
-    add_student_user_argument(check)
 
     listing = actions.add_parser(
         "list", help="list the chapters and which you have passed",
@@ -66,24 +70,16 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
                       help="print only the page's path (to open it in a Markdown viewer)")
 
     batch = actions.add_parser(
-        "grade-all", help="grade a whole class's submissions (for teachers)",
+        "grade-all", parents=[graded], help="grade a whole class's submissions (for teachers)",
         description="Grade every submission in DIR for chapter NN: each Python file, or each "
                     "folder (holding the chapter's file, or one Python file), is one student. "
                     "Each is graded in isolation, several at once; the CSV gets one row per "
                     "student and is rewritten after each, so an interrupted run resumes "
                     "(students already in the CSV are not graded again).")
-    batch.add_argument("chapter", metavar="NN", help="the chapter number")
     batch.add_argument("dir", metavar="DIR", help="the folder of submissions")
     batch.add_argument("--csv", metavar="OUT", help="the grades (default grades-NN.csv here)")
     batch.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) // 2),
                        metavar="K", help="students graded at once (default: half the cores)")
-    _add_timeout_scale(batch)
-    add_student_user_argument(batch)
-
-
-def _add_timeout_scale(parser: argparse.ArgumentParser) -> None:
-    parser.add_argument("--timeout-scale", type=float, default=1.0, metavar="X",
-                        help="multiply every check's time limit by X (slow machines)")
 
 
 def run_exercise(args: argparse.Namespace) -> int:

@@ -8,33 +8,46 @@
 * ``depth``: the distance from the eye to the hit (0 where the ray escapes).
 
 Each camera sample adds its value to the film, so the views are antialiased like renders.
+The views are registered, under their functions' names, in ``ptlab.integrators``.
 """
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.integrators.path import Paths, add_to_film, shade, surface_hit
+from ptlab.integrators.path import Paths, PathSettings, SurfaceHit, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 
-VIEWS = ("normals", "albedo", "depth")
+
+def normals(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
+    """(N, 3) the normal facing the camera, each axis from [-1, 1] to [0, 1]."""
+    return (hit.n + 1.0) * 0.5
+
+
+def albedo(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
+    """(N, 3) one sample of the directional albedo: the bounce weight f cos / pdf."""
+    u = BounceUniforms(sampler, hit.sample, 0).bsdf()
+    _, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
+    return weight
+
+
+def depth(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
+    """(N, 3) the distance from the eye to the hit, in every channel."""
+    return np.repeat(hit.t[:, None], 3, axis=1)
 
 
 def trace_debug(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                sampler: Sampler, view: str) -> int:
-    """Add one debug value per camera ray into ``film``; return the rays traced."""
+                sampler: Sampler, settings: PathSettings,
+                view: Callable[[SurfaceHit, Sampler], np.ndarray]) -> int:
+    """Add one ``view`` value per camera ray into ``film``; return the rays traced.
+    (``settings``, which no view needs, keeps the call the same as every integrator's.)"""
     hits = accel.intersect(paths.origins, paths.dirs)
     hit = surface_hit(scene, paths, hits)
     if len(hit.prim) == 0:
         return len(hits.prim)
-    if view == "normals":
-        value = (hit.n + 1.0) * 0.5
-    elif view == "depth":
-        value = np.repeat(hit.t[:, None], 3, axis=1)
-    else:
-        u = BounceUniforms(sampler, hit.sample, 0).bsdf()
-        _, value = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
-    add_to_film(film, hit.pixel, value)
+    add_to_film(film, hit.pixel, view(hit, sampler))
     return len(hits.prim)

@@ -24,13 +24,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from ptlab.measure.metrics import relmse
-from ptlab.rendering import render_result
-from ptlab.samplers import DEFAULT_SAMPLER
+from ptlab.rendering import RenderOptions, render_result
 from ptlab.scene import Scene, load_scene
 
+#: The estimators measured: the homework's, and the renderer's defaults.
 ESTIMATORS = {
     "homework": dict(sampling="uniform", rr=0.8),
-    "default": dict(sampling="cosine", rr="throughput"),
+    "default": dict(sampling=RenderOptions.sampling, rr=RenderOptions.rr),
 }
 
 
@@ -50,7 +50,7 @@ class BenchRow:
 
 
 def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int, spp: int,
-              seed: int = 0, sampler: str = DEFAULT_SAMPLER) -> BenchRow:
+              seed: int = 0, sampler: str = RenderOptions.sampler) -> BenchRow:
     """Render once and time it: wall time includes starting the worker processes."""
     result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend, workers=workers,
                            sampler=sampler, **ESTIMATORS[estimator])
@@ -65,7 +65,7 @@ def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int
 
 
 def run_bench(backends: list[str], estimators: list[str], workers: list[int], res: int = 512,
-              spp: int = 16, scene: str = "cornell-box", samplers: tuple[str, ...] = (DEFAULT_SAMPLER,),
+              spp: int = 16, scene: str = "cornell-box", samplers: tuple[str, ...] = (RenderOptions.sampler,),
               echo=print) -> list[BenchRow]:
     """Run every backend x estimator x sampler x worker count, print a table, return the rows."""
     loaded = load_scene(scene)

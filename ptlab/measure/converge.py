@@ -29,9 +29,9 @@ from ptlab.errors import PtlabError
 from ptlab.image import read_image, write_image
 from ptlab.integrators.path import STRATEGIES
 from ptlab.measure.metrics import relmse, rmse
-from ptlab.rendering import render_result
+from ptlab.rendering import RenderOptions, render_result
 from ptlab.rendering.checkpoint import scene_digest
-from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
+from ptlab.samplers import SAMPLERS
 from ptlab.scene import Scene
 
 #: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY, either followed by @SAMPLER.
@@ -48,18 +48,19 @@ class Estimator:
 
     label: str
     integrator: str
-    strategy: str = "nee"
-    sampler: str = DEFAULT_SAMPLER
+    strategy: str = RenderOptions.strategy
+    sampler: str = RenderOptions.sampler
 
     def options(self) -> dict:
         """Keyword arguments of ``render_result`` that select this estimator."""
         return dict(integrator=self.integrator, strategy=self.strategy, sampler=self.sampler)
 
 
-def parse_estimators(text: str, sampler: str = DEFAULT_SAMPLER) -> list[Estimator]:
+def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Estimator]:
     """``"path:bsdf,path:nee,path:mis@independent"`` -> estimators.
 
-    ``path`` alone is ``path:nee``; an estimator without ``@SAMPLER`` uses ``sampler``.
+    ``path`` alone is ``path`` with the default strategy (``path:nee``); an estimator without
+    ``@SAMPLER`` uses ``sampler``.
     """
     estimators = []
     for label in (part.strip() for part in text.split(",")):
@@ -71,14 +72,13 @@ def parse_estimators(text: str, sampler: str = DEFAULT_SAMPLER) -> list[Estimato
         if integrator not in ESTIMATOR_INTEGRATORS:
             raise PtlabError(f"estimator {label!r}: the integrator must be one of "
                              f"{', '.join(ESTIMATOR_INTEGRATORS)} (e.g. path:mis)")
-        if integrator == "path":
-            strategy = strategy or "nee"
-            if strategy not in STRATEGIES:
-                raise PtlabError(f"estimator {label!r}: the strategy must be one of "
-                                 f"{', '.join(STRATEGIES)}")
-        elif strategy:
+        if integrator == "path" and strategy and strategy not in STRATEGIES:
+            raise PtlabError(f"estimator {label!r}: the strategy must be one of "
+                             f"{', '.join(STRATEGIES)}")
+        if integrator != "path" and strategy:
             raise PtlabError(f"estimator {label!r}: {integrator} takes no strategy")
-        estimators.append(Estimator(label, integrator, strategy or "nee", chosen or sampler))
+        estimators.append(Estimator(label, integrator, strategy or RenderOptions.strategy,
+                                    chosen or sampler))
     if len({e.label for e in estimators}) != len(estimators):
         raise PtlabError(f"estimators {text!r}: each may appear once")
     return estimators

@@ -4,12 +4,14 @@ This package is everything that turns a scene and an integrator into an image, b
 itself a concept of light transport:
 
 * ``api``: ``render`` and ``render_result``, which the names below are;
+* ``options``: ``RenderOptions``, every option of a render with its default, choices, help
+  and check, from which the API, the command line, image headers and checkpoints are made;
 * ``sizes``: how big a job is (``TILE_SIZE``, ``SPP_PER_PASS``);
 * ``jobs``: the image cut into tiles and the samples into passes; one job = one tile, one pass;
 * ``scheduler`` and ``executors``: where jobs run (this process, worker processes, Dask);
 * ``film``: the float64 sums the jobs add into, in an order that keeps images bit-identical;
 * ``checkpoint``, ``progress``: saving and resuming a render, the progress bar;
-* ``settings``: every option checked, with one clear error for an absurd value;
+* ``settings``: the checks of the options, with one clear error for an absurd value;
 * ``memory``: the allocator tuning that keeps NumPy's temporaries cheap.
 
 The API is imported when first used (a module ``__getattr__``, PEP 562), not with the
@@ -25,8 +27,8 @@ from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
 
 if TYPE_CHECKING:
     from ptlab.rendering.api import (
-        DEFAULT_MAX_DEPTH,
         DEFAULT_RES,
+        RenderOptions,
         RenderResult,
         pass_schedule,
         render,
@@ -34,9 +36,9 @@ if TYPE_CHECKING:
         resolution,
     )
 
-__all__ = ["SPP_PER_PASS", "TILE_SIZE", "DEFAULT_MAX_DEPTH", "DEFAULT_RES", "RenderResult",
+__all__ = ["SPP_PER_PASS", "TILE_SIZE", "DEFAULT_RES", "RenderOptions", "RenderResult",
            "pass_schedule", "render", "render_result", "resolution"]
-#: The names that ``api`` defines.
+#: The names that ``api`` holds.
 _API = __all__[2:]
 
 

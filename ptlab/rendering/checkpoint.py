@@ -1,9 +1,11 @@
 """Checkpoints: a render's film saved to disk, so that it can be resumed.
 
 A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums, the samples taken
-per tile and the render's settings. Resuming adds the missing passes in the same order an
-uninterrupted render would, so the finished image is bit-identical to one. Settings that
-change the image (scene, resolution, seed, estimator, sampler, tiles, backend) must match;
+per tile and the render's identity: its options (``RenderOptions.record``) but the number
+of workers, with the scene's fingerprint and the sampler's identity. Resuming adds the
+missing passes in the same order an uninterrupted render would, so the finished image is
+bit-identical to one. Settings that change the image (scene, resolution, seed, estimator,
+sampler, tiles, backend) must match;
 a resume that asks for more samples per pixel than the checkpoint's render simply goes on
 (the stratified sampler, whose pattern depends on spp, excepted).
 
@@ -68,7 +70,8 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
         version = saved.get("format") if isinstance(saved, dict) else None
         raise PtlabError(f"{path}: checkpoint format {version} is not {FORMAT_VERSION}")
     for key, value in identity.items():
-        if key != "spp" and saved.get(key) != value:
+        # Compared as text: checkpoints written before RenderOptions kept rr_depth as text.
+        if key != "spp" and (key not in saved or str(saved[key]) != str(value)):
             raise PtlabError(f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, "
                              f"this render has {value!r}")
     if not _fits(arrays, film):

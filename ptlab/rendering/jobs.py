@@ -28,9 +28,8 @@ import numpy as np
 from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
-from ptlab.integrators.debug import trace_debug
+from ptlab.integrators import INTEGRATORS
 from ptlab.integrators.path import Paths, PathSettings, trace_paths
-from ptlab.integrators.whitted import trace_whitted
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
@@ -132,12 +131,10 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
                   sees_emission=np.ones(len(pixel), dtype=bool), sample=sample)
     film = np.zeros((n_pixels, 3))
     timed = TimedAccelerator(accel)
-    if setup.integrator == "path":
-        rays = trace_paths(film, setup.scene, timed, paths, sampler, setup.settings)
-    elif setup.integrator == "whitted":
-        rays = trace_whitted(film, setup.scene, timed, paths, sampler, setup.settings)
-    else:
-        rays = trace_debug(film, setup.scene, timed, paths, sampler, setup.integrator)
+    # The path loop is called by its name in this module, where chapter 7's grader puts a
+    # student's in its place (ptlab.exercises.plug).
+    trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
+    rays = trace(film, setup.scene, timed, paths, sampler, setup.settings)
     return JobResult(job=job, sums=film.reshape(tile_height, tile_width, 3), rays=rays,
                      query_seconds=timed.seconds, sampler_seconds=sampler.seconds)
 

@@ -1,16 +1,15 @@
-"""Checking render options: every absurd value becomes one clear ``PtlabError``."""
+"""Checking render options: every absurd value becomes one clear ``PtlabError``.
+
+Each check returns the value it was given, made plain (a Python ``int``, a parsed resolution
+or roulette setting). ``RenderOptions`` (``options``) says which check each option gets.
+(No NumPy here: ``ptlab.cli`` reads the limits before it imports NumPy.)
+"""
 
 from __future__ import annotations
 
-import numpy as np
-
-from ptlab.errors import PtlabError
-from ptlab.integrators.path import HEURISTICS, STRATEGIES
-from ptlab.materials.diffuse import SAMPLINGS
+from ptlab.errors import PtlabError, is_integer
 from ptlab.rendering.executors import default_workers
-from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 
-INTEGRATORS = ("path", "whitted", "normals", "albedo", "depth")
 MAX_SPP = 1 << 20
 MAX_PIXELS = 1 << 28
 MAX_WORKERS = 1024
@@ -28,9 +27,9 @@ def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
         except ValueError:
             raise PtlabError(f"resolution {res!r}: expected N or WxH, e.g. 512 or 640x480") from None
         res = numbers[0] if len(numbers) == 1 else tuple(numbers)
-    if isinstance(res, int | np.integer):
+    if is_integer(res):
         res = (int(res), int(res))
-    if len(res) != 2 or not all(isinstance(r, int | np.integer) for r in res):
+    if not (isinstance(res, tuple | list) and len(res) == 2 and all(map(is_integer, res))):
         raise PtlabError(f"resolution {res!r}: expected N or (width, height)")
     width, height = int(res[0]), int(res[1])
     if width <= 0 or height <= 0:
@@ -40,30 +39,28 @@ def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
     return width, height
 
 
-def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
-                   integrator: str, strategy: str = "nee", heuristic: str = "power",
-                   rr_depth: int | None = None, sampler: str = DEFAULT_SAMPLER) -> float | str:
-    """Raise ``PtlabError`` for an absurd option; return the roulette setting, parsed."""
-    if not _is_int(spp) or not 1 <= spp <= MAX_SPP:
-        raise PtlabError(f"spp {spp!r}: must be an integer from 1 to {MAX_SPP}")
-    check_seed(seed)
-    if sampler not in SAMPLERS:
-        raise PtlabError(f"sampler {sampler!r}: choose one of {', '.join(SAMPLERS)}")
-    if sampling not in SAMPLINGS:
-        raise PtlabError(f"sampling {sampling!r}: choose one of {', '.join(SAMPLINGS)}")
-    if not _is_int(max_depth) or max_depth < 0:
-        raise PtlabError(f"max depth {max_depth!r}: must be a non-negative integer")
-    if integrator not in INTEGRATORS:
-        raise PtlabError(f"integrator {integrator!r}: choose one of {', '.join(INTEGRATORS)}")
-    if strategy not in STRATEGIES:
-        raise PtlabError(f"strategy {strategy!r}: choose one of {', '.join(STRATEGIES)}")
-    if heuristic not in HEURISTICS:
-        raise PtlabError(f"heuristic {heuristic!r}: choose one of {', '.join(HEURISTICS)}")
-    if integrator != "path" and (strategy, heuristic) != ("nee", "power"):
-        raise PtlabError(f"strategy {strategy!r} / heuristic {heuristic!r}: these choose how the "
-                         f"path integrator finds light; {integrator!r} has no such choice")
-    if rr_depth is not None and (not _is_int(rr_depth) or rr_depth < 0):
-        raise PtlabError(f"russian roulette depth {rr_depth!r}: must be a non-negative integer")
+def check_integer(label: str, value: object, low: int, high: int | None = None) -> int:
+    """``value``, an integer from ``low`` to ``high`` (None: no upper bound), as an ``int``."""
+    if is_integer(value) and low <= value and (high is None or value <= high):
+        return int(value)
+    if high is not None:
+        wanted = f"an integer from {low} to {high}"
+    else:
+        wanted = {0: "a non-negative integer", 1: "a positive integer"}.get(
+            low, f"an integer of at least {low}")
+    raise PtlabError(f"{label} {value!r}: must be {wanted}")
+
+
+def check_choice(label: str, value: object, choices: tuple[str, ...]) -> str:
+    """``value``, one of the names ``choices``."""
+    if not (isinstance(value, str) and value in choices):
+        raise PtlabError(f"{label} {value!r}: choose one of {', '.join(choices)}")
+    return value
+
+
+def check_roulette(rr: object) -> float | str:
+    """Russian roulette: ``"throughput"``, or a survival probability (a number, or its text
+    from the command line) in [2^-24, 1], as a float."""
     if rr == "throughput":
         return rr
     try:
@@ -76,28 +73,13 @@ def check_settings(spp: int, seed: int, sampling: str, rr, max_depth: int,
     return probability
 
 
-def check_seed(seed: int) -> int:
+def check_seed(seed: object) -> int:
     """A random seed: any non-negative integer."""
-    if not _is_int(seed) or seed < 0:
-        raise PtlabError(f"seed {seed!r}: must be a non-negative integer")
-    return int(seed)
+    return check_integer("seed", seed, 0)
 
 
-def check_workers(workers: int | None) -> int:
-    """``None`` -> every core; otherwise a positive integer, checked."""
+def check_workers(workers: object) -> int:
+    """``None`` -> every core; otherwise an integer from 1 to ``MAX_WORKERS``, checked."""
     if workers is None:
         return default_workers()
-    if not _is_int(workers) or not 1 <= workers <= MAX_WORKERS:
-        raise PtlabError(f"workers {workers!r}: must be an integer from 1 to {MAX_WORKERS}")
-    return int(workers)
-
-
-def check_tile_size(tile_size: int) -> int:
-    """A tile edge in pixels, from 8 to 4096."""
-    if not _is_int(tile_size) or not 8 <= tile_size <= 4096:
-        raise PtlabError(f"tile size {tile_size!r}: must be an integer from 8 to 4096")
-    return int(tile_size)
-
-
-def _is_int(value) -> bool:
-    return isinstance(value, int | np.integer) and not isinstance(value, bool)
+    return check_integer("workers", workers, 1, MAX_WORKERS)

@@ -1,5 +1,6 @@
-"""How big a render's jobs are: tiles of ``TILE_SIZE`` x ``TILE_SIZE`` pixels, passes of
-``SPP_PER_PASS`` samples per pixel (``jobs`` cuts the image and the samples so).
+"""How big a render and its jobs are: ``DEFAULT_SPP`` samples per pixel unless told, in tiles
+of ``TILE_SIZE`` x ``TILE_SIZE`` pixels and passes of ``SPP_PER_PASS`` samples per pixel
+(``jobs`` cuts the image and the samples so).
 
 Batches of about 2^18 paths are the fastest here (measured: 10-15% faster than 2^16):
 large enough that NumPy's per-call overhead vanishes, small enough that memory stays
@@ -10,6 +11,8 @@ derived from the tile size, so that an image does not depend on its tiles.
 size before it imports NumPy.)
 """
 
+#: Samples per pixel of a render that asks for none (``RenderOptions.spp``).
+DEFAULT_SPP = 16
 #: Tile edge in pixels.
 TILE_SIZE = 128
 #: Samples per pixel in each pass (with 128 x 128 tiles, batches of 2^18 paths).
