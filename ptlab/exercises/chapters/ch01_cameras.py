@@ -12,7 +12,7 @@ import math
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import require_finite
 
 
@@ -131,11 +131,11 @@ CHAPTER = Chapter(
     functions=("generate_rays",),
     answers=("ptlab.camera.generate_rays",),
     checks=(
-        Check("centre ray", 2, check_centre_ray, timeout=30),
-        Check("unit directions", 1, check_unit_length, timeout=30),
-        Check("field of view", 2, check_field_of_view, timeout=30),
-        Check("image orientation", 1, check_orientation, timeout=30),
-        Check("jittered rays", 2, check_known_rays, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("centre ray", 2, check_centre_ray, timeout=30),
+        ChapterCheck("unit directions", 1, check_unit_length, timeout=30),
+        ChapterCheck("field of view", 2, check_field_of_view, timeout=30),
+        ChapterCheck("image orientation", 1, check_orientation, timeout=30),
+        ChapterCheck("jittered rays", 2, check_known_rays, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

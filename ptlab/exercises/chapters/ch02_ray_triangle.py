@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import require_finite
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
@@ -266,12 +266,12 @@ CHAPTER = Chapter(
     functions=("ray_triangle",),
     answers=("ptlab.accel.triangle.ray_triangle",),
     checks=(
-        Check("known hits", 2, check_known_hits, timeout=30),
-        Check("outside each edge", 2, check_edges, timeout=30),
-        Check("parallel rays", 1, check_parallel, timeout=30),
-        Check("behind the origin", 1, check_behind, timeout=30),
-        Check("both faces", 1, check_both_faces, timeout=30),
-        Check("many rays", 1, check_many, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("known hits", 2, check_known_hits, timeout=30),
+        ChapterCheck("outside each edge", 2, check_edges, timeout=30),
+        ChapterCheck("parallel rays", 1, check_parallel, timeout=30),
+        ChapterCheck("behind the origin", 1, check_behind, timeout=30),
+        ChapterCheck("both faces", 1, check_both_faces, timeout=30),
+        ChapterCheck("many rays", 1, check_many, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

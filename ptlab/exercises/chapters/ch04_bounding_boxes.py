@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))          # the square z = 1, 0 <= x, y <= 1
@@ -172,12 +172,12 @@ CHAPTER = Chapter(
     functions=("slab_test",),
     answers=("ptlab.accel.numpy_bvh.slab_test",),
     checks=(
-        Check("entering a box", 2, check_entering, timeout=30),
-        Check("going backwards", 1, check_backwards, timeout=30),
-        Check("misses", 1, check_misses, timeout=30),
-        Check("starting inside", 1, check_inside, timeout=30),
-        Check("parallel to a slab", 1, check_parallel, timeout=30),
-        Check("flat boxes", 2, check_flat, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("entering a box", 2, check_entering, timeout=30),
+        ChapterCheck("going backwards", 1, check_backwards, timeout=30),
+        ChapterCheck("misses", 1, check_misses, timeout=30),
+        ChapterCheck("starting inside", 1, check_inside, timeout=30),
+        ChapterCheck("parallel to a slab", 1, check_parallel, timeout=30),
+        ChapterCheck("flat boxes", 2, check_flat, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

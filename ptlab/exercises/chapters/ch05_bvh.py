@@ -17,7 +17,7 @@ import copy
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test
@@ -486,13 +486,13 @@ CHAPTER = Chapter(
     answers=("ptlab.accel.numpy_bvh.split_costs", "ptlab.accel.numpy_bvh.best_split",
              "ptlab.accel.numpy_bvh.child_order"),
     checks=(
-        Check("SAH costs", 2, check_split_costs, timeout=30),
-        Check("empty sides", 1, check_empty_sides, timeout=30),
-        Check("best split", 1, check_best_split, timeout=30),
-        Check("near child first", 1, check_child_order, timeout=30),
-        Check("closest hits", 2, check_closest_hits, timeout=60),
-        Check("tree quality", 1, check_tree_quality, timeout=60),
-        Check("traversal order", 1, check_traversal_order, timeout=60),
-        Check("render", 1, check_render, timeout=60),
+        ChapterCheck("SAH costs", 2, check_split_costs, timeout=30),
+        ChapterCheck("empty sides", 1, check_empty_sides, timeout=30),
+        ChapterCheck("best split", 1, check_best_split, timeout=30),
+        ChapterCheck("near child first", 1, check_child_order, timeout=30),
+        ChapterCheck("closest hits", 2, check_closest_hits, timeout=60),
+        ChapterCheck("tree quality", 1, check_tree_quality, timeout=60),
+        ChapterCheck("traversal order", 1, check_traversal_order, timeout=60),
+        ChapterCheck("render", 1, check_render, timeout=60),
     ),
 )

@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import CHANNELS, at_pixel, at_row, require_finite
 
 if TYPE_CHECKING:
@@ -599,12 +599,12 @@ CHAPTER = Chapter(
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},
     checks=(
-        Check("direct light", 2, check_direct_light, timeout=30),
-        Check("roulette unbiased", 2, check_russian_roulette, timeout=45),
-        Check("indirect bounce", 2, check_scatter, timeout=30),
-        Check("light not black", 1, check_light_not_black, timeout=45),
-        Check("lights one-sided", 1, check_one_sided_lights, timeout=30),
-        Check("white furnace", 2, check_furnace, timeout=60),
-        Check("Cornell box", 2, check_cornell, timeout=60),
+        ChapterCheck("direct light", 2, check_direct_light, timeout=30),
+        ChapterCheck("roulette unbiased", 2, check_russian_roulette, timeout=45),
+        ChapterCheck("indirect bounce", 2, check_scatter, timeout=30),
+        ChapterCheck("light not black", 1, check_light_not_black, timeout=45),
+        ChapterCheck("lights one-sided", 1, check_one_sided_lights, timeout=30),
+        ChapterCheck("white furnace", 2, check_furnace, timeout=60),
+        ChapterCheck("Cornell box", 2, check_cornell, timeout=60),
     ),
 )
