@@ -361,7 +361,7 @@ def _converge(args) -> int:
 
 
 def _bench(args) -> int:
-    from ptlab.measure.bench import ESTIMATORS, run_accuracy, run_bench
+    from ptlab.measure.bench import ESTIMATOR_OPTIONS, run_accuracy, run_bench
     from ptlab.measure.converge import default_cache_dir
     from ptlab.rendering.settings import MAX_SPP, check_workers, default_workers
     from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
@@ -387,7 +387,7 @@ def _bench(args) -> int:
         run_accuracy(args.sampler or list(SAMPLERS), res=res, spp=spp, repeat=args.repeat,
                      reference=args.reference, reference_spp=args.reference_spp, workers=workers,
                      cache_dir=default_cache_dir(), backend=(args.backend or ["auto"])[0],
-                     **ESTIMATORS[(args.estimator or ["default"])[0]])
+                     **ESTIMATOR_OPTIONS[(args.estimator or ["default"])[0]])
         return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})

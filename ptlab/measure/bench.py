@@ -28,7 +28,10 @@ from ptlab.rendering import render_result
 from ptlab.samplers import DEFAULT_SAMPLER
 from ptlab.scene import Scene, load_scene
 
-ESTIMATORS = {
+#: The render options (BSDF sampling and Russian roulette) of each estimator that ``ptlab
+#: bench --estimator`` names; not ``ptlab.measure.converge.Estimator``s, which name an
+#: integrator, a strategy and a sampler.
+ESTIMATOR_OPTIONS = {
     "homework": dict(sampling="uniform", rr=0.8),
     "default": dict(sampling="cosine", rr="throughput"),
 }
@@ -53,7 +56,7 @@ def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int
               seed: int = 0, sampler: str = DEFAULT_SAMPLER) -> BenchRow:
     """Render once and time it: wall time includes starting the worker processes."""
     result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend, workers=workers,
-                           sampler=sampler, **ESTIMATORS[estimator])
+                           sampler=sampler, **ESTIMATOR_OPTIONS[estimator])
     paths = res * res * spp
     worker_seconds = result.seconds * workers
     return BenchRow(backend=backend, estimator=estimator, sampler=sampler, workers=workers,
