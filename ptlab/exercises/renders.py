@@ -64,8 +64,8 @@ COLUMNS = ("left", "centre left", "centre right", "right")
 NORMALS_VIEW = dict(spp=2, res=(48, 36), integrator="normals", seed=3)
 #: The mean absolute difference from the library's normals view that a student's may have.
 NORMALS_TOLERANCE = 1e-3
-#: The share of the pixels where the library's normals view sees a wall that a student's may
-#: leave black, where the check looks for missing walls (``missing_hint``).
+#: The share of the picture that a student's normals view may leave black where the
+#: library's sees a wall, where the check looks for missing walls (``missing_hint``).
 MISSING_TOLERANCE = 0.01
 
 
@@ -85,8 +85,8 @@ def check_render_through(yours: str, hooks: ModuleType, replacements: dict, *,
         hint: what a difference may mean, added to the failure of the comparison.
         nan_hint: what may cause NaN in the normals view, added to that failure.
         missing_hint: if given, the normals view must also see a wall wherever the
-            library's does (in all but ``MISSING_TOLERANCE`` of those pixels); this says
-            what may have lost them.
+            library's does (black there in at most ``MISSING_TOLERANCE`` of the picture);
+            this says what may have lost them.
 
     The library's picture is rendered first, before any of the student's code runs. The
     pieces of the NumPy BVH (``hooks`` is ``ptlab.accel.numpy_bvh``) are seen only through
