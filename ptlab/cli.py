@@ -342,7 +342,7 @@ def _converge(args) -> int:
 
 
 def _bench(args) -> int:
-    from ptlab.measure.bench import ESTIMATORS, run_accuracy, run_bench
+    from ptlab.measure.bench import ESTIMATOR_OPTIONS, run_accuracy, run_bench
     from ptlab.measure.converge import default_cache_dir
     from ptlab.rendering import RenderOptions
     from ptlab.rendering.executors import default_workers
@@ -371,7 +371,7 @@ def _bench(args) -> int:
                      reference=args.reference, reference_spp=args.reference_spp, workers=workers,
                      cache_dir=default_cache_dir(),
                      backend=(args.backend or [RenderOptions.backend])[0],
-                     **ESTIMATORS[(args.estimator or ["default"])[0]])
+                     **ESTIMATOR_OPTIONS[(args.estimator or ["default"])[0]])
         return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})

@@ -1,8 +1,15 @@
 """The exercises: every chapter's grader against the library's answer, the untouched
-exercise file and typical wrong answers; the grader's time limits; the command line."""
+exercise file, right answers of students' own and typical wrong answers; the grader's time
+limits; the command line.
+
+The right answers (``tests/exercises/NN_right_*.py``) are whole files; most wrong answers
+are one of them with the mistake patched in (``tests/exercises/wrong_answers.toml``), which
+``_wrong_answer_text`` applies, and the few written otherwise throughout are whole files
+(``NN_wrong_*.py``)."""
 
 from __future__ import annotations
 
+import ast
 import hashlib
 import json
 import re
@@ -11,6 +18,7 @@ import shutil
 import subprocess
 import sys
 import time
+import tomllib
 from pathlib import Path
 
 import numpy as np
@@ -21,6 +29,8 @@ from ptlab.exercises import all_chapters, chapter
 from ptlab.exercises.grader import grade
 
 WRONG = Path(__file__).parent / "exercises"
+#: The wrong answers that are right answers with the mistake patched in, by name.
+PATCHED = tomllib.loads((WRONG / "wrong_answers.toml").read_text(encoding="utf-8"))
 CHAPTERS = all_chapters()
 
 
@@ -46,51 +56,88 @@ def test_the_untouched_exercise_file_fails_every_check_clearly(found, tmp_path):
         assert "Traceback" not in check.message
 
 
-@pytest.mark.parametrize("path", sorted(WRONG.glob("[0-9][0-9]_right_*.py")), ids=lambda p: p.stem)
-def test_right_answers_of_the_students_own_get_full_marks(path):
-    # Their functions are theirs (not the library's), and run in the student's process.
-    result = grade(chapter(path.name[:2]), path)
-    assert result.full_marks, result.table()
-
-
-def _wrong_answers():
-    return sorted(WRONG.glob("[0-9][0-9]_wrong_*.py"))
+def _wrong_answers() -> list[str]:
+    """The names of the typical wrong answers (``NN_wrong_what``), patched and whole."""
+    return sorted([*PATCHED, *(path.stem for path in WRONG.glob("[0-9][0-9]_wrong_*.py"))])
 
 
 def _right_answers():
     return sorted(WRONG.glob("[0-9][0-9]_right_*.py"))
 
 
-def _constants(path: Path) -> dict:
-    """EXPECTED_FAILURES, EXPECTED_HINTS, MISLEADING_HINTS of an answer in tests/exercises."""
+def _wrong_answer_text(name: str) -> str:
+    """The wrong answer ``name`` as a student's file: a whole file as it is, a patched one
+    as its right answer with each ``old`` replaced by its ``new`` and the docstring its
+    ``about``. A patch whose ``old`` is not in the right answer exactly once (the right
+    answer changed since) fails the test that asked for it."""
+    if name not in PATCHED:
+        return (WRONG / f"{name}.py").read_text(encoding="utf-8")
+    wrong = PATCHED[name]
+    text = (WRONG / wrong["base"]).read_text(encoding="utf-8")
+    for replacement in wrong["replace"]:
+        found = text.count(replacement["old"])
+        if found != 1:
+            pytest.fail(f"{name}: the patch of {wrong['base']} no longer applies: these lines "
+                        f"are there {found} times, not once (update wrong_answers.toml):\n"
+                        f"{replacement['old']}")
+        text = text.replace(replacement["old"], replacement["new"])
+    docstring = ast.parse(text).body[0]
+    lines = text.splitlines(keepends=True)
+    return f'"""{wrong["about"]}"""\n' + "".join(lines[docstring.end_lineno:])
+
+
+def _expected(name: str) -> dict:
+    """What the graders must say of the wrong answer ``name``: ``failures``, the checks it
+    fails; ``hints``, phrases their messages hold; ``misleading``, phrases they must not.
+    A whole file says them in EXPECTED_FAILURES, EXPECTED_HINTS and MISLEADING_HINTS."""
+    if name in PATCHED:
+        return PATCHED[name]
     namespace: dict = {}
-    exec(compile(path.read_text(), str(path), "exec"), namespace)
-    return namespace
+    exec(compile(_wrong_answer_text(name), f"{name}.py", "exec"), namespace)
+    return dict(failures=namespace["EXPECTED_FAILURES"],
+                hints=namespace.get("EXPECTED_HINTS", {}),
+                misleading=namespace.get("MISLEADING_HINTS", {}))
 
 
-@pytest.mark.parametrize("path", _wrong_answers(), ids=lambda p: p.stem)
-def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(path):
+def test_each_patched_wrong_answer_is_a_right_answer_of_its_chapter_with_lines_changed():
+    # Fast, without grading: a right answer that changed shows here first.
+    assert not set(PATCHED) & {path.stem for path in WRONG.glob("[0-9][0-9]_wrong_*.py")}
+    for name, wrong in PATCHED.items():
+        assert re.fullmatch(r"\d\d_wrong_\w+", name), name
+        assert re.fullmatch(rf"{name[:2]}_right_\w+\.py", wrong["base"]), (name, wrong["base"])
+        assert wrong["replace"] and all(r["old"] != r["new"] for r in wrong["replace"]), name
+        assert set(wrong) <= {"base", "about", "failures", "hints", "misleading", "replace"}, name
+        text = _wrong_answer_text(name)
+        compile(text, f"{name}.py", "exec")
+        assert ast.get_docstring(ast.parse(text)) == wrong["about"].strip()
+
+
+@pytest.mark.parametrize("name", _wrong_answers())
+def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(name, tmp_path):
     """Each wrong answer fails the checks it names, and no other (a mistake is reported by
     the check that owns it); where it names hints, the messages say them (the essential
     words), and not the misleading ones."""
-    constants = _constants(path)
-    result = grade(chapter(path.name[:2]), path)
+    expected = _expected(name)
+    path = tmp_path / f"{name}.py"
+    path.write_text(_wrong_answer_text(name), encoding="utf-8")
+    result = grade(chapter(name[:2]), path)
     failed = {r.name for r in result.results if not r.passed}
-    assert failed == set(constants["EXPECTED_FAILURES"]), result.table()
+    assert failed == set(expected["failures"]), result.table()
     messages = {r.name: r.message for r in result.results}
-    for check, phrases in constants.get("EXPECTED_HINTS", {}).items():
+    for check, phrases in expected.get("hints", {}).items():
         for phrase in phrases:
             assert phrase in messages[check], (check, phrase, messages[check])
-    for check, phrases in constants.get("MISLEADING_HINTS", {}).items():
+    for check, phrases in expected.get("misleading", {}).items():
         for phrase in phrases:
             assert phrase not in messages[check], (check, phrase, messages[check])
 
 
 @pytest.mark.parametrize("path", _right_answers(), ids=lambda p: p.stem)
-def test_other_right_answers_get_full_marks_and_no_warning(path):
+def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     """Right answers written into the exercise file as a student would (another sampling
-    than the library's) get full marks, and the material harness warns of nothing: the
-    exercise file's own ``__init__`` keeps float32 float32."""
+    than the library's) get full marks: their functions are theirs (not the library's), and
+    run in the student's process. The material harness warns of nothing: the exercise
+    file's own ``__init__`` keeps float32 float32."""
     from ptlab.grading import check_material
     from ptlab.untrusted.child import import_file
 
@@ -116,7 +163,7 @@ def test_the_exercise_files_keep_material_parameters_in_float32(number, name):
 
 
 def test_every_chapter_has_a_wrong_answer_that_fails():
-    covered = {int(p.name[:2]) for p in _wrong_answers()}
+    covered = {int(name[:2]) for name in _wrong_answers()}
     assert covered == {c.number for c in CHAPTERS}
 
 
@@ -179,7 +226,7 @@ def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_che
     gives the ``ptlab grade`` command for that file, and the command works from there."""
     work = tmp_path / "my work"
     work.mkdir()
-    shutil.copyfile(WRONG / "06_wrong_pdf_off_by_2.py", work / "attempt.py")
+    (work / "attempt.py").write_text(_wrong_answer_text("06_wrong_pdf_off_by_2"), encoding="utf-8")
     ptlab = [sys.executable, "-m", "ptlab.cli"]
     run = subprocess.run([*ptlab, "exercise", "check", "6", "my work/attempt.py", "--json", "r.json"],
                          cwd=tmp_path, capture_output=True, text=True, timeout=300)
@@ -235,7 +282,8 @@ def _class_folder(tmp_path) -> Path:
     (folder / "bob").mkdir(parents=True)
     (folder / "dave").mkdir()
     shutil.copyfile(WRONG / "01_right_own_code.py", folder / "alice.py")
-    shutil.copyfile(WRONG / "01_wrong_rows_up.py", folder / "bob" / "01_cameras.py")
+    (folder / "bob" / "01_cameras.py").write_text(_wrong_answer_text("01_wrong_rows_up"),
+                                                  encoding="utf-8")
     shutil.copyfile(WRONG / "01_hangs_or_raises.py", folder / "carol.py")
     (folder / "dave" / "notes.txt").write_text("I ran out of time")
     return folder

@@ -41,7 +41,7 @@ from tqdm import tqdm
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import Chapter
-from ptlab.exercises.grader import OVERALL_SLACK, one_line, overall_limit
+from ptlab.exercises.grader import OVERALL_SLACK, overall_limit, table_message
 from ptlab.exercises.progress import private_state
 from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, student_user
 
@@ -284,7 +284,7 @@ def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:
     if not valid:
         return None, "the grader's report was unreadable"
     for check in report["checks"]:
-        check["message"] = one_line(check["message"])
+        check["message"] = table_message(check["message"])
     return report, ""
 
 

@@ -1,7 +1,7 @@
 """What a chapter of the exercises is: its graded checks, and the helpers checks use.
 
 A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``,
-a list of ``Check``s, and the library's own answers to what the student writes (which are
+a list of ``ChapterCheck``s, and the library's own answers to what the student writes (which are
 traps in the student's process, and whose copies earn nothing) and what each function may
 do to its arguments (``Chapter.rules``). A check is a plain function of the student's
 module (a stand-in for it, whose functions run in the student's own process:
@@ -33,7 +33,7 @@ class CheckFailed(Exception):  # noqa: N818 (a verdict, not an error of the grad
 
 
 @dataclass(frozen=True)
-class Check:
+class ChapterCheck:
     """One graded check of a chapter.
 
     Attributes:
@@ -71,7 +71,7 @@ class Chapter:
     slug: str
     title: str
     functions: tuple[str, ...]
-    checks: tuple[Check, ...]
+    checks: tuple[ChapterCheck, ...]
     answers: tuple[str, ...] = ()
     writes: dict[str, tuple[str, ...]] = field(default_factory=dict)
     scratch: dict[str, tuple[str, ...]] = field(default_factory=dict)

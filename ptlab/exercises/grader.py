@@ -156,7 +156,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
         for check in chapter.checks:
             left = deadline - time.monotonic()
             if isinstance(taken, str):
-                result = CheckResult(check.name, 0, check.points, False, one_line(taken), 0.0)
+                result = CheckResult(check.name, 0, check.points, False, table_message(taken), 0.0)
             elif left <= 0:
                 result = CheckResult(check.name, 0, check.points, False,
                                      f"not run: grading reached its overall limit of {overall:.0f} s", 0.0)
@@ -212,10 +212,10 @@ def run_check(check, submission: str | Path | Taken, timeout: float, guard: Proc
     except Exception as error:  # the checks' code failed on what the student's code returned
         message = f"{type(error).__name__}: {error} (raised outside your file)"
     return CheckResult(check.name, check.points if passed else 0, check.points, passed,
-                       one_line(message), time.perf_counter() - start), hung
+                       table_message(message), time.perf_counter() - start), hung
 
 
-def one_line(text: str) -> str:
+def table_message(text: str) -> str:
     """``text`` as one printable line of at most ``MAX_MESSAGE`` characters (a message may
     quote what the student's code said, which must not forge lines of the table)."""
     printable = "".join(c if unicodedata.category(c)[0] != "C" else " " for c in text)

@@ -1,13 +1,15 @@
 """Comparing a render made with a student's code with the library's, up to noise.
 
-The chapters whose code changes what the renderer computes (the intersection, the
-materials, the path loop) end with a render check: the same scene, the same seed, rendered
-once with the library's code and once with the student's plugged in. ``pass_images`` keeps
-every pass of a render as an independent estimate, and ``compare_renders`` compares the
-two renders' passes region by region: the student's must not be NaN, not noisier than a
-right answer's may be (``noise_verdict``), and not differ from the library's in the mean
-beyond the noise (a paired t-test per region and colour). ``replace_materials`` swaps a
-scene's materials for a student's.
+The chapters whose code changes what the renderer computes (the rays, the intersection,
+the materials, the path loop) end with a render check: the same scene, the same seed,
+rendered once with the library's code and once with the student's plugged in.
+``pass_images`` keeps every pass of a render as an independent estimate, and
+``compare_renders`` compares the two renders' passes region by region: the student's must
+not be NaN, not noisier than a right answer's may be (``noise_verdict``), and not differ
+from the library's in the mean beyond the noise (a paired t-test per region and colour).
+``check_render_through`` is the whole check of the chapters whose functions the renderer
+looks up (1, 2, 4 and 5): the Cornell box through the library's code, then through the
+student's, compared. ``replace_materials`` swaps a scene's materials for a student's.
 
 Every threshold comes from the library's passes, never from the student's alone (the
 grading contract, docs/DESIGN.md): a render whose noise set its own standard error could
@@ -19,6 +21,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from types import ModuleType
 
 import numpy as np
 
@@ -55,6 +58,72 @@ GRID = 4
 
 ROWS = ("top", "upper middle", "lower middle", "bottom")
 COLUMNS = ("left", "centre left", "centre right", "right")
+
+#: The picture of ``check_render_through`` without passes: the Cornell box's normals. The
+#: normals view is deterministic: the same closest hits give the same picture.
+NORMALS_VIEW = dict(spp=2, res=(48, 36), integrator="normals", seed=3)
+#: The mean absolute difference from the library's normals view that a student's may have.
+NORMALS_TOLERANCE = 1e-3
+#: The share of the picture that a student's normals view may leave black where the
+#: library's sees a wall, where the check looks for missing walls (``missing_hint``).
+MISSING_TOLERANCE = 0.01
+
+
+def check_render_through(yours: str, hooks: ModuleType, replacements: dict, *,
+                         passes: dict | None = None, hint: str = "", nan_hint: str = "",
+                         missing_hint: str = "") -> str:
+    """The Cornell box rendered with the library's code, then with the student's functions
+    ``replacements`` (by name) plugged into ``hooks``, the module the renderer looks them up
+    in: the same picture? -> a note saying how close, or ``CheckFailed``.
+
+    Args:
+        yours: the student's code in the messages: "your rays", "your BVH".
+        passes: None for the normals view (``NORMALS_VIEW``), compared pixel by pixel: it
+            must be finite and differ from the library's by at most ``NORMALS_TOLERANCE``
+            on average. Else the ``pass_images`` settings of a path-traced render (res,
+            passes, spp_per_pass, seed, ...), compared up to noise by ``compare_renders``.
+        hint: what a difference may mean, added to the failure of the comparison.
+        nan_hint: what may cause NaN in the normals view, added to that failure.
+        missing_hint: if given, the normals view must also see a wall wherever the
+            library's does (black there in at most ``MISSING_TOLERANCE`` of the picture);
+            this says what may have lost them.
+
+    The library's picture is rendered first, before any of the student's code runs. The
+    pieces of the NumPy BVH (``hooks`` is ``ptlab.accel.numpy_bvh``) are seen only through
+    its tree: the student's render runs on the NumPy backend with ``SMALL_SCENE`` 0 (a scene
+    as small as the Cornell box would otherwise be tested triangle by triangle, without
+    one). The library's normals view comes from the same backend as the student's (compared
+    pixel by pixel), its passes from the fastest (compared up to noise).
+    """
+    import ptlab
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.plug import plugged
+
+    backend = "auto"
+    if hooks is ptlab.accel.numpy_bvh:
+        backend, replacements = "numpy", dict(replacements, SMALL_SCENE=0)
+    scene = ptlab.load_scene("cornell-box")
+    if passes is not None:
+        library = pass_images(scene, backend="auto", **passes)
+        with plugged(hooks, **replacements):
+            student = pass_images(scene, backend=backend, **passes)
+        return compare_renders(student, library, f"the path-traced Cornell box through {yours}",
+                               hint)
+    options = dict(NORMALS_VIEW, workers=1, backend=backend)
+    library = ptlab.render(scene, **options)
+    with plugged(hooks, **replacements):
+        student = ptlab.render(scene, **options)
+    what = f"the Cornell box's normals seen through {yours}"
+    require_finite(student, what, at_pixel, hint=nan_hint)
+    missing = (student.max(axis=2) == 0) & (library.max(axis=2) > 0)
+    if missing_hint and missing.mean() > MISSING_TOLERANCE:
+        raise CheckFailed(f"through {yours} the camera sees nothing in {missing.mean():.0%} of "
+                          f"the pixels where the library sees a wall ({missing_hint})")
+    difference = np.abs(student - library).mean()
+    if not difference <= NORMALS_TOLERANCE:
+        raise CheckFailed(f"{what} differ from the library's by {difference:.4f} on average"
+                          + (f" ({hint})" if hint else ""))
+    return f"the Cornell box seen through {yours} matches"
 
 
 def replace_materials(scene, replace: Callable):

@@ -27,8 +27,10 @@ from ptlab.measure.metrics import relmse
 from ptlab.rendering import RenderOptions, render_result
 from ptlab.scene import Scene, load_scene
 
-#: The estimators measured: the homework's, and the renderer's defaults.
-ESTIMATORS = {
+#: The render options (BSDF sampling and Russian roulette) of each estimator that ``ptlab
+#: bench --estimator`` names; not ``ptlab.measure.converge.Estimator``s, which name an
+#: integrator, a strategy and a sampler.
+ESTIMATOR_OPTIONS = {
     "homework": dict(sampling="uniform", rr=0.8),
     "default": dict(sampling=RenderOptions.sampling, rr=RenderOptions.rr),
 }
@@ -53,7 +55,7 @@ def bench_one(scene: Scene, backend: str, estimator: str, workers: int, res: int
               seed: int = 0, sampler: str = RenderOptions.sampler) -> BenchRow:
     """Render once and time it: wall time includes starting the worker processes."""
     result = render_result(scene, spp=spp, res=res, seed=seed, backend=backend, workers=workers,
-                           sampler=sampler, **ESTIMATORS[estimator])
+                           sampler=sampler, **ESTIMATOR_OPTIONS[estimator])
     paths = res * res * spp
     worker_seconds = result.seconds * workers
     return BenchRow(backend=backend, estimator=estimator, sampler=sampler, workers=workers,

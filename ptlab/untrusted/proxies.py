@@ -26,8 +26,9 @@ if TYPE_CHECKING:
 MAX_NAME = 60
 
 
-class Submission(Protocol):
-    """What a stand-in needs of the student's process (``ptlab.untrusted.submission``)."""
+class StudentProcess(Protocol):
+    """What a stand-in needs of the student's process: of the ``Submission`` that runs it
+    (``ptlab.untrusted.submission``)."""
 
     path: Path
     rules: Rules
@@ -100,7 +101,7 @@ class RemoteFunction:
         arguments: what it may do to its arguments (see ``__init__``).
     """
 
-    def __init__(self, submission: Submission, tag: dict):
+    def __init__(self, submission: StudentProcess, tag: dict):
         self._submission, self._handle = submission, tag["function"]
         self.__name__ = self.__qualname__ = tag["name"]
         self.kind, self.origin = tag["kind"], tag["origin"]
@@ -130,7 +131,7 @@ class RemoteObject:
     """Any other object of the student's process: its attributes are fetched from there
     (functions and methods once, then kept), and set there."""
 
-    def __init__(self, submission: Submission, handle: int, type_name: str):
+    def __init__(self, submission: StudentProcess, handle: int, type_name: str):
         object.__setattr__(self, "_submission", submission)
         object.__setattr__(self, "_handle", handle)
         object.__setattr__(self, "_type_name", type_name)
@@ -165,7 +166,7 @@ class RemoteObject:
         return f"{self._type_name} object"
 
 
-def remote_object(submission: Submission, handle: int, type_name: str) -> RemoteObject:
+def remote_object(submission: StudentProcess, handle: int, type_name: str) -> RemoteObject:
     """A ``RemoteObject`` whose class is named like the student's (for messages)."""
     name = _safe_name(type_name, "StudentObject")
     cls = _object_classes.get(name)
@@ -179,7 +180,7 @@ class RemoteModule(RemoteObject):
     """The student's module (object 0 of its process). Its functions get the grader's
     rules for their arguments, looked up by the name the grader asked for."""
 
-    def __init__(self, submission: Submission, handle: int = 0):
+    def __init__(self, submission: StudentProcess, handle: int = 0):
         super().__init__(submission, handle, "module")
 
     def __getattr__(self, name: str):
@@ -199,6 +200,6 @@ class RemoteModule(RemoteObject):
 STAND_INS: set[type] = {RemoteFunction, RemoteObject, RemoteModule}
 
 
-def submission_of(proxy: RemoteObject | RemoteFunction) -> Submission:
+def submission_of(proxy: RemoteObject | RemoteFunction) -> StudentProcess:
     """The ``Submission`` a stand-in belongs to."""
     return object.__getattribute__(proxy, "_submission")

@@ -253,7 +253,7 @@ class Submission:
             raise ImportFailed(str(failure)) from None
         if "import_failed" in envelope and type(envelope["import_failed"]) is str:
             self.close()
-            raise ImportFailed(_one_line(envelope["import_failed"]))
+            raise ImportFailed(_collapse_whitespace(envelope["import_failed"]))
         if envelope.get("ready") is not True:
             self.close()
             raise ImportFailed(f"importing {self.path.name}: the process sent a malformed reply")
@@ -302,7 +302,7 @@ class Submission:
                                        None, False)
             if "unreceived" in envelope:
                 raise RuntimeError(f"the grader could not send {during} its arguments: "
-                                   f"{_one_line(str(envelope['unreceived']))}")
+                                   f"{_collapse_whitespace(str(envelope['unreceived']))}")
             if "value" not in envelope:
                 raise MalformedError("a reply without a value")
             value = decoder.decode(envelope["value"])
@@ -350,8 +350,8 @@ class Submission:
         if type(type_name) is not str or type(message) is not str or \
                 not (where is None or type(where) is str) or type(not_implemented) is not bool:
             raise MalformedError("an error report with a bad field")
-        return student_error(_one_line(type_name)[:60], _one_line(message),
-                             None if where is None else _one_line(where)[:200], not_implemented)
+        return student_error(_collapse_whitespace(type_name)[:60], _collapse_whitespace(message),
+                             None if where is None else _collapse_whitespace(where)[:200], not_implemented)
 
     def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None):
         """Record the failure, end the process, raise ``SubmissionFailed`` (now and for
@@ -566,5 +566,5 @@ def _exit_cause(code: int | None) -> str:
     return f"{name}: {cause.get(name, 'a signal')}"
 
 
-def _one_line(text: str) -> str:
+def _collapse_whitespace(text: str) -> str:
     return " ".join(text.split())

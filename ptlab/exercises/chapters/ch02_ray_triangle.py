@@ -10,11 +10,9 @@ Cornell box (whose hit points are built from ``u, v``) must match the library's.
 
 from __future__ import annotations
 
-from collections.abc import Callable
-
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import require_finite
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
@@ -239,25 +237,9 @@ def _error_hint(name: str, error: float, got, tuv: np.ndarray, inside: np.ndarra
             "v = (s2 . d) / det weighs v2, and 1 - u - v weighs v0")
 
 
-def render_passes(ray_triangle: Callable | None = None, seed: int = RENDER_SEED) -> np.ndarray:
-    """The ``pass_images`` of the Cornell box (``RENDER``) through the NumPy BVH with
-    ``ray_triangle`` plugged in, or through the fastest backend if None."""
-    import ptlab
-    import ptlab.accel.numpy_bvh
-    from ptlab.exercises.plug import plugged
-    from ptlab.exercises.renders import pass_images
-
-    scene = ptlab.load_scene("cornell-box")
-    if ray_triangle is None:
-        return pass_images(scene, backend="auto", seed=seed, **RENDER)
-    # SMALL_SCENE = 0: through the tree, which calls ray_triangle (a scene as small as the
-    # Cornell box would otherwise be tested triangle by triangle, without it).
-    with plugged(ptlab.accel.numpy_bvh, ray_triangle=ray_triangle, SMALL_SCENE=0):
-        return pass_images(scene, backend="numpy", seed=seed, **RENDER)
-
-
 def check_render(module) -> str:
-    from ptlab.exercises.renders import compare_renders
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.renders import check_render_through
 
     (ray_triangle,) = require(module, "ray_triangle")
 
@@ -273,11 +255,10 @@ def check_render(module) -> str:
         _require_finite_hits(t, u, v, "traced through the BVH")
         return t, u, v
 
-    library = render_passes()
-    student = render_passes(student_ray_triangle)
-    return compare_renders(student, library,
-                           "the path-traced Cornell box through your intersections",
-                           hint="wrong hit points from u, v, or missing triangles?")
+    return check_render_through("your intersections", ptlab.accel.numpy_bvh,
+                                dict(ray_triangle=student_ray_triangle),
+                                passes=dict(RENDER, seed=RENDER_SEED),
+                                hint="wrong hit points from u, v, or missing triangles?")
 
 
 CHAPTER = Chapter(
@@ -285,12 +266,12 @@ CHAPTER = Chapter(
     functions=("ray_triangle",),
     answers=("ptlab.accel.triangle.ray_triangle",),
     checks=(
-        Check("known hits", 2, check_known_hits, timeout=30),
-        Check("outside each edge", 2, check_edges, timeout=30),
-        Check("parallel rays", 1, check_parallel, timeout=30),
-        Check("behind the origin", 1, check_behind, timeout=30),
-        Check("both faces", 1, check_both_faces, timeout=30),
-        Check("many rays", 1, check_many, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("known hits", 2, check_known_hits, timeout=30),
+        ChapterCheck("outside each edge", 2, check_edges, timeout=30),
+        ChapterCheck("parallel rays", 1, check_parallel, timeout=30),
+        ChapterCheck("behind the origin", 1, check_behind, timeout=30),
+        ChapterCheck("both faces", 1, check_both_faces, timeout=30),
+        ChapterCheck("many rays", 1, check_many, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import at_pixel, finite_array, require_finite
 
 if TYPE_CHECKING:
@@ -320,10 +320,10 @@ CHAPTER = Chapter(
     answers=("ptlab.scattering.reflect", "ptlab.scattering.refract",
              "ptlab.scattering.fresnel_dielectric"),
     checks=(
-        Check("reflect", 2, check_reflect, timeout=20),
-        Check("refract", 2, check_refract, timeout=20),
-        Check("fresnel", 2, check_fresnel, timeout=20),
-        Check("total internal reflection", 1, check_total_internal_reflection, timeout=20),
-        Check("render", 3, check_render, timeout=60),
+        ChapterCheck("reflect", 2, check_reflect, timeout=20),
+        ChapterCheck("refract", 2, check_refract, timeout=20),
+        ChapterCheck("fresnel", 2, check_fresnel, timeout=20),
+        ChapterCheck("total internal reflection", 1, check_total_internal_reflection, timeout=20),
+        ChapterCheck("render", 3, check_render, timeout=60),
     ),
 )

@@ -12,8 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
-from ptlab.exercises.finite import at_pixel, require_finite
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))          # the square z = 1, 0 <= x, y <= 1
@@ -153,9 +152,8 @@ def check_flat(module) -> str:
 
 
 def check_render(module) -> str:
-    import ptlab
     import ptlab.accel.numpy_bvh
-    from ptlab.exercises.plug import plugged
+    from ptlab.exercises.renders import check_render_through
 
     (slab_test,) = require(module, "slab_test")
 
@@ -164,25 +162,9 @@ def check_render(module) -> str:
             result = slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax)
         return _checked(result, len(origins))
 
-    # The normals view is deterministic: the same closest hits give the same picture.
-    options = dict(spp=2, res=(48, 36), integrator="normals", workers=1, seed=3,
-                   backend="numpy")
-    # SMALL_SCENE = 0: through the tree (a scene as small as the Cornell box would otherwise
-    # be tested triangle by triangle, without boxes).
-    expected = ptlab.render("cornell-box", **options)
-    with plugged(ptlab.accel.numpy_bvh, slab_test=student_slab_test, SMALL_SCENE=0):
-        image = ptlab.render("cornell-box", **options)
-    require_finite(image, "the Cornell box's normals through your slab test", at_pixel)
-    missing = (image.max(axis=2) == 0) & (expected.max(axis=2) > 0)
-    if missing.mean() > 0.01:
-        raise CheckFailed(f"through your slab test the camera sees nothing in "
-                          f"{missing.mean():.0%} of the pixels where the library sees a wall "
-                          f"(flat boxes around the axis-aligned walls missed?)")
-    difference = np.abs(image - expected).mean()
-    if not difference <= 1e-3:
-        raise CheckFailed(f"the Cornell box's normals through your slab test differ from the "
-                          f"library's by {difference:.4f} on average (boxes missed?)")
-    return "the Cornell box seen through your slab test matches"
+    return check_render_through(
+        "your slab test", ptlab.accel.numpy_bvh, dict(slab_test=student_slab_test),
+        hint="boxes missed?", missing_hint="flat boxes around the axis-aligned walls missed?")
 
 
 CHAPTER = Chapter(
@@ -190,12 +172,12 @@ CHAPTER = Chapter(
     functions=("slab_test",),
     answers=("ptlab.accel.numpy_bvh.slab_test",),
     checks=(
-        Check("entering a box", 2, check_entering, timeout=30),
-        Check("going backwards", 1, check_backwards, timeout=30),
-        Check("misses", 1, check_misses, timeout=30),
-        Check("starting inside", 1, check_inside, timeout=30),
-        Check("parallel to a slab", 1, check_parallel, timeout=30),
-        Check("flat boxes", 2, check_flat, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("entering a box", 2, check_entering, timeout=30),
+        ChapterCheck("going backwards", 1, check_backwards, timeout=30),
+        ChapterCheck("misses", 1, check_misses, timeout=30),
+        ChapterCheck("starting inside", 1, check_inside, timeout=30),
+        ChapterCheck("parallel to a slab", 1, check_parallel, timeout=30),
+        ChapterCheck("flat boxes", 2, check_flat, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

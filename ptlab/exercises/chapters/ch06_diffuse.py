@@ -16,7 +16,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require, student_file
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require, student_file
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 from ptlab.grading.probes import Turned
@@ -239,10 +239,10 @@ CHAPTER = Chapter(
     functions=("Lambertian.eval", "Lambertian.pdf", "Lambertian.sample"),
     answers=("ptlab.materials.Diffuse",),
     checks=(
-        Check("eval", 2, check_eval, timeout=30),
-        Check("sample", 1, check_sample, timeout=30),
-        Check("pdf integrates to 1", 2, check_pdf_normalisation, timeout=30),
-        Check("material harness", 3, check_harness, timeout=60),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("eval", 2, check_eval, timeout=30),
+        ChapterCheck("sample", 1, check_sample, timeout=30),
+        ChapterCheck("pdf integrates to 1", 2, check_pdf_normalisation, timeout=30),
+        ChapterCheck("material harness", 3, check_harness, timeout=60),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

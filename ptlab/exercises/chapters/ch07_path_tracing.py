@@ -29,7 +29,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import CHANNELS, at_pixel, at_row, require_finite
 
 if TYPE_CHECKING:
@@ -380,6 +380,12 @@ def _render(scene, trace_paths=None, **options) -> np.ndarray:
         return ptlab.render(scene, **options)
 
 
+#: What a black light misses, in the messages of ``check_light_not_black``.
+ADD_THE_EMISSION = ("A camera ray that hits a light adds its emission (the homework's castRay "
+                    "forgets it; in ptlab, add scene.emission of the hit triangle where "
+                    "hit.sees_emission, facing the ray: hit.front)")
+
+
 def check_light_not_black(module) -> str:
     import ptlab
 
@@ -390,9 +396,7 @@ def check_light_not_black(module) -> str:
     if np.abs(furnace).max() == 0:
         raise CheckFailed(f"the light is black: in the furnace every camera ray hits a wall "
                           f"that glows Le = {LE}, yet with max_depth 0 (emission only) your image "
-                          f"is black. A camera ray that hits a light adds its emission (the "
-                          f"homework's castRay forgets it; in ptlab, add scene.emission of the "
-                          f"hit triangle where hit.sees_emission, facing the ray: hit.front)")
+                          f"is black. {ADD_THE_EMISSION}")
     if not np.allclose(furnace, LE, rtol=1e-5):
         raise CheckFailed(f"with max_depth 0 a path adds only the emission its camera ray sees: "
                           f"the furnace must be Le = {LE} in every pixel, yours ranges from "
@@ -409,10 +413,7 @@ def check_light_not_black(module) -> str:
     seen = image[on_light]
     if np.abs(seen).max() == 0:
         raise CheckFailed(f"the light is black: pixels that see only the light must show its Le "
-                          f"= {np.round(light, 2)}. A camera ray that hits a light adds its "
-                          f"emission (the homework's castRay forgets it; in ptlab, add "
-                          f"scene.emission of the hit triangle where hit.sees_emission, facing "
-                          f"the ray: hit.front)")
+                          f"= {np.round(light, 2)}. {ADD_THE_EMISSION}")
     if not np.allclose(image[sees], expected[sees], rtol=1e-4, atol=1e-4):
         ratio = float(np.median(seen / light, axis=0).mean())
         raise CheckFailed(f"with max_depth 0 (emission only), pixels that see the light should "
@@ -598,12 +599,12 @@ CHAPTER = Chapter(
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},
     checks=(
-        Check("direct light", 2, check_direct_light, timeout=30),
-        Check("roulette unbiased", 2, check_russian_roulette, timeout=45),
-        Check("indirect bounce", 2, check_scatter, timeout=30),
-        Check("light not black", 1, check_light_not_black, timeout=45),
-        Check("lights one-sided", 1, check_one_sided_lights, timeout=30),
-        Check("white furnace", 2, check_furnace, timeout=60),
-        Check("Cornell box", 2, check_cornell, timeout=60),
+        ChapterCheck("direct light", 2, check_direct_light, timeout=30),
+        ChapterCheck("roulette unbiased", 2, check_russian_roulette, timeout=45),
+        ChapterCheck("indirect bounce", 2, check_scatter, timeout=30),
+        ChapterCheck("light not black", 1, check_light_not_black, timeout=45),
+        ChapterCheck("lights one-sided", 1, check_one_sided_lights, timeout=30),
+        ChapterCheck("white furnace", 2, check_furnace, timeout=60),
+        ChapterCheck("Cornell box", 2, check_cornell, timeout=60),
     ),
 )

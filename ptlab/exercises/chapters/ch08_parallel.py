@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import at_pixel, require_finite
 from ptlab.untrusted import submission_of
 
@@ -273,10 +273,10 @@ CHAPTER = Chapter(
              "ptlab.rendering.api.render_result"),
     programs=True,
     checks=(
-        Check("tiles", 2, check_tiles, timeout=20),
-        Check("tile job", 2, check_tile_job, timeout=30),
-        Check("parallel", 2, check_parallel, timeout=60),
-        Check("any worker count", 2, check_worker_count, timeout=90),
-        Check("matches the library", 2, check_library, timeout=60),
+        ChapterCheck("tiles", 2, check_tiles, timeout=20),
+        ChapterCheck("tile job", 2, check_tile_job, timeout=30),
+        ChapterCheck("parallel", 2, check_parallel, timeout=60),
+        ChapterCheck("any worker count", 2, check_worker_count, timeout=90),
+        ChapterCheck("matches the library", 2, check_library, timeout=60),
     ),
 )

@@ -18,7 +18,7 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require, student_file
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require, student_file
 from ptlab.exercises.chapters.ch06_diffuse import probe, random_pairs, run_harness
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
@@ -259,13 +259,13 @@ CHAPTER = Chapter(
         "D", "G1", "G2", "Lambda", "Microfacet")) + ("ptlab.scattering.F_schlick",
                                                       "ptlab.sampling.ggx_visible_normals"),
     checks=(
-        Check("D normalisation", 2, check_d, timeout=30),
-        Check("Smith G", 1, check_g, timeout=30),
-        Check("Fresnel-Schlick", 1, check_fresnel, timeout=30),
-        Check("eval", 1, check_eval, timeout=30),
-        Check("harness (hemisphere)", 1, check_harness_hemisphere, timeout=60),
-        Check("render (hemisphere)", 1, check_render_hemisphere, timeout=60),
-        Check("harness (importance)", 2, check_harness_importance, timeout=60),
-        Check("render (importance)", 1, check_render_importance, timeout=60),
+        ChapterCheck("D normalisation", 2, check_d, timeout=30),
+        ChapterCheck("Smith G", 1, check_g, timeout=30),
+        ChapterCheck("Fresnel-Schlick", 1, check_fresnel, timeout=30),
+        ChapterCheck("eval", 1, check_eval, timeout=30),
+        ChapterCheck("harness (hemisphere)", 1, check_harness_hemisphere, timeout=60),
+        ChapterCheck("render (hemisphere)", 1, check_render_hemisphere, timeout=60),
+        ChapterCheck("harness (importance)", 2, check_harness_importance, timeout=60),
+        ChapterCheck("render (importance)", 1, check_render_importance, timeout=60),
     ),
 )

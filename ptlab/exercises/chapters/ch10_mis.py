@@ -14,7 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, Check, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 from ptlab.exercises.finite import at_pixel, require_finite
 
 
@@ -193,10 +193,10 @@ CHAPTER = Chapter(
     functions=("balance_heuristic", "power_heuristic", "mis_weight"),
     answers=("ptlab.integrators.path.mis_weight",),
     checks=(
-        Check("balance heuristic", 2, check_balance, timeout=30),
-        Check("power heuristic", 2, check_power, timeout=30),
-        Check("weights sum to 1", 2, check_sum_to_one, timeout=30),
-        Check("zero and delta pdfs", 2, check_zero_pdfs, timeout=30),
-        Check("render", 2, check_render, timeout=60),
+        ChapterCheck("balance heuristic", 2, check_balance, timeout=30),
+        ChapterCheck("power heuristic", 2, check_power, timeout=30),
+        ChapterCheck("weights sum to 1", 2, check_sum_to_one, timeout=30),
+        ChapterCheck("zero and delta pdfs", 2, check_zero_pdfs, timeout=30),
+        ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )
