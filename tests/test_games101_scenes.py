@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import grazing_cameras
+from helpers import grazing_cameras
 
 import ptlab
 from ptlab.accel import make_accelerator

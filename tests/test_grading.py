@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import wrong_materials as wrong
+from helpers import Recording, assert_every_call_mixes_its_rows
 
 from ptlab.cli import main as ptlab_main
 from ptlab.grading import check_material, write_plots
@@ -254,50 +255,6 @@ def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
 
 
 # -- the probes cannot be told from a render ---------------------------------------------------
-
-class Recording:
-    """A right material (the library's, called through) that records the wo and n of every
-    call: any object with the methods is a material to the graders."""
-
-    def __init__(self, material):
-        self.material, self.calls = material, []
-
-    def __getattr__(self, name: str):       # is_delta, eta: the material's
-        if name in ("material", "calls"):
-            raise AttributeError(name)
-        return getattr(self.material, name)
-
-    def _record(self, method: str, wo, n):
-        self.calls.append((method, np.array(wo, dtype=np.float64), np.array(n, dtype=np.float64)))
-        return getattr(self.material, method)
-
-    def eval(self, wo, wi, n):
-        return self._record("eval", wo, n)(wo, wi, n)
-
-    def pdf(self, wo, wi, n):
-        return self._record("pdf", wo, n)(wo, wi, n)
-
-    def sample(self, wo, n, u):
-        return self._record("sample", wo, n)(wo, n, u)
-
-    def sample_weight(self, wo, n, u, front=None):
-        method = self._record("sample_weight", wo, n)
-        return method(wo, n, u) if front is None else method(wo, n, u, front)
-
-
-def assert_every_call_mixes_its_rows(calls):
-    """No call of two rows or more has one wo, one n, or one angle between them on every row;
-    and some calls have a single row (the row-independence check)."""
-    for method, wo, n in calls:
-        if len(wo) < 2:
-            continue
-        assert not (wo == wo[0]).all(), f"{method}: every row has the same wo ({len(wo)} rows)"
-        assert not (n == n[0]).all(), f"{method}: every row has the same n ({len(wo)} rows)"
-        cos_theta_o = np.sum(wo * n, axis=1)
-        assert np.ptp(cos_theta_o) > 1e-6, f"{method}: every row has the same wo . n ({len(wo)} rows)"
-    assert any(len(wo) == 1 for _, wo, _ in calls)
-    assert {method for method, _, _ in calls} >= {"eval", "pdf", "sample", "sample_weight"}
-
 
 def test_no_probe_repeats_one_wo_or_n_on_every_row():
     material = Recording(Microfacet("gold", roughness=0.4))

@@ -2,7 +2,7 @@
 
 Statistical tests use fixed seeds; a "3 standard errors" check on a mean of 16 seeds (a t
 statistic with 15 degrees of freedom) fails by chance with probability 0.9%. The furnaces
-are spheres, where light sampling has a finite variance (``conftest.closed_sphere_scene``);
+are spheres, where light sampling has a finite variance (``helpers.closed_sphere_scene``);
 the seeds are fixed, so a given run either always passes or always fails.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import closed_box_scene, closed_sphere_scene
+from helpers import closed_box_scene, closed_sphere_scene
 
 import ptlab
 from ptlab.accel import make_accelerator
@@ -197,7 +197,7 @@ def test_furnace_stays_uniform_around_lossless_objects(inner):
     # The sphere neither absorbs nor emits: the radiance everywhere stays Le / (1 - albedo).
     # A wrong delta-material rule (light sampled through a mirror, emission after a mirror
     # dropped, a missing 1 / eta^2) shows the sphere brighter or darker than the walls.
-    from conftest import furnace_with
+    from helpers import furnace_with
     scene = furnace_with(inner)
     images = np.array([ptlab.render(scene, seed=s, spp=16, res=24, workers=1)[..., 0]
                        for s in range(8)])

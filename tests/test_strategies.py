@@ -19,7 +19,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import grazing_cameras
+from helpers import grazing_cameras
 from scipy import stats
 
 import ptlab
