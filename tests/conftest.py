@@ -1,10 +1,13 @@
 """Shared fixtures: the built-in Cornell box, a private state folder, a record of NaN
-contributions, a check that a test left no process behind; the Hypothesis profiles.
+contributions, a check that a test left no process behind; the Hypothesis profiles; and the
+check that a test which starts a process says so (the ``subprocess`` marker).
 (Scene builders and other helpers that test files import are in ``helpers.py``.)"""
 
 from __future__ import annotations
 
+import multiprocessing.process
 import os
+import sys
 import tempfile
 from pathlib import Path
 
@@ -27,6 +30,57 @@ _FUZZ = dict(database=None, deadline=None, print_blob=True,
 settings.register_profile("fixed", max_examples=100, derandomize=True, **_FUZZ)
 settings.register_profile("long", max_examples=2000, **_FUZZ)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
+
+
+# -- the layers: pyproject.toml's markers ----------------------------------------------------
+# ``pytest -m "not slow"`` is the quick layer; ``subprocess`` marks every test that starts a
+# process (a grader's child, the command as a program, a tutorial, a pool of workers). This
+# process sees each start: os.fork, exec, spawn and subprocess.Popen through their audit
+# events (PEP 578), and multiprocessing's starts (a fork server or ``spawn`` starts a process
+# without an event here) through ``BaseProcess.start``.
+PROCESS_EVENTS = {"os.fork", "os.forkpty", "os.exec", "os.posix_spawn", "os.spawn", "os.system",
+                  "subprocess.Popen"}
+_started: list[str] = []
+
+
+def _audit(event: str, args) -> None:
+    if event in PROCESS_EVENTS and not _looking_up_a_library():
+        _started.append(event)
+
+
+def _looking_up_a_library() -> bool:
+    """True inside ``ctypes.util.find_library``, which runs ``ldconfig -p`` (the first render
+    of a session does, in ``ptlab.rendering.memory``): not a process the test is about."""
+    frame = sys._getframe(2)
+    while frame is not None and frame.f_globals.get("__name__") != "ctypes.util":
+        frame = frame.f_back
+    return frame is not None
+
+
+sys.addaudithook(_audit)
+_start_process = multiprocessing.process.BaseProcess.start
+
+
+def _recorded_start(self) -> None:
+    _started.append("multiprocessing")
+    _start_process(self)
+
+
+multiprocessing.process.BaseProcess.start = _recorded_start
+
+
+def pytest_runtest_setup(item) -> None:
+    _started.clear()        # (before the test's fixtures of any scope are set up)
+
+
+@pytest.fixture(autouse=True)
+def marked_if_it_starts_processes(request):
+    """Fail a test that started a process (its fixtures included) without the ``subprocess``
+    marker, so that ``-m "not subprocess"`` and the marker's promise stay true."""
+    yield
+    if _started and request.node.get_closest_marker("subprocess") is None:
+        pytest.fail(f"started processes ({', '.join(sorted(set(_started)))}) but is not "
+                    f"marked subprocess: add @pytest.mark.subprocess", pytrace=False)
 
 
 @pytest.fixture(autouse=True)

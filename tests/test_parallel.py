@@ -31,6 +31,7 @@ def reference(cornell):
     return render_result(cornell, workers=1, **SMALL)
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("workers", [2, 3])
 def test_process_pool_gives_the_same_image(cornell, reference, workers):
     result = render_result(cornell, workers=workers, **SMALL)
@@ -45,6 +46,8 @@ def test_any_executor_gives_the_same_image(cornell, reference):
     assert np.array_equal(result.image, reference.image)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_dask_cluster_gives_the_same_image(cornell, reference):
     distributed = pytest.importorskip("dask.distributed")
     with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
@@ -67,7 +70,7 @@ class StopAfter:
         return self.seen >= self.jobs
 
 
-@pytest.mark.parametrize("workers", [1, 2])
+@pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.subprocess)])
 def test_stop_keeps_whole_passes_per_tile_and_resume_finishes_identically(
         cornell, reference, tmp_path, workers):
     checkpoint = tmp_path / "render.npz"
@@ -134,6 +137,7 @@ class DieOnceDiffuse(Diffuse):
         return super().sample_weight(wo, n, u, front)
 
 
+@pytest.mark.subprocess
 def test_a_killed_worker_has_its_jobs_run_again(cornell, tmp_path):
     materials = list(cornell.materials)
     white = cornell.material_names.index("white")
@@ -165,6 +169,7 @@ def wait_for(path: Path, process: subprocess.Popen, seconds: float = 60) -> None
         time.sleep(0.02)
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
 def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(
         tmp_path, signum):

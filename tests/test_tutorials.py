@@ -16,6 +16,8 @@ def test_there_is_a_tutorial_per_chapter():
     assert [p.stem for p in TUTORIALS] == [c.stem for c in all_chapters()]
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
 def test_tutorial_runs_at_reduced_settings(script, tmp_path):
     run = subprocess.run([sys.executable, str(script), "--res", "32", "--spp", "1",

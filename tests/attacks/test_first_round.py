@@ -17,6 +17,8 @@ from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade, run_check
 from ptlab.untrusted import ProcessGuard
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+
 # -- attacks on the exercise grader ---------------------------------------------------------
 
 def test_forged_replies_and_verdicts_earn_nothing(attack):
