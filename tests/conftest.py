@@ -1,18 +1,23 @@
 """Shared fixtures: the built-in Cornell box, a private state folder, a record of NaN
-contributions, a check that a test left no process behind; the Hypothesis profiles; and the
-check that a test which starts a process says so (the ``subprocess`` marker).
+contributions, a check that a test left no process behind; the Hypothesis profiles; the
+check that a test which starts a process says so (the ``subprocess`` marker); and the
+``--untouched-modules`` option, which lists the modules a run never called a function of.
 (Scene builders and other helpers that test files import are in ``helpers.py``.)"""
 
 from __future__ import annotations
 
+import ast
+import inspect
 import multiprocessing.process
 import os
 import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import library_modules
 from hypothesis import HealthCheck, settings
 
 import ptlab
@@ -71,6 +76,8 @@ multiprocessing.process.BaseProcess.start = _recorded_start
 
 def pytest_runtest_setup(item) -> None:
     _started.clear()        # (before the test's fixtures of any scope are set up)
+    if item.config.getoption("untouched_modules") and sys.gettrace() is not _record_call:
+        sys.settrace(_record_call)      # (Hypothesis's explain phase leaves no tracer behind)
 
 
 @pytest.fixture(autouse=True)
@@ -81,6 +88,66 @@ def marked_if_it_starts_processes(request):
     if _started and request.node.get_closest_marker("subprocess") is None:
         pytest.fail(f"started processes ({', '.join(sorted(set(_started)))}) but is not "
                     f"marked subprocess: add @pytest.mark.subprocess", pytrace=False)
+
+
+# -- does a run reach every module? ---------------------------------------------------------
+# ``pytest -m "not slow" --untouched-modules`` records which functions of ptlab run in this
+# process (sys.settrace, calls only: the run takes about twice as long) and fails the run if
+# a module that defines functions had none of them called: the quick layer must touch every
+# module, not just import it.
+
+#: Modules whose functions run only in a student's process (``ptlab.untrusted.child`` sets
+#: them up there), where this one cannot trace them; the quick layer grades in such
+#: processes (test_untrusted.py, test_exercises.py).
+ONLY_IN_STUDENTS_PROCESSES = {"ptlab.untrusted.confinement", "ptlab.untrusted.no_exec",
+                              "ptlab.untrusted.traps"}
+_called: set = set()
+_untouched: list[str] = []
+
+
+def _record_call(frame, event: str, arg) -> None:
+    _called.add(frame.f_code)           # (returning None: no line-by-line tracing)
+
+
+def pytest_addoption(parser) -> None:
+    parser.addoption("--untouched-modules", action="store_true",
+                     help="fail the run if some module of ptlab had none of its functions called "
+                          "in this process (about twice as slow)")
+
+
+def pytest_configure(config) -> None:
+    if config.getoption("untouched_modules"):
+        threading.settrace(_record_call)
+        sys.settrace(_record_call)
+
+
+def untouched_modules(called: set) -> list[str]:
+    """The library's modules that define a function and had none of them ``called`` (code
+    objects): module and class bodies and comprehensions run on import, so they do not count."""
+    ran = {code.co_filename for code in called if code.co_flags & inspect.CO_OPTIMIZED
+           and (code.co_name == "<lambda>" or not code.co_name.startswith("<"))}
+    return sorted(name for name, path in library_modules().items()
+                  if name not in ONLY_IN_STUDENTS_PROCESSES and str(path) not in ran
+                  and any(isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda)
+                          for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionfinish(session) -> None:
+    if session.config.getoption("untouched_modules"):
+        sys.settrace(None)
+        threading.settrace(None)
+        _untouched[:] = untouched_modules(_called)
+        if _untouched:
+            session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+def pytest_terminal_summary(terminalreporter, config) -> None:
+    if config.getoption("untouched_modules"):
+        terminalreporter.write_line(
+            f"untouched modules: {', '.join(_untouched)}" if _untouched else
+            "untouched modules: none (every module of ptlab had a function called)",
+            red=bool(_untouched), green=not _untouched)
 
 
 @pytest.fixture(autouse=True)

@@ -1,9 +1,11 @@
 """What several test files build or check: small scenes made in Python (closed furnaces,
-a furnace around one object, cameras that graze a floor) and a material that records how
-the graders call it. Fixtures stay in ``conftest.py``; test files import these by name
-(``from helpers import closed_sphere_scene``)."""
+a furnace around one object, cameras that graze a floor), a material that records how the
+graders call it, and the list of the library's modules. Fixtures stay in ``conftest.py``;
+test files import these by name (``from helpers import closed_sphere_scene``)."""
 
 from __future__ import annotations
+
+from pathlib import Path
 
 import numpy as np
 import trimesh
@@ -133,3 +135,19 @@ def assert_every_call_mixes_its_rows(calls):
         assert np.ptp(cos_theta_o) > 1e-6, f"{method}: every row has the same wo . n ({len(wo)} rows)"
     assert any(len(wo) == 1 for _, wo, _ in calls)
     assert {method for method, _, _ in calls} >= {"eval", "pdf", "sample", "sample_weight"}
+
+
+# -- the library's modules --------------------------------------------------------------------
+
+PACKAGE = Path(__file__).resolve().parent.parent / "ptlab"
+
+
+def module_name(path: Path) -> str:
+    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def library_modules() -> dict[str, Path]:
+    """Every module of the library (the students' exercise files are not part of it)."""
+    return {module_name(p): p for p in PACKAGE.rglob("*.py")
+            if not {"templates", "solutions"} & set(p.parts)}

@@ -289,7 +289,6 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     assert "columns are not chapter 2's" in capsys.readouterr().err
 
 
-@pytest.mark.slow
 @pytest.mark.subprocess
 def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
     from ptlab.exercises.batch import Work, _Runner

@@ -238,8 +238,8 @@ def test_direct_light_from_one_triangle_is_lamberts_closed_form(floor):
 
 def test_direct_light_behind_a_blocker_is_black(floor):
     scene, _ = floor
-    blocker = np.array([[[-1, 0.5, -1], [1, 0.5, 1], [1, 0.5, -1]], [[-1, 0.5, -1], [-1, 0.5, 1], [1, 0.5, 1]]],
-                       dtype=float)
+    blocker = np.array([[[-1, 0.5, -1], [1, 0.5, 1], [1, 0.5, -1]],
+                        [[-1, 0.5, -1], [-1, 0.5, 1], [1, 0.5, 1]]], dtype=float)
     blocked = Scene(triangles=np.concatenate([scene.triangles, blocker]),
                     material_ids=[0, 0, 1, 0, 0], materials=scene.materials, camera=scene.camera)
     accel = make_accelerator(blocked.triangles, "embree")
