@@ -157,6 +157,17 @@ def private_state_folder(tmp_path_factory, monkeypatch) -> None:
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("state")))
 
 
+@pytest.fixture(autouse=True)
+def same_import_path():
+    """Give ``sys.path`` back as the test found it. A grader run in this process (``grade``,
+    ``ptlab grade``, ``ptlab exercise check``) takes the current folder off it; run from the
+    checkout with an editable install, that is where ptlab is, and every process started
+    later (Dask's workers, a pool) could not import it."""
+    path = sys.path[:]
+    yield
+    sys.path[:] = path
+
+
 @pytest.fixture(scope="session")
 def cornell() -> Scene:
     return ptlab.load_scene("cornell-box")
