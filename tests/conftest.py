@@ -1,21 +1,27 @@
-"""Shared fixtures: small scenes built in Python, and the built-in Cornell box; cameras that
-graze a scene's floor and a record of NaN contributions; the Hypothesis profiles."""
+"""Shared fixtures: the built-in Cornell box, a private state folder, a record of NaN
+contributions, a check that a test left no process behind; the Hypothesis profiles; the
+check that a test which starts a process says so (the ``subprocess`` marker); and the
+``--untouched-modules`` option, which lists the modules a run never called a function of.
+(Scene builders and other helpers that test files import are in ``helpers.py``.)"""
 
 from __future__ import annotations
 
+import ast
+import inspect
+import multiprocessing.process
 import os
+import sys
 import tempfile
+import threading
 from pathlib import Path
 
 import numpy as np
 import pytest
-import trimesh
+from helpers import library_modules
 from hypothesis import HealthCheck, settings
 
 import ptlab
 import ptlab.integrators.path
-from ptlab.camera import Camera
-from ptlab.materials import Diffuse
 from ptlab.scene import Scene
 
 # Property-based tests (tests/test_fuzz.py) run a fixed, derandomized set of examples by
@@ -31,41 +37,117 @@ settings.register_profile("long", max_examples=2000, **_FUZZ)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
 
 
-def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
-    """A closed unit-ish box whose every inner face has ``albedo`` and emits ``emission``.
-
-    Its normals point inward, so every face emits into the box. The exact radiance
-    everywhere inside is Le / (1 - albedo) (the "furnace").
-    """
-    return _furnace(trimesh.creation.box(extents=(2.0, 3.0, 4.0)), albedo, emission, sampling,
-                    eye=(0.1, -0.2, -1.0), name="furnace")
-
-
-def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
-    """A closed sphere (an icosphere of 1280 triangles) whose inside has ``albedo`` and emits
-    ``emission``: the furnace of ``closed_box_scene``, Le / (1 - albedo) everywhere.
-
-    In a sphere, light sampling by area is nearly exact: for two points x, y on a sphere of
-    radius R, cos(theta_x) cos(theta_y) / |x - y|^2 = 1 / (4 R^2) whatever they are. In a box
-    it is not: points near a shared edge of two faces see each other at distances near 0,
-    and the estimator's variance is infinite (measured: values up to 1700 times the mean),
-    so a mean over seeds is far from normal and a test in standard errors fails far more
-    often than it says, all the more with samplers that stratify the rest of the noise away.
-    """
-    return _furnace(trimesh.creation.icosphere(subdivisions=3, radius=2.0), albedo, emission,
-                    sampling, eye=(0.1, -0.2, -0.5), name="sphere-furnace")
+# -- the layers: pyproject.toml's markers ----------------------------------------------------
+# ``pytest -m "not slow"`` is the quick layer; ``subprocess`` marks every test that starts a
+# process (a grader's child, the command as a program, a tutorial, a pool of workers). This
+# process sees each start: os.fork, exec, spawn and subprocess.Popen through their audit
+# events (PEP 578), and multiprocessing's starts (a fork server or ``spawn`` starts a process
+# without an event here) through ``BaseProcess.start``.
+PROCESS_EVENTS = {"os.fork", "os.forkpty", "os.exec", "os.posix_spawn", "os.spawn", "os.system",
+                  "subprocess.Popen"}
+_started: list[str] = []
 
 
-def _furnace(mesh: trimesh.Trimesh, albedo: float, emission: float, sampling: str,
-             eye: tuple[float, float, float], name: str) -> Scene:
-    """The inside of the closed ``mesh``, every face of one grey that emits ``emission``,
-    seen from ``eye`` inside it."""
-    mesh.invert()                                   # outward normals -> inward
-    triangles = mesh.vertices[mesh.faces]
-    material = Diffuse(albedo=[albedo] * 3, sampling=sampling, emission=[emission] * 3)
-    camera = Camera.look_at(eye, (0.3, 0.1, 1.0), fov_y=100.0)
-    return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
-                 materials=[material], camera=camera, name=name)
+def _audit(event: str, args) -> None:
+    if event in PROCESS_EVENTS and not _looking_up_a_library():
+        _started.append(event)
+
+
+def _looking_up_a_library() -> bool:
+    """True inside ``ctypes.util.find_library``, which runs ``ldconfig -p`` (the first render
+    of a session does, in ``ptlab.rendering.memory``): not a process the test is about."""
+    frame = sys._getframe(2)
+    while frame is not None and frame.f_globals.get("__name__") != "ctypes.util":
+        frame = frame.f_back
+    return frame is not None
+
+
+sys.addaudithook(_audit)
+_start_process = multiprocessing.process.BaseProcess.start
+
+
+def _recorded_start(self) -> None:
+    _started.append("multiprocessing")
+    _start_process(self)
+
+
+multiprocessing.process.BaseProcess.start = _recorded_start
+
+
+def pytest_runtest_setup(item) -> None:
+    _started.clear()        # (before the test's fixtures of any scope are set up)
+    if item.config.getoption("untouched_modules") and sys.gettrace() is not _record_call:
+        sys.settrace(_record_call)      # (Hypothesis's explain phase leaves no tracer behind)
+
+
+@pytest.fixture(autouse=True)
+def marked_if_it_starts_processes(request):
+    """Fail a test that started a process (its fixtures included) without the ``subprocess``
+    marker, so that ``-m "not subprocess"`` and the marker's promise stay true."""
+    yield
+    if _started and request.node.get_closest_marker("subprocess") is None:
+        pytest.fail(f"started processes ({', '.join(sorted(set(_started)))}) but is not "
+                    f"marked subprocess: add @pytest.mark.subprocess", pytrace=False)
+
+
+# -- does a run reach every module? ---------------------------------------------------------
+# ``pytest -m "not slow" --untouched-modules`` records which functions of ptlab run in this
+# process (sys.settrace, calls only: the run takes about twice as long) and fails the run if
+# a module that defines functions had none of them called: the quick layer must touch every
+# module, not just import it.
+
+#: Modules whose functions run only in a student's process (``ptlab.untrusted.child`` sets
+#: them up there), where this one cannot trace them; the quick layer grades in such
+#: processes (test_untrusted.py, test_exercises.py).
+ONLY_IN_STUDENTS_PROCESSES = {"ptlab.untrusted.confinement", "ptlab.untrusted.no_exec",
+                              "ptlab.untrusted.traps"}
+_called: set = set()
+_untouched: list[str] = []
+
+
+def _record_call(frame, event: str, arg) -> None:
+    _called.add(frame.f_code)           # (returning None: no line-by-line tracing)
+
+
+def pytest_addoption(parser) -> None:
+    parser.addoption("--untouched-modules", action="store_true",
+                     help="fail the run if some module of ptlab had none of its functions called "
+                          "in this process (about twice as slow)")
+
+
+def pytest_configure(config) -> None:
+    if config.getoption("untouched_modules"):
+        threading.settrace(_record_call)
+        sys.settrace(_record_call)
+
+
+def untouched_modules(called: set) -> list[str]:
+    """The library's modules that define a function and had none of them ``called`` (code
+    objects): module and class bodies and comprehensions run on import, so they do not count."""
+    ran = {code.co_filename for code in called if code.co_flags & inspect.CO_OPTIMIZED
+           and (code.co_name == "<lambda>" or not code.co_name.startswith("<"))}
+    return sorted(name for name, path in library_modules().items()
+                  if name not in ONLY_IN_STUDENTS_PROCESSES and str(path) not in ran
+                  and any(isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda)
+                          for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))))
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_sessionfinish(session) -> None:
+    if session.config.getoption("untouched_modules"):
+        sys.settrace(None)
+        threading.settrace(None)
+        _untouched[:] = untouched_modules(_called)
+        if _untouched:
+            session.exitstatus = pytest.ExitCode.TESTS_FAILED
+
+
+def pytest_terminal_summary(terminalreporter, config) -> None:
+    if config.getoption("untouched_modules"):
+        terminalreporter.write_line(
+            f"untouched modules: {', '.join(_untouched)}" if _untouched else
+            "untouched modules: none (every module of ptlab had a function called)",
+            red=bool(_untouched), green=not _untouched)
 
 
 @pytest.fixture(autouse=True)
@@ -75,47 +157,20 @@ def private_state_folder(tmp_path_factory, monkeypatch) -> None:
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path_factory.mktemp("state")))
 
 
+@pytest.fixture(autouse=True)
+def same_import_path():
+    """Give ``sys.path`` back as the test found it. A grader run in this process (``grade``,
+    ``ptlab grade``, ``ptlab exercise check``) takes the current folder off it; run from the
+    checkout with an editable install, that is where ptlab is, and every process started
+    later (Dask's workers, a pool) could not import it."""
+    path = sys.path[:]
+    yield
+    sys.path[:] = path
+
+
 @pytest.fixture(scope="session")
 def cornell() -> Scene:
     return ptlab.load_scene("cornell-box")
-
-
-def furnace_with(inner, albedo: float = 0.5, emission: float = 0.3) -> Scene:
-    """``closed_box_scene`` with a sphere of material ``inner`` in the middle.
-
-    A lossless mirror or glass object in a uniform radiance field leaves it uniform, so the
-    image must still be Le / (1 - albedo) everywhere.
-    """
-    box = closed_box_scene(albedo, emission)
-    sphere = trimesh.creation.icosphere(subdivisions=3, radius=0.6)
-    sphere_triangles = sphere.vertices[sphere.faces] + np.array([0.2, 0.1, 0.4])
-    triangles = np.concatenate([box.triangles, sphere_triangles])
-    material_ids = np.concatenate([box.material_ids, np.ones(len(sphere_triangles), dtype=np.intp)])
-    return Scene(triangles=triangles, material_ids=material_ids,
-                 materials=[box.materials[0], inner], camera=box.camera, name="furnace-with")
-
-
-def grazing_cameras(scene) -> dict[str, Camera]:
-    """Cameras that look along the floor (the scene's lowest plane, y = min y).
-
-    ``along the floor``: the scene's camera lowered to the floor, looking level the way it
-    looked; the rays of the middle rows run in the floor's plane or just off it.
-    ``on the floor``: standing on the floor in the middle of the scene, looking along +x:
-    every ray starts on a surface, half of them below it.
-    """
-    low, high = scene.triangles.min(axis=(0, 1)), scene.triangles.max(axis=(0, 1))
-    floor = low[1]
-    eye = scene.camera.position.copy()
-    eye[1] = floor
-    level = scene.camera.forward * [1, 0, 1]
-    if np.linalg.norm(level) < 1e-6:          # a camera looking straight up or down
-        level = np.array([0.0, 0.0, 1.0])
-    middle = (low + high) / 2
-    middle[1] = floor
-    return {
-        "along the floor": Camera.look_at(eye, eye + level, (0, 1, 0), fov_y=40),
-        "on the floor": Camera.look_at(middle, middle + [1, 0, 0], (0, 1, 0), fov_y=90),
-    }
 
 
 @pytest.fixture

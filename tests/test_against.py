@@ -38,6 +38,7 @@ def calls(project: Path) -> list[dict]:
     return [json.loads(line) for line in (project / "calls").read_text().splitlines()]
 
 
+@pytest.mark.subprocess
 def test_against_times_both_programs_and_prints_their_ratio(tmp_path, capsys):
     project = tmp_path / "Assignment7"
     program = stand_in(project, f"time.sleep(0.1)\nopen('binary.ppm', 'wb').write({PPM!r})")
@@ -69,6 +70,7 @@ def test_the_summary_gives_the_median_ratio_and_its_range_over_the_pairs():
                                 "above 1, ptlab is faster)")
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("body, options, message", [
     ("", ["--cpp-args", "--spp {spp} --fast"], "wrote no binary.ppm into the folder it ran in"),
     (f"open('binary.ppm', 'wb').write({PPM[:40]!r})", [], "wrote an unreadable binary.ppm"),

@@ -62,6 +62,7 @@ def exit_code(args: list[str]) -> int:
         return exit.code
 
 
+@pytest.mark.subprocess
 def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text("[camera\n")
@@ -74,6 +75,7 @@ def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
     assert not (tmp_path / "x.png").exists()
 
 
+@pytest.mark.subprocess
 def test_a_reader_that_stops_early_is_not_an_error(tmp_path):
     # 'ptlab exercise list | head -1': the pipe closes before ptlab writes.
     child = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "list"],
@@ -84,6 +86,7 @@ def test_a_reader_that_stops_early_is_not_an_error(tmp_path):
     assert errors == ""
 
 
+@pytest.mark.subprocess
 def test_listing_and_help_import_none_of_the_heavy_libraries():
     # Start-up time: what 'ptlab scenes' and '--help' do must not wait for the grading
     # harness, Embree, SciPy, trimesh, colour-science, matplotlib or OpenImageIO.
@@ -103,6 +106,7 @@ def test_listing_and_help_import_none_of_the_heavy_libraries():
     assert result.stdout.strip() == "[]"
 
 
+@pytest.mark.subprocess
 def test_the_command_imports_no_numpy_before_it_can_start_the_workers_server():
     # ``ptlab render`` starts the workers' fork server first, so that its imports run
     # alongside the command's; a heavy import at the top of ptlab, ptlab.rendering or
@@ -252,6 +256,7 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     assert "numpy / embree time" in out and "speed-up of 2 workers over 1" in out
 
 
+@pytest.mark.subprocess
 def test_bench_accuracy_compares_samplers_against_a_reference(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("PTLAB_CACHE", str(tmp_path))
     assert main(["bench", "--accuracy", "--res", "16", "--spp", "4", "--repeat", "2",

@@ -9,6 +9,7 @@ import math
 
 import numpy as np
 import pytest
+from helpers import Recording, assert_every_call_mixes_its_rows
 
 from ptlab.grading import check_material
 from ptlab.grading.checks import batch, direction_at
@@ -145,8 +146,6 @@ def test_a_mirror_right_only_for_repeated_rows_fails():
 
 @pytest.mark.parametrize("material", [Mirror((0.9, 0.6, 0.3), fresnel=True), Dielectric(1.5)], ids=repr)
 def test_no_delta_probe_repeats_one_wo_or_n_on_every_row(material):
-    from test_grading import Recording, assert_every_call_mixes_its_rows
-
     recording = Recording(material)
     assert check_material(recording).passed
     assert_every_call_mixes_its_rows(recording.calls)

@@ -38,12 +38,15 @@ def _ids(chapters):
     return [c.stem for c in chapters]
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("found", CHAPTERS, ids=_ids(CHAPTERS))
 def test_the_library_answer_gets_full_marks(found, tmp_path):
     result = grade(found, found.solution, library_answer=True)
     assert result.full_marks, result.table()
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("found", CHAPTERS, ids=_ids(CHAPTERS))
 def test_the_untouched_exercise_file_fails_every_check_clearly(found, tmp_path):
     copied = tmp_path / found.template.name      # as 'ptlab exercise start' copies it
@@ -112,6 +115,8 @@ def test_each_patched_wrong_answer_is_a_right_answer_of_its_chapter_with_lines_c
         assert ast.get_docstring(ast.parse(text)) == wrong["about"].strip()
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("name", _wrong_answers())
 def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(name, tmp_path):
     """Each wrong answer fails the checks it names, and no other (a mistake is reported by
@@ -132,6 +137,8 @@ def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(name,
             assert phrase not in messages[check], (check, phrase, messages[check])
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("path", _right_answers(), ids=lambda p: p.stem)
 def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     """Right answers written into the exercise file as a student would (another sampling
@@ -167,6 +174,8 @@ def test_every_chapter_has_a_wrong_answer_that_fails():
     assert covered == {c.number for c in CHAPTERS}
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_code_that_hangs_or_raises_fails_its_check_and_grading_goes_on():
     result = grade(chapter(1), WRONG / "01_hangs_or_raises.py", timeout_scale=0.05)
     by_name = {r.name: r for r in result.results}
@@ -193,6 +202,7 @@ def test_start_copies_the_exercise_file_and_refuses_to_overwrite(tmp_path, capsy
     assert "already exists" in capsys.readouterr().err
 
 
+@pytest.mark.subprocess
 def test_check_prints_a_score_table_writes_json_and_list_shows_progress(tmp_path, capsys):
     answer = tmp_path / "01_cameras.py"
     shutil.copyfile(WRONG / "01_right_own_code.py", answer)
@@ -208,6 +218,7 @@ def test_check_prints_a_score_table_writes_json_and_list_shows_progress(tmp_path
     assert "passed (10/10)" in listing.splitlines()[2]
 
 
+@pytest.mark.subprocess
 def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):
     answer = tmp_path / "01_cameras.py"
     shutil.copyfile(chapter(1).template, answer)
@@ -221,6 +232,8 @@ def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):
         assert message in error and error.count("\n") == 1
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_check_ran(tmp_path):
     """A student in their home folder checks "my work/attempt.py": the harness's message
     gives the ``ptlab grade`` command for that file, and the command works from there."""
@@ -263,6 +276,7 @@ def test_docs_without_a_chapter_shows_the_list_and_start_points_to_docs(tmp_path
     assert "no such chapter" in capsys.readouterr().err
 
 
+@pytest.mark.subprocess
 def test_docs_piped_into_a_reader_that_stops_early_is_no_error():
     """``ptlab exercise docs 7 | head -0``: the reader has closed the pipe before the page
     is written (the interpreter takes far longer to start than this takes to close it)."""
@@ -289,6 +303,8 @@ def _class_folder(tmp_path) -> Path:
     return folder
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     import csv
 
@@ -319,6 +335,7 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     assert "columns are not chapter 2's" in capsys.readouterr().err
 
 
+@pytest.mark.subprocess
 def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
     from ptlab.exercises.batch import Work, _Runner
     from ptlab.untrusted import ProcessGuard

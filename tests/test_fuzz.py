@@ -850,6 +850,7 @@ def ptlab_command() -> list[str]:
     return [str(script)] if script.is_file() else [sys.executable, "-m", "ptlab.cli"]
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("command", [[sys.executable, "-m", "ptlab.cli"], ptlab_command()],
                          ids=["python -m ptlab.cli", "ptlab"])
 def test_processes_report_bad_meshes_without_traceback(command, tmp_path):

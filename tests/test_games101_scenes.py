@@ -7,7 +7,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import grazing_cameras
+from helpers import grazing_cameras
 
 import ptlab
 from ptlab.accel import make_accelerator
@@ -88,7 +88,7 @@ def render_job(scene, accel, backend: str, integrator: str, strategy: str, width
     return run_job(setup, job, accel).sums / job.spp
 
 
-@pytest.mark.parametrize("backend", ["embree", "numpy"])
+@pytest.mark.parametrize("backend", ["embree", pytest.param("numpy", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("name", ["games101-hw5", "games101-hw6"])
 def test_every_integrator_renders_the_scene_without_nan(name, backend, bad_contributions):
     # Every integrator, from the scene's camera and from two that graze its floor

@@ -14,6 +14,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 import wrong_materials as wrong
+from helpers import Recording, assert_every_call_mixes_its_rows
 
 from ptlab.cli import main as ptlab_main
 from ptlab.grading import check_material, write_plots
@@ -34,6 +35,7 @@ BUILT_IN = [Diffuse((0.8, 0.5, 0.2)), Diffuse((1, 1, 1), sampling="uniform")] + 
     Microfacet("gold", roughness=0.7, kd=(0.5, 0.2, 0.1), ks=0.5, sampling="hemisphere")]
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("material", BUILT_IN, ids=repr)
 def test_built_in_materials_pass_up_to_85_degrees(material):
     report = check_material(material, seed=1, samples=SAMPLES, wo_degrees=(0, 45, 85))
@@ -92,6 +94,7 @@ def reports():
             for name in dict.fromkeys(name for name, _, _ in MISTAKES)}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("name, check, phrase", MISTAKES, ids=[f"{m[0]}-{m[1]}" for m in MISTAKES])
 def test_wrong_material_fails_with_the_right_hint(reports, name, check, phrase):
     report = reports[name]
@@ -100,6 +103,7 @@ def test_wrong_material_fails_with_the_right_hint(reports, name, check, phrase):
     assert phrase in report[check].hint, str(report)
 
 
+@pytest.mark.slow
 def test_each_wrong_material_fails_only_where_it_is_wrong(reports):
     # The checks that a mistake cannot touch stay green: the hints point at one place.
     assert reports["CosineTwice"].failed == ["reciprocity"]
@@ -120,6 +124,7 @@ def test_a_material_that_raises_fails_instead_of_crashing():
     assert "pdf raised ZeroDivisionError: oops" in report["chi-square"].hint
 
 
+@pytest.mark.slow
 def test_plots_of_a_failed_chi_square(tmp_path, reports):
     written = write_plots(reports["UniformSamplingCosinePdf"], tmp_path)
     assert len(written) == 9 and all(p.suffix == ".png" and p.stat().st_size > 0 for p in written)
@@ -158,6 +163,7 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
 
 # -- the command ------------------------------------------------------------------------------
 
+@pytest.mark.subprocess
 def test_grade_exit_codes(tmp_path, capsys):
     assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
     assert "PASSED" in capsys.readouterr().out
@@ -170,6 +176,7 @@ def test_grade_exit_codes(tmp_path, capsys):
                        "--samples", "20000"]) == 0
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("target, args, message", [
     ("missing.py:Material", "{}", "no such file"),
     ("{wrong}:NoSuchClass", "{}", "no class or object named"),
@@ -215,6 +222,7 @@ def test_an_object_with_only_the_three_functions_is_a_material():
     assert report["sample_weight"].verdict == "pass"     # derived from the three, and checked
 
 
+@pytest.mark.subprocess
 def test_ptlab_grade_takes_a_class_that_inherits_from_nothing(capsys):
     assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000",
                        "--args", '{"albedo": [0.8, 0.5, 0.2]}']) == 0
@@ -242,6 +250,8 @@ def test_float32_rounding_in_a_material_is_not_a_mistake():
     assert report["estimator agreement"].verdict == "pass", str(report)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
     path = tmp_path / "slow.py"
     path.write_text(PLAIN.read_text() + "\n\nclass Slow(Lambertian):\n"
@@ -254,50 +264,6 @@ def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
 
 
 # -- the probes cannot be told from a render ---------------------------------------------------
-
-class Recording:
-    """A right material (the library's, called through) that records the wo and n of every
-    call: any object with the methods is a material to the graders."""
-
-    def __init__(self, material):
-        self.material, self.calls = material, []
-
-    def __getattr__(self, name: str):       # is_delta, eta: the material's
-        if name in ("material", "calls"):
-            raise AttributeError(name)
-        return getattr(self.material, name)
-
-    def _record(self, method: str, wo, n):
-        self.calls.append((method, np.array(wo, dtype=np.float64), np.array(n, dtype=np.float64)))
-        return getattr(self.material, method)
-
-    def eval(self, wo, wi, n):
-        return self._record("eval", wo, n)(wo, wi, n)
-
-    def pdf(self, wo, wi, n):
-        return self._record("pdf", wo, n)(wo, wi, n)
-
-    def sample(self, wo, n, u):
-        return self._record("sample", wo, n)(wo, n, u)
-
-    def sample_weight(self, wo, n, u, front=None):
-        method = self._record("sample_weight", wo, n)
-        return method(wo, n, u) if front is None else method(wo, n, u, front)
-
-
-def assert_every_call_mixes_its_rows(calls):
-    """No call of two rows or more has one wo, one n, or one angle between them on every row;
-    and some calls have a single row (the row-independence check)."""
-    for method, wo, n in calls:
-        if len(wo) < 2:
-            continue
-        assert not (wo == wo[0]).all(), f"{method}: every row has the same wo ({len(wo)} rows)"
-        assert not (n == n[0]).all(), f"{method}: every row has the same n ({len(wo)} rows)"
-        cos_theta_o = np.sum(wo * n, axis=1)
-        assert np.ptp(cos_theta_o) > 1e-6, f"{method}: every row has the same wo . n ({len(wo)} rows)"
-    assert any(len(wo) == 1 for _, wo, _ in calls)
-    assert {method for method, _, _ in calls} >= {"eval", "pdf", "sample", "sample_weight"}
-
 
 def test_no_probe_repeats_one_wo_or_n_on_every_row():
     material = Recording(Microfacet("gold", roughness=0.4))
@@ -312,6 +278,7 @@ def test_a_material_right_only_for_repeated_rows_fails_in_process():
     assert report["row independence"].verdict == "FAIL"
 
 
+@pytest.mark.subprocess
 def test_row_independence_holds_for_float32_arithmetic_and_a_student_process(capsys):
     # The float32 Lambertian of the exercises, graded in its own process: every row asked
     # again alone and shuffled, in float64 and in float32, gives the same answer.

@@ -5,6 +5,7 @@ from __future__ import annotations
 import warnings
 
 import numpy as np
+import pytest
 
 from ptlab.image import encode_srgb8, srgb_encode
 
@@ -28,6 +29,7 @@ def test_srgb_encoding_is_colour_sciences():
                           .astype(np.uint8).reshape(1000, 1000, 1).repeat(3, axis=2))
 
 
+@pytest.mark.subprocess
 def test_writing_a_png_does_not_import_colour_science_or_matplotlib():
     # Start-up: each would cost the PNG a second of imports (colour imports matplotlib.pyplot).
     import subprocess

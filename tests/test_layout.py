@@ -10,8 +10,7 @@ import ast
 from pathlib import Path
 
 import pytest
-
-PACKAGE = Path(__file__).resolve().parent.parent / "ptlab"
+from helpers import PACKAGE, library_modules
 
 #: The layers, lowest first (docs/architecture.md draws the same). A module may import its own
 #: layer and those below it, never one above; within a layer, the no-cycle test keeps order.
@@ -26,17 +25,6 @@ LAYERS = [
     ("exercises", ["ptlab.exercises"]),
     ("command line", ["ptlab.cli"]),
 ]
-
-
-def module_name(path: Path) -> str:
-    parts = path.relative_to(PACKAGE.parent).with_suffix("").parts
-    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
-
-
-def library_modules() -> dict[str, Path]:
-    """Every module of the library (the students' exercise files are not part of it)."""
-    return {module_name(p): p for p in PACKAGE.rglob("*.py")
-            if not {"templates", "solutions"} & set(p.parts)}
 
 
 def imports_of(path: Path, modules: dict[str, Path]) -> set[str]:

@@ -2,7 +2,7 @@
 
 Statistical tests use fixed seeds; a "3 standard errors" check on a mean of 16 seeds (a t
 statistic with 15 degrees of freedom) fails by chance with probability 0.9%. The furnaces
-are spheres, where light sampling has a finite variance (``conftest.closed_sphere_scene``);
+are spheres, where light sampling has a finite variance (``helpers.closed_sphere_scene``);
 the seeds are fixed, so a given run either always passes or always fails.
 """
 
@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import closed_box_scene, closed_sphere_scene
+from helpers import closed_box_scene, closed_sphere_scene
 
 import ptlab
 from ptlab.accel import make_accelerator
@@ -38,6 +38,8 @@ def check_furnace(albedo: float, sampling: str, rr, sampler: str = "sobol") -> N
     assert 3 * standard_error < emission * albedo ** 3
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("sampler", ["sobol", "stratified", "independent"])
 @pytest.mark.parametrize("sampling", ["cosine", "uniform"])
 @pytest.mark.parametrize("albedo", [0.5, 0.9])
@@ -45,6 +47,8 @@ def test_furnace_renders_emission_over_one_minus_albedo(albedo, sampling, sample
     check_furnace(albedo, sampling, rr="throughput", sampler=sampler)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("sampler", ["sobol", "stratified", "independent"])
 @pytest.mark.parametrize("sampling", ["cosine", "uniform"])
 def test_furnace_with_the_homeworks_fixed_roulette(sampling, sampler):
@@ -182,6 +186,7 @@ def test_nan_from_a_material_never_reaches_the_image(cornell):
     assert image.max() > 10 and image.mean() > 0.1
 
 
+@pytest.mark.subprocess
 def test_image_is_bit_identical_whatever_the_number_of_workers(cornell):
     # Small tiles and several passes, so that threads really finish out of order.
     kwargs = dict(spp=5, res=(40, 24), seed=4, tile_size=16)
@@ -197,7 +202,7 @@ def test_furnace_stays_uniform_around_lossless_objects(inner):
     # The sphere neither absorbs nor emits: the radiance everywhere stays Le / (1 - albedo).
     # A wrong delta-material rule (light sampled through a mirror, emission after a mirror
     # dropped, a missing 1 / eta^2) shows the sphere brighter or darker than the walls.
-    from conftest import furnace_with
+    from helpers import furnace_with
     scene = furnace_with(inner)
     images = np.array([ptlab.render(scene, seed=s, spp=16, res=24, workers=1)[..., 0]
                        for s in range(8)])
@@ -248,6 +253,7 @@ def test_roulette_starts_at_the_given_depth():
     assert abs(means[:, 0].mean() - 0.6) < 3 * standard_error + 1e-3
 
 
+@pytest.mark.slow
 def test_strategies_agree_on_the_microfacet_cornell_box():
     # Light sampling, BSDF sampling and MIS estimate the same image (4 standard errors,
     # false-alarm rate about 1e-4 per channel); MIS is at least as good as light sampling.

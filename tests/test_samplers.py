@@ -160,6 +160,7 @@ def _image(sampler: str, **options) -> np.ndarray:
     return render_result("cornell-box", **dict(defaults, **options)).image
 
 
+@pytest.mark.subprocess
 @pytest.mark.parametrize("name", SAMPLERS)
 def test_image_does_not_depend_on_workers_tiles_or_pass_size(name):
     reference = _image(name)

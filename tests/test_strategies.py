@@ -19,7 +19,7 @@ import dataclasses
 
 import numpy as np
 import pytest
-from conftest import grazing_cameras
+from helpers import grazing_cameras
 from scipy import stats
 
 import ptlab
@@ -158,6 +158,7 @@ def disagreements(scene_name: str, seed: int) -> tuple[list[str], float]:
     return failures, worst
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("scene_name", list(UNBIASED))
 def test_every_strategy_has_the_same_mean_per_region(scene_name):
     # Light sampling, BSDF sampling and MIS estimate the same integral: in every region
@@ -264,6 +265,7 @@ def efficiency_table(errors) -> str:
     return "\n".join(lines)
 
 
+@pytest.mark.slow
 def test_veach_light_sampling_fails_top_right_and_bsdf_sampling_bottom_left(veach_errors):
     # The scene does what it is for (Veach 1997, figure 9.2): on the smoothest plate the
     # large light defeats light sampling, on the roughest the tiny one defeats BSDF
@@ -278,6 +280,7 @@ def test_veach_light_sampling_fails_top_right_and_bsdf_sampling_bottom_left(veac
     assert bsdf[bottom_left] > 3 * mis[bottom_left], table
 
 
+@pytest.mark.slow
 def test_veach_mis_is_as_good_as_the_better_strategy_in_every_region(veach_errors):
     # At equal spp MIS's error is at most 2x that of the better of light and BSDF sampling,
     # plate by plate and light by light (MIS takes both samples, so it is usually better
@@ -288,6 +291,7 @@ def test_veach_mis_is_as_good_as_the_better_strategy_in_every_region(veach_error
     assert np.all(ratio <= 2.0), efficiency_table(veach_errors)
 
 
+@pytest.mark.slow
 def test_veach_mis_is_far_better_than_the_strategy_that_fails(veach_errors):
     # Where one strategy is at least 3x worse than the other (it fails there), MIS's error
     # is at most half the failing strategy's. (Where the two are alike, MIS, taking both
@@ -307,7 +311,7 @@ def test_veach_mis_is_far_better_than_the_strategy_that_fails(veach_errors):
 INTEGRATORS = [("path", "nee"), ("path", "bsdf"), ("path", "mis"), ("whitted", "nee")]
 
 
-@pytest.mark.parametrize("backend", ["embree", "numpy"])
+@pytest.mark.parametrize("backend", ["embree", pytest.param("numpy", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("integrator, strategy", INTEGRATORS,
                          ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS])
 #: games101-hw5's 100k triangles would take the numpy backend 3 s a render to build:

@@ -1,4 +1,5 @@
-"""Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures."""
+"""Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures;
+the command line they share (``ptlab.exercises.tutorial``) takes those settings."""
 
 from __future__ import annotations
 
@@ -16,6 +17,17 @@ def test_there_is_a_tutorial_per_chapter():
     assert [p.stem for p in TUTORIALS] == [c.stem for c in all_chapters()]
 
 
+def test_every_tutorial_takes_res_spp_and_out_and_makes_the_folder(tmp_path, monkeypatch):
+    from ptlab.exercises.tutorial import tutorial_options
+
+    out = tmp_path / "pictures" / "chapter 7"
+    monkeypatch.setattr(sys, "argv", ["07_path_tracing.py", "--res", "32", "--out", str(out)])
+    args, folder = tutorial_options("Chapter 7's pictures.\n\nMore.", res=256, spp=64)
+    assert (args.res, args.spp) == (32, 64) and folder == out and out.is_dir()
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
 @pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
 def test_tutorial_runs_at_reduced_settings(script, tmp_path):
     run = subprocess.run([sys.executable, str(script), "--res", "32", "--spp", "1",

@@ -106,6 +106,7 @@ def test_the_channel_refuses_oversized_and_late_messages():
 
 # -- the student's process ----------------------------------------------------------------
 
+@pytest.mark.subprocess
 def test_calls_change_the_graders_arguments_as_they_would_in_its_own_process(tmp_path):
     path = tmp_path / "student.py"
     path.write_text("import numpy as np\n"
@@ -144,6 +145,7 @@ def test_calls_change_the_graders_arguments_as_they_would_in_its_own_process(tmp
         assert getattr(module, "missing", None) is None
 
 
+@pytest.mark.subprocess
 def test_a_call_has_its_own_time_limit_and_ends_the_process(tmp_path):
     path = tmp_path / "student.py"
     path.write_text("import time\ndef slow():\n    time.sleep(60)\ndef fast():\n    return 1\n")
@@ -158,6 +160,7 @@ def test_a_call_has_its_own_time_limit_and_ends_the_process(tmp_path):
         assert alive([submission.pid]) == []
 
 
+@pytest.mark.subprocess
 def test_the_guard_ends_processes_that_left_their_session_and_their_parent():
     script = ("import os, subprocess, sys, time\n"
               "p = subprocess.Popen([sys.executable, '-c', 'import time; time.sleep(60)'],"
@@ -215,11 +218,13 @@ def test_materials_that_are_ptlabs_own(source, origin):
     assert library_answer(ast.parse(source), "L") == origin
 
 
+@pytest.mark.subprocess
 def test_the_library_solutions_are_graded_as_themselves():
     result = grade(chapter(10), chapter(10).solution, library_answer=True)
     assert result.full_marks, result.table()
 
 
+@pytest.mark.subprocess
 def test_output_of_the_students_code_is_passed_on_not_mixed_into_results(tmp_path):
     path = tmp_path / "01_cameras.py"
     path.write_text("print('hello from import')\n" + RIGHT_CAMERA.read_text())

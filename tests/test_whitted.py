@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import pytest
 import trimesh
-from conftest import furnace_with
+from helpers import furnace_with
 
 import ptlab
 from ptlab.accel import make_accelerator

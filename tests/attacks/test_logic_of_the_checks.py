@@ -7,6 +7,7 @@ from __future__ import annotations
 import time
 
 import numpy as np
+import pytest
 
 import ptlab.untrusted.submission
 from attacks.hostile import assert_honest_failure
@@ -14,6 +15,8 @@ from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.untrusted import ArgumentChanged, Arguments, ProcessGuard, Rules, Submission
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
 
 
 def test_changing_an_argument_it_may_only_read_fails_the_check(attack):

@@ -6,9 +6,13 @@ is."""
 
 from __future__ import annotations
 
+import pytest
+
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.exercises.renders import NOISE_RATIO
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
 
 
 def _results(path, number: int) -> dict:

@@ -19,6 +19,8 @@ from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+
 #: What the static reading of the file says, or the trap in the student's process.
 OWN_ANSWER = "ptlab's own answer"
 

@@ -23,7 +23,8 @@ from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.untrusted.student_user import become, student_user
 
-pytestmark = pytest.mark.skipif(os.geteuid() != 0, reason="the student user needs a root grader")
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess,
+              pytest.mark.skipif(os.geteuid() != 0, reason="the student user needs a root grader")]
 NOBODY = pwd.getpwnam("nobody")
 
 

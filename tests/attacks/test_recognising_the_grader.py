@@ -5,7 +5,11 @@ then. Every probe now turns each row by a rotation of its own
 
 from __future__ import annotations
 
+import pytest
+
 from ptlab.cli import main
+
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
 
 
 def test_a_material_right_only_for_repeated_rows_fails(attack, capsys):
