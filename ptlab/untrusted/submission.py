@@ -542,9 +542,13 @@ def library_answer(module: RemoteModule, name: str) -> str | None:
 def import_nothing_from_here() -> None:
     """Take the current folder off ``sys.path`` (``python -m`` puts it first), so that
     nothing the grader imports later, nor its fork server, can come from a module planted
-    there. ptlab itself, if it was imported from there, keeps finding its own modules."""
+    there. The folder ptlab itself was found in stays (a checkout installed with ``pip
+    install -e`` and graded from its root): the processes a grading starts must import
+    ptlab from there too, and only the grader's own user may write to it."""
     here = os.getcwd()
-    sys.path[:] = [entry for entry in sys.path if entry not in ("", here)]
+    home = str(Path(__file__).resolve().parents[2])
+    sys.path[:] = [entry for entry in sys.path
+                   if entry not in ("", here) or os.path.abspath(entry or ".") == home]
 
 
 def copied_answer(module: RemoteModule) -> str | None:
