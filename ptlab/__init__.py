@@ -19,16 +19,19 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ptlab.rendering.api import RenderResult, render, render_result
-    from ptlab.scene import Scene, load_scene
+    from ptlab.rendering.options import RenderOptions
+    from ptlab.scene import Scene
+    from ptlab.scene_file import load_scene
 
 __version__ = "0.1.0"
 
-__all__ = ["Scene", "RenderResult", "load_scene", "render", "render_result", "__version__"]
+__all__ = ["Scene", "RenderOptions", "RenderResult", "load_scene", "render", "render_result",
+           "__version__"]
 
 #: Where each lazily imported name lives.
-_HOMES = {"Scene": "ptlab.scene", "load_scene": "ptlab.scene",
+_HOMES = {"Scene": "ptlab.scene", "load_scene": "ptlab.scene_file",
           "RenderResult": "ptlab.rendering.api", "render": "ptlab.rendering.api",
-          "render_result": "ptlab.rendering.api"}
+          "render_result": "ptlab.rendering.api", "RenderOptions": "ptlab.rendering.options"}
 
 
 def __getattr__(name: str):

@@ -201,7 +201,7 @@ def _render(args) -> int:
     from ptlab.rendering.executors import dask_executor
     from ptlab.rendering.progress import ProgressBar
     from ptlab.rendering.settings import check_workers
-    from ptlab.scene import load_scene
+    from ptlab.scene_file import load_scene
 
     options = RenderOptions(**{f.name: getattr(args, f.name) for f in fields(RenderOptions)
                                if hasattr(args, f.name)})
@@ -315,7 +315,7 @@ def _converge(args) -> int:
     from ptlab.atomic import check_writable_folder
     from ptlab.measure.converge import default_cache_dir, parse_estimators, run_converge
     from ptlab.rendering.settings import MAX_SPP, check_seed, check_workers, parse_resolution
-    from ptlab.scene import load_scene
+    from ptlab.scene_file import load_scene
 
     estimators = parse_estimators(args.integrators, args.sampler)
     check_seed(args.seed)
@@ -381,7 +381,7 @@ def _bench(args) -> int:
 
 
 def _scenes(args) -> int:
-    from ptlab.scene import builtin_scene_names
+    from ptlab.scene_file import builtin_scene_names
     for name in builtin_scene_names():
         print(name)
     return 0

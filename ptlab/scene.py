@@ -120,9 +120,13 @@ class Scene:
             raise ValueError("a textured material needs texture coordinates: give uvs")
 
     def with_sampling(self, sampling: str) -> Scene:
-        """This scene with every diffuse material sampling directions by ``sampling``."""
+        """This scene with every diffuse material sampling directions by ``sampling``: the
+        scene itself when they already do (a new Scene rebuilds its light and material
+        tables)."""
         materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m
                      for m in self.materials]
+        if all(new is old for new, old in zip(materials, self.materials, strict=True)):
+            return self
         return Scene(self.triangles, self.material_ids, materials, self.camera, self.name,
                      self.material_names, self.point_lights, self.sky, self.uvs, self.defaults)
 

@@ -41,7 +41,7 @@ import numpy as np
 
 from ptlab.atomic import path_kind
 from ptlab.camera import Camera
-from ptlab.errors import PtlabError, SceneError
+from ptlab.errors import PtlabError, SceneError, is_integer
 from ptlab.lights import PointLights, Sky, area_times_radiance, triangle_areas
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
 from ptlab.meshes import drop_zero_area, has_area, read_mesh
@@ -156,10 +156,6 @@ def _is_number(value: object) -> bool:
     return isinstance(value, int | float) and not isinstance(value, bool)
 
 
-def _is_int(value: object) -> bool:
-    return isinstance(value, int) and not isinstance(value, bool)
-
-
 def _scaled_to_one(vector: np.ndarray) -> np.ndarray:
     """``vector`` times the power of two that brings its largest component into [0.5, 1).
 
@@ -262,14 +258,14 @@ class _SceneReader:
         self.check_keys(spec, "render", {"res", "max_depth"})
         res = spec.get("res")
         if res is not None:
-            sizes = [res, res] if _is_int(res) else res
-            if not (isinstance(sizes, list) and len(sizes) == 2 and all(map(_is_int, sizes))
+            sizes = [res, res] if is_integer(res) else res
+            if not (isinstance(sizes, list) and len(sizes) == 2 and all(map(is_integer, sizes))
                     and all(1 <= n <= MAX_RESOLUTION for n in sizes)):
                 raise self.error("render.res", f"must be an integer or [width, height], from 1 "
                                                f"to {MAX_RESOLUTION}, got {_shown(res)}")
             res = (int(sizes[0]), int(sizes[1]))
         max_depth = spec.get("max_depth")
-        if max_depth is not None and not (_is_int(max_depth) and 0 <= max_depth <= MAX_DEPTH):
+        if max_depth is not None and not (is_integer(max_depth) and 0 <= max_depth <= MAX_DEPTH):
             raise self.error("render.max_depth", f"must be an integer from 0 to {MAX_DEPTH}, "
                                                  f"got {_shown(max_depth)}")
         return RenderDefaults(res=res, max_depth=max_depth)
@@ -515,7 +511,7 @@ class _SceneReader:
         if np.abs(center).max() + radius > MAX_COORDINATE:
             raise self.error(f"{key}.radius", f"the sphere reaches beyond +-{MAX_COORDINATE:g} "
                                               f"(float32 rays), radius {radius:g}")
-        if not (_is_int(subdivisions) and 0 <= subdivisions <= 7):
+        if not (is_integer(subdivisions) and 0 <= subdivisions <= 7):
             raise self.error(f"{key}.subdivisions", f"must be an integer from 0 to 7, "
                                                     f"got {_shown(subdivisions)}")
         mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)

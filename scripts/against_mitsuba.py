@@ -79,7 +79,8 @@ from ptlab.rendering import render_result
 from ptlab.rendering.checkpoint import scene_digest
 from ptlab.rendering.settings import MAX_SPP, parse_resolution
 from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
-from ptlab.scene import Scene, load_scene
+from ptlab.scene import Scene
+from ptlab.scene_file import load_scene
 
 PROG = "against_mitsuba.py"
 MITSUBA_SAMPLERS = ("independent", "stratified", "multijitter", "ldsampler")

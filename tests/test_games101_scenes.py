@@ -15,7 +15,7 @@ from ptlab.integrators.path import PathSettings
 from ptlab.rendering import resolution
 from ptlab.rendering.jobs import Job, RenderSetup, Tile, run_job
 from ptlab.samplers import make_sampler
-from ptlab.scene import builtin_scene_names, builtin_scenes_dir
+from ptlab.scene_file import builtin_scene_names, builtin_scenes_dir
 
 BACKGROUND = (0.235294, 0.67451, 0.843137)   # the homework's backgroundColor, 8-bit sRGB
 

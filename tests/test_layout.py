@@ -105,7 +105,7 @@ def test_find_cycle_finds_one():
 
 
 @pytest.mark.parametrize("module", ["ptlab.render", "ptlab.render_result", "ptlab.load_scene",
-                                    "ptlab.Scene", "ptlab.RenderResult"])
+                                    "ptlab.Scene", "ptlab.RenderResult", "ptlab.RenderOptions"])
 def test_the_api_is_at_the_top(module):
     import ptlab
     assert callable(getattr(ptlab, module.removeprefix("ptlab.")))

@@ -26,7 +26,7 @@ import ptlab
 import ptlab.integrators.path
 from ptlab.accel import make_accelerator
 from ptlab.camera import generate_rays
-from ptlab.scene import builtin_scene_names
+from ptlab.scene_file import builtin_scene_names
 
 STRATEGIES = ("nee", "bsdf", "mis")
 PAIRS = (("nee", "bsdf"), ("nee", "mis"), ("bsdf", "mis"))

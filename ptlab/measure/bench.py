@@ -25,7 +25,8 @@ import numpy as np
 
 from ptlab.measure.metrics import relmse
 from ptlab.rendering import RenderOptions, render_result
-from ptlab.scene import Scene, load_scene
+from ptlab.scene import Scene
+from ptlab.scene_file import load_scene
 
 #: The render options (BSDF sampling and Russian roulette) of each estimator that ``ptlab
 #: bench --estimator`` names; not ``ptlab.measure.converge.Estimator``s, which name an

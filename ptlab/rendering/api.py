@@ -18,7 +18,6 @@ from typing import Any
 
 import numpy as np
 
-from ptlab.materials.diffuse import Diffuse
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
@@ -28,7 +27,8 @@ from ptlab.rendering.scheduler import run_jobs
 from ptlab.rendering.settings import check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
 from ptlab.samplers import make_sampler
-from ptlab.scene import Scene, load_scene
+from ptlab.scene import Scene
+from ptlab.scene_file import load_scene
 
 __all__ = ["DEFAULT_RES", "RenderOptions", "RenderResult", "pass_schedule", "render",
            "render_result", "resolution"]
@@ -93,9 +93,7 @@ def render_result(scene: Scene | str, *args, options: RenderOptions | None = Non
     options = options.for_scene(scene)
     workers = check_workers(options.workers)
     sampler = make_sampler(options.sampler, options.seed, options.spp)
-    # A new Scene rebuilds its light and material tables: only when a material changes.
-    if any(isinstance(m, Diffuse) and m.sampling != options.sampling for m in scene.materials):
-        scene = scene.with_sampling(options.sampling)
+    scene = scene.with_sampling(options.sampling)
     settings = options.path_settings()
     keep_freed_memory()
 
