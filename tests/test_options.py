@@ -137,14 +137,15 @@ def test_the_commands_options_are_render_options():
 
 
 def test_a_scene_that_already_samples_so_is_not_rebuilt(cornell, monkeypatch):
-    rebuilt = []
-    original = Scene.with_sampling
-    monkeypatch.setattr(Scene, "with_sampling",
-                        lambda scene, sampling: rebuilt.append(sampling) or original(scene, sampling))
+    built = []
+    original = Scene.__init__
+    monkeypatch.setattr(Scene, "__init__",
+                        lambda scene, *args, **kw: built.append(1) or original(scene, *args, **kw))
+    assert cornell.with_sampling("cosine") is cornell
     ptlab.render(cornell, spp=1, res=8, workers=1)
-    assert rebuilt == []
+    assert built == []
     ptlab.render(cornell, spp=1, res=8, workers=1, sampling="uniform")
-    assert rebuilt == ["uniform"]
+    assert built == [1]
 
 
 def test_the_header_records_every_option(cornell):
