@@ -396,11 +396,11 @@ class _Glance(argparse.ArgumentParser):
 
 def _start_workers_early(argv: list[str]) -> None:
     """For a ``render`` on worker processes, start their fork server before this process
-    imports NumPy: the server's imports (0.25-0.3 s) then run alongside ours instead of
-    after them (measured: 0.25-0.3 s sooner to the first tile with 2 workers).
+    imports NumPy: the server's imports then run alongside ours instead of after them
+    (docs/performance.md).
 
     Not for a render of one job (one tile, one pass), which runs in this process: there the
-    server's imports would only compete with ours (0.15 s later to the image). This is only
+    server's imports would only compete with ours. This is only
     a glance at the options: a wrong guess costs nothing but that time, and the real parser
     checks them afterwards.
     """

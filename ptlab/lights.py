@@ -371,11 +371,9 @@ def light_shares(area_power: float, point_power: float, sky: bool) -> tuple[floa
     The sky gets ``SKY_SHARE``: its power, the flux 4 pi^2 r^2 mean(L) through the scene's
     bounding sphere of radius r (pbrt-v4's ``UniformInfiniteLight::Phi``), cannot be compared
     with a point light's, most of which misses the scene. In ``games101-hw5`` and
-    ``games101-hw6`` it would give the sky 0.8% and 0.3% of the samples for about as much
-    light as the point lights bring (measured at 128 x 96, 16 spp, relMSE against 1024 spp of
-    MIS: with ``"nee"`` 0.40 and 2.3 by power, 0.0056 and 0.0032 with the share 1/2; MIS,
-    whose BSDF samples find the sky well, pays for the share: 0.0018 and 0.0004 by power,
-    0.0028 and 0.0009 with 1/2).
+    ``games101-hw6`` it would give the sky under 1% of the samples for about as much light
+    as the point lights bring, and ``"nee"``'s error would be 70-700 times as large
+    (docs/performance.md).
     """
     finite = area_power + point_power
     if point_power == 0 and not sky:

@@ -13,7 +13,7 @@ GAMES101 lecture 16 samples independently). A sampler hands out the numbers one 
 ``pixel`` (N,) are global pixel ids (y * width + x), ``index`` (N,) the number of the sample
 within its pixel (0, 1, ..., spp - 1), ``dim`` the first dimension asked for. ``keys`` hold
 what the sampler needs of (seed, pixel, index), hashed once per path rather than once per
-request (measured: half the cost of a request). The value is a pure function of (seed,
+request (docs/performance.md). The value is a pure function of (seed,
 pixel, index, dimension): no state, no stream shared between jobs, so an image is the same
 whatever its tiles, passes, workers or a checkpoint's resume.
 
@@ -67,7 +67,7 @@ _TO_UNIT = np.float32(2.0 ** -24)
 #: The dimensions a sampler spreads evenly: the camera's pair and the first two bounces
 #: (``BounceUniforms``). From the third bounce on, every sampler's numbers are independent:
 #: a path's later dimensions mix with all its earlier ones, and stratifying them bought
-#: 1% of relMSE (Cornell box, 64 spp) for 15-20% of the sampler's time.
+#: little error for much of the sampler's time (docs/performance.md).
 PATTERNED_DIMENSIONS = 2 + 5 * 2
 
 #: SplitMix64's increment, 2^64 / phi: consecutive counters k * _GAMMA are far apart.
@@ -249,9 +249,8 @@ class SobolSampler(Sampler):
     power-of-two prefix of a pixel's samples is still a net, whatever spp); the Sobol point
     of the shuffled index is computed; and both coordinates get a random digital shift (an
     XOR with a random 32-bit number, which keeps every elementary interval's count and makes
-    each point uniform on [0, 1)). Measured on the Cornell box at 64 spp, the shift gave the
-    same error as a full nested (Owen) scramble of the coordinates, for less than half the
-    sampler's time.
+    each point uniform on [0, 1)). The shift gave the same error as a full nested (Owen)
+    scramble of the coordinates, for less than half the sampler's time (docs/performance.md).
 
     Keys hold the bit-reversed index: the shuffle works on the reversed index (so that the
     scramble nests from the index's highest bit down), and its result ``a`` is then the

@@ -3,8 +3,8 @@
 Every batch of vectors (origins, directions, normals, colours) is an (N, 3) array, as the
 interfaces promise, but stored column by column ("Fortran order": the x of every row, then
 every y, then every z). NumPy then runs each operation as three long contiguous loops
-instead of N loops of length 3: measured on this machine, ``a + u[:, None] * b`` on
-262 144 rows takes 0.25 ms this way and 1.5 ms in row order. ``a[:, 0]`` is contiguous too.
+instead of N loops of length 3, several times faster (docs/performance.md). ``a[:, 0]`` is
+contiguous too.
 
 Code that makes new (N, 3) arrays keeps the layout with ``vec3``, ``take_rows`` and ``cross``;
 plain arithmetic between such arrays keeps it by itself (NumPy follows the inputs' layout).

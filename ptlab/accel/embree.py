@@ -5,8 +5,7 @@ releases the GIL while it runs. Facts about the binding that shape this module
 (measured with embreex 4.4):
 
 * it wants writable float32 arrays of any strides: ptlab's column-major batches go in as
-  they are (measured: copying them to row-major costs 9 ns a ray, more than the 2-4% that
-  Embree then saves);
+  they are (a copy to row-major costs more than Embree then saves: docs/performance.md);
 * the ray start distance is fixed at 0, so ``tmin`` is applied by moving the origin;
 * the per-ray far distance goes in through ``dists``, which INTERSECT overwrites;
 * OCCLUDED returns 0 for occluded rays and -1 for visible ones.

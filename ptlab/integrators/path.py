@@ -162,8 +162,8 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
 def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> None:
     """film[pixel[k]] += radiance[k] for every k, in float64.
 
-    ``np.bincount`` with weights sums repeated pixels correctly and is about 5x faster
-    than ``np.add.at``. A NaN or infinite contribution (a material's bug, a pdf of 0) is
+    ``np.bincount`` with weights sums repeated pixels correctly, and faster than
+    ``np.add.at`` (docs/performance.md). A NaN or infinite contribution (a material's bug, a pdf of 0) is
     dropped rather than poisoning its pixel for good; it is checked on the per-pixel sums,
     which are far fewer than the contributions, so the common case costs nothing extra.
     """
@@ -268,9 +268,9 @@ def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: Surfac
     wi = to_light / np.sqrt(dist2)[:, None]
     cos_theta = dot(hit.n, wi)
     cos_theta_light = -dot(light.normals, wi)
-    # Points that do not face each other exchange no light and need no shadow ray (about
-    # 30% in the Cornell box; Embree costs ~100 ns even for a ray of length 0). Nor do
-    # mirrors and glass, whose f_r is 0 for any direction but the one they choose.
+    # Points that do not face each other exchange no light and need no shadow ray (a
+    # third of them in the Cornell box: docs/performance.md). Nor do mirrors and glass,
+    # whose f_r is 0 for any direction but the one they choose.
     facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
     visible = sees(accel, hit, facing, take_rows(light.target, facing))
     f = shade(hit, "eval", hit.wo, wi, hit.n)

@@ -73,8 +73,7 @@ LIGHT_SAMPLING = PathSettings(strategy="nee", sample_sky=False)
 
 #: Glass doubles its rays at every bounce. A batch that has grown beyond this many rays is
 #: traced in parts, so memory stays bounded whatever ``max_depth``; it is faster too, as
-#: batches of about 2^18 rays are (measured: three glass panes filling a 128 x 128 view at
-#: 16 spp, depth 5: 3.5-4.6 s and 0.5 GB in parts, 7-9 s and 0.95 GB whole).
+#: batches of about 2^18 rays are (docs/performance.md).
 MAX_BATCH = 1 << 18
 
 

@@ -6,7 +6,7 @@
   Each worker ignores Ctrl-C, which the main process handles (it stops the render and keeps
   what is done), and receives the render's setup once, through the pool's initializer.
   ``ptlab render`` starts that server first thing (``start_worker_server``), so that it
-  imports ptlab while the command does (measured: 0.25-0.3 s sooner to the first tile).
+  imports ptlab while the command does (docs/performance.md).
 * any ``concurrent.futures.Executor`` the caller passes, e.g. ``ThreadPoolExecutor`` or a
   Dask client's ``get_executor()``: jobs then carry the setup with them.
 """

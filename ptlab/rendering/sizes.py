@@ -2,9 +2,9 @@
 of ``TILE_SIZE`` x ``TILE_SIZE`` pixels and passes of ``SPP_PER_PASS`` samples per pixel
 (``jobs`` cuts the image and the samples so).
 
-Batches of about 2^18 paths are the fastest here (measured: 10-15% faster than 2^16):
-large enough that NumPy's per-call overhead vanishes, small enough that memory stays
-modest: 128 x 128 tiles of 16 samples per pixel per pass. The pass size is fixed, not
+Batches of about 2^18 paths are the fastest (docs/performance.md): large enough that
+NumPy's per-call overhead vanishes, small enough that memory stays modest: 128 x 128 tiles
+of 16 samples per pixel per pass. The pass size is fixed, not
 derived from the tile size, so that an image does not depend on its tiles.
 
 (A module of its own, importing nothing, so that the command line can judge a render's
