@@ -544,15 +544,12 @@ def _check_face(number: int, line: str, references: list[str], vertices_so_far: 
         raise ValueError(f"line {number}: {bad!r} is not a vertex reference (v, v/vt, v//vn "
                          f"or v/vt/vn)" if bad else
                          f"line {number}: separate the references with spaces or tabs")
-    # All references are in the first one's form if the line has as many slashes, and as
-    # many double slashes, as that many copies of it.
     first = references[0]
     slashes, doubles = first.count("/"), first.count("//")
-    if line.count("/") != slashes * len(references) or \
-            line.count("//") != doubles * len(references):
+    written = {_form(r) for r in references}
+    if len(written) > 1:
         raise ValueError(f"line {number}: the face mixes reference forms "
-                         f"({', '.join(sorted({_form(r) for r in references}))}): write its "
-                         f"vertices alike")
+                         f"({', '.join(sorted(written))}): write its vertices alike")
     indices = [int(r.split("/", 1)[0]) for r in references] if slashes else \
         list(map(int, references))
     low, high = min(indices), max(indices)

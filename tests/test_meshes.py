@@ -66,10 +66,19 @@ def valid_obj(draw) -> tuple[bytes, bool]:
 
 
 def trimesh_reading(data: bytes) -> tuple[np.ndarray, np.ndarray | None]:
-    """(T, 3, 3) triangles and (T, 3, 2) texture coordinates (or None) as trimesh reads them."""
+    """(T, 3, 3) triangles and (T, 3, 2) texture coordinates (or None) as trimesh reads them,
+    each face's triangles one after another.
+
+    (Where every face is a quad, trimesh puts the first triangle of every quad before all the
+    second ones; ptlab's reader keeps each face's two together, as trimesh does wherever the
+    faces are of several sizes, and as ptlab read such files before.)
+    """
     mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", force="mesh",
                         process=False)
     faces = np.asarray(mesh.faces)
+    if all(len(line.split()) == 5 for line in data.decode().splitlines()
+           if line.startswith("f ")):
+        faces = np.stack(np.split(faces, 2), axis=1).reshape(-1, 3)
     uv = getattr(mesh.visual, "uv", None)
     if uv is not None:
         uv = np.asarray(uv)[faces]
