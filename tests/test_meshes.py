@@ -9,6 +9,9 @@ there.
 
 from __future__ import annotations
 
+import subprocess
+import sys
+import tracemalloc
 from pathlib import Path
 
 import numpy as np
@@ -139,3 +142,37 @@ def test_texture_coordinates_that_do_not_exist_are_none_as_in_trimesh():
     for faces in ("f 1/1 2/2 3/9\n", "f 1/1 2/2 3/0\n", "f 1 2 3\nf 1/1 2/2 3/3\n"):
         vertices, triangles, uv = read_obj((QUAD + faces).encode())
         assert uv is None and len(triangles) == faces.count("f ")
+
+
+def test_loading_obj_scenes_imports_no_trimesh(tmp_path):
+    # Start-up: trimesh, and SciPy through it, cost a render about a second; OBJ files, with
+    # texture coordinates or without, are read without them.
+    (tmp_path / "board.obj").write_text(QUAD + "f 1/1 2/2 3/3 4/4\n")
+    scene = (ROOT / "scenes" / "cornell-box" / "scene.toml").read_text().replace(
+        '"meshes/', f'"{ROOT}/scenes/cornell-box/meshes/') + \
+        '\n[[mesh]]\nfile = "board.obj"\nmaterial = "board"\n' \
+        '\n[materials.board]\ntype = "diffuse"\n' \
+        'albedo = { checkerboard = [[0.8, 0.1, 0], [0.2, 0.6, 0.9]] }\n'
+    (tmp_path / "scene.toml").write_text(scene)
+    code = ("import sys, ptlab\n"
+            f"assert ptlab.load_scene({str(tmp_path / 'scene.toml')!r}).uvs is not None\n"
+            "print([m for m in ('trimesh', 'scipy') if m in sys.modules])\n")
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                            check=True)
+    assert result.stdout.strip() == "[]"
+
+
+def test_a_big_obj_file_is_read_within_a_bounded_memory_per_triangle():
+    # tracemalloc counts NumPy's arrays, so the peak is the same on any machine: about 310
+    # bytes a triangle (the file's text is 37), where a reader that kept a Python string per
+    # line took 500 (docs/performance.md).
+    sphere = trimesh.creation.icosphere(subdivisions=6)            # 81 920 triangles
+    data = trimesh.exchange.obj.export_obj(sphere).encode()
+    tracemalloc.start()
+    try:
+        _, faces, _ = read_obj(data)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(faces) == len(sphere.faces)
+    assert peak / len(faces) < 450, f"{peak / len(faces):.0f} bytes a triangle"

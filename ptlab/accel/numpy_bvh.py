@@ -304,9 +304,10 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
                    first=first, count=count, order=order, depth=len(levels))
 
 
-#: The most (bin, node) cells binned at once: a level's nodes are binned and split this many
-#: cells at a time, which bounds the memory of a deep level's bins (docs/performance.md).
-BIN_CELLS = 1 << 18
+#: The most (bin, node) cells binned at once, per triangle of the level: a deep level has
+#: more cells than triangles (many small nodes, each with all the bins), and binning its
+#: nodes a few at a time keeps the bins' memory a small part of the build's.
+CELLS_PER_TRIANGLE = 0.25
 
 
 def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np.ndarray,
@@ -324,7 +325,7 @@ def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np
     k = len(size)
     split_bin, split_axis = np.empty(k, np.intp), np.empty(k, np.intp)
     is_leaf, median = np.empty(k, bool), np.empty(k, bool)
-    group = max(1, BIN_CELLS // n_bins)          # nodes binned at once
+    group = max(1, int(CELLS_PER_TRIANGLE * len(bins)) // n_bins)   # nodes binned at once
     for first in range(0, k, group):
         nodes = slice(first, min(first + group, k))
         m = nodes.stop - first
