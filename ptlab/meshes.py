@@ -1,26 +1,35 @@
 """Mesh files: the triangles of an OBJ, STL, PLY, OFF or glTF file, read and checked.
 
-trimesh reads each format and triangulates polygons; ptlab then checks what came out (three
-coordinates per vertex, faces that refer to existing vertices, nothing NaN or infinite) and
-drops triangles of zero area, which no ray can hit. OBJ text that ``check_obj_text`` accepts
-and that has no texture coordinates is plain enough to read directly (``read_obj``), with
-the same triangles as trimesh's: that spares a render of OBJ meshes importing trimesh, and
-through it SciPy, a second of its start-up (measured: 1.2 s of 1.3 s CPU for a 16 x 16
-Cornell box).
+OBJ files are read here (``read_obj``), the other formats by trimesh, which triangulates
+polygons; ptlab then checks what came out (three coordinates per vertex, faces that refer to
+existing vertices, nothing NaN or infinite) and drops triangles of zero area, which no ray
+can hit.
+
+``read_obj`` is one reader for every OBJ file, with texture coordinates or without. It
+parses the whole text at once (``parse_obj``: lines found and classified by whole-array
+operations on the bytes, each kind of record's numbers read by one ``np.fromstring``), so
+that no Python loop runs per line: a 1.3 million-triangle file reads faster than trimesh
+reads it (docs/performance.md). Its triangles are trimesh's, in the file's order, so images
+are the same; and a render of OBJ meshes imports neither trimesh nor, through it, SciPy,
+which spares it a second of start-up.
 
 trimesh's OBJ reader is fast because it is lenient, and some of its leniency goes wrong
 silently: it takes the number of values per vertex from the first ``v`` line, skips ``v``
 and ``f`` lines that do not begin with the keyword and a space, drops faces of fewer than
 three vertices, counts negative indices from the end of the file rather than from their
 line, and reads a face whose references mix forms (``1/2`` beside ``3``) as other
-vertices. ``check_obj_text`` looks for each of these first and names the line, so that a
-malformed OBJ file is an error instead of a wrong picture.
+vertices. ``read_obj`` refuses each of these and names the line, so that a malformed OBJ
+file, which other programs may misread, is an error instead of a wrong picture: the parse
+itself confirms that a file is written the common way (``ObjRecords.plain``), and only where
+it cannot does ``check_obj_lines`` look line by line.
 """
 
 from __future__ import annotations
 
 import math
 import re
+import warnings
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -51,8 +60,8 @@ def read_mesh_triangles(path: Path, where: str | None = None,
 
 def read_mesh(path: Path, where: str | None = None,
               limit: float = math.inf) -> tuple[np.ndarray, np.ndarray | None]:
-    """The triangles of a mesh file and their texture coordinates: an OBJ file without
-    texture coordinates read here (``read_obj``), any other file by trimesh.
+    """The triangles of a mesh file and their texture coordinates: an OBJ file read here
+    (``read_obj``), any other file by trimesh.
 
     Returns:
         triangles: (T, 3, 3) float64, vertex k of triangle i at ``triangles[i, k]``;
@@ -77,12 +86,9 @@ def read_mesh(path: Path, where: str | None = None,
         raise SceneError(where, f"mesh {path.name} is empty")
     if fmt == "obj":
         try:
-            check_obj_text(data)
+            vertices, faces, uv = read_obj(data)
         except ValueError as error:
             raise SceneError(where, f"mesh {path.name}: {error}") from None
-    if fmt == "obj" and b"\nvt " not in b"\n" + data:
-        vertices, faces = read_obj(data.decode("utf-8").replace("\r\n", "\n"))
-        mesh = None
     else:
         mesh = _read_with_trimesh(path, where, fmt)
         vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
@@ -109,8 +115,12 @@ def read_mesh(path: Path, where: str | None = None,
         vertex = triangles[beyond][0]
         raise SceneError(where, f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
                                 f"coordinate must lie within +-{limit:g}")
-    uv = None if mesh is None else _texture_coordinates(mesh, len(vertices), where, path.name)
-    uv = None if uv is None else uv[faces]
+    if fmt != "obj":
+        uv = _texture_coordinates(mesh, len(vertices), where, path.name)
+        uv = None if uv is None else uv[faces]
+    if uv is not None and not np.isfinite(uv).all():
+        raise SceneError(where, f"mesh {path.name} has texture coordinates that are NaN or "
+                                f"infinite")
     # (Only now: a vertex far out can make its triangles degenerate in float64.)
     kept = has_area(triangles)
     if not kept.any():
@@ -127,10 +137,7 @@ def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.n
     if uv.ndim != 2 or len(uv) != vertex_count or uv.shape[1] == 0:
         raise SceneError(where, f"mesh {name}: texture coordinates of shape {uv.shape} for "
                                 f"{vertex_count} vertices")
-    uv = np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
-    if not np.isfinite(uv).all():
-        raise SceneError(where, f"mesh {name} has texture coordinates that are NaN or infinite")
-    return uv
+    return np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
 
 
 def has_area(triangles: np.ndarray) -> np.ndarray:
@@ -156,130 +163,307 @@ def _read_with_trimesh(path: Path, where: str, fmt: str):
     return mesh
 
 
-def read_obj(text: str) -> tuple[np.ndarray, np.ndarray]:
-    """(V, 3) float64 vertices and (F, 3) int64 triangles (0-based) of OBJ text that
-    ``check_obj_text`` accepted: every record at the start of its line, ``v`` lines alike,
-    faces of at least three references whose vertices exist.
-
-    Faces are cut into triangles as trimesh cuts them, in the file's order: a quad (a, b, c, d)
-    into (a, b, c) and (c, d, a), a larger polygon into the fan (0, k, k + 1). A negative index
-    counts back from the last vertex before its line (the check allows it only where that is
-    also the end of the file, so the two readings agree).
-    """
-    lines = text.replace("\\\n", "").split("\n")     # (lines continued with a backslash)
-    vertex_lines = [line[2:] for line in lines if line.startswith("v ")]
-    size = len(vertex_lines[0].split()) if vertex_lines else 3
-    vertices = np.fromstring(" ".join(vertex_lines), sep=" ").reshape(-1, size)[:, :3]
-    # Faces grouped by their number of vertices, each group read at once: the vertex index is
-    # what comes before a reference's first "/" (the texture and normal indices are dropped).
-    by_size: dict[int, tuple[list[int], list[str]]] = {}   # size -> (face numbers, faces)
-    faces = (line[2:].split() for line in lines if line.startswith("f "))
-    for number, references in enumerate(faces):
-        order, group = by_size.setdefault(len(references), ([], []))
-        order.append(number)
-        group.append(" ".join(references))
-    triangles, face_of = [], []
-    for count, (order, group) in by_size.items():
-        index = np.fromstring(_TEXTURE_AND_NORMAL.sub("", " ".join(group)), dtype=np.int64,
-                              sep=" ").reshape(-1, count)
-        index = np.where(index > 0, index - 1, len(vertices) + index)
-        corners = _CUTS.get(count) or [(0, k, k + 1) for k in range(1, count - 1)]
-        triangles.append(index[:, np.array(corners)].reshape(-1, 3))
-        face_of.append(np.repeat(order, len(corners)))
-    if not triangles:
-        return vertices, np.zeros((0, 3), np.int64)
-    in_file_order = np.argsort(np.concatenate(face_of), kind="stable")
-    return vertices, np.concatenate(triangles)[in_file_order]
-
-
-#: How trimesh cuts a triangle and a quad (larger polygons: fans from the first corner).
-_CUTS = {3: [(0, 1, 2)], 4: [(0, 1, 2), (2, 3, 0)]}
-
-
-#: The texture and normal parts of face references (``/vt``, ``//vn``, ``/vt/vn``).
-_TEXTURE_AND_NORMAL = re.compile(r"/\S*")
-
-
 def drop_zero_area(triangles: np.ndarray) -> np.ndarray:
     """(T', 3, 3) the triangles of (T, 3, 3) ``triangles`` whose area is not zero."""
     return triangles[has_area(triangles)]
 
 
-def check_obj_text(data: bytes) -> None:
-    """Raise ``ValueError("line N: ...")`` where trimesh would misread this OBJ file.
+def read_obj(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """The triangles of an OBJ file, read the way trimesh reads them, or ``ValueError("line
+    N: ...")`` where trimesh would misread the file (module docstring).
 
-    Checks the text (UTF-8, no byte-order mark, LF or CRLF line ends) and every ``v``,
-    ``vt``, ``vn`` and ``f`` record: where it starts, its numbers, and each face's vertex
-    references. Other records (``o``, ``g``, ``usemtl``, ``l``, ...) are left to trimesh.
+    Faces are cut into triangles as trimesh cuts them, in the file's order: a quad (a, b, c, d)
+    into (a, b, c) and (c, d, a), a larger polygon into the fan (0, k, k + 1).
+
+    Returns:
+        vertices: (V, 3) float64, each ``v`` record's first three numbers;
+        faces: (F, 3) int64 0-based vertex indices of each triangle;
+        uv: (F, 3, 2) float64 texture coordinates of each triangle's vertices (a ``vt``
+        record's u and v; v = 0 where it gives u only), or None where some face gives none
+        or one that does not exist.
     """
+    text = _obj_text(data)
+    records = parse_obj(text)
+    if records is None or not records.plain:
+        check_obj_lines(text.decode("utf-8"))
+        # (check_obj_lines accepts only text that parse_obj reads.)
+        assert records is not None
+    corners = _fan_corners(records.face_sizes)
+    faces = records.vertex_references[corners]
+    if records.texture_references is None:
+        return records.vertices, faces, None
+    return records.vertices, faces, records.texture[records.texture_references[corners]]
+
+
+def _obj_text(data: bytes) -> bytes:
+    """The text of an OBJ file with LF line ends, or ``ValueError`` for bytes that are not
+    text a reader of OBJ lines would split as this one does."""
     if b"\0" in data:
         raise ValueError("contains NUL bytes: a binary file, not OBJ text")
     if data.startswith(b"\xef\xbb\xbf"):
         raise ValueError("starts with a byte-order mark, which hides its first line from "
                          "trimesh: save it as UTF-8 without BOM")
     try:
-        text = data.decode("utf-8")
+        data.isascii() or data.decode("utf-8")      # (the first is 20x faster)
     except UnicodeDecodeError as error:
         raise ValueError(f"is not UTF-8 text (byte {data[error.start]:#04x} at offset "
                          f"{error.start}): a binary file, or another encoding") from None
-    text = text.replace("\r\n", "\n")
-    if "\r" in text:
+    text = data.replace(b"\r\n", b"\n")
+    if b"\r" in text:
         raise ValueError("ends its lines with CR alone, which trimesh does not split: save it "
                          "with LF or CRLF line ends")
-    if not is_plain_obj(text):
-        check_obj_lines(text)
+    return text
 
 
-#: A record that does not start its line with the keyword and a space (in text that
-#: starts with a line break; beginning with one makes the search fast).
-_MISPLACED = re.compile(r"\n(?:[^\S\n]+(?:v|vt|vn|f)(?:[^\S\n]|\n|$)|(?:v|vt|vn|f)(?:[^\S\n ]|\n|$))")
-#: A face's references in each form, with positive indices.
-_FORMS = {"i": "[0-9]+", "i/i": "[0-9]+/[0-9]+", "i//i": "[0-9]+//[0-9]+",
-          "i/i/i": "[0-9]+/[0-9]+/[0-9]+"}
+@dataclass
+class ObjRecords:
+    """The ``v``, ``vt`` and ``f`` records of OBJ text, parsed at once (``parse_obj``).
 
-
-def is_plain_obj(text: str) -> bool:
-    """True if the OBJ text is written the common way, which a few scans of the whole text
-    can confirm (measured on a 330 000-face file: 5x faster than ``check_obj_lines``, and
-    faster than trimesh's own reading): no continued lines,
-    records at the start of their lines and without comments, every ``v`` (``vt``, ``vn``)
-    with as many numbers, and every face in one form, with positive indices of vertices
-    that exist. False means only that ``check_obj_lines`` must look line by line.
+    Attributes:
+        vertices: (V, 3) float64, each ``v`` record's first three numbers.
+        texture: (VT, 2) float64 ``vt`` records' u and v (0 where a record gives u only).
+        vertex_references: (R,) int64 0-based vertex of every face's every reference, in
+            the file's order.
+        texture_references: (R,) int64 0-based ``vt`` record of every reference, or None
+            where some face gives none or one that does not exist.
+        face_sizes: (F,) the number of references of each face.
+        plain: the text is written the common way, which the parse itself confirms: records
+            at the very start of their lines and without comments, numbers made of digits,
+            signs, points and exponents, every face's references in one form, with indices
+            of vertices that exist. False means only that ``check_obj_lines`` must look line
+            by line.
     """
-    text = "\n" + text
-    if "\\\n" in text or _MISPLACED.search(text) or _commented_record(text):
-        return False
-    for keyword, (fewest, most) in _RECORD_SIZES.items():
-        first = re.search(rf"\n{keyword} (.*)", text)
-        if first is None:
-            continue
-        size = len(first.group(1).split())
-        unlike = rf"\n{keyword} (?![ \t]*{_NUMBER}(?:[ \t]+{_NUMBER}){{{size - 1}}}[ \t]*(?:\n|$))"
-        if not fewest <= size <= most or re.search(unlike, text):
-            return False
-    faces = re.findall(r"\nf (.*)", text)
-    if not faces or not faces[0].split():
-        return False
-    form = _form(faces[0].split()[0])
-    if form not in _FORMS:
-        return False
-    reference = _FORMS[form]
-    if re.search(rf"\nf (?![ \t]*{reference}(?:[ \t]+{reference}){{2,}}[ \t]*(?:\n|$))", text):
-        return False
-    numbers = " ".join(faces).replace("/", " ")
-    if re.search("[0-9]{19}", numbers):      # an index beyond int64: surely no such vertex
-        return False
-    indices = np.fromstring(numbers, dtype=np.int64, sep=" ")[::form.count("i")]
-    return 1 <= indices.min() and indices.max() <= text.count("\nv ")
+
+    vertices: np.ndarray
+    texture: np.ndarray
+    vertex_references: np.ndarray
+    texture_references: np.ndarray | None
+    face_sizes: np.ndarray
+    plain: bool
 
 
-def _commented_record(text: str) -> bool:
-    """Whether a ``v``, ``vt``, ``vn`` or ``f`` line of ``text`` holds a comment (a ``#``)."""
-    for hash_sign in re.finditer("#", text):      # (few: comments are rare in big files)
-        start = text.rfind("\n", 0, hash_sign.start()) + 1
-        if text.startswith(("v ", "vt ", "vn ", "f "), start):
-            return True
-    return False
+def parse_obj(text: bytes) -> ObjRecords | None:
+    """The records of OBJ text (LF line ends), read by a few whole-array operations on its
+    bytes, or None where they cannot be read that way (then ``check_obj_lines`` finds a
+    line that is wrong).
+
+    Lines are found by their line feeds and classified by their first three bytes; the lines
+    of each kind of record are gathered into one array of bytes (keyword blanked), whose
+    fields one ``np.fromstring`` call reads. Bytes of a few classes (separators, slashes)
+    give the fields of each line and their forms. No Python loop runs over lines, so reading
+    takes a time proportional to the file's size (docs/performance.md).
+    """
+    joined = text.replace(b"\\\n", b"")       # (lines continued with a backslash)
+    if not joined.endswith(b"\n"):
+        joined += b"\n"
+    data = np.frombuffer(joined, np.uint8)
+    ends = np.flatnonzero(data == _NEWLINE)
+    starts = np.concatenate(([0], ends[:-1] + 1))
+    kind, misplaced = _line_kinds(data, starts, ends)
+    hashes = np.flatnonzero(data == ord("#"))
+    commented = (kind[np.searchsorted(ends, hashes)] != 0).any()
+    byte_kind = np.repeat(kind, ends - starts + 1)
+
+    def lines_of(record: str) -> np.ndarray:
+        """The bytes of every line of one kind of record, keyword blanked: (n,) uint8."""
+        lengths = (ends - starts + 1)[kind == _KINDS[record]]
+        if len(lengths) == 0:
+            return np.zeros(0, np.uint8)
+        stream = data[byte_kind == _KINDS[record]]
+        first = np.cumsum(lengths) - lengths
+        for k in range(len(record)):
+            stream[first + k] = _SPACE
+        return stream
+
+    numbers = {}
+    plain_numbers = True
+    for record, (fewest, most) in _RECORD_SIZES.items():
+        values = _number_records(lines_of(record), fewest, most)
+        if values is None:
+            return None
+        numbers[record], plain = values
+        plain_numbers &= plain
+    # Per face: how many `v` and `vt` records come before its line.
+    before = {record: np.cumsum(kind == _KINDS[record])[kind == _KINDS["f"]]
+              for record in ("v", "vt")}
+    faces = _face_records(lines_of("f"), before, len(numbers["v"]), len(numbers["vt"]))
+    if faces is None:
+        return None
+    vertex_references, texture_references, face_sizes, plain_faces = faces
+    texture = numbers["vt"][:, :2]
+    return ObjRecords(
+        vertices=numbers["v"][:, :3],
+        texture=np.pad(texture, ((0, 0), (0, 2 - texture.shape[1]))),
+        vertex_references=vertex_references, texture_references=texture_references,
+        face_sizes=face_sizes,
+        plain=b"\\\n" not in text and not misplaced.any() and not commented and plain_numbers
+        and plain_faces)
+
+
+#: The records ``parse_obj`` reads, and the code of each in its per-line kinds (0: others).
+_KINDS = {"v": 1, "vt": 2, "vn": 3, "f": 4}
+_NEWLINE, _SPACE, _SLASH = b"\n /"
+
+
+def _byte_class(chars: bytes) -> np.ndarray:
+    """(256,) bool: which byte values are among ``chars``."""
+    table = np.zeros(256, bool)
+    table[list(chars)] = True
+    return table
+
+
+#: The bytes besides digits that a plain number or face reference is made of (and the
+#: fields' separators).
+_NUMBER_BYTES = _byte_class(b".+-eE \t\n")
+_REFERENCE_BYTES = _byte_class(b"-/ \t\n")
+#: Bytes that may be whitespace to Python's ``str.split`` (or end a line, or start a UTF-8
+#: character that may be whitespace): a keyword followed by one of these but a space is a
+#: misplaced record, as is a record after any of them.
+_BLANK = _byte_class(bytes(range(0x21)) + bytes(range(0x80, 0x100)))
+
+
+def _line_kinds(data: np.ndarray, starts: np.ndarray,
+                ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(L,) uint8 kind of each line (``_KINDS``, from its first three bytes), and (L,) bool:
+    which lines may be misplaced records (indented, or a keyword not followed by a space)."""
+    def byte(k: int) -> np.ndarray:
+        """Byte k of every line; a line feed beyond a line's end."""
+        return np.where(ends - starts > k, data[np.minimum(starts + k, len(data) - 1)],
+                        _NEWLINE)
+
+    b0, b1, b2 = byte(0), byte(1), byte(2)
+    v, f = b0 == ord("v"), b0 == ord("f")
+    vt_or_vn = v & ((b1 == ord("t")) | (b1 == ord("n")))
+    kind = np.zeros(len(starts), np.uint8)
+    kind[v & (b1 == _SPACE)] = _KINDS["v"]
+    kind[vt_or_vn & (b1 == ord("t")) & (b2 == _SPACE)] = _KINDS["vt"]
+    kind[vt_or_vn & (b1 == ord("n")) & (b2 == _SPACE)] = _KINDS["vn"]
+    kind[f & (b1 == _SPACE)] = _KINDS["f"]
+    misplaced = (_BLANK[b0] & (b0 != _NEWLINE)) | ((v | f) & _BLANK[b1] & (b1 != _SPACE)) | \
+        (vt_or_vn & _BLANK[b2] & (b2 != _SPACE))
+    return kind, misplaced
+
+
+def _made_of(stream: np.ndarray, others: np.ndarray) -> bool:
+    """Whether the bytes of ``stream`` are all digits or among ``others`` (a ``_byte_class``)."""
+    # (Digits are most of the bytes: only the rest is looked up, which is 4x faster.)
+    return bool(others[stream[stream - np.uint8(ord("0")) > 9]].all())
+
+
+def _fields(stream: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the fields of ``stream`` (lines of bytes, each ending in a line feed) start,
+    (n,); where its lines end, (L,); and (L,) how many fields each line has. Fields are
+    separated by spaces, tabs and any other control byte (which ``_made_of`` finds)."""
+    separator = stream <= _SPACE
+    start = ~separator
+    start[1:] &= separator[:-1]
+    start = np.flatnonzero(start)
+    ends = np.flatnonzero(stream == _NEWLINE)
+    return start, ends, np.diff(np.searchsorted(start, ends), prepend=0)
+
+
+def _read_numbers(stream: np.ndarray, count: int, dtype: type) -> np.ndarray | None:
+    """The ``count`` numbers of ``stream`` (bytes of fields separated by whitespace), or None
+    if it does not hold exactly that many, each a whole field."""
+    if count == 0:
+        return np.zeros(0, dtype)             # (np.fromstring reads blank text as [-1])
+    with warnings.catch_warnings():
+        # A field that is not (wholly) a number ends the reading with a warning.
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            values = np.fromstring(stream.tobytes(), dtype=dtype, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
+    return values if len(values) == count else None
+
+
+def _number_records(stream: np.ndarray, fewest: int,
+                    most: int) -> tuple[np.ndarray, bool] | None:
+    """(n, size) float64 numbers of n ``v`` (``vt``, ``vn``) lines that each have as many,
+    between ``fewest`` and ``most``, and whether they are all plain numbers; or None."""
+    _, _, counts = _fields(stream)
+    if len(counts) == 0:
+        return np.zeros((0, fewest)), True
+    size = int(counts[0])
+    if not fewest <= size <= most or (counts != size).any():
+        return None
+    values = _read_numbers(stream, len(counts) * size, np.float64)
+    if values is None:
+        return None
+    # (Anything else that np.fromstring reads, nan and inf, is left to check_obj_lines.)
+    return values.reshape(-1, size), _made_of(stream, _NUMBER_BYTES)
+
+
+def _face_records(stream: np.ndarray, before: dict[str, np.ndarray], vertex_count: int,
+                  texture_count: int) -> tuple[np.ndarray, np.ndarray | None, np.ndarray,
+                                               bool] | None:
+    """The references of F faces, from their lines' bytes (keyword blanked) and the number
+    of ``v`` and ``vt`` records before each line, (F,) each: (R,) 0-based vertices, (R,)
+    0-based ``vt`` records or None, (F,) references per face, and whether the faces are
+    plain; or None."""
+    if not _made_of(stream, _REFERENCE_BYTES):
+        return None
+    start, ends, sizes = _fields(stream)
+    if len(sizes) == 0 or sizes.min() < 3:
+        return None
+    # Each line's references are in one form (i, i/i, i//i or i/i/i), of `per` numbers, as
+    # its slashes tell.
+    slash = np.flatnonzero(stream == _SLASH)
+    slashes = np.diff(np.searchsorted(slash, ends), prepend=0)
+    double = slash[1:][np.diff(slash) == 1]          # the second of two slashes in a row
+    doubles = np.diff(np.searchsorted(double, ends), prepend=0)
+    per, rest = np.divmod(slashes - doubles, sizes)
+    if rest.any() or (per > 2).any():
+        return None
+    per_reference = np.repeat(per + 1, sizes)
+    if slash.size:
+        stream = stream.copy()
+        stream[slash] = _SPACE
+    numbers = _read_numbers(stream, int(per_reference.sum()), np.int64)
+    if numbers is None:
+        return None
+    first = np.cumsum(per_reference) - per_reference
+    vertex = _zero_based(numbers[first], before["v"], sizes, vertex_count)
+    if vertex is None:
+        return None
+    # Plain: positive indices, and every reference in the first one's form: as many slashes
+    # each, all between its start and the next reference's, and a double slash in all or none.
+    form = int(slashes[0] // sizes[0])
+    inside = slash.reshape(len(start), form) if len(slash) == form * len(start) else None
+    plain = inside is not None and bool((inside > start[:, None]).all()) and \
+        bool((inside[:-1] < start[1:, None]).all()) and doubles.sum() in (0, len(start)) and \
+        bool((numbers[first] > 0).all())
+    texture = None
+    if ((per >= 1) & (doubles == 0)).all():
+        texture = _zero_based(numbers[first + 1], before["vt"], sizes, texture_count)
+    return vertex, texture, sizes, plain
+
+
+def _zero_based(index: np.ndarray, before: np.ndarray, sizes: np.ndarray,
+                count: int) -> np.ndarray | None:
+    """(R,) 0-based records of the (R,) OBJ indices of faces of (F,) ``sizes`` references
+    (from 1, or negative: counted back from the last of the (F,) ``before`` records before
+    the face's line), or None if one of them is not among the ``count`` records."""
+    if index.min() > 0:                          # (the common case: spare the negatives)
+        return index - 1 if index.max() <= count else None
+    zero_based = np.where(index > 0, index - 1, index + np.repeat(before, sizes))
+    if (index == 0).any() or zero_based.min() < 0 or zero_based.max() >= count:
+        return None
+    return zero_based
+
+
+def _fan_corners(sizes: np.ndarray) -> np.ndarray:
+    """(T, 3) the references of each triangle of faces of (F,) ``sizes`` references, in the
+    faces' order, as indices into all their references: a quad (a, b, c, d) cut into
+    (a, b, c) and (c, d, a), a larger polygon into the fan (0, k, k + 1), as trimesh cuts."""
+    count = sizes - 2
+    face = np.repeat(np.arange(len(sizes)), count)
+    k = np.arange(len(face)) - np.repeat(np.cumsum(count) - count, count)  # (in its face)
+    first = (np.cumsum(sizes) - sizes)[face]
+    corners = first[:, None] + np.stack([np.zeros_like(k), k + 1, k + 2], axis=1)
+    quad = (sizes[face] == 4) & (k == 1)
+    corners[quad] = first[quad, None] + [2, 3, 0]
+    return corners
 
 
 def check_obj_lines(text: str) -> None:
@@ -360,15 +544,12 @@ def _check_face(number: int, line: str, references: list[str], vertices_so_far: 
         raise ValueError(f"line {number}: {bad!r} is not a vertex reference (v, v/vt, v//vn "
                          f"or v/vt/vn)" if bad else
                          f"line {number}: separate the references with spaces or tabs")
-    # All references are in the first one's form if the line has as many slashes, and as
-    # many double slashes, as that many copies of it.
     first = references[0]
     slashes, doubles = first.count("/"), first.count("//")
-    if line.count("/") != slashes * len(references) or \
-            line.count("//") != doubles * len(references):
+    written = {_form(r) for r in references}
+    if len(written) > 1:
         raise ValueError(f"line {number}: the face mixes reference forms "
-                         f"({', '.join(sorted({_form(r) for r in references}))}): write its "
-                         f"vertices alike")
+                         f"({', '.join(sorted(written))}): write its vertices alike")
     indices = [int(r.split("/", 1)[0]) for r in references] if slashes else \
         list(map(int, references))
     low, high = min(indices), max(indices)

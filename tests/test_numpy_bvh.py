@@ -13,12 +13,14 @@ triangle.
 
 from __future__ import annotations
 
+import tracemalloc
 import warnings
 
 import numpy as np
 import pytest
 import trimesh
 
+from ptlab.accel import numpy_bvh
 from ptlab.accel.base import Hits
 from ptlab.accel.embree import EmbreeAccelerator
 from ptlab.accel.numpy_bvh import SMALL_SCENE, NumpyBVH, build_bvh, slab_test
@@ -244,6 +246,34 @@ def test_build_invariants(max_leaf_size):
     for c in (bvh.child[inner], bvh.child[inner] + 1):
         assert np.all(bvh.box_min[c] >= bvh.box_min[inner])
         assert np.all(bvh.box_max[c] <= bvh.box_max[inner])
+
+
+def test_the_tree_is_the_same_however_many_nodes_are_binned_at_once(monkeypatch):
+    # A deep level's nodes are binned a group at a time (to bound memory); the groups must not
+    # change a single split.
+    rng = np.random.default_rng(7)
+    tris = np.concatenate([cornell_like(), rng.uniform(0, 556, (3000, 3, 3))])
+    trees = []
+    for cells in (1e-9, 0.25, 1e9):
+        monkeypatch.setattr(numpy_bvh, "CELLS_PER_TRIANGLE", cells)
+        trees.append(build_bvh(tris))
+    for tree in trees[1:]:
+        for name in ("box_min", "box_max", "child", "axis", "first", "count", "order"):
+            np.testing.assert_array_equal(getattr(tree, name), getattr(trees[0], name))
+
+
+def test_a_big_mesh_builds_within_a_bounded_memory_per_triangle():
+    # tracemalloc counts NumPy's arrays, so the peak is the same on any machine. It was 1.1-1.4
+    # KB a triangle when a deep level binned all its nodes at once (docs/performance.md).
+    sphere = trimesh.creation.icosphere(subdivisions=6)           # 81 920 triangles
+    tris = sphere.vertices[sphere.faces]
+    tracemalloc.start()
+    try:
+        NumpyBVH(tris)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak / len(tris) < 450, f"{peak / len(tris):.0f} bytes a triangle"
 
 
 # Both ways of answering a query: walking the tree, and (the default for a scene this small)

@@ -126,18 +126,23 @@ def _half_area(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return ext[..., 0] * ext[..., 1] + ext[..., 1] * ext[..., 2] + ext[..., 2] * ext[..., 0]
 
 
-def _scatter(op: np.ufunc, key: np.ndarray, values: np.ndarray, fill: float,
-             shape: tuple[int, ...]) -> np.ndarray:
-    """A new array of ``shape`` (last axis: x, y, z) filled with ``fill``, into whose
-    flat row ``key[p, a]`` every (3,) ``values[p]`` is reduced with ``op``.
+def _bin_bounds(key: np.ndarray, lo: np.ndarray, hi: np.ndarray,
+                shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The bounds of the points in each bin: two new arrays of ``shape`` (..., 3 axes,
+    3 coordinates), empty (``inf``, ``-inf``) but where the flat row ``key[p, a]`` (that of
+    point p's bin along axis a) takes the minimum of the (P, 3) ``lo[p]`` and the maximum of
+    the (P, 3) ``hi[p]`` that fall into it.
 
-    key: (P, 3) row indices; values: (P, 3). Works on flat 1-D indices because
-    ``ufunc.at`` is about 5x faster there than when it updates rows.
+    key: (P, 3) row indices; lo, hi: (P, 3) C-contiguous. Works on flat 1-D indices because
+    ``ufunc.at`` is about 5x faster there than when it updates rows; one axis at a time, so
+    that the indices take a third of the memory.
     """
-    out = np.full(np.prod(shape), fill, dtype=values.dtype)
-    index = key[:, :, None] * 3 + np.arange(3)                       # (P, 3 axes, 3 coords)
-    op.at(out, index.ravel(), np.broadcast_to(values[:, None, :], index.shape).ravel())
-    return out.reshape(shape)
+    bin_lo, bin_hi = np.full(shape, np.inf, lo.dtype), np.full(shape, -np.inf, hi.dtype)
+    for axis in range(3):
+        index = (key[:, axis, None] * 3 + np.arange(3)).ravel()
+        np.minimum.at(bin_lo.reshape(-1), index, lo.ravel())
+        np.maximum.at(bin_hi.reshape(-1), index, hi.ravel())
+    return bin_lo, bin_hi
 
 
 def _running(op: np.ufunc, a: np.ndarray) -> np.ndarray:
@@ -221,7 +226,7 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
     between ``max_bins`` equal bins of the node's centroid bounds, along each axis. Nodes
     with more than ``max_leaf_size`` triangles are always split; if all their centroids
     coincide, the split is at the median (any split is as good as another there).
-    About 1 s for 100k triangles, 5 s for 330k, on the test machine (binning dominates).
+    Time and memory grow in proportion to the triangles (docs/performance.md).
 
     Args:
         triangles: (T, 3, 3) vertex k of triangle i at ``triangles[i, k]``.
@@ -235,58 +240,53 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
     tris = np.asarray(triangles, dtype=np.float64)
     if len(tris) == 0:
         raise ValueError("a BVH needs at least one triangle")
+    n_tris = len(tris)
+    order = np.empty(n_tris, np.intp)
+    levels = []                                  # per level: the arrays of its nodes
+    # The nodes of the level being built: where their triangles will sit in `order`.
+    start, size = np.array([0]), np.array([n_tris])
+    # Their triangles, node after node: index, bounds and centroid. (Kept in this order,
+    # rather than gathered through `order` each level, they are read in sequence.)
+    tri = np.arange(n_tris)
     tri_lo, tri_hi = tris.min(axis=1), tris.max(axis=1)
     centroid = 0.5 * (tri_lo + tri_hi)
-    tri_lo32, tri_hi32 = tri_lo.astype(np.float32), tri_hi.astype(np.float32)
-    n_tris = len(tris)
-
-    order = np.arange(n_tris)
-    levels = []                                  # per level: the arrays of its nodes
-    # The nodes of the level being built: where their triangles sit in `order`.
-    start, size = np.array([0]), np.array([n_tris])
     next_id = 1
     while start.size:
         k = start.size
-        node = np.repeat(np.arange(k), size)     # node of each triangle of this level
         offset = np.cumsum(size) - size          # where each node's run begins in `tri`
-        pos = np.arange(size.sum()) + np.repeat(start - offset, size)
-        tri = order[pos]
 
         # Node bounds and centroid bounds: min/max over each node's run of triangles.
-        box_lo = np.minimum.reduceat(tri_lo[tri], offset)
-        box_hi = np.maximum.reduceat(tri_hi[tri], offset)
-        c = centroid[tri]
-        c_lo = np.minimum.reduceat(c, offset)
-        c_hi = np.maximum.reduceat(c, offset)
+        box_lo = np.minimum.reduceat(tri_lo, offset)
+        box_hi = np.maximum.reduceat(tri_hi, offset)
+        c_lo = np.minimum.reduceat(centroid, offset)
+        c_hi = np.maximum.reduceat(centroid, offset)
 
         # Bin every centroid along every axis; extent 0 puts everything in bin 0. Deep
         # levels hold only small nodes: fewer bins than triangles would be wasted work.
         n_bins = max(2, min(max_bins, size.max()))
         extent = c_hi - c_lo
         scale = np.divide(n_bins, extent, out=np.zeros_like(extent), where=extent > 0)
-        bins = np.minimum(((c - c_lo[node]) * scale[node]).astype(np.intp), n_bins - 1)
+        bins = np.minimum(((centroid - np.repeat(c_lo, size, axis=0))
+                           * np.repeat(scale, size, axis=0)).astype(np.intp), n_bins - 1)
 
-        # Per (bin, node, axis): triangle count and bounds of its triangles. Bins come
-        # first so that the sweeps below run over whole contiguous (node, axis) slices.
-        key = (bins * k + node[:, None]) * 3 + np.arange(3)              # (P, 3)
-        bin_count = np.bincount(key.ravel(), minlength=n_bins * k * 3).reshape(n_bins, k, 3)
-        # (float32: these only rank the candidate splits, and half the bytes build faster)
-        bin_lo = _scatter(np.minimum, key, tri_lo32[tri], np.inf, (n_bins, k, 3, 3))
-        bin_hi = _scatter(np.maximum, key, tri_hi32[tri], -np.inf, (n_bins, k, 3, 3))
-
-        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo, box_hi, traversal_cost)
-        split_bin, split_axis, is_leaf = best_split(cost, size, max_leaf_size)
-        best_cost = cost[split_bin, np.arange(k), split_axis]
-        median = ~is_leaf & np.isinf(best_cost)    # all centroids coincide
-        split_axis[median] = 0
+        split_bin, split_axis, is_leaf, median = _choose_splits(
+            bins, n_bins, tri_lo, tri_hi, box_lo, box_hi, size, offset, max_leaf_size,
+            traversal_cost)
 
         # Partition each splitting node's run: left side first (stable sort by side).
+        node = np.repeat(np.arange(k), size)     # node of each triangle of this level
         go_right = bins[np.arange(len(tri)), split_axis[node]] > split_bin[node]
         rank = np.arange(len(tri)) - offset[node]
         go_right = np.where(median[node], rank >= size[node] // 2, go_right)
         go_right &= ~is_leaf[node]
-        order[pos] = tri[np.argsort(2 * node + go_right, kind="stable")]
+        sorted_ = np.argsort(2 * node + go_right, kind="stable")
         n_right = np.bincount(node, weights=go_right, minlength=k).astype(np.intp)
+        # A leaf's triangles take their place in `order`; the others go on to the next level.
+        in_leaf = is_leaf[node]
+        order[(rank + start[node])[in_leaf]] = tri[in_leaf]
+        sorted_ = sorted_[~in_leaf[sorted_]]
+        tri, tri_lo, tri_hi, centroid = (a.take(sorted_, axis=0)
+                                         for a in (tri, tri_lo, tri_hi, centroid))
 
         inner = np.flatnonzero(~is_leaf)
         child = np.full(k, -1)
@@ -303,6 +303,50 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
     box_min, box_max, child, axis, first, count = (np.concatenate(a) for a in zip(*levels, strict=True))
     return FlatBVH(box_min=box_min, box_max=box_max, child=child, axis=axis,
                    first=first, count=count, order=order, depth=len(levels))
+
+
+#: The most (bin, node) cells binned at once, per triangle of the level: a deep level has
+#: more cells than triangles (many small nodes, each with all the bins), and binning its
+#: nodes a few at a time keeps the bins' memory a small part of the build's.
+CELLS_PER_TRIANGLE = 0.25
+
+
+def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np.ndarray,
+                   box_lo: np.ndarray, box_hi: np.ndarray, size: np.ndarray,
+                   offset: np.ndarray, max_leaf_size: int, traversal_cost: float
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The split of each of K nodes of a level (``split_costs``, ``best_split``), from its
+    triangles' (P, 3) bins along each axis and (P, 3) bounds, node after node (node k's
+    from ``offset[k]``, ``size[k]`` of them), and the nodes' (K, 3) bounds.
+
+    Returns (K,) each: split_bin, split_axis, make_leaf (as ``best_split``), and median:
+    True where the node must be split but no plane divides it (all its centroids coincide),
+    to be split at its median instead (along axis 0).
+    """
+    k = len(size)
+    split_bin, split_axis = np.empty(k, np.intp), np.empty(k, np.intp)
+    is_leaf, median = np.empty(k, bool), np.empty(k, bool)
+    group = max(1, int(CELLS_PER_TRIANGLE * len(bins)) // n_bins)   # nodes binned at once
+    for first in range(0, k, group):
+        nodes = slice(first, min(first + group, k))
+        m = nodes.stop - first
+        tris = slice(offset[first], offset[nodes.stop] if nodes.stop < k else len(bins))
+        node = np.repeat(np.arange(m), size[nodes])
+        # Per (bin, node, axis): triangle count and bounds of its triangles. Bins come
+        # first so that the sweeps in split_costs run over contiguous (node, axis) slices.
+        key = (bins[tris] * m + node[:, None]) * 3 + np.arange(3)       # (P, 3)
+        bin_count = np.bincount(key.ravel(), minlength=n_bins * m * 3).reshape(n_bins, m, 3)
+        # (float32: these only rank the candidate splits, and half the bytes build faster)
+        bin_lo, bin_hi = _bin_bounds(key, tri_lo[tris].astype(np.float32),
+                                     tri_hi[tris].astype(np.float32), (n_bins, m, 3, 3))
+        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo[nodes], box_hi[nodes],
+                           traversal_cost)
+        split_bin[nodes], split_axis[nodes], is_leaf[nodes] = best_split(
+            cost, size[nodes], max_leaf_size)
+        median[nodes] = ~is_leaf[nodes] & np.isinf(
+            cost[split_bin[nodes], np.arange(m), split_axis[nodes]])
+    split_axis[median] = 0
+    return split_bin, split_axis, is_leaf, median
 
 
 class NumpyBVH:
