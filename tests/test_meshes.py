@@ -144,6 +144,7 @@ def test_texture_coordinates_that_do_not_exist_are_none_as_in_trimesh():
         assert uv is None and len(triangles) == faces.count("f ")
 
 
+@pytest.mark.subprocess
 def test_loading_obj_scenes_imports_no_trimesh(tmp_path):
     # Start-up: trimesh, and SciPy through it, cost a render about a second; OBJ files, with
     # texture coordinates or without, are read without them.
