@@ -25,13 +25,17 @@ if TYPE_CHECKING:
 
 __version__ = "0.1.0"
 
-__all__ = ["Scene", "RenderOptions", "RenderResult", "load_scene", "render", "render_result",
-           "__version__"]
+__all__ = ["Scene", "RenderOptions", "RenderResult", "load_scene", "render", "render_result", "__version__"]
 
 #: Where each lazily imported name lives.
-_HOMES = {"Scene": "ptlab.scene", "load_scene": "ptlab.scene_file",
-          "RenderResult": "ptlab.rendering.api", "render": "ptlab.rendering.api",
-          "render_result": "ptlab.rendering.api", "RenderOptions": "ptlab.rendering.options"}
+_HOMES = {
+    "Scene": "ptlab.scene",
+    "load_scene": "ptlab.scene_file",
+    "RenderResult": "ptlab.rendering.api",
+    "render": "ptlab.rendering.api",
+    "render_result": "ptlab.rendering.api",
+    "RenderOptions": "ptlab.rendering.options",
+}
 
 
 def __getattr__(name: str):

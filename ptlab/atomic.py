@@ -21,8 +21,7 @@ from ptlab.errors import PtlabError
 def write_atomically(path: str | Path, write: Callable[[str], None]) -> Path:
     """Call ``write(temporary_path)``, then move the result to ``path``."""
     path = Path(path)
-    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix,
-                                             dir=path.parent)
+    descriptor, temporary = tempfile.mkstemp(prefix=f".{path.stem}-", suffix=path.suffix, dir=path.parent)
     os.close(descriptor)
     umask = os.umask(0)
     os.umask(umask)
@@ -71,8 +70,7 @@ def check_writable_folder(path: str | Path) -> Path:
     path = Path(path)
     if path_kind(path) not in (None, "folder"):
         raise PtlabError(f"{path}: exists and is not a folder")
-    existing = next(p for p in (path.absolute(), *path.absolute().parents)
-                    if path_kind(p) is not None)
+    existing = next(p for p in (path.absolute(), *path.absolute().parents) if path_kind(p) is not None)
     if path_kind(existing) != "folder":
         raise PtlabError(f"{path}: {existing} is not a folder")
     _try_writing_in(existing, path)

@@ -51,8 +51,9 @@ class Camera:
         return cross(self.forward, self.up)
 
 
-def generate_rays(camera: Camera, width: int, height: int, pixel_x: np.ndarray,
-                  pixel_y: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def generate_rays(
+    camera: Camera, width: int, height: int, pixel_x: np.ndarray, pixel_y: np.ndarray, u: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """Primary rays through jittered points of the given pixels.
 
     Args:

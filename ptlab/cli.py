@@ -49,41 +49,48 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     _add_bench(commands)
     _add_converge(commands, shared)
     grade = commands.add_parser(
-        "grade", help="check a material's sample / eval / pdf statistically",
+        "grade",
+        help="check a material's sample / eval / pdf statistically",
         description="Load a material (anything with eval, pdf and sample) from a Python file "
-                    "in a process of its own and run every check of ptlab.grading on it; exit 0 "
-                    "only if all pass (1 if any fails, 2 if the file cannot be loaded).")
+        "in a process of its own and run every check of ptlab.grading on it; exit 0 "
+        "only if all pass (1 if any fails, 2 if the file cannot be loaded).",
+    )
     exercise = commands.add_parser(
-        "exercise", help="the step-by-step exercises: start, check, list, grade-all",
+        "exercise",
+        help="the step-by-step exercises: start, check, list, grade-all",
         description="Exercises from Whitted ray tracing to path tracing: `start NN` copies a "
-                    "chapter's file, `check NN FILE` grades it, `list` shows your progress, "
-                    "`grade-all NN DIR` grades a whole class.")
+        "chapter's file, `check NN FILE` grades it, `list` shows your progress, "
+        "`grade-all NN DIR` grades a whole class.",
+    )
     # The graders' own arguments are added only for their command: importing ptlab.grading
     # and ptlab.exercises costs every other command a tenth of a second of start-up.
     if command in (None, "grade"):
         from ptlab.grading.cli import add_grade_arguments
+
         add_grade_arguments(grade)
     if command in (None, "exercise"):
         from ptlab.exercises.cli import add_exercise_arguments
+
         add_exercise_arguments(exercise)
     commands.add_parser("scenes", help="list the built-in scenes")
     return parser
 
 
-def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = None,
-                **overrides) -> None:
+def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = None, **overrides) -> None:
     """Add ``--NAME``, the render option ``name`` (a field of ``RenderOptions``): its choices,
     default, help and type, but for ``help`` and argparse's keywords in ``overrides``."""
     from ptlab.rendering.options import RenderOptions, with_default
 
     about = RenderOptions.about(name)
-    keywords = dict(choices=about.choices, default=RenderOptions.default(name), type=about.parse,
-                    metavar=about.metavar)
+    keywords = dict(
+        choices=about.choices, default=RenderOptions.default(name), type=about.parse, metavar=about.metavar
+    )
     keywords.update(overrides)
-    if keywords.get("action") == "append":       # (a list of its own: no default to add to)
+    if keywords.get("action") == "append":  # (a list of its own: no default to add to)
         keywords["default"] = None
-    parser.add_argument("--" + name.replace("_", "-"), **keywords,
-                        help=with_default(help or about.help, keywords["default"]))
+    parser.add_argument(
+        "--" + name.replace("_", "-"), **keywords, help=with_default(help or about.help, keywords["default"])
+    )
 
 
 def _shared_arguments() -> argparse.ArgumentParser:
@@ -98,22 +105,43 @@ def _shared_arguments() -> argparse.ArgumentParser:
 
 def _add_render(commands, shared: argparse.ArgumentParser) -> None:
     render = commands.add_parser(
-        "render", parents=[shared], help="render a scene to an image",
+        "render",
+        parents=[shared],
+        help="render a scene to an image",
         description="Render a scene (a built-in name such as cornell-box, or a scene file) "
-                    "and write .png (8-bit sRGB) or .exr (linear float).")
-    for name in ("spp", "res", "integrator", "strategy", "heuristic", "sampler", "sampling", "rr",
-                 "rr_depth", "max_depth"):
+        "and write .png (8-bit sRGB) or .exr (linear float).",
+    )
+    for name in (
+        "spp",
+        "res",
+        "integrator",
+        "strategy",
+        "heuristic",
+        "sampler",
+        "sampling",
+        "rr",
+        "rr_depth",
+        "max_depth",
+    ):
         _add_option(render, name)
     render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
-    render.add_argument("--scheduler", metavar="ADDRESS",
-                        help="render on the Dask cluster whose scheduler is at ADDRESS "
-                             "(needs the dask extra)")
-    render.add_argument("--checkpoint", metavar="FILE",
-                        help="save the render's state to FILE after every pass")
-    render.add_argument("--resume", metavar="FILE",
-                        help="continue the render saved in checkpoint FILE (same options)")
-    render.add_argument("--preview-every", type=float, metavar="SECONDS",
-                        help="after a pass, rewrite the output image if SECONDS have passed")
+    render.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="render on the Dask cluster whose scheduler is at ADDRESS (needs the dask extra)",
+    )
+    render.add_argument(
+        "--checkpoint", metavar="FILE", help="save the render's state to FILE after every pass"
+    )
+    render.add_argument(
+        "--resume", metavar="FILE", help="continue the render saved in checkpoint FILE (same options)"
+    )
+    render.add_argument(
+        "--preview-every",
+        type=float,
+        metavar="SECONDS",
+        help="after a pass, rewrite the output image if SECONDS have passed",
+    )
 
 
 def _add_bench(commands) -> None:
@@ -121,75 +149,126 @@ def _add_bench(commands) -> None:
     from ptlab.rendering.options import RenderOptions
 
     bench = commands.add_parser(
-        "bench", help="measure rendering speed, or accuracy per second",
+        "bench",
+        help="measure rendering speed, or accuracy per second",
         description="Render the Cornell box with each backend, estimator, sampler and worker "
-                    "count; print wall seconds, samples/s, rays/s, the shares of time in ray "
-                    "queries and in the sampler, and the parallel speed-up. With --accuracy: "
-                    "render it with each sampler (alternately, --repeat times with other seeds) "
-                    "and print relMSE against a cached high-spp reference, seconds, their "
-                    "product and the sampler's share.")
-    bench.add_argument("--res", type=int, help="square resolution (default 512; 256 with "
-                                                 "--accuracy)")
+        "count; print wall seconds, samples/s, rays/s, the shares of time in ray "
+        "queries and in the sampler, and the parallel speed-up. With --accuracy: "
+        "render it with each sampler (alternately, --repeat times with other seeds) "
+        "and print relMSE against a cached high-spp reference, seconds, their "
+        "product and the sampler's share.",
+    )
+    bench.add_argument("--res", type=int, help="square resolution (default 512; 256 with --accuracy)")
     bench.add_argument("--spp", type=int, help="samples per pixel (default 16; 64 with --accuracy)")
-    _add_option(bench, "sampler", action="append",
-                help=f"sampler to measure (repeatable; default {RenderOptions.sampler}, all "
-                     "three with --accuracy)")
-    bench.add_argument("--accuracy", action="store_true",
-                       help="compare the samplers' error at equal spp and its product with time")
-    bench.add_argument("--repeat", type=int, default=3,
-                       help="--accuracy: renders per sampler, alternating, each with another "
-                            "seed; --against: runs of each program (default 3)")
-    bench.add_argument("--reference", metavar="REF.exr",
-                       help="--accuracy: the reference image (linear EXR at --res) instead of "
-                            "a rendered one")
-    bench.add_argument("--reference-spp", type=int, default=4096, metavar="N",
-                       help="--accuracy: spp of the reference (default 4096; cached in "
-                            "$PTLAB_CACHE or ~/.cache/ptlab/references)")
-    _add_option(bench, "backend", action="append",
-                choices=[name for name in BACKENDS if name != "auto"],
-                help="backend to measure (repeatable; default both)")
-    bench.add_argument("--estimator", action="append", choices=("homework", "default"),
-                       help="estimator to measure (repeatable; default both)")
-    _add_option(bench, "workers", action="append",
-                help="worker processes (repeatable; default one per core); one worker is "
-                     "always measured too, as the baseline of the speed-up")
-    bench.add_argument("--against", metavar="PATH",
-                       help="time PATH, a compiled C++ path tracer such as the GAMES101 Homework 7 "
-                            "build/RayTracing, against ptlab render with the homework's estimator "
-                            "at its image's size, alternately --repeat times, as whole processes")
-    bench.add_argument("--cpp-args", default="{spp}", metavar="ARGS",
-                       help="--against: the C++ program's arguments ({spp} is replaced by --spp; "
-                            "default '{spp}')")
+    _add_option(
+        bench,
+        "sampler",
+        action="append",
+        help=f"sampler to measure (repeatable; default {RenderOptions.sampler}, all three with --accuracy)",
+    )
+    bench.add_argument(
+        "--accuracy",
+        action="store_true",
+        help="compare the samplers' error at equal spp and its product with time",
+    )
+    bench.add_argument(
+        "--repeat",
+        type=int,
+        default=3,
+        help="--accuracy: renders per sampler, alternating, each with another "
+        "seed; --against: runs of each program (default 3)",
+    )
+    bench.add_argument(
+        "--reference",
+        metavar="REF.exr",
+        help="--accuracy: the reference image (linear EXR at --res) instead of a rendered one",
+    )
+    bench.add_argument(
+        "--reference-spp",
+        type=int,
+        default=4096,
+        metavar="N",
+        help="--accuracy: spp of the reference (default 4096; cached in "
+        "$PTLAB_CACHE or ~/.cache/ptlab/references)",
+    )
+    _add_option(
+        bench,
+        "backend",
+        action="append",
+        choices=[name for name in BACKENDS if name != "auto"],
+        help="backend to measure (repeatable; default both)",
+    )
+    bench.add_argument(
+        "--estimator",
+        action="append",
+        choices=("homework", "default"),
+        help="estimator to measure (repeatable; default both)",
+    )
+    _add_option(
+        bench,
+        "workers",
+        action="append",
+        help="worker processes (repeatable; default one per core); one worker is "
+        "always measured too, as the baseline of the speed-up",
+    )
+    bench.add_argument(
+        "--against",
+        metavar="PATH",
+        help="time PATH, a compiled C++ path tracer such as the GAMES101 Homework 7 "
+        "build/RayTracing, against ptlab render with the homework's estimator "
+        "at its image's size, alternately --repeat times, as whole processes",
+    )
+    bench.add_argument(
+        "--cpp-args",
+        default="{spp}",
+        metavar="ARGS",
+        help="--against: the C++ program's arguments ({spp} is replaced by --spp; default '{spp}')",
+    )
 
 
 def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
     converge = commands.add_parser(
-        "converge", parents=[shared], help="chart error against time for several estimators",
+        "converge",
+        parents=[shared],
+        help="chart error against time for several estimators",
         description="Render the scene with each estimator at 1, 2, 4, ... spp until its time "
-                    "budget is spent, compare every render with a reference, and write "
-                    "convergence.csv (integrator, spp, seconds, rmse, relmse), a log-log chart "
-                    "convergence.png, an equal-time strip equal-time.png with error heat maps, "
-                    "and the reference.exr. Prints the time each needs to reach --target.")
-    converge.add_argument("--integrators", default="path:bsdf,path:nee,path:mis",
-                          metavar="LIST",
-                          help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
-                               "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
-                               "(default path:bsdf,path:nee,path:mis)")
+        "budget is spent, compare every render with a reference, and write "
+        "convergence.csv (integrator, spp, seconds, rmse, relmse), a log-log chart "
+        "convergence.png, an equal-time strip equal-time.png with error heat maps, "
+        "and the reference.exr. Prints the time each needs to reach --target.",
+    )
+    converge.add_argument(
+        "--integrators",
+        default="path:bsdf,path:nee,path:mis",
+        metavar="LIST",
+        help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
+        "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
+        "(default path:bsdf,path:nee,path:mis)",
+    )
     _add_option(converge, "sampler", help="the sampler of estimators without @SAMPLER")
     source = converge.add_mutually_exclusive_group()
-    source.add_argument("--reference", metavar="REF.exr",
-                        help="the reference image (linear EXR at the same resolution)")
-    source.add_argument("--reference-spp", type=int, default=1024, metavar="N",
-                        help="without --reference: render one with path:mis at N spp (default "
-                             "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references")
-    converge.add_argument("--budget", type=float, default=30.0, metavar="SECONDS",
-                          help="render time per estimator (default 30)")
+    source.add_argument(
+        "--reference", metavar="REF.exr", help="the reference image (linear EXR at the same resolution)"
+    )
+    source.add_argument(
+        "--reference-spp",
+        type=int,
+        default=1024,
+        metavar="N",
+        help="without --reference: render one with path:mis at N spp (default "
+        "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references",
+    )
+    converge.add_argument(
+        "--budget", type=float, default=30.0, metavar="SECONDS", help="render time per estimator (default 30)"
+    )
     converge.add_argument("--res", default="256", help="N (square) or WxH (default 256)")
     converge.add_argument("--out", metavar="DIR", help="output folder (default converge-SCENE)")
-    converge.add_argument("--target", type=float, default=0.01,
-                          help="report the time to reach this relMSE (default 0.01)")
-    converge.add_argument("--no-cache", action="store_true",
-                          help="render the reference even if a cached one exists")
+    converge.add_argument(
+        "--target", type=float, default=0.01, help="report the time to reach this relMSE (default 0.01)"
+    )
+    converge.add_argument(
+        "--no-cache", action="store_true", help="render the reference even if a cached one exists"
+    )
 
 
 def _render(args) -> int:
@@ -203,21 +282,26 @@ def _render(args) -> int:
     from ptlab.rendering.settings import check_workers
     from ptlab.scene_file import load_scene
 
-    options = RenderOptions(**{f.name: getattr(args, f.name) for f in fields(RenderOptions)
-                               if hasattr(args, f.name)})
+    options = RenderOptions(
+        **{f.name: getattr(args, f.name) for f in fields(RenderOptions) if hasattr(args, f.name)}
+    )
     scene = load_scene(args.scene)
     width, height = resolution(scene, options.res)
     out = check_output_path(args.out or f"{scene.name}.png")
     checkpoint = args.checkpoint or args.resume
     if checkpoint is not None:
         check_writable_file(checkpoint)
-    if args.preview_every is not None and not args.preview_every >= 0:   # (NaN too)
+    if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
     workers = check_workers(options.workers)
-    progress = ProgressBar(width * height * options.spp, len(pass_schedule(options.spp)),
-                           quiet=args.quiet)
-    run = dict(options=options, checkpoint=checkpoint, resume=args.resume, progress=progress,
-               on_pass=_Preview(out, args.preview_every))
+    progress = ProgressBar(width * height * options.spp, len(pass_schedule(options.spp)), quiet=args.quiet)
+    run = dict(
+        options=options,
+        checkpoint=checkpoint,
+        resume=args.resume,
+        progress=progress,
+        on_pass=_Preview(out, args.preview_every),
+    )
     with _StopOnSignal() as stop:
         try:
             if args.scheduler:
@@ -231,11 +315,13 @@ def _render(args) -> int:
         return _interrupted(result, out, checkpoint, quiet=args.quiet)
     _write(out, result)
     if not args.quiet:
-        print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
-              f"{result.samples_per_second / 1e6:.3f} M samples/s "
-              f"({result.settings['backend']}, {options.sampler} sampler, {options.sampling} "
-              f"sampling, rr {options.rr}, "
-              f"{workers} workers{', dask' if args.scheduler else ''})")
+        print(
+            f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
+            f"{result.samples_per_second / 1e6:.3f} M samples/s "
+            f"({result.settings['backend']}, {options.sampler} sampler, {options.sampling} "
+            f"sampling, rr {options.rr}, "
+            f"{workers} workers{', dask' if args.scheduler else ''})"
+        )
         print(f"wrote {out.resolve()}")
     return 0
 
@@ -245,8 +331,9 @@ def _write(out: Path, result) -> None:
     from ptlab import __version__
     from ptlab.image import write_image
 
-    metadata = dict(result.settings, seconds=round(result.seconds, 3), version=__version__,
-                    complete=int(result.complete))
+    metadata = dict(
+        result.settings, seconds=round(result.seconds, 3), version=__version__, complete=int(result.complete)
+    )
     if result.spp_max != result.spp:
         metadata["spp_max"] = result.spp_max
     image = result.image
@@ -263,8 +350,11 @@ def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
         print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
         return 130
     _write(out, result)
-    spread = f"{result.spp} spp" if result.spp == result.spp_max else (
-        f"{result.spp}-{result.spp_max} spp (tiles differ by a pass)")
+    spread = (
+        f"{result.spp} spp"
+        if result.spp == result.spp_max
+        else (f"{result.spp}-{result.spp_max} spp (tiles differ by a pass)")
+    )
     print(f"ptlab: interrupted: wrote {out.resolve()} with {spread}", file=sys.stderr)
     if checkpoint is not None:
         print(f"ptlab: resume with --resume {checkpoint}", file=sys.stderr)
@@ -307,6 +397,7 @@ class _Preview:
         if self.every is None or time.monotonic() - self.last < self.every:
             return
         from ptlab.image import write_image
+
         write_image(self.out, film.image(), dict(spp=film.spp, complete=0, preview=1))
         self.last = time.monotonic()
 
@@ -333,11 +424,22 @@ def _converge(args) -> int:
         except PtlabError as error:
             raise PtlabError(f"reference cache {error} (set PTLAB_CACHE, or give --no-cache)") from None
     echo = (lambda text: None) if args.quiet else print
-    run_converge(scene, estimators, out_dir, res, args.budget, seed=args.seed,
-                 reference=args.reference, reference_spp=args.reference_spp,
-                 cache_dir=cache_dir, target=args.target,
-                 echo=echo, quiet=args.quiet, workers=check_workers(args.workers),
-                 backend=args.backend)
+    run_converge(
+        scene,
+        estimators,
+        out_dir,
+        res,
+        args.budget,
+        seed=args.seed,
+        reference=args.reference,
+        reference_spp=args.reference_spp,
+        cache_dir=cache_dir,
+        target=args.target,
+        echo=echo,
+        quiet=args.quiet,
+        workers=check_workers(args.workers),
+        backend=args.backend,
+    )
     return 0
 
 
@@ -351,11 +453,24 @@ def _bench(args) -> int:
 
     if args.against is not None:
         from ptlab.measure.against import reject_options, run_against
-        reject_options({"--accuracy": args.accuracy, "--res": args.res, "--backend": args.backend,
-                        "--estimator": args.estimator, "--sampler": args.sampler,
-                        "a second --workers": (args.workers or [])[1:]})
-        run_against(args.against, args.cpp_args, spp=16 if args.spp is None else args.spp,
-                    repeat=args.repeat, workers=(args.workers or [None])[0])
+
+        reject_options(
+            {
+                "--accuracy": args.accuracy,
+                "--res": args.res,
+                "--backend": args.backend,
+                "--estimator": args.estimator,
+                "--sampler": args.sampler,
+                "a second --workers": (args.workers or [])[1:],
+            }
+        )
+        run_against(
+            args.against,
+            args.cpp_args,
+            spp=16 if args.spp is None else args.spp,
+            repeat=args.repeat,
+            workers=(args.workers or [None])[0],
+        )
         return 0
     res = args.res if args.res is not None else (256 if args.accuracy else 512)
     spp = args.spp if args.spp is not None else (64 if args.accuracy else 16)
@@ -367,21 +482,35 @@ def _bench(args) -> int:
         if not 1 <= args.reference_spp <= MAX_SPP:
             raise PtlabError(f"--reference-spp {args.reference_spp}: must be from 1 to {MAX_SPP}")
         workers = check_workers(args.workers[0]) if args.workers else 1
-        run_accuracy(args.sampler or list(SAMPLERS), res=res, spp=spp, repeat=args.repeat,
-                     reference=args.reference, reference_spp=args.reference_spp, workers=workers,
-                     cache_dir=default_cache_dir(),
-                     backend=(args.backend or [RenderOptions.backend])[0],
-                     **ESTIMATOR_OPTIONS[(args.estimator or ["default"])[0]])
+        run_accuracy(
+            args.sampler or list(SAMPLERS),
+            res=res,
+            spp=spp,
+            repeat=args.repeat,
+            reference=args.reference,
+            reference_spp=args.reference_spp,
+            workers=workers,
+            cache_dir=default_cache_dir(),
+            backend=(args.backend or [RenderOptions.backend])[0],
+            **ESTIMATOR_OPTIONS[(args.estimator or ["default"])[0]],
+        )
         return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
     workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
-    run_bench(args.backend or ["embree", "numpy"], args.estimator or ["homework", "default"],
-              workers, res=res, spp=spp, samplers=tuple(args.sampler or [RenderOptions.sampler]))
+    run_bench(
+        args.backend or ["embree", "numpy"],
+        args.estimator or ["homework", "default"],
+        workers,
+        res=res,
+        spp=spp,
+        samplers=tuple(args.sampler or [RenderOptions.sampler]),
+    )
     return 0
 
 
 def _scenes(args) -> int:
     from ptlab.scene_file import builtin_scene_names
+
     for name in builtin_scene_names():
         print(name)
     return 0
@@ -414,12 +543,11 @@ def _start_workers_early(argv: list[str]) -> None:
     glance.add_argument("-h", "--help", action="store_true")
     try:
         options, _ = glance.parse_known_args(argv)
-    except ValueError:      # (an unreadable number: the real parser says so)
+    except ValueError:  # (an unreadable number: the real parser says so)
         return
     size = [int(n) for n in (options.res or "").lower().split("x") if n.isdigit()]
     one_tile = bool(size) and max(size) <= TILE_SIZE
-    if (options.help or options.scheduler is not None
-            or one_tile and options.spp <= SPP_PER_PASS):
+    if options.help or options.scheduler is not None or one_tile and options.spp <= SPP_PER_PASS:
         return
     from ptlab.rendering.executors import default_workers, start_worker_server
 
@@ -438,13 +566,12 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "exercise":
         from ptlab.exercises.cli import run_exercise as handler
     else:
-        handler = {"render": _render, "bench": _bench, "converge": _converge,
-                   "scenes": _scenes}[args.command]
+        handler = {"render": _render, "bench": _bench, "converge": _converge, "scenes": _scenes}[args.command]
     try:
         code = handler(args)
         sys.stdout.flush()
         return code
-    except BrokenPipeError:     # the reader (head, a pager) stopped reading: not an error
+    except BrokenPipeError:  # the reader (head, a pager) stopped reading: not an error
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except PtlabError as error:

@@ -27,8 +27,7 @@ FORMATS = (".exr", ".png")
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
     """Linear values in [0, 1] -> sRGB-encoded values in [0, 1] (IEC 61966-2-1:1999):
     12.92 L below the break point 0.0031308, 1.055 L^(1 / 2.4) - 0.055 above it."""
-    return np.where(linear <= 0.0031308, 12.92 * linear,
-                    1.055 * np.power(linear, 1 / 2.4) - 0.055)
+    return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * np.power(linear, 1 / 2.4) - 0.055)
 
 
 #: Values that ``encode_srgb8`` encodes at a time.
@@ -46,9 +45,9 @@ def encode_srgb8(linear: np.ndarray) -> np.ndarray:
     encoded = np.empty(linear.shape, dtype=np.uint8)
     values, out = linear.reshape(-1), encoded.reshape(-1)
     for start in range(0, values.size, ENCODE_CHUNK):
-        chunk = values[start:start + ENCODE_CHUNK].astype(np.float64)
+        chunk = values[start : start + ENCODE_CHUNK].astype(np.float64)
         clipped = np.clip(np.nan_to_num(chunk), 0.0, 1.0)
-        out[start:start + ENCODE_CHUNK] = np.round(srgb_encode(clipped) * 255.0)
+        out[start : start + ENCODE_CHUNK] = np.round(srgb_encode(clipped) * 255.0)
     return encoded
 
 
@@ -56,8 +55,7 @@ def check_output_path(path: str | Path) -> Path:
     """The path, if its extension is a format we write and it can be written."""
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
-        raise PtlabError(f"{path}: unsupported image format {path.suffix!r} "
-                         f"(use {' or '.join(FORMATS)})")
+        raise PtlabError(f"{path}: unsupported image format {path.suffix!r} (use {' or '.join(FORMATS)})")
     return check_writable_file(path)
 
 
@@ -85,8 +83,12 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
     # larger one (a big seed) goes in as text too.
     typed = path.suffix.lower() == ".exr"
     for key, value in (metadata or {}).items():
-        keep = typed and (isinstance(value, float) or isinstance(value, int)
-                          and not isinstance(value, bool) and -2**31 <= value < 2**31)
+        keep = typed and (
+            isinstance(value, float)
+            or isinstance(value, int)
+            and not isinstance(value, bool)
+            and -(2**31) <= value < 2**31
+        )
         spec.attribute(f"ptlab:{key}", value if keep else str(value))
 
     def write(temporary: str) -> None:
@@ -120,10 +122,11 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
         if spec.nchannels < 3:
             raise PtlabError(f"{path}: has {spec.nchannels} channel(s), not the 3 of an RGB image")
         pixels = source.read_image(0, 0, 0, 3, oiio.FLOAT)
-        if pixels is None:   # e.g. a file cut short
+        if pixels is None:  # e.g. a file cut short
             raise PtlabError(f"{path}: cannot read image: {source.geterror() or 'no pixels'}")
     finally:
         source.close()
-    metadata = {a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs
-                if a.name.startswith("ptlab:")}
+    metadata = {
+        a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs if a.name.startswith("ptlab:")
+    }
     return np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, 3), metadata

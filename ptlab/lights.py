@@ -103,8 +103,7 @@ def area_times_radiance(areas: np.ndarray, radiance: np.ndarray) -> np.ndarray:
     return areas * radiance.mean(axis=1)
 
 
-def solid_angle_pdf(pdf_area: np.ndarray, dist2: np.ndarray,
-                    cos_theta_light: np.ndarray) -> np.ndarray:
+def solid_angle_pdf(pdf_area: np.ndarray, dist2: np.ndarray, cos_theta_light: np.ndarray) -> np.ndarray:
     """(N,) density per solid angle of a light point chosen with density ``pdf_area`` per
     area, seen at squared distance ``dist2`` and angle ``cos_theta_light`` to its normal:
     pdf_area |x - x'|^2 / cos (pbrt-v4 eq. 4.9; inf or NaN where cos <= 0)."""
@@ -126,8 +125,15 @@ class AreaLights:
     #: A triangle is found by rays as well as by light sampling (not a delta light).
     is_delta = False
 
-    def __init__(self, v0: np.ndarray, v1: np.ndarray, v2: np.ndarray, radiance: np.ndarray,
-                 offset: np.ndarray, share: float = 1.0):
+    def __init__(
+        self,
+        v0: np.ndarray,
+        v1: np.ndarray,
+        v2: np.ndarray,
+        radiance: np.ndarray,
+        offset: np.ndarray,
+        share: float = 1.0,
+    ):
         v0, v1, v2 = (np.asarray(a, dtype=np.float64) for a in (v0, v1, v2))
         triangles = np.stack([v0, v1, v2], axis=1)
         self.areas = triangle_areas(triangles)
@@ -149,10 +155,17 @@ class AreaLights:
         # (to stretch u back to [0, 1)), each as rows of a (rows, L) table.
         cdf_below = np.concatenate([[0.0], self.cdf[:-1]]).astype(np.float32)
         width = np.maximum(self.cdf - cdf_below, np.float32(1e-30))
-        fields = dict(v0=self.v0.T, e1=self.e1.T, e2=self.e2.T, normals=self.normals.T,
-                      radiance=self.radiance.T, offset=np.asarray(offset, np.float32)[None],
-                      pdf_area=self.pdf_area(self.radiance)[None], cdf_below=cdf_below[None],
-                      stretch=(1 / width)[None])
+        fields = dict(
+            v0=self.v0.T,
+            e1=self.e1.T,
+            e2=self.e2.T,
+            normals=self.normals.T,
+            radiance=self.radiance.T,
+            offset=np.asarray(offset, np.float32)[None],
+            pdf_area=self.pdf_area(self.radiance)[None],
+            cdf_below=cdf_below[None],
+            stretch=(1 / width)[None],
+        )
         # offset x normal per light, the step from a sampled point to its shadow ray's target:
         # the same float32 product as per sample, made once (arithmetic between two of the
         # broadcast views below is several times slower than with one array).
@@ -160,14 +173,13 @@ class AreaLights:
         # Fields that are the same for every light (in the Cornell box: the normal, Le, the
         # offset, pdf_area and the stretch) are kept as one column that broadcasts to every
         # sample; the others are packed in one table, gathered with one `take` per sample.
-        self._same = {name: rows[:, :1] for name, rows in fields.items()
-                      if (rows == rows[:, :1]).all()}
+        self._same = {name: rows[:, :1] for name, rows in fields.items() if (rows == rows[:, :1]).all()}
         varying = [name for name in fields if name not in self._same]
-        self._packed = np.vstack([fields[name] for name in varying] + [np.zeros((0, len(v0)))]
-                                 ).astype(np.float32)     # (one light: nothing varies)
+        self._packed = np.vstack([fields[name] for name in varying] + [np.zeros((0, len(v0)))]).astype(
+            np.float32
+        )  # (one light: nothing varies)
         starts = np.cumsum([0] + [len(fields[name]) for name in varying])
-        self._rows = {name: slice(a, b)
-                      for name, a, b in zip(varying, starts[:-1], starts[1:], strict=True)}
+        self._rows = {name: slice(a, b) for name, a, b in zip(varying, starts[:-1], starts[1:], strict=True)}
 
     def __len__(self) -> int:
         return len(self.areas)
@@ -182,7 +194,6 @@ class AreaLights:
         """(N,) float32 area density of sampling a point on a light of radiance ``radiance``
         (N, 3): share x mean(Le) / total power (0 on surfaces that do not emit)."""
         return (radiance.mean(axis=1) / np.float32(self.total_power / self.share)).astype(np.float32)
-
 
     def sample(self, u: np.ndarray) -> ShapeSample:
         """Points on the lights from (N, 2) uniforms.
@@ -203,7 +214,7 @@ class AreaLights:
         else:
             index = np.searchsorted(self.cdf, u0, side="right")
             np.minimum(index, len(self.areas) - 1, out=index)  # guards cdf[-1] rounding below 1
-        data = self._packed.take(index, axis=1)     # (rows, N): rows are contiguous
+        data = self._packed.take(index, axis=1)  # (rows, N): rows are contiguous
 
         def field(name: str) -> np.ndarray:
             """(N, k) per sample: gathered rows, or one column broadcast to every sample
@@ -215,12 +226,17 @@ class AreaLights:
 
         # u0 within [cdf_below, cdf_at), stretched to [0, 1) (and kept below 1 in float32).
         stretched = (u0 - field("cdf_below")[:, 0]) * field("stretch")[:, 0]
-        np.minimum(stretched, np.float32(1 - 2.0 ** -24), out=stretched)
+        np.minimum(stretched, np.float32(1 - 2.0**-24), out=stretched)
         b1, b2 = uniform_triangle(np.stack([stretched, u[:, 1]]).T)
         points = field("v0") + b1[:, None] * field("e1") + b2[:, None] * field("e2")
-        return ShapeSample(points=points, normals=field("normals"), radiance=field("radiance"),
-                           offset=field("offset"), pdf_area=field("pdf_area")[:, 0],
-                           target=points + field("lift"))
+        return ShapeSample(
+            points=points,
+            normals=field("normals"),
+            radiance=field("radiance"),
+            offset=field("offset"),
+            pdf_area=field("pdf_area")[:, 0],
+            target=points + field("lift"),
+        )
 
     def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
         """A point on the triangles (``sample``) as seen from the points ``p`` (N, 3).
@@ -234,10 +250,12 @@ class AreaLights:
         wi = to_light / np.sqrt(dist2)[:, None]
         cos_theta_light = -dot(light.normals, wi)
         front = cos_theta_light > 0
-        return LightLiSample(wi=wi, radiance=light.radiance * front[:, None],
-                             pdf=np.where(front, solid_angle_pdf(light.pdf_area, dist2,
-                                                                 cos_theta_light), 0),
-                             target=light.target)
+        return LightLiSample(
+            wi=wi,
+            radiance=light.radiance * front[:, None],
+            pdf=np.where(front, solid_angle_pdf(light.pdf_area, dist2, cos_theta_light), 0),
+            target=light.target,
+        )
 
 
 def pick(weights: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -254,13 +272,13 @@ def pick(weights: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         [0, 1), so that it can serve again, as stratified as it was (``ptlab.samplers``).
     """
     cdf = np.cumsum(weights, dtype=np.float64)
-    cdf /= cdf[-1]                 # exactly 1 from the last item of non-zero weight on
+    cdf /= cdf[-1]  # exactly 1 from the last item of non-zero weight on
     # The number of cdf entries at or below u: cdf[index - 1] <= u < cdf[index].
     index = np.searchsorted(cdf, u, side="right")
     below = np.concatenate([[0.0], cdf[:-1]])
     width = (cdf - below).take(index)
     stretched = ((u - below.take(index)) / width).astype(np.float32)
-    return index, np.minimum(stretched, np.float32(1 - 2.0 ** -24))
+    return index, np.minimum(stretched, np.float32(1 - 2.0**-24))
 
 
 class PointLights:
@@ -286,11 +304,12 @@ class PointLights:
         self.positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         self.intensity = np.asarray(intensity, dtype=np.float64).reshape(-1, 3)
         if len(self.positions) != len(self.intensity) or len(self.positions) == 0:
-            raise ValueError(f"{len(self.positions)} positions for {len(self.intensity)} "
-                             f"intensities: give one (3,) intensity per point light")
+            raise ValueError(
+                f"{len(self.positions)} positions for {len(self.intensity)} "
+                f"intensities: give one (3,) intensity per point light"
+            )
         if (self.intensity < 0).any() or not (self.intensity.mean(axis=1) > 0).all():
-            raise ValueError("a point light's intensity must be >= 0 in each channel and "
-                             "not 0 in all three")
+            raise ValueError("a point light's intensity must be >= 0 in each channel and not 0 in all three")
         self.share = float(share)
         #: (K,) each light's power, and their sum.
         self.powers = 4 * math.pi * self.intensity.mean(axis=1)
@@ -302,8 +321,7 @@ class PointLights:
         return len(self.positions)
 
     def __repr__(self) -> str:
-        return (f"PointLights(positions={self.positions.tolist()}, "
-                f"intensity={self.intensity.tolist()})")
+        return f"PointLights(positions={self.positions.tolist()}, intensity={self.intensity.tolist()})"
 
     def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
         """One of the lights for each point ``p`` (N, 3), picked by power with ``u[:, 0]``."""
@@ -312,8 +330,12 @@ class PointLights:
         to_light = position - p
         dist2 = dot(to_light, to_light)
         radiance = self.intensity.astype(np.float32).take(index, axis=0) / dist2[:, None]
-        return LightLiSample(wi=to_light / np.sqrt(dist2)[:, None], radiance=radiance,
-                             pdf=self.probability.take(index), target=position)
+        return LightLiSample(
+            wi=to_light / np.sqrt(dist2)[:, None],
+            radiance=radiance,
+            pdf=self.probability.take(index),
+            target=position,
+        )
 
 
 class Sky:
@@ -351,9 +373,12 @@ class Sky:
         """A direction uniform on the sphere for each point ``p`` (N, 3)."""
         wi = uniform_sphere(u).astype(np.float32)
         n = len(p)
-        return LightLiSample(wi=wi, radiance=np.broadcast_to(self.radiance.astype(np.float32), (n, 3)),
-                             pdf=np.full(n, self.pdf, dtype=np.float32),
-                             target=p + np.float32(self.distance) * wi)
+        return LightLiSample(
+            wi=wi,
+            radiance=np.broadcast_to(self.radiance.astype(np.float32), (n, 3)),
+            pdf=np.full(n, self.pdf, dtype=np.float32),
+            target=p + np.float32(self.distance) * wi,
+        )
 
 
 #: The probability with which light sampling picks the sky when there are other lights too:
@@ -377,7 +402,7 @@ def light_shares(area_power: float, point_power: float, sky: bool) -> tuple[floa
     """
     finite = area_power + point_power
     if point_power == 0 and not sky:
-        return 1.0, 0.0, 0.0       # (exactly 1: scenes of triangles only keep their numbers)
+        return 1.0, 0.0, 0.0  # (exactly 1: scenes of triangles only keep their numbers)
     if finite == 0:
         return 0.0, 0.0, 1.0
     sky_share = SKY_SHARE if sky else 0.0
@@ -402,8 +427,12 @@ class LightSampler:
         kinds: the kinds given, in this order.
     """
 
-    def __init__(self, area_lights: AreaLights | None = None,
-                 point_lights: PointLights | None = None, sky: Sky | None = None):
+    def __init__(
+        self,
+        area_lights: AreaLights | None = None,
+        point_lights: PointLights | None = None,
+        sky: Sky | None = None,
+    ):
         self.area_lights, self.point_lights, self.sky = area_lights, point_lights, sky
         self.kinds = [kind for kind in (area_lights, point_lights, sky) if kind is not None]
         self.shares = np.array([kind.share for kind in self.kinds])
@@ -427,9 +456,14 @@ class LightSampler:
         return kind, np.stack([stretched, u[:, 1]]).T, 1.0 / float(shares.sum())
 
 
-def build_lights(triangles: np.ndarray, radiance: np.ndarray, offset: np.ndarray,
-                 point_lights: PointLights | None = None, sky: Sky | None = None,
-                 sky_distance: float | None = None) -> LightSampler | None:
+def build_lights(
+    triangles: np.ndarray,
+    radiance: np.ndarray,
+    offset: np.ndarray,
+    point_lights: PointLights | None = None,
+    sky: Sky | None = None,
+    sky_distance: float | None = None,
+) -> LightSampler | None:
     """The lights of a scene as light sampling picks them, each kind with its share of the
     samples (``light_shares``); None for a scene without light.
 
@@ -450,13 +484,19 @@ def build_lights(triangles: np.ndarray, radiance: np.ndarray, offset: np.ndarray
     # bits, and changing either would change the images of scenes with two kinds of light.)
     area_share, point_share, sky_share = light_shares(
         math.pi * float(np.sum(area_times_radiance(areas[lit], radiance[lit]))),
-        point_lights.power if point_lights is not None else 0.0, sky is not None)
+        point_lights.power if point_lights is not None else 0.0,
+        sky is not None,
+    )
     emitters = triangles[lit]
     sampler = LightSampler(
-        area_lights=AreaLights(emitters[:, 0], emitters[:, 1], emitters[:, 2], radiance[lit],
-                               offset[lit], share=area_share) if lit.any() else None,
-        point_lights=PointLights(point_lights.positions, point_lights.intensity,
-                                 share=point_share) if point_lights is not None else None,
-        sky=Sky(sky.radiance, share=sky_share, distance=sky_distance)
-        if sky is not None else None)
+        area_lights=AreaLights(
+            emitters[:, 0], emitters[:, 1], emitters[:, 2], radiance[lit], offset[lit], share=area_share
+        )
+        if lit.any()
+        else None,
+        point_lights=PointLights(point_lights.positions, point_lights.intensity, share=point_share)
+        if point_lights is not None
+        else None,
+        sky=Sky(sky.radiance, share=sky_share, distance=sky_distance) if sky is not None else None,
+    )
     return sampler if sampler.kinds else None

@@ -52,14 +52,14 @@ _FACE_RECORD = re.compile(rf"f(?:[ \t]+{_REFERENCE})*[ \t]*")
 _RECORD_SIZES = {"v": (3, 7), "vt": (1, 3), "vn": (3, 3)}
 
 
-def read_mesh_triangles(path: Path, where: str | None = None,
-                        limit: float = math.inf) -> np.ndarray:
+def read_mesh_triangles(path: Path, where: str | None = None, limit: float = math.inf) -> np.ndarray:
     """(T, 3, 3) float64 triangles of a mesh file (``read_mesh``)."""
     return read_mesh(path, where, limit)[0]
 
 
-def read_mesh(path: Path, where: str | None = None,
-              limit: float = math.inf) -> tuple[np.ndarray, np.ndarray | None]:
+def read_mesh(
+    path: Path, where: str | None = None, limit: float = math.inf
+) -> tuple[np.ndarray, np.ndarray | None]:
     """The triangles of a mesh file and their texture coordinates: an OBJ file read here
     (``read_obj``), any other file by trimesh.
 
@@ -76,8 +76,9 @@ def read_mesh(path: Path, where: str | None = None,
     where = where or str(path)
     fmt = path.suffix.lower().lstrip(".")
     if fmt not in MESH_FORMATS:
-        raise SceneError(where, f"mesh {path.name}: unknown mesh format {path.suffix!r} "
-                                f"(use .{', .'.join(MESH_FORMATS)})")
+        raise SceneError(
+            where, f"mesh {path.name}: unknown mesh format {path.suffix!r} (use .{', .'.join(MESH_FORMATS)})"
+        )
     try:
         data = path.read_bytes()
     except OSError as error:
@@ -96,31 +97,42 @@ def read_mesh(path: Path, where: str | None = None,
     if len(faces) == 0:
         raise SceneError(where, f"mesh {path.name} has no triangles")
     if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise SceneError(where, f"mesh {path.name}: vertices must have 3 coordinates, "
-                                f"got {vertices.shape[-1] if vertices.ndim == 2 else 0}")
+        raise SceneError(
+            where,
+            f"mesh {path.name}: vertices must have 3 coordinates, "
+            f"got {vertices.shape[-1] if vertices.ndim == 2 else 0}",
+        )
     if faces.ndim != 2 or faces.shape[1] != 3 or not np.issubdtype(faces.dtype, np.integer):
         raise SceneError(where, f"mesh {path.name}: trimesh returned faces of shape {faces.shape}")
     outside = faces[(faces < 0) | (faces >= len(vertices))]
     if len(outside):
-        raise SceneError(where, f"mesh {path.name}: a face refers to vertex {int(outside[0])}, "
-                                f"but there are {len(vertices)} vertices (0 to "
-                                f"{len(vertices) - 1})")
+        raise SceneError(
+            where,
+            f"mesh {path.name}: a face refers to vertex {int(outside[0])}, "
+            f"but there are {len(vertices)} vertices (0 to "
+            f"{len(vertices) - 1})",
+        )
     bad = ~np.isfinite(vertices).all(axis=1)
     if bad.any():
-        raise SceneError(where, f"mesh {path.name} has {int(bad.sum())} vertices that are NaN "
-                                f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})")
+        raise SceneError(
+            where,
+            f"mesh {path.name} has {int(bad.sum())} vertices that are NaN "
+            f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})",
+        )
     triangles = vertices[faces]
     beyond = np.abs(triangles).max(axis=2) > limit
     if beyond.any():
         vertex = triangles[beyond][0]
-        raise SceneError(where, f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
-                                f"coordinate must lie within +-{limit:g}")
+        raise SceneError(
+            where,
+            f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
+            f"coordinate must lie within +-{limit:g}",
+        )
     if fmt != "obj":
         uv = _texture_coordinates(mesh, len(vertices), where, path.name)
         uv = None if uv is None else uv[faces]
     if uv is not None and not np.isfinite(uv).all():
-        raise SceneError(where, f"mesh {path.name} has texture coordinates that are NaN or "
-                                f"infinite")
+        raise SceneError(where, f"mesh {path.name} has texture coordinates that are NaN or infinite")
     # (Only now: a vertex far out can make its triangles degenerate in float64.)
     kept = has_area(triangles)
     if not kept.any():
@@ -135,15 +147,17 @@ def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.n
         return None
     uv = np.asarray(uv, dtype=np.float64)
     if uv.ndim != 2 or len(uv) != vertex_count or uv.shape[1] == 0:
-        raise SceneError(where, f"mesh {name}: texture coordinates of shape {uv.shape} for "
-                                f"{vertex_count} vertices")
+        raise SceneError(
+            where, f"mesh {name}: texture coordinates of shape {uv.shape} for {vertex_count} vertices"
+        )
     return np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
 
 
 def has_area(triangles: np.ndarray) -> np.ndarray:
     """(T,) bool: which of the (T, 3, 3) ``triangles`` have an area that is not zero."""
-    area2 = np.linalg.norm(np.cross(triangles[:, 1] - triangles[:, 0],
-                                    triangles[:, 2] - triangles[:, 0]), axis=1)
+    area2 = np.linalg.norm(
+        np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1
+    )
     return area2 > 0
 
 
@@ -156,8 +170,9 @@ def _read_with_trimesh(path: Path, where: str, fmt: str):
     except ModuleNotFoundError:
         # trimesh imports a character-set detector (an optional package) only for a file
         # that is neither valid binary data of its format nor UTF-8 text.
-        raise SceneError(where, f"cannot read mesh {path.name}: neither a binary .{fmt} file "
-                                f"nor UTF-8 text") from None
+        raise SceneError(
+            where, f"cannot read mesh {path.name}: neither a binary .{fmt} file nor UTF-8 text"
+        ) from None
     except Exception as error:  # trimesh raises many kinds for unreadable files
         raise SceneError(where, f"cannot read mesh {path.name}: {error}") from None
     return mesh
@@ -201,17 +216,22 @@ def _obj_text(data: bytes) -> bytes:
     if b"\0" in data:
         raise ValueError("contains NUL bytes: a binary file, not OBJ text")
     if data.startswith(b"\xef\xbb\xbf"):
-        raise ValueError("starts with a byte-order mark, which hides its first line from "
-                         "trimesh: save it as UTF-8 without BOM")
+        raise ValueError(
+            "starts with a byte-order mark, which hides its first line from "
+            "trimesh: save it as UTF-8 without BOM"
+        )
     try:
-        data.isascii() or data.decode("utf-8")      # (the first is 20x faster)
+        data.isascii() or data.decode("utf-8")  # (the first is 20x faster)
     except UnicodeDecodeError as error:
-        raise ValueError(f"is not UTF-8 text (byte {data[error.start]:#04x} at offset "
-                         f"{error.start}): a binary file, or another encoding") from None
+        raise ValueError(
+            f"is not UTF-8 text (byte {data[error.start]:#04x} at offset "
+            f"{error.start}): a binary file, or another encoding"
+        ) from None
     text = data.replace(b"\r\n", b"\n")
     if b"\r" in text:
-        raise ValueError("ends its lines with CR alone, which trimesh does not split: save it "
-                         "with LF or CRLF line ends")
+        raise ValueError(
+            "ends its lines with CR alone, which trimesh does not split: save it with LF or CRLF line ends"
+        )
     return text
 
 
@@ -253,7 +273,7 @@ def parse_obj(text: bytes) -> ObjRecords | None:
     give the fields of each line and their forms. No Python loop runs over lines, so reading
     takes a time proportional to the file's size (docs/performance.md).
     """
-    joined = text.replace(b"\\\n", b"")       # (lines continued with a backslash)
+    joined = text.replace(b"\\\n", b"")  # (lines continued with a backslash)
     if not joined.endswith(b"\n"):
         joined += b"\n"
     data = np.frombuffer(joined, np.uint8)
@@ -284,8 +304,7 @@ def parse_obj(text: bytes) -> ObjRecords | None:
         numbers[record], plain = values
         plain_numbers &= plain
     # Per face: how many `v` and `vt` records come before its line.
-    before = {record: np.cumsum(kind == _KINDS[record])[kind == _KINDS["f"]]
-              for record in ("v", "vt")}
+    before = {record: np.cumsum(kind == _KINDS[record])[kind == _KINDS["f"]] for record in ("v", "vt")}
     faces = _face_records(lines_of("f"), before, len(numbers["v"]), len(numbers["vt"]))
     if faces is None:
         return None
@@ -294,10 +313,11 @@ def parse_obj(text: bytes) -> ObjRecords | None:
     return ObjRecords(
         vertices=numbers["v"][:, :3],
         texture=np.pad(texture, ((0, 0), (0, 2 - texture.shape[1]))),
-        vertex_references=vertex_references, texture_references=texture_references,
+        vertex_references=vertex_references,
+        texture_references=texture_references,
         face_sizes=face_sizes,
-        plain=b"\\\n" not in text and not misplaced.any() and not commented and plain_numbers
-        and plain_faces)
+        plain=b"\\\n" not in text and not misplaced.any() and not commented and plain_numbers and plain_faces,
+    )
 
 
 #: The records ``parse_obj`` reads, and the code of each in its per-line kinds (0: others).
@@ -322,14 +342,13 @@ _REFERENCE_BYTES = _byte_class(b"-/ \t\n")
 _BLANK = _byte_class(bytes(range(0x21)) + bytes(range(0x80, 0x100)))
 
 
-def _line_kinds(data: np.ndarray, starts: np.ndarray,
-                ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _line_kinds(data: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(L,) uint8 kind of each line (``_KINDS``, from its first three bytes), and (L,) bool:
     which lines may be misplaced records (indented, or a keyword not followed by a space)."""
+
     def byte(k: int) -> np.ndarray:
         """Byte k of every line; a line feed beyond a line's end."""
-        return np.where(ends - starts > k, data[np.minimum(starts + k, len(data) - 1)],
-                        _NEWLINE)
+        return np.where(ends - starts > k, data[np.minimum(starts + k, len(data) - 1)], _NEWLINE)
 
     b0, b1, b2 = byte(0), byte(1), byte(2)
     v, f = b0 == ord("v"), b0 == ord("f")
@@ -339,8 +358,11 @@ def _line_kinds(data: np.ndarray, starts: np.ndarray,
     kind[vt_or_vn & (b1 == ord("t")) & (b2 == _SPACE)] = _KINDS["vt"]
     kind[vt_or_vn & (b1 == ord("n")) & (b2 == _SPACE)] = _KINDS["vn"]
     kind[f & (b1 == _SPACE)] = _KINDS["f"]
-    misplaced = (_BLANK[b0] & (b0 != _NEWLINE)) | ((v | f) & _BLANK[b1] & (b1 != _SPACE)) | \
-        (vt_or_vn & _BLANK[b2] & (b2 != _SPACE))
+    misplaced = (
+        (_BLANK[b0] & (b0 != _NEWLINE))
+        | ((v | f) & _BLANK[b1] & (b1 != _SPACE))
+        | (vt_or_vn & _BLANK[b2] & (b2 != _SPACE))
+    )
     return kind, misplaced
 
 
@@ -366,7 +388,7 @@ def _read_numbers(stream: np.ndarray, count: int, dtype: type) -> np.ndarray | N
     """The ``count`` numbers of ``stream`` (bytes of fields separated by whitespace), or None
     if it does not hold exactly that many, each a whole field."""
     if count == 0:
-        return np.zeros(0, dtype)             # (np.fromstring reads blank text as [-1])
+        return np.zeros(0, dtype)  # (np.fromstring reads blank text as [-1])
     with warnings.catch_warnings():
         # A field that is not (wholly) a number ends the reading with a warning.
         warnings.simplefilter("error", DeprecationWarning)
@@ -377,8 +399,7 @@ def _read_numbers(stream: np.ndarray, count: int, dtype: type) -> np.ndarray | N
     return values if len(values) == count else None
 
 
-def _number_records(stream: np.ndarray, fewest: int,
-                    most: int) -> tuple[np.ndarray, bool] | None:
+def _number_records(stream: np.ndarray, fewest: int, most: int) -> tuple[np.ndarray, bool] | None:
     """(n, size) float64 numbers of n ``v`` (``vt``, ``vn``) lines that each have as many,
     between ``fewest`` and ``most``, and whether they are all plain numbers; or None."""
     _, _, counts = _fields(stream)
@@ -394,9 +415,9 @@ def _number_records(stream: np.ndarray, fewest: int,
     return values.reshape(-1, size), _made_of(stream, _NUMBER_BYTES)
 
 
-def _face_records(stream: np.ndarray, before: dict[str, np.ndarray], vertex_count: int,
-                  texture_count: int) -> tuple[np.ndarray, np.ndarray | None, np.ndarray,
-                                               bool] | None:
+def _face_records(
+    stream: np.ndarray, before: dict[str, np.ndarray], vertex_count: int, texture_count: int
+) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, bool] | None:
     """The references of F faces, from their lines' bytes (keyword blanked) and the number
     of ``v`` and ``vt`` records before each line, (F,) each: (R,) 0-based vertices, (R,)
     0-based ``vt`` records or None, (F,) references per face, and whether the faces are
@@ -410,7 +431,7 @@ def _face_records(stream: np.ndarray, before: dict[str, np.ndarray], vertex_coun
     # its slashes tell.
     slash = np.flatnonzero(stream == _SLASH)
     slashes = np.diff(np.searchsorted(slash, ends), prepend=0)
-    double = slash[1:][np.diff(slash) == 1]          # the second of two slashes in a row
+    double = slash[1:][np.diff(slash) == 1]  # the second of two slashes in a row
     doubles = np.diff(np.searchsorted(double, ends), prepend=0)
     per, rest = np.divmod(slashes - doubles, sizes)
     if rest.any() or (per > 2).any():
@@ -430,21 +451,24 @@ def _face_records(stream: np.ndarray, before: dict[str, np.ndarray], vertex_coun
     # each, all between its start and the next reference's, and a double slash in all or none.
     form = int(slashes[0] // sizes[0])
     inside = slash.reshape(len(start), form) if len(slash) == form * len(start) else None
-    plain = inside is not None and bool((inside > start[:, None]).all()) and \
-        bool((inside[:-1] < start[1:, None]).all()) and doubles.sum() in (0, len(start)) and \
-        bool((numbers[first] > 0).all())
+    plain = (
+        inside is not None
+        and bool((inside > start[:, None]).all())
+        and bool((inside[:-1] < start[1:, None]).all())
+        and doubles.sum() in (0, len(start))
+        and bool((numbers[first] > 0).all())
+    )
     texture = None
     if ((per >= 1) & (doubles == 0)).all():
         texture = _zero_based(numbers[first + 1], before["vt"], sizes, texture_count)
     return vertex, texture, sizes, plain
 
 
-def _zero_based(index: np.ndarray, before: np.ndarray, sizes: np.ndarray,
-                count: int) -> np.ndarray | None:
+def _zero_based(index: np.ndarray, before: np.ndarray, sizes: np.ndarray, count: int) -> np.ndarray | None:
     """(R,) 0-based records of the (R,) OBJ indices of faces of (F,) ``sizes`` references
     (from 1, or negative: counted back from the last of the (F,) ``before`` records before
     the face's line), or None if one of them is not among the ``count`` records."""
-    if index.min() > 0:                          # (the common case: spare the negatives)
+    if index.min() > 0:  # (the common case: spare the negatives)
         return index - 1 if index.max() <= count else None
     zero_based = np.where(index > 0, index - 1, index + np.repeat(before, sizes))
     if (index == 0).any() or zero_based.min() < 0 or zero_based.max() >= count:
@@ -470,8 +494,8 @@ def check_obj_lines(text: str) -> None:
     """Raise ``ValueError("line N: ...")`` for the first record trimesh would misread."""
     records = list(_obj_records(text))
     vertex_count = sum(keyword == "v" for _, keyword, _ in records)
-    sizes: dict[str, tuple[int, int]] = {}     # record keyword -> (size, first line with it)
-    forms: dict[int, tuple[str, int]] = {}     # numbers in a face -> (its form, first line)
+    sizes: dict[str, tuple[int, int]] = {}  # record keyword -> (size, first line with it)
+    forms: dict[int, tuple[str, int]] = {}  # numbers in a face -> (its form, first line)
     vertices_so_far = faces = 0
     for number, keyword, line in records:
         fields = line.split()[1:]
@@ -481,21 +505,28 @@ def check_obj_lines(text: str) -> None:
             continue
         if not _NUMBERS_RECORD.fullmatch(line):
             bad = next((f for f in fields if not re.fullmatch(_NUMBER, f)), None)
-            raise ValueError(f"line {number}: {bad!r} is not a number" if bad else
-                             f"line {number}: separate the numbers with spaces or tabs")
+            raise ValueError(
+                f"line {number}: {bad!r} is not a number"
+                if bad
+                else f"line {number}: separate the numbers with spaces or tabs"
+            )
         fewest, most = _RECORD_SIZES[keyword]
         if not fewest <= len(fields) <= most:
             expected = f"{fewest}" if fewest == most else f"{fewest} to {most}"
-            raise ValueError(f"line {number}: `{keyword}` needs {expected} numbers, got "
-                             f"{len(fields)}")
+            raise ValueError(f"line {number}: `{keyword}` needs {expected} numbers, got {len(fields)}")
         size, first = sizes.setdefault(keyword, (len(fields), number))
         if len(fields) != size:
-            raise ValueError(f"line {number}: `{keyword}` has {len(fields)} numbers but line "
-                             f"{first}'s has {size}: write every `{keyword}` alike")
+            raise ValueError(
+                f"line {number}: `{keyword}` has {len(fields)} numbers but line "
+                f"{first}'s has {size}: write every `{keyword}` alike"
+            )
         vertices_so_far += keyword == "v"
     if faces == 0:
-        raise ValueError("has no faces (`f` lines)" if vertex_count else
-                         "has no vertices or faces (`v` and `f` lines): is it an OBJ file?")
+        raise ValueError(
+            "has no faces (`f` lines)"
+            if vertex_count
+            else "has no vertices or faces (`v` and `f` lines): is it an OBJ file?"
+        )
 
 
 def _obj_records(text: str):
@@ -513,18 +544,21 @@ def _obj_records(text: str):
             number += 1
             line = line[:-1] + lines[number]
         number += 1
-        if not line or line[0] not in "vf" and not line[0].isspace():   # (a quick skip)
+        if not line or line[0] not in "vf" and not line[0].isspace():  # (a quick skip)
             continue
         words = line.split(None, 1)
         if not words or words[0] not in ("v", "vt", "vn", "f"):
             continue
         keyword = words[0]
         if not line.startswith(keyword + " "):
-            raise ValueError(f"line {start}: write `{keyword}` at the very start of the line, "
-                             f"with a space after it: trimesh skips the line otherwise")
+            raise ValueError(
+                f"line {start}: write `{keyword}` at the very start of the line, "
+                f"with a space after it: trimesh skips the line otherwise"
+            )
         if "#" in line:
-            raise ValueError(f"line {start}: a comment after the data; trimesh reads "
-                             f"comments only on lines of their own")
+            raise ValueError(
+                f"line {start}: a comment after the data; trimesh reads comments only on lines of their own"
+            )
         yield start, keyword, line
 
 
@@ -533,41 +567,56 @@ def _form(reference: str) -> str:
     return re.sub(r"-?[0-9]+", "i", reference)
 
 
-def _check_face(number: int, line: str, references: list[str], vertices_so_far: int,
-                vertex_count: int, forms: dict[int, tuple[str, int]]) -> None:
+def _check_face(
+    number: int,
+    line: str,
+    references: list[str],
+    vertices_so_far: int,
+    vertex_count: int,
+    forms: dict[int, tuple[str, int]],
+) -> None:
     """Raise ``ValueError`` for a face that trimesh would drop or misread."""
     if len(references) < 3:
-        raise ValueError(f"line {number}: a face needs at least 3 vertices, got "
-                         f"{len(references)} (`{line.strip()}`)")
+        raise ValueError(
+            f"line {number}: a face needs at least 3 vertices, got {len(references)} (`{line.strip()}`)"
+        )
     if not _FACE_RECORD.fullmatch(line):
         bad = next((r for r in references if not re.fullmatch(_REFERENCE, r)), None)
-        raise ValueError(f"line {number}: {bad!r} is not a vertex reference (v, v/vt, v//vn "
-                         f"or v/vt/vn)" if bad else
-                         f"line {number}: separate the references with spaces or tabs")
+        raise ValueError(
+            f"line {number}: {bad!r} is not a vertex reference (v, v/vt, v//vn or v/vt/vn)"
+            if bad
+            else f"line {number}: separate the references with spaces or tabs"
+        )
     first = references[0]
     slashes, doubles = first.count("/"), first.count("//")
     written = {_form(r) for r in references}
     if len(written) > 1:
-        raise ValueError(f"line {number}: the face mixes reference forms "
-                         f"({', '.join(sorted(written))}): write its vertices alike")
-    indices = [int(r.split("/", 1)[0]) for r in references] if slashes else \
-        list(map(int, references))
+        raise ValueError(
+            f"line {number}: the face mixes reference forms "
+            f"({', '.join(sorted(written))}): write its vertices alike"
+        )
+    indices = [int(r.split("/", 1)[0]) for r in references] if slashes else list(map(int, references))
     low, high = min(indices), max(indices)
     if low <= 0 <= high and 0 in indices:
         raise ValueError(f"line {number}: vertex index 0 (OBJ counts vertices from 1)")
     for index in (high, low):
         if index > vertex_count or -index > vertices_so_far:
-            raise ValueError(f"line {number}: vertex {index} does not exist (the file has "
-                             f"{vertex_count} vertices, {vertices_so_far} before this line)")
+            raise ValueError(
+                f"line {number}: vertex {index} does not exist (the file has "
+                f"{vertex_count} vertices, {vertices_so_far} before this line)"
+            )
     if low < 0 and vertices_so_far != vertex_count:
-        raise ValueError(f"line {number}: negative vertex index {low} with vertices after "
-                         f"this line: trimesh would count it from the end of the file; use "
-                         f"positive indices")
+        raise ValueError(
+            f"line {number}: negative vertex index {low} with vertices after "
+            f"this line: trimesh would count it from the end of the file; use "
+            f"positive indices"
+        )
     # trimesh reads the faces that have as many numbers as the first such face in its form.
     form = _form(first)
-    first_form, first_line = forms.setdefault(len(references) * (slashes - doubles + 1),
-                                              (form, number))
+    first_form, first_line = forms.setdefault(len(references) * (slashes - doubles + 1), (form, number))
     if form != first_form:
-        raise ValueError(f"line {number}: this face ({form}) and line {first_line}'s "
-                         f"({first_form}) have as many numbers, so trimesh reads them in one "
-                         f"form: write the faces alike")
+        raise ValueError(
+            f"line {number}: this face ({form}) and line {first_line}'s "
+            f"({first_form}) have as many numbers, so trimesh reads them in one "
+            f"form: write the faces alike"
+        )

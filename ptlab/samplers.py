@@ -63,7 +63,7 @@ DEFAULT_SAMPLER = "sobol"
 _U32 = np.uint32
 _U64 = np.uint64
 #: 2^-24: a uint32 whose top 24 bits are kept, times this, is a float32 in [0, 1) exactly.
-_TO_UNIT = np.float32(2.0 ** -24)
+_TO_UNIT = np.float32(2.0**-24)
 #: The dimensions a sampler spreads evenly: the camera's pair and the first two bounces
 #: (``BounceUniforms``). From the third bounce on, every sampler's numbers are independent:
 #: a path's later dimensions mix with all its earlier ones, and stratifying them bought
@@ -351,7 +351,7 @@ class StratifiedSampler(Sampler):
 
 def _below_one(x: np.ndarray) -> np.ndarray:
     """float32 values clamped below 1 (a sum of floats can round up to 1.0 exactly)."""
-    return np.minimum(x, np.float32(1 - 2.0 ** -24), dtype=np.float32)
+    return np.minimum(x, np.float32(1 - 2.0**-24), dtype=np.float32)
 
 
 def make_sampler(name: str, seed: int = 0, spp: int = 1) -> Sampler:

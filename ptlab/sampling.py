@@ -93,9 +93,11 @@ def to_world(local: np.ndarray, n: np.ndarray) -> np.ndarray:
     x, y, z = local[:, 0], local[:, 1], local[:, 2]
     # world = x * t + y * s + z * n with t = (1 + sign nx^2 a, sign b, -sign nx),
     # s = (b, sign + ny^2 a, -ny).
-    return vec3(x * (1.0 + sign * nx * nx * a) + y * b + z * nx,
-                x * (sign * b) + y * (sign + ny * ny * a) + z * ny,
-                x * (-sign * nx) - y * ny + z * nz)
+    return vec3(
+        x * (1.0 + sign * nx * nx * a) + y * b + z * nx,
+        x * (sign * b) + y * (sign + ny * ny * a) + z * ny,
+        x * (-sign * nx) - y * ny + z * nz,
+    )
 
 
 def ggx_visible_normals(wo: np.ndarray, n: np.ndarray, alpha, u: np.ndarray) -> np.ndarray:

@@ -88,8 +88,9 @@ class Scene:
         offset = OFFSET_SCALE * np.abs(tri).max(axis=(1, 2))
         # Everything the renderer gathers per hit, packed in one column: one `take` per
         # bounce instead of five. Rows: v0 | e1 | e2 | unit normal | offset.
-        self.triangle_data = np.vstack([self.v0.T, self.e1.T, self.e2.T, self.normals.T,
-                                        offset[None]]).astype(np.float32)
+        self.triangle_data = np.vstack(
+            [self.v0.T, self.e1.T, self.e2.T, self.normals.T, offset[None]]
+        ).astype(np.float32)
         emission = np.zeros((len(self.materials), 3))
         for k, material in enumerate(self.materials):
             if material.emission is not None:
@@ -99,13 +100,18 @@ class Scene:
         self.emits = self.emission.max(axis=1) > 0
         emitting = np.flatnonzero(self.emits)
         # Shadow rays toward the sky go twice the scene's diagonal: out of it from anywhere.
-        sky_distance = (2 * float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
-                        if self.sky is not None else None)
-        self.light_sampler = build_lights(tri[emitting], self.emission[emitting],
-                                          offset[emitting], self.point_lights, self.sky,
-                                          sky_distance)
-        self.area_lights = (self.light_sampler.area_lights if self.light_sampler is not None
-                            else None)
+        sky_distance = (
+            2 * float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0))) if self.sky is not None else None
+        )
+        self.light_sampler = build_lights(
+            tri[emitting],
+            self.emission[emitting],
+            offset[emitting],
+            self.point_lights,
+            self.sky,
+            sky_distance,
+        )
+        self.area_lights = self.light_sampler.area_lights if self.light_sampler is not None else None
         self.material_table = MaterialTable(self.materials, self.material_ids)
         self.triangle_uv = None
         if self.uvs is not None:
@@ -114,8 +120,9 @@ class Scene:
                 raise ValueError(f"uvs must be (T, 3, 2) = {(len(tri), 3, 2)}, not {uvs.shape}")
             self.uvs = uvs
             # Packed for one gather per bounce: uv0 | uv1 - uv0 | uv2 - uv0, (6, T).
-            self.triangle_uv = np.vstack([uvs[:, 0].T, (uvs[:, 1] - uvs[:, 0]).T,
-                                          (uvs[:, 2] - uvs[:, 0]).T]).astype(np.float32)
+            self.triangle_uv = np.vstack(
+                [uvs[:, 0].T, (uvs[:, 1] - uvs[:, 0]).T, (uvs[:, 2] - uvs[:, 0]).T]
+            ).astype(np.float32)
         elif any(m.textured for m in self.materials):
             raise ValueError("a textured material needs texture coordinates: give uvs")
 
@@ -123,12 +130,21 @@ class Scene:
         """This scene with every diffuse material sampling directions by ``sampling``: the
         scene itself when they already do (a new Scene rebuilds its light and material
         tables)."""
-        materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m
-                     for m in self.materials]
+        materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m for m in self.materials]
         if all(new is old for new, old in zip(materials, self.materials, strict=True)):
             return self
-        return Scene(self.triangles, self.material_ids, materials, self.camera, self.name,
-                     self.material_names, self.point_lights, self.sky, self.uvs, self.defaults)
+        return Scene(
+            self.triangles,
+            self.material_ids,
+            materials,
+            self.camera,
+            self.name,
+            self.material_names,
+            self.point_lights,
+            self.sky,
+            self.uvs,
+            self.defaults,
+        )
 
     def uv_at(self, prim: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
         """(N, 2) float32 texture coordinates at the points with barycentrics ``b1``, ``b2``
@@ -151,8 +167,10 @@ class Scene:
         lights = len(self.area_lights) if self.area_lights is not None else 0
         points = len(self.point_lights) if self.point_lights is not None else 0
         sky = ", a sky" if self.sky is not None else ""
-        return (f"{self.name}: {self.triangle_count} triangles, {len(self.materials)} materials, "
-                f"{lights} emissive triangles, {points} point lights{sky}")
+        return (
+            f"{self.name}: {self.triangle_count} triangles, {len(self.materials)} materials, "
+            f"{lights} emissive triangles, {points} point lights{sky}"
+        )
 
 
 class MaterialTable:
@@ -186,10 +204,21 @@ class MaterialTable:
 #: Names that ``ptlab.scene_file`` defines and that callers import from here as well
 #: (``from ptlab.scene import load_scene``): looked up when first used (PEP 562), since
 #: ``scene_file`` imports this module and not the other way round.
-_SCENE_FILE_NAMES = {"load_scene", "find_scene_file", "builtin_scenes_dir",
-                     "builtin_scene_names", "SCENE_FILE_NAME", "MATERIAL_KEYS",
-                     "MAX_COORDINATE", "MIN_SCENE_SIZE", "MAX_DISTANCE_IN_SIZES", "MIN_RADIUS",
-                     "MAX_RADIANCE", "MAX_RESOLUTION", "MAX_DEPTH"}
+_SCENE_FILE_NAMES = {
+    "load_scene",
+    "find_scene_file",
+    "builtin_scenes_dir",
+    "builtin_scene_names",
+    "SCENE_FILE_NAME",
+    "MATERIAL_KEYS",
+    "MAX_COORDINATE",
+    "MIN_SCENE_SIZE",
+    "MAX_DISTANCE_IN_SIZES",
+    "MIN_RADIUS",
+    "MAX_RADIANCE",
+    "MAX_RESOLUTION",
+    "MAX_DEPTH",
+}
 
 
 def __getattr__(name: str):

@@ -176,33 +176,34 @@ class _SceneReader:
         return SceneError(self.path, problem, key)
 
     def read(self, data: dict) -> Scene:
-        self.check_keys(data, None, {"camera", "materials", "mesh", "point_light", "sky",
-                                     "render"})
+        self.check_keys(data, None, {"camera", "materials", "mesh", "point_light", "sky", "render"})
         if "camera" not in data:
             raise self.error(None, "no [camera] section")
         camera = self.camera(data["camera"])
         materials_table = data.get("materials", {})
         if not isinstance(materials_table, dict):
-            raise self.error("materials", f"must be a table of [materials.NAME] tables, "
-                                          f"got {_shown(materials_table)}")
+            raise self.error(
+                "materials", f"must be a table of [materials.NAME] tables, got {_shown(materials_table)}"
+            )
         if not materials_table:
             raise self.error("materials", "no materials: add a [materials.NAME] section")
         names = list(materials_table)
-        materials = [self.material(f"materials.{name}", spec)
-                     for name, spec in materials_table.items()]
+        materials = [self.material(f"materials.{name}", spec) for name, spec in materials_table.items()]
         meshes = data.get("mesh", [])
         if not isinstance(meshes, list):
-            raise self.error("mesh", f"must be an array of tables, each one [[mesh]], "
-                                     f"got {_shown(meshes)}")
+            raise self.error("mesh", f"must be an array of tables, each one [[mesh]], got {_shown(meshes)}")
         if not meshes:
             raise self.error("mesh", "no meshes: add a [[mesh]] section")
         triangles, uvs, material_ids, keys = [], [], [], []
         for i, spec in enumerate(meshes):
             tri, uv, material, key = self.mesh(f"mesh[{i}]", spec, names)
             if materials[material].textured and uv is None:
-                raise self.error(key, f"material {names[material]!r} is textured, but this mesh "
-                                      f"has no texture coordinates (a `quad`'s `uv`, or `vt` "
-                                      f"lines in an OBJ file)")
+                raise self.error(
+                    key,
+                    f"material {names[material]!r} is textured, but this mesh "
+                    f"has no texture coordinates (a `quad`'s `uv`, or `vt` "
+                    f"lines in an OBJ file)",
+                )
             triangles.append(tri)
             uvs.append(uv if uv is not None else np.zeros((len(tri), 3, 2)))
             material_ids.append(np.full(len(tri), material, dtype=np.intp))
@@ -213,22 +214,32 @@ class _SceneReader:
         sky = self.sky(data["sky"]) if "sky" in data else None
         self.check_light_power(triangles, material_ids, materials, point_lights)
         textured = any(m.textured for m in materials)
-        scene = Scene(triangles=np.concatenate(triangles), material_ids=material_ids,
-                      materials=materials, camera=camera, name=self.path.parent.name
-                      if self.path.name == SCENE_FILE_NAME else self.path.stem,
-                      material_names=names, point_lights=point_lights, sky=sky,
-                      uvs=np.concatenate(uvs) if textured else None,
-                      defaults=self.render_defaults(data.get("render", {})))
+        scene = Scene(
+            triangles=np.concatenate(triangles),
+            material_ids=material_ids,
+            materials=materials,
+            camera=camera,
+            name=self.path.parent.name if self.path.name == SCENE_FILE_NAME else self.path.stem,
+            material_names=names,
+            point_lights=point_lights,
+            sky=sky,
+            uvs=np.concatenate(uvs) if textured else None,
+            defaults=self.render_defaults(data.get("render", {})),
+        )
         if scene.light_sampler is None:
-            raise self.error(None, "the scene has no light: give a material an `emission` "
-                                   "and a mesh that uses it, add a [[point_light]], or a [sky]")
+            raise self.error(
+                None,
+                "the scene has no light: give a material an `emission` "
+                "and a mesh that uses it, add a [[point_light]], or a [sky]",
+            )
         return scene
 
     def point_lights(self, specs: list) -> PointLights | None:
         """The ``[[point_light]]`` tables: a position and an intensity (W/sr) each."""
         if not isinstance(specs, list):
-            raise self.error("point_light", f"must be an array of tables, each one "
-                                            f"[[point_light]], got {_shown(specs)}")
+            raise self.error(
+                "point_light", f"must be an array of tables, each one [[point_light]], got {_shown(specs)}"
+            )
         positions, intensities = [], []
         for i, spec in enumerate(specs):
             key = f"point_light[{i}]"
@@ -236,11 +247,13 @@ class _SceneReader:
             positions.append(self.point(spec, key, "position"))
             if "intensity" not in spec:
                 raise self.error(f"{key}.intensity", "missing (W/sr: one number or three)")
-            intensity = self.colour(spec, key, "intensity", default=None, upper=MAX_RADIANCE,
-                                    why="float32 radiance")
+            intensity = self.colour(
+                spec, key, "intensity", default=None, upper=MAX_RADIANCE, why="float32 radiance"
+            )
             if not intensity.max() > 0:
-                raise self.error(f"{key}.intensity", "must not be 0 in every channel: such a "
-                                                     "light gives no light")
+                raise self.error(
+                    f"{key}.intensity", "must not be 0 in every channel: such a light gives no light"
+                )
             intensities.append(intensity)
         return PointLights(positions, intensities) if positions else None
 
@@ -249,8 +262,9 @@ class _SceneReader:
         self.check_keys(spec, "sky", {"radiance"})
         if "radiance" not in spec:
             raise self.error("sky.radiance", "missing (linear RGB radiance: one number or three)")
-        radiance = self.colour(spec, "sky", "radiance", default=None, upper=MAX_RADIANCE,
-                               why="float32 radiance")
+        radiance = self.colour(
+            spec, "sky", "radiance", default=None, upper=MAX_RADIANCE, why="float32 radiance"
+        )
         return Sky(radiance) if radiance.max() > 0 else None
 
     def render_defaults(self, spec: dict) -> RenderDefaults:
@@ -259,15 +273,22 @@ class _SceneReader:
         res = spec.get("res")
         if res is not None:
             sizes = [res, res] if is_integer(res) else res
-            if not (isinstance(sizes, list) and len(sizes) == 2 and all(map(is_integer, sizes))
-                    and all(1 <= n <= MAX_RESOLUTION for n in sizes)):
-                raise self.error("render.res", f"must be an integer or [width, height], from 1 "
-                                               f"to {MAX_RESOLUTION}, got {_shown(res)}")
+            if not (
+                isinstance(sizes, list)
+                and len(sizes) == 2
+                and all(map(is_integer, sizes))
+                and all(1 <= n <= MAX_RESOLUTION for n in sizes)
+            ):
+                raise self.error(
+                    "render.res",
+                    f"must be an integer or [width, height], from 1 to {MAX_RESOLUTION}, got {_shown(res)}",
+                )
             res = (int(sizes[0]), int(sizes[1]))
         max_depth = spec.get("max_depth")
         if max_depth is not None and not (is_integer(max_depth) and 0 <= max_depth <= MAX_DEPTH):
-            raise self.error("render.max_depth", f"must be an integer from 0 to {MAX_DEPTH}, "
-                                                 f"got {_shown(max_depth)}")
+            raise self.error(
+                "render.max_depth", f"must be an integer from 0 to {MAX_DEPTH}, got {_shown(max_depth)}"
+            )
         return RenderDefaults(res=res, max_depth=max_depth)
 
     def check_keys(self, table: dict, key: str | None, allowed: set[str]) -> None:
@@ -296,8 +317,10 @@ class _SceneReader:
         """A position in the scene: a vector within +-MAX_COORDINATE."""
         point = self.vector(table, key, name)
         if np.abs(point).max() > MAX_COORDINATE:
-            raise self.error(f"{key}.{name}", f"must lie within +-{MAX_COORDINATE:g} of the "
-                                              f"origin (float32 rays), got {point.tolist()}")
+            raise self.error(
+                f"{key}.{name}",
+                f"must lie within +-{MAX_COORDINATE:g} of the origin (float32 rays), got {point.tolist()}",
+            )
         return point
 
     def number(self, table: dict, key: str, name: str, default: float | None = None) -> float:
@@ -312,16 +335,16 @@ class _SceneReader:
             raise self.error(full, f"must be a finite number, got {_shown(value)}")
         return number
 
-    def colour(self, table: dict, key: str, name: str, default, upper: float = 1.0,
-               why: str = "energy conservation") -> np.ndarray:
+    def colour(
+        self, table: dict, key: str, name: str, default, upper: float = 1.0, why: str = "energy conservation"
+    ) -> np.ndarray:
         """One number (a grey) or three, each from 0 to ``upper``."""
         full = f"{key}.{name}"
         value = table.get(name, default)
         if _is_number(value):
             value = [value] * 3
         if not isinstance(value, list):
-            raise self.error(full, f"must be a colour: one number or a list of 3, got "
-                                   f"{_shown(value)}")
+            raise self.error(full, f"must be a colour: one number or a list of 3, got {_shown(value)}")
         colour = self.vector({name: value}, key, name)
         if np.any(colour < 0):
             raise self.error(full, f"must not be negative, got {colour.tolist()}")
@@ -338,8 +361,7 @@ class _SceneReader:
         if "look_at" in spec:
             forward = self.point(spec, key, "look_at") - position
             if not forward.any():
-                raise self.error(f"{key}.look_at", "is the camera's position: the camera "
-                                                   "looks nowhere")
+                raise self.error(f"{key}.look_at", "is the camera's position: the camera looks nowhere")
         else:
             forward = self.vector(spec, key, "direction")
             if not forward.any():
@@ -365,11 +387,9 @@ class _SceneReader:
         if kind is None:
             raise self.error(f"{key}.type", f"missing (known types: {known})")
         if not isinstance(kind, str) or kind not in MATERIAL_KEYS:
-            raise self.error(f"{key}.type", f"unknown material type {_shown(kind)} "
-                                            f"(known types: {known})")
+            raise self.error(f"{key}.type", f"unknown material type {_shown(kind)} (known types: {known})")
         self.check_keys(spec, key, {"type", "emission"} | MATERIAL_KEYS[kind])
-        emission = self.colour(spec, key, "emission", default=0.0, upper=MAX_RADIANCE,
-                               why="float32 radiance")
+        emission = self.colour(spec, key, "emission", default=0.0, upper=MAX_RADIANCE, why="float32 radiance")
         try:
             material = self.build_material(kind, key, spec)
         except ValueError as error:
@@ -384,36 +404,45 @@ class _SceneReader:
                 return Diffuse(albedo=self.checkerboard(f"{key}.albedo", spec["albedo"]))
             return Diffuse(albedo=self.colour(spec, key, "albedo", default=0.8))
         if kind == "mirror":
-            return Mirror(reflectance=self.colour(spec, key, "reflectance", 1.0),
-                          fresnel=self.flag(spec, key, "fresnel", default=False))
+            return Mirror(
+                reflectance=self.colour(spec, key, "reflectance", 1.0),
+                fresnel=self.flag(spec, key, "fresnel", default=False),
+            )
         if kind == "dielectric":
-            return Dielectric(eta=self.number(spec, key, "eta", default=1.5),
-                              transmittance=self.colour(spec, key, "transmittance", 1.0))
+            return Dielectric(
+                eta=self.number(spec, key, "eta", default=1.5),
+                transmittance=self.colour(spec, key, "transmittance", 1.0),
+            )
         f0 = spec.get("f0", "gold")
         if not isinstance(f0, str):
             f0 = self.colour(spec, key, "f0", default=None)
-        options = {name: self.number(spec, key, name) for name in ("roughness", "alpha")
-                   if name in spec}
+        options = {name: self.number(spec, key, name) for name in ("roughness", "alpha") if name in spec}
         sampling = spec.get("sampling", "vndf")
         if not isinstance(sampling, str):
             raise self.error(f"{key}.sampling", f"must be a string, got {_shown(sampling)}")
-        return Microfacet(f0=f0, kd=self.colour(spec, key, "kd", 0.0),
-                          ks=self.colour(spec, key, "ks", 1.0), sampling=sampling,
-                          **options)
+        return Microfacet(
+            f0=f0,
+            kd=self.colour(spec, key, "kd", 0.0),
+            ks=self.colour(spec, key, "ks", 1.0),
+            sampling=sampling,
+            **options,
+        )
 
     def checkerboard(self, key: str, spec: dict) -> Checkerboard:
         """``{ checkerboard = [COLOUR, COLOUR], scale = 5 }``: Homework 5's floor texture."""
         self.check_keys(spec, key, {"checkerboard", "scale"})
         colours = spec.get("checkerboard")
         if not isinstance(colours, list) or len(colours) != 2:
-            raise self.error(f"{key}.checkerboard", f"must be a list of two colours, got "
-                                                    f"{_shown(colours)}")
-        pair = [self.colour({"colour": c}, f"{key}.checkerboard[{i}]", "colour", None)
-                for i, c in enumerate(colours)]
+            raise self.error(f"{key}.checkerboard", f"must be a list of two colours, got {_shown(colours)}")
+        pair = [
+            self.colour({"colour": c}, f"{key}.checkerboard[{i}]", "colour", None)
+            for i, c in enumerate(colours)
+        ]
         scale = self.number(spec, key, "scale", default=5.0)
         if not 0 < scale <= MAX_COORDINATE:
-            raise self.error(f"{key}.scale", f"must be a positive number of squares per unit "
-                                             f"of uv, got {scale:g}")
+            raise self.error(
+                f"{key}.scale", f"must be a positive number of squares per unit of uv, got {scale:g}"
+            )
         return Checkerboard(pair, scale)
 
     def flag(self, table: dict, key: str, name: str, default: bool) -> bool:
@@ -422,22 +451,26 @@ class _SceneReader:
             raise self.error(f"{key}.{name}", f"must be true or false, got {_shown(value)}")
         return value
 
-    def mesh(self, key: str, spec: dict,
-             material_names: list[str]) -> tuple[np.ndarray, np.ndarray | None, int, str]:
+    def mesh(
+        self, key: str, spec: dict, material_names: list[str]
+    ) -> tuple[np.ndarray, np.ndarray | None, int, str]:
         """The triangles of one ``[[mesh]]``, their texture coordinates (or None), its
         material's index, and the key they came from."""
         self.check_keys(spec, key, {"file", "sphere", "quad", "material", "scale"})
         if not isinstance(spec.get("material"), str):
             raise self.error(f"{key}.material", "missing, or not a string")
         if spec["material"] not in material_names:
-            raise self.error(f"{key}.material", f"no material named {_shown(spec['material'])} "
-                                                f"(defined: {', '.join(material_names)})")
+            raise self.error(
+                f"{key}.material",
+                f"no material named {_shown(spec['material'])} (defined: {', '.join(material_names)})",
+            )
         shapes = [name for name in ("file", "sphere", "quad") if name in spec]
         if len(shapes) != 1:
             raise self.error(key, "give exactly one of `file`, `sphere` and `quad`")
         if "scale" in spec and "file" not in spec:
-            raise self.error(f"{key}.scale", "scales a mesh `file` only (give a sphere its "
-                                             "radius, a quad its corners)")
+            raise self.error(
+                f"{key}.scale", "scales a mesh `file` only (give a sphere its radius, a quad its corners)"
+            )
         material = material_names.index(spec["material"])
         shape_key = f"{key}.{shapes[0]}"
         if "sphere" in spec:
@@ -482,11 +515,15 @@ class _SceneReader:
         corners = spec.get("corners")
         if not isinstance(corners, list) or len(corners) != 4:
             raise self.error(f"{key}.corners", f"must be a list of 4 points, got {_shown(corners)}")
-        points = np.array([self.point({"corner": c}, f"{key}.corners[{i}]", "corner")
-                           for i, c in enumerate(corners)])
+        points = np.array(
+            [self.point({"corner": c}, f"{key}.corners[{i}]", "corner") for i, c in enumerate(corners)]
+        )
         uv = spec.get("uv", [[0, 0], [1, 0], [1, 1], [0, 1]])
-        if not (isinstance(uv, list) and len(uv) == 4
-                and all(isinstance(c, list) and len(c) == 2 and all(map(_is_number, c)) for c in uv)):
+        if not (
+            isinstance(uv, list)
+            and len(uv) == 4
+            and all(isinstance(c, list) and len(c) == 2 and all(map(_is_number, c)) for c in uv)
+        ):
             raise self.error(f"{key}.uv", f"must be 4 pairs [u, v], one per corner, got {_shown(uv)}")
         values = [[_as_float(x) for x in c] for c in uv]
         if any(x is None for c in values for x in c):
@@ -509,17 +546,23 @@ class _SceneReader:
         if radius < MIN_RADIUS:
             raise self.error(f"{key}.radius", f"must be at least {MIN_RADIUS:g}, got {radius:g}")
         if np.abs(center).max() + radius > MAX_COORDINATE:
-            raise self.error(f"{key}.radius", f"the sphere reaches beyond +-{MAX_COORDINATE:g} "
-                                              f"(float32 rays), radius {radius:g}")
+            raise self.error(
+                f"{key}.radius",
+                f"the sphere reaches beyond +-{MAX_COORDINATE:g} (float32 rays), radius {radius:g}",
+            )
         if not (is_integer(subdivisions) and 0 <= subdivisions <= 7):
-            raise self.error(f"{key}.subdivisions", f"must be an integer from 0 to 7, "
-                                                    f"got {_shown(subdivisions)}")
+            raise self.error(
+                f"{key}.subdivisions", f"must be an integer from 0 to 7, got {_shown(subdivisions)}"
+            )
         mesh = trimesh.creation.icosphere(subdivisions=subdivisions, radius=radius)
         triangles = drop_zero_area(mesh.vertices[mesh.faces] + center)
         if len(triangles) == 0:
-            raise self.error(f"{key}.radius", f"{radius:g} is too small for a sphere centred "
-                                              f"{np.abs(center).max():g} from the origin: its "
-                                              f"triangles have zero area")
+            raise self.error(
+                f"{key}.radius",
+                f"{radius:g} is too small for a sphere centred "
+                f"{np.abs(center).max():g} from the origin: its "
+                f"triangles have zero area",
+            )
         return triangles
 
     def check_extent(self, triangles: list[np.ndarray], keys: list[str]) -> None:
@@ -527,29 +570,46 @@ class _SceneReader:
         corners = np.concatenate([t.reshape(-1, 3) for t in triangles])
         size = float(np.ptp(corners, axis=0).max())
         if size < MIN_SCENE_SIZE:
-            raise self.error("mesh", f"the scene is only {size:g} wide; float32 rays need at "
-                                     f"least {MIN_SCENE_SIZE:g}: use smaller units")
+            raise self.error(
+                "mesh",
+                f"the scene is only {size:g} wide; float32 rays need at "
+                f"least {MIN_SCENE_SIZE:g}: use smaller units",
+            )
         farthest = [float(np.abs(t).max()) for t in triangles]
         i = int(np.argmax(farthest))
         if farthest[i] > MAX_DISTANCE_IN_SIZES * size:
-            raise self.error(keys[i], f"a vertex lies {farthest[i]:g} from the origin, more "
-                                      f"than {MAX_DISTANCE_IN_SIZES:g} times the scene's width "
-                                      f"({size:g}): rays would leave surfaces "
-                                      f"{OFFSET_SCALE * farthest[i]:g} off them; move the scene "
-                                      f"nearer the origin")
+            raise self.error(
+                keys[i],
+                f"a vertex lies {farthest[i]:g} from the origin, more "
+                f"than {MAX_DISTANCE_IN_SIZES:g} times the scene's width "
+                f"({size:g}): rays would leave surfaces "
+                f"{OFFSET_SCALE * farthest[i]:g} off them; move the scene "
+                f"nearer the origin",
+            )
 
-    def check_light_power(self, triangles: list[np.ndarray], material_ids: np.ndarray,
-                          materials: list[Material], point_lights: PointLights | None) -> None:
+    def check_light_power(
+        self,
+        triangles: list[np.ndarray],
+        material_ids: np.ndarray,
+        materials: list[Material],
+        point_lights: PointLights | None,
+    ) -> None:
         """The lights' total power (area x radiance, and 4 pi x intensity), which light
         sampling divides by in float32, must be a normal float32 number."""
-        emission = np.array([m.emission if m.emission is not None else np.zeros(3)
-                             for m in materials])[material_ids]
-        power = float(np.sum(area_times_radiance(triangle_areas(np.concatenate(triangles)),
-                                                 emission)))
+        emission = np.array([m.emission if m.emission is not None else np.zeros(3) for m in materials])[
+            material_ids
+        ]
+        power = float(np.sum(area_times_radiance(triangle_areas(np.concatenate(triangles)), emission)))
         float32 = np.finfo(np.float32)
         if power > 0 and not float32.tiny <= power <= float32.max:
-            raise self.error(None, f"the lights' total power (area x radiance) is {power:g}, "
-                                   f"outside float32's range: change the emission or the units")
+            raise self.error(
+                None,
+                f"the lights' total power (area x radiance) is {power:g}, "
+                f"outside float32's range: change the emission or the units",
+            )
         if point_lights is not None and not point_lights.power <= float32.max:
-            raise self.error("point_light", f"the point lights' total power (4 pi x intensity) "
-                                            f"is {point_lights.power:g}, beyond float32's range")
+            raise self.error(
+                "point_light",
+                f"the point lights' total power (4 pi x intensity) "
+                f"is {point_lights.power:g}, beyond float32's range",
+            )

@@ -145,9 +145,11 @@ def write_mitsuba_scene(scene: Scene, folder: Path, width: int, height: int) -> 
     for k, material in enumerate(scene.materials):
         name = scene.material_names[k]
         if not isinstance(material, Diffuse):
-            raise PtlabError(f"scene {scene.name}: material {name!r} is a "
-                             f"{type(material).__name__}; only diffuse materials have a "
-                             f"Mitsuba counterpart here")
+            raise PtlabError(
+                f"scene {scene.name}: material {name!r} is a "
+                f"{type(material).__name__}; only diffuse materials have a "
+                f"Mitsuba counterpart here"
+            )
         triangles = scene.triangles[scene.material_ids == k]
         if not len(triangles):
             continue
@@ -157,15 +159,21 @@ def write_mitsuba_scene(scene: Scene, folder: Path, width: int, height: int) -> 
             # Every triangle has its own three vertices, so the normals are ptlab's face normals.
             np.savetxt(out, triangles.reshape(-1, 3), fmt="v %.17g %.17g %.17g")
             np.savetxt(out, np.arange(1, 3 * len(triangles) + 1).reshape(-1, 3), fmt="f %d %d %d")
-        emitter = "" if material.emission is None else (
-            f'<emitter type="area"><rgb name="radiance" value="{_xml_vector(material.emission)}"/>'
-            f"</emitter>")
+        emitter = (
+            ""
+            if material.emission is None
+            else (
+                f'<emitter type="area"><rgb name="radiance" value="{_xml_vector(material.emission)}"/>'
+                f"</emitter>"
+            )
+        )
         shapes.append(
             f'  <shape type="obj"><string name="filename" value="{mesh.name}"/>'
             f'<boolean name="face_normals" value="true"/>\n'
             f'    <bsdf type="twosided"><bsdf type="diffuse">'
             f'<rgb name="reflectance" value="{_xml_vector(material.albedo)}"/></bsdf></bsdf>'
-            f"{emitter}</shape>")
+            f"{emitter}</shape>"
+        )
     camera = scene.camera
     # Nothing may lie beyond the far clipping plane (ptlab has none).
     far = 2 * float(np.linalg.norm(scene.triangles - camera.position, axis=-1).max()) + 1
@@ -218,12 +226,17 @@ def import_mitsuba(variant: str) -> tuple[ModuleType, ModuleType]:
         if probe.stdout.strip():
             raise PtlabError(probe.stdout.strip().splitlines()[-1])
         lines = [line.strip() for line in probe.stderr.splitlines() if line.strip()]
-        cause = next((line for line in lines if "error" in line.lower()),
-                     lines[-1] if lines else f"exit code {probe.returncode}")
-        hint = (" (Dr.Jit needs a libLLVM recent enough for it: install one, and point "
-                "DRJIT_LIBLLVM_PATH at it if Dr.Jit does not find it)" if "LLVM" in cause else "")
-        raise PtlabError(f"mitsuba cannot render with variant {variant!r} here: "
-                         f"{cause[:160]}{hint}")
+        cause = next(
+            (line for line in lines if "error" in line.lower()),
+            lines[-1] if lines else f"exit code {probe.returncode}",
+        )
+        hint = (
+            " (Dr.Jit needs a libLLVM recent enough for it: install one, and point "
+            "DRJIT_LIBLLVM_PATH at it if Dr.Jit does not find it)"
+            if "LLVM" in cause
+            else ""
+        )
+        raise PtlabError(f"mitsuba cannot render with variant {variant!r} here: {cause[:160]}{hint}")
     import drjit as dr
     import mitsuba as mi
 
@@ -236,14 +249,16 @@ def import_mitsuba(variant: str) -> tuple[ModuleType, ModuleType]:
 class KernelReport:
     """What Dr.Jit did for the kernels launched since the last report."""
 
-    compiled: int = 0     # compiled now (not in memory, not in the disk cache)
-    from_disk: int = 0    # loaded from Dr.Jit's disk cache (~/.drjit)
-    cached: int = 0       # already in memory
+    compiled: int = 0  # compiled now (not in memory, not in the disk cache)
+    from_disk: int = 0  # loaded from Dr.Jit's disk cache (~/.drjit)
+    cached: int = 0  # already in memory
     codegen_ms: float = 0.0
 
     def __str__(self) -> str:
-        return (f"{self.compiled} kernels compiled, {self.from_disk} loaded from the disk cache, "
-                f"{self.cached} in memory, code generation {self.codegen_ms:.0f} ms")
+        return (
+            f"{self.compiled} kernels compiled, {self.from_disk} loaded from the disk cache, "
+            f"{self.cached} in memory, code generation {self.codegen_ms:.0f} ms"
+        )
 
 
 class Mitsuba:
@@ -254,12 +269,14 @@ class Mitsuba:
     would otherwise be compiled again in a timed render.
     """
 
-    def __init__(self, mi: ModuleType, dr: ModuleType, scene_xml: Path,
-                 configurations: list[tuple[str, int]]):
+    def __init__(
+        self, mi: ModuleType, dr: ModuleType, scene_xml: Path, configurations: list[tuple[str, int]]
+    ):
         self.mi, self.dr, self.scene_xml = mi, dr, scene_xml
-        self._scenes = {(sampler, depth): mi.load_file(str(scene_xml), sampler=sampler,
-                                                       rr_depth=depth)
-                        for sampler, depth in dict.fromkeys(configurations)}
+        self._scenes = {
+            (sampler, depth): mi.load_file(str(scene_xml), sampler=sampler, rr_depth=depth)
+            for sampler, depth in dict.fromkeys(configurations)
+        }
 
     def render(self, sampler: str, rr_depth: int, spp: int, seed: int) -> tuple[np.ndarray, float]:
         """(H, W, 3) float32 linear RGB and the wall-clock seconds it took."""
@@ -293,7 +310,7 @@ class Contender:
     """One renderer with one configuration: a row of the table."""
 
     label: str
-    render: Callable[[int], tuple[np.ndarray, float]]   # seed -> image, seconds
+    render: Callable[[int], tuple[np.ndarray, float]]  # seed -> image, seconds
     warm_up: Callable[[], object] | None = None
     runs: list[Run] = field(default_factory=list)
 
@@ -316,15 +333,20 @@ class Run:
         return self.seconds * self.relmse
 
 
-def measure(contender: Contender, round_: int, seed: int, reference: np.ndarray,
-            unlit: np.ndarray) -> Run:
+def measure(contender: Contender, round_: int, seed: int, reference: np.ndarray, unlit: np.ndarray) -> Run:
     image, seconds = contender.render(seed)
     if image.shape != reference.shape:
-        raise RenderError(f"{contender.label}: the image is {image.shape}, the reference "
-                          f"{reference.shape}")
+        raise RenderError(f"{contender.label}: the image is {image.shape}, the reference {reference.shape}")
     errors = relative_squared_error(image, reference)
-    run = Run(round_, seed, seconds, float(errors.mean()), float(errors[unlit].mean()),
-              rmse(image, reference), image)
+    run = Run(
+        round_,
+        seed,
+        seconds,
+        float(errors.mean()),
+        float(errors[unlit].mean()),
+        rmse(image, reference),
+        image,
+    )
     contender.runs.append(run)
     return run
 
@@ -336,14 +358,15 @@ def run_command(command: list[str], label: str) -> float:
     seconds = time.perf_counter() - start
     if done.returncode != 0:
         lines = [line for line in (done.stderr + done.stdout).splitlines() if line.strip()]
-        raise RenderError(f"{label} failed (exit code {done.returncode}): "
-                          f"{lines[-1] if lines else 'no output'}")
+        raise RenderError(
+            f"{label} failed (exit code {done.returncode}): {lines[-1] if lines else 'no output'}"
+        )
     return seconds
 
 
-def command_contender(label: str, command: Callable[[int, Path], list[str]],
-                      output: Path) -> Contender:
+def command_contender(label: str, command: Callable[[int, Path], list[str]], output: Path) -> Contender:
     """A whole process that writes ``output`` (an EXR), timed from start to exit."""
+
     def render(seed: int) -> tuple[np.ndarray, float]:
         seconds = run_command(command(seed, output), label)
         return read_image(output)[0], seconds
@@ -353,6 +376,7 @@ def command_contender(label: str, command: Callable[[int, Path], list[str]],
 
 def interleave(first: list, second: list) -> list:
     """Both lists in one, each spread evenly over the whole (a1 b1 a2 a3 b2 a4 ...)."""
+
     def place(items: list) -> list[tuple[float, object]]:
         return [((k + 0.5) / len(items), item) for k, item in enumerate(items)]
 
@@ -363,12 +387,28 @@ def interleave(first: list, second: list) -> list:
 # The reference
 
 
-def mitsuba_reference(mitsuba: Mitsuba, scene: Scene, res: tuple[int, int], spp: int, seed: int,
-                      cache_dir: Path, echo: Callable[[str], None]) -> tuple[np.ndarray, int]:
+def mitsuba_reference(
+    mitsuba: Mitsuba,
+    scene: Scene,
+    res: tuple[int, int],
+    spp: int,
+    seed: int,
+    cache_dir: Path,
+    echo: Callable[[str], None],
+) -> tuple[np.ndarray, int]:
     """An ``spp``-sample Mitsuba render (independent sampler), from the cache if it is there."""
     mi = mitsuba.mi
-    identity = (mi.__version__, mi.variant(), scene_digest(scene), res, spp, seed,
-                MITSUBA_RR_DEPTH, "independent", REFERENCE_PASS_SPP)
+    identity = (
+        mi.__version__,
+        mi.variant(),
+        scene_digest(scene),
+        res,
+        spp,
+        seed,
+        MITSUBA_RR_DEPTH,
+        "independent",
+        REFERENCE_PASS_SPP,
+    )
     key = hashlib.sha256(repr(identity).encode()).hexdigest()[:16]
     cached = cache_dir / f"mitsuba-{scene.name}-{key}.exr"
     if cached.is_file():
@@ -378,16 +418,20 @@ def mitsuba_reference(mitsuba: Mitsuba, scene: Scene, res: tuple[int, int], spp:
     echo(f"reference: rendering {spp} spp with Mitsuba in {len(passes)} passes ...")
     total, seconds = np.zeros((res[1], res[0], 3)), 0.0
     for k, pass_spp in enumerate(passes):
-        image, took = mitsuba.render("independent", MITSUBA_RR_DEPTH, pass_spp,
-                                     seed + REFERENCE_SEED_OFFSET + k)
+        image, took = mitsuba.render(
+            "independent", MITSUBA_RR_DEPTH, pass_spp, seed + REFERENCE_SEED_OFFSET + k
+        )
         total += image.astype(np.float64) * pass_spp
         seconds += took
         if (k + 1) % 4 == 0 or k + 1 == len(passes):
             echo(f"reference: {k + 1}/{len(passes)} passes, {seconds:.0f} s")
     reference = (total / spp).astype(np.float32)
     cached.parent.mkdir(parents=True, exist_ok=True)
-    write_image(cached, reference, dict(spp=spp, renderer=f"mitsuba {mi.__version__}",
-                                        variant=mi.variant(), seconds=seconds))
+    write_image(
+        cached,
+        reference,
+        dict(spp=spp, renderer=f"mitsuba {mi.__version__}", variant=mi.variant(), seconds=seconds),
+    )
     echo(f"reference: wrote {cached}")
     return reference, spp
 
@@ -398,6 +442,7 @@ def mitsuba_reference(mitsuba: Mitsuba, scene: Scene, res: tuple[int, int], spp:
 
 def _summary(values: list[float], digits: int = 3) -> str:
     """median [min, max] with ``digits`` significant digits."""
+
     def fmt(v: float) -> str:
         return f"{v:.{digits}g}"
 
@@ -408,20 +453,37 @@ def _summary(values: list[float], digits: int = 3) -> str:
 
 def table(contenders: list[Contender], baseline: Contender) -> str:
     """The Markdown table of every contender, medians and ranges over the rounds."""
-    header = ["renderer", "seconds", "relMSE", "relMSE w/o light", "RMSE", "s x relMSE",
-              f"speed vs {baseline.label}", f"efficiency vs {baseline.label}"]
+    header = [
+        "renderer",
+        "seconds",
+        "relMSE",
+        "relMSE w/o light",
+        "RMSE",
+        "s x relMSE",
+        f"speed vs {baseline.label}",
+        f"efficiency vs {baseline.label}",
+    ]
     rows = [header, ["---"] * len(header)]
     by_round = {run.round: run for run in baseline.runs}
     for contender in contenders:
         runs = contender.runs
-        rows.append([contender.label, _summary([r.seconds for r in runs]),
-                     _summary([r.relmse for r in runs]), _summary([r.relmse_unlit for r in runs]),
-                     _summary([r.rmse for r in runs]), _summary([r.cost for r in runs]),
-                     _summary([by_round[r.round].seconds / r.seconds for r in runs]),
-                     _summary([by_round[r.round].cost / r.cost for r in runs])])
-    legend = (f"median [min, max] over the rounds; speed: {baseline.label}'s seconds / this "
-              f"one's, efficiency: {baseline.label}'s s x relMSE / this one's, in the same round "
-              f"(above 1: better than {baseline.label})")
+        rows.append(
+            [
+                contender.label,
+                _summary([r.seconds for r in runs]),
+                _summary([r.relmse for r in runs]),
+                _summary([r.relmse_unlit for r in runs]),
+                _summary([r.rmse for r in runs]),
+                _summary([r.cost for r in runs]),
+                _summary([by_round[r.round].seconds / r.seconds for r in runs]),
+                _summary([by_round[r.round].cost / r.cost for r in runs]),
+            ]
+        )
+    legend = (
+        f"median [min, max] over the rounds; speed: {baseline.label}'s seconds / this "
+        f"one's, efficiency: {baseline.label}'s s x relMSE / this one's, in the same round "
+        f"(above 1: better than {baseline.label})"
+    )
     return "\n".join("| " + " | ".join(row) + " |" for row in rows) + "\n" + legend
 
 
@@ -435,17 +497,26 @@ def _mean_standard_error(run: Run, reference: np.ndarray, spp: int, reference_sp
     return np.sqrt(squared.sum(axis=0)) / len(squared) * math.sqrt(spp / reference_spp)
 
 
-def agreement(reference: np.ndarray, reference_spp: int | None, ptlab_reference: np.ndarray,
-              ptlab_spp: int | None, unlit: np.ndarray, mitsuba_independent: Contender | None,
-              ptlab_independent: Contender | None, spp: int, echo: Callable[[str], None]) -> bool:
+def agreement(
+    reference: np.ndarray,
+    reference_spp: int | None,
+    ptlab_reference: np.ndarray,
+    ptlab_spp: int | None,
+    unlit: np.ndarray,
+    mitsuba_independent: Contender | None,
+    ptlab_independent: Contender | None,
+    spp: int,
+    echo: Callable[[str], None],
+) -> bool:
     """Compare ptlab's reference with the reference; echo the verdict; True if they agree
     within noise (or if there is nothing to tell the noise by)."""
     errors = relative_squared_error(ptlab_reference, reference)
     ratio = ptlab_reference.reshape(-1, 3).mean(axis=0) / reference.reshape(-1, 3).mean(axis=0)
-    echo(f"ptlab's reference / the reference, mean of each channel: "
-         f"{', '.join(f'{r:.5f}' for r in ratio)}")
-    echo(f"relMSE of ptlab's reference against the reference: {errors.mean():.3g} "
-         f"(without the light's pixels {errors[unlit].mean():.3g})")
+    echo(f"ptlab's reference / the reference, mean of each channel: {', '.join(f'{r:.5f}' for r in ratio)}")
+    echo(
+        f"relMSE of ptlab's reference against the reference: {errors.mean():.3g} "
+        f"(without the light's pixels {errors[unlit].mean():.3g})"
+    )
     known = None not in (reference_spp, ptlab_spp, mitsuba_independent, ptlab_independent)
     if not known:
         echo("(no noise estimate: it needs both references' spp and the independent samplers)")
@@ -453,17 +524,23 @@ def agreement(reference: np.ndarray, reference_spp: int | None, ptlab_reference:
     # What their noise alone gives: each reference's relMSE is about that of its renderer's
     # independent spp-sample render times spp / its own spp (variance falls as 1 / samples;
     # a reference made with a QMC sampler is less noisy, so this is an upper estimate).
-    noise = (statistics.median(r.relmse for r in mitsuba_independent.runs) * spp / reference_spp
-             + statistics.median(r.relmse for r in ptlab_independent.runs) * spp / ptlab_spp)
+    noise = (
+        statistics.median(r.relmse for r in mitsuba_independent.runs) * spp / reference_spp
+        + statistics.median(r.relmse for r in ptlab_independent.runs) * spp / ptlab_spp
+    )
     echo(f"relMSE that the references' noise alone gives: about {noise:.3g} or less")
-    error = np.hypot(_mean_standard_error(mitsuba_independent.runs[-1], reference, spp, reference_spp),
-                     _mean_standard_error(ptlab_independent.runs[-1], reference, spp, ptlab_spp))
+    error = np.hypot(
+        _mean_standard_error(mitsuba_independent.runs[-1], reference, spp, reference_spp),
+        _mean_standard_error(ptlab_independent.runs[-1], reference, spp, ptlab_spp),
+    )
     z = (ptlab_reference - reference).reshape(-1, 3).mean(axis=0) / error
-    echo(f"difference of the means in standard errors (z), per channel: "
-         f"{', '.join(f'{v:+.1f}' for v in z)}")
+    echo(f"difference of the means in standard errors (z), per channel: {', '.join(f'{v:+.1f}' for v in z)}")
     agree = bool(np.all(np.abs(z) < AGREEMENT_Z)) and errors.mean() < 2 * noise
-    echo("the references agree within noise" if agree else
-         "the references DIFFER by more than noise: a bug in the scene translation or a renderer")
+    echo(
+        "the references agree within noise"
+        if agree
+        else "the references DIFFER by more than noise: a bug in the scene translation or a renderer"
+    )
     return agree
 
 
@@ -497,45 +574,72 @@ class _Parser(argparse.ArgumentParser):
 
 
 def build_parser() -> argparse.ArgumentParser:
-    parser = _Parser(prog=PROG, description=__doc__,
-                     formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--scene", default="cornell-box",
-                        help="built-in scene name or scene file, diffuse materials only "
-                             "(default cornell-box)")
+    parser = _Parser(prog=PROG, description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument(
+        "--scene",
+        default="cornell-box",
+        help="built-in scene name or scene file, diffuse materials only (default cornell-box)",
+    )
     parser.add_argument("--res", default="256", help="N (square) or WxH (default 256)")
     parser.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    parser.add_argument("--repeat", type=int, default=3,
-                        help="rounds, each with its own seed (default 3)")
+    parser.add_argument("--repeat", type=int, default=3, help="rounds, each with its own seed (default 3)")
     parser.add_argument("--seed", type=int, default=0, help="the first round's seed (default 0)")
-    parser.add_argument("--samplers", default=",".join(MITSUBA_SAMPLERS),
-                        help=f"Mitsuba's samplers, of {', '.join(MITSUBA_SAMPLERS)} (default all)")
-    parser.add_argument("--rr-depth", default="5,3,2",
-                        help="Mitsuba's Russian roulette depths (default 5,3,2: Mitsuba's "
-                             "default, the one that matches ptlab's default, and 2)")
-    parser.add_argument("--ptlab-samplers", default=",".join(SAMPLERS),
-                        help=f"ptlab's samplers (default {','.join(SAMPLERS)})")
-    parser.add_argument("--ptlab-strategy", choices=STRATEGIES, default="nee",
-                        help="ptlab's path tracer: light sampling (nee, its default) or MIS "
-                             "(mis, as Mitsuba's path tracer)")
-    parser.add_argument("--workers", type=int,
-                        help="ptlab's worker processes (default one per core); Mitsuba uses "
-                             "Dr.Jit's default thread count")
-    parser.add_argument("--variant", default="llvm_ad_rgb",
-                        help="Mitsuba's variant, an RGB one (default llvm_ad_rgb)")
-    parser.add_argument("--reference", metavar="FILE.exr",
-                        help="the reference, a linear EXR of the same resolution "
-                             "(default: a Mitsuba render of --reference-spp samples, cached)")
-    parser.add_argument("--reference-spp", type=int, default=4096,
-                        help="samples per pixel of the Mitsuba reference (default 4096)")
-    parser.add_argument("--ptlab-reference", metavar="FILE.exr",
-                        help="a high-spp ptlab render to check against the reference")
-    parser.add_argument("--ptlab-reference-spp", type=int,
-                        help="its samples per pixel, for the noise estimate (default: from "
-                             "its metadata)")
-    parser.add_argument("--no-process", action="store_true",
-                        help="skip the whole-process runs of ptlab render and mitsuba")
-    parser.add_argument("--csv", metavar="FILE",
-                        help="also write every run (label, round, seed, seconds, errors)")
+    parser.add_argument(
+        "--samplers",
+        default=",".join(MITSUBA_SAMPLERS),
+        help=f"Mitsuba's samplers, of {', '.join(MITSUBA_SAMPLERS)} (default all)",
+    )
+    parser.add_argument(
+        "--rr-depth",
+        default="5,3,2",
+        help="Mitsuba's Russian roulette depths (default 5,3,2: Mitsuba's "
+        "default, the one that matches ptlab's default, and 2)",
+    )
+    parser.add_argument(
+        "--ptlab-samplers",
+        default=",".join(SAMPLERS),
+        help=f"ptlab's samplers (default {','.join(SAMPLERS)})",
+    )
+    parser.add_argument(
+        "--ptlab-strategy",
+        choices=STRATEGIES,
+        default="nee",
+        help="ptlab's path tracer: light sampling (nee, its default) or MIS (mis, as Mitsuba's path tracer)",
+    )
+    parser.add_argument(
+        "--workers",
+        type=int,
+        help="ptlab's worker processes (default one per core); Mitsuba uses Dr.Jit's default thread count",
+    )
+    parser.add_argument(
+        "--variant", default="llvm_ad_rgb", help="Mitsuba's variant, an RGB one (default llvm_ad_rgb)"
+    )
+    parser.add_argument(
+        "--reference",
+        metavar="FILE.exr",
+        help="the reference, a linear EXR of the same resolution "
+        "(default: a Mitsuba render of --reference-spp samples, cached)",
+    )
+    parser.add_argument(
+        "--reference-spp",
+        type=int,
+        default=4096,
+        help="samples per pixel of the Mitsuba reference (default 4096)",
+    )
+    parser.add_argument(
+        "--ptlab-reference", metavar="FILE.exr", help="a high-spp ptlab render to check against the reference"
+    )
+    parser.add_argument(
+        "--ptlab-reference-spp",
+        type=int,
+        help="its samples per pixel, for the noise estimate (default: from its metadata)",
+    )
+    parser.add_argument(
+        "--no-process", action="store_true", help="skip the whole-process runs of ptlab render and mitsuba"
+    )
+    parser.add_argument(
+        "--csv", metavar="FILE", help="also write every run (label, round, seed, seconds, errors)"
+    )
     return parser
 
 
@@ -552,13 +656,16 @@ def check_options(args: argparse.Namespace) -> None:
     if args.workers is not None and args.workers < 1:
         raise PtlabError(f"--workers {args.workers}: must be at least 1")
     if "_rgb" not in args.variant:
-        raise PtlabError(f"--variant {args.variant}: ptlab's colours are RGB; use an RGB variant "
-                         f"such as llvm_ad_rgb")
+        raise PtlabError(
+            f"--variant {args.variant}: ptlab's colours are RGB; use an RGB variant such as llvm_ad_rgb"
+        )
     for sampler in args.samplers:
         rule = MITSUBA_SPP_RULES.get(sampler)
         if rule and not rule[0](args.spp):
-            raise PtlabError(f"--spp {args.spp}: Mitsuba's {sampler} sampler needs {rule[1]} "
-                             f"(it would round it up and render more samples)")
+            raise PtlabError(
+                f"--spp {args.spp}: Mitsuba's {sampler} sampler needs {rule[1]} "
+                f"(it would round it up and render more samples)"
+            )
     if args.ptlab_reference_spp is not None and args.ptlab_reference_spp < 1:
         raise PtlabError(f"--ptlab-reference-spp {args.ptlab_reference_spp}: must be positive")
     if args.csv and not Path(args.csv).resolve().parent.is_dir():
@@ -572,8 +679,17 @@ def write_csv(path: Path, contenders: list[Contender]) -> None:
             rows.writerow(["renderer", "round", "seed", "seconds", "relmse", "relmse_unlit", "rmse"])
             for contender in contenders:
                 for r in contender.runs:
-                    rows.writerow([contender.label, r.round, r.seed, f"{r.seconds:.4f}",
-                                   f"{r.relmse:.6g}", f"{r.relmse_unlit:.6g}", f"{r.rmse:.6g}"])
+                    rows.writerow(
+                        [
+                            contender.label,
+                            r.round,
+                            r.seed,
+                            f"{r.seconds:.4f}",
+                            f"{r.relmse:.6g}",
+                            f"{r.relmse_unlit:.6g}",
+                            f"{r.rmse:.6g}",
+                        ]
+                    )
 
     write_atomically(path, write)
 
@@ -590,18 +706,22 @@ def _load_average() -> str:
 
 def mitsuba_contenders(mitsuba: Mitsuba, args: argparse.Namespace) -> list[Contender]:
     """Mitsuba with every sampler and Russian roulette depth, in this process."""
+
     def contender(sampler: str, depth: int) -> Contender:
-        return Contender(f"mitsuba {sampler} rr_depth {depth}",
-                         lambda seed: mitsuba.render(sampler, depth, args.spp, seed),
-                         lambda: mitsuba.render(sampler, depth, args.spp, WARM_UP_SEED))
+        return Contender(
+            f"mitsuba {sampler} rr_depth {depth}",
+            lambda seed: mitsuba.render(sampler, depth, args.spp, seed),
+            lambda: mitsuba.render(sampler, depth, args.spp, WARM_UP_SEED),
+        )
 
     return [contender(sampler, depth) for depth in args.rr_depth for sampler in args.samplers]
 
 
 def ptlab_contenders(scene: Scene, args: argparse.Namespace) -> list[Contender]:
     """ptlab with every sampler, in this process (its workers are processes of their own)."""
-    options = dict(spp=args.spp, res=parse_resolution(args.res), workers=args.workers,
-                   strategy=args.ptlab_strategy)
+    options = dict(
+        spp=args.spp, res=parse_resolution(args.res), workers=args.workers, strategy=args.ptlab_strategy
+    )
 
     def contender(sampler: str) -> Contender:
         def render(seed: int) -> tuple[np.ndarray, float]:
@@ -609,9 +729,11 @@ def ptlab_contenders(scene: Scene, args: argparse.Namespace) -> list[Contender]:
             image = render_result(scene, seed=seed, sampler=sampler, **options).image
             return image, time.perf_counter() - start
 
-        return Contender(f"ptlab {sampler} {args.ptlab_strategy}", render,
-                         lambda: render_result(scene, seed=WARM_UP_SEED, sampler=sampler,
-                                               **dict(options, spp=1)))
+        return Contender(
+            f"ptlab {sampler} {args.ptlab_strategy}",
+            render,
+            lambda: render_result(scene, seed=WARM_UP_SEED, sampler=sampler, **dict(options, spp=1)),
+        )
 
     return [contender(sampler) for sampler in args.ptlab_samplers]
 
@@ -626,19 +748,28 @@ def warm_up(contenders: list[Contender], mitsuba: Mitsuba, echo: Callable[[str],
         contender.warm_up()
         seconds = time.perf_counter() - start
         kernels = mitsuba.kernels()
-        echo(f"warm-up {contender.label}: {seconds:.1f} s"
-             + (f"; {kernels}" if kernels.compiled + kernels.from_disk + kernels.cached else ""))
+        echo(
+            f"warm-up {contender.label}: {seconds:.1f} s"
+            + (f"; {kernels}" if kernels.compiled + kernels.from_disk + kernels.cached else "")
+        )
 
 
-def run_rounds(order: list[Contender], args: argparse.Namespace, reference: np.ndarray,
-               unlit: np.ndarray, echo: Callable[[str], None]) -> None:
+def run_rounds(
+    order: list[Contender],
+    args: argparse.Namespace,
+    reference: np.ndarray,
+    unlit: np.ndarray,
+    echo: Callable[[str], None],
+) -> None:
     """Every contender once per round, a new seed each round, every other round backwards."""
     for round_ in range(args.repeat):
         seed = args.seed + round_
         for contender in order if round_ % 2 == 0 else order[::-1]:
             run = measure(contender, round_, seed, reference, unlit)
-            echo(f"round {round_ + 1}/{args.repeat}  {contender.label:42} {run.seconds:7.2f} s  "
-                 f"relMSE {run.relmse:.4g}")
+            echo(
+                f"round {round_ + 1}/{args.repeat}  {contender.label:42} {run.seconds:7.2f} s  "
+                f"relMSE {run.relmse:.4g}"
+            )
 
 
 def compare(args: argparse.Namespace, folder: Path, echo: Callable[[str], None]) -> int:
@@ -649,32 +780,40 @@ def compare(args: argparse.Namespace, folder: Path, echo: Callable[[str], None])
     ptlab_reference = load_reference(args.ptlab_reference, res) if args.ptlab_reference else None
     mi, dr = import_mitsuba(args.variant)
     configurations = [(sampler, depth) for depth in args.rr_depth for sampler in args.samplers]
-    mitsuba = Mitsuba(mi, dr, write_mitsuba_scene(scene, folder, width, height),
-                      configurations + [("independent", MITSUBA_RR_DEPTH)])
+    mitsuba = Mitsuba(
+        mi,
+        dr,
+        write_mitsuba_scene(scene, folder, width, height),
+        configurations + [("independent", MITSUBA_RR_DEPTH)],
+    )
     echo(f"{scene.summary()}; {width}x{height}, {args.spp} spp, {args.repeat} rounds")
-    echo(f"mitsuba {mi.__version__} ({args.variant}, {dr.thread_count()} threads), ptlab with "
-         f"{args.workers or 'one per core'} workers; load average {_load_average()} "
-         f"on {os.cpu_count()} cores")
+    echo(
+        f"mitsuba {mi.__version__} ({args.variant}, {dr.thread_count()} threads), ptlab with "
+        f"{args.workers or 'one per core'} workers; load average {_load_average()} "
+        f"on {os.cpu_count()} cores"
+    )
     if reference is None:
         reference, reference_spp = mitsuba_reference(
-            mitsuba, scene, res, args.reference_spp, args.seed, default_cache_dir(), echo)
+            mitsuba, scene, res, args.reference_spp, args.seed, default_cache_dir(), echo
+        )
     else:
         reference_spp = _spp_from_metadata(args.reference)
     unlit = reference.max(axis=-1) <= LIGHT_THRESHOLD
     echo(f"{(~unlit).sum()} of {unlit.size} pixels see the light")
 
     mitsuba_runs, ptlab_runs = mitsuba_contenders(mitsuba, args), ptlab_contenders(scene, args)
-    ptlab_process, mitsuba_process = ([], []) if args.no_process else \
-        process_contenders(args, mitsuba.scene_xml, folder, echo)
+    ptlab_process, mitsuba_process = (
+        ([], []) if args.no_process else process_contenders(args, mitsuba.scene_xml, folder, echo)
+    )
     warm_up(mitsuba_runs + ptlab_runs, mitsuba, echo)
-    run_rounds(interleave(mitsuba_runs + mitsuba_process, ptlab_runs + ptlab_process),
-               args, reference, unlit, echo)
+    run_rounds(
+        interleave(mitsuba_runs + mitsuba_process, ptlab_runs + ptlab_process), args, reference, unlit, echo
+    )
     echo(f"timed Mitsuba renders in this process: {mitsuba.kernels()}")
     echo(f"load average after: {_load_average()}")
 
     contenders = mitsuba_runs + ptlab_runs + ptlab_process + mitsuba_process
-    baseline = next((c for c in ptlab_runs if c.label.startswith(f"ptlab {DEFAULT_SAMPLER} ")),
-                    ptlab_runs[0])
+    baseline = next((c for c in ptlab_runs if c.label.startswith(f"ptlab {DEFAULT_SAMPLER} ")), ptlab_runs[0])
     echo(f"\n{table(contenders, baseline)}\n")
     if args.csv:
         write_csv(Path(args.csv), contenders)
@@ -685,10 +824,17 @@ def compare(args: argparse.Namespace, folder: Path, echo: Callable[[str], None])
     def independent(runs: list[Contender], renderer: str) -> Contender | None:
         return next((c for c in runs if c.label.startswith(f"{renderer} independent ")), None)
 
-    agree = agreement(reference, reference_spp, ptlab_reference,
-                      args.ptlab_reference_spp or _spp_from_metadata(args.ptlab_reference), unlit,
-                      independent(mitsuba_runs, "mitsuba"), independent(ptlab_runs, "ptlab"),
-                      args.spp, echo)
+    agree = agreement(
+        reference,
+        reference_spp,
+        ptlab_reference,
+        args.ptlab_reference_spp or _spp_from_metadata(args.ptlab_reference),
+        unlit,
+        independent(mitsuba_runs, "mitsuba"),
+        independent(ptlab_runs, "ptlab"),
+        args.spp,
+        echo,
+    )
     return 0 if agree else 1
 
 
@@ -697,8 +843,9 @@ def _spp_from_metadata(path: str) -> int | None:
     return int(spp) if spp is not None else None
 
 
-def process_contenders(args: argparse.Namespace, scene_xml: Path, folder: Path,
-                       echo: Callable[[str], None]) -> tuple[list[Contender], list[Contender]]:
+def process_contenders(
+    args: argparse.Namespace, scene_xml: Path, folder: Path, echo: Callable[[str], None]
+) -> tuple[list[Contender], list[Contender]]:
     """``ptlab render`` (its default sampler) and ``mitsuba`` (the scene file's defaults:
     sampler independent, rr_depth 5) as whole processes."""
     ptlab_command = _executable("ptlab")
@@ -707,19 +854,45 @@ def process_contenders(args: argparse.Namespace, scene_xml: Path, folder: Path,
     workers = [] if args.workers is None else ["--workers", str(args.workers)]
     ptlab = command_contender(
         f"ptlab render {DEFAULT_SAMPLER} {args.ptlab_strategy} [process]",
-        lambda seed, out: [ptlab_command, "render", args.scene, "--res", args.res, "--spp",
-                           str(args.spp), "--seed", str(seed), "--strategy", args.ptlab_strategy,
-                           "--quiet", "--out", str(out), *workers],
-        folder / "ptlab.exr")
+        lambda seed, out: [
+            ptlab_command,
+            "render",
+            args.scene,
+            "--res",
+            args.res,
+            "--spp",
+            str(args.spp),
+            "--seed",
+            str(seed),
+            "--strategy",
+            args.ptlab_strategy,
+            "--quiet",
+            "--out",
+            str(out),
+            *workers,
+        ],
+        folder / "ptlab.exr",
+    )
     mitsuba_command = _executable("mitsuba")
     if mitsuba_command is None:
         echo("no mitsuba command beside this Python or on the PATH: its process is not timed")
         return [ptlab], []
     mitsuba = command_contender(
         f"mitsuba independent rr_depth {MITSUBA_RR_DEPTH} [process]",
-        lambda seed, out: [mitsuba_command, "-m", args.variant, "-o", str(out), "-D",
-                           f"spp={args.spp}", "-D", f"seed={seed}", str(scene_xml)],
-        folder / "mitsuba.exr")
+        lambda seed, out: [
+            mitsuba_command,
+            "-m",
+            args.variant,
+            "-o",
+            str(out),
+            "-D",
+            f"spp={args.spp}",
+            "-D",
+            f"seed={seed}",
+            str(scene_xml),
+        ],
+        folder / "mitsuba.exr",
+    )
     return [ptlab], [mitsuba]
 
 

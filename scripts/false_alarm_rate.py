@@ -60,11 +60,11 @@ class Float32Pi:
 
     def pdf(self, wo, wi, n):
         cos_theta = np.sum(wi * n, axis=1)
-        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0),
-                        cos_theta / np.float32(math.pi), 0.0)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0), cos_theta / np.float32(math.pi), 0.0)
 
     def sample(self, wo, n, u):
         from ptlab.sampling import cosine_hemisphere_around
+
         return cosine_hemisphere_around(n, u)
 
     def __repr__(self) -> str:
@@ -93,8 +93,9 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=200)
     parser.add_argument("--samples", type=int, default=1_000_000)
-    parser.add_argument("--every-material", action="store_true",
-                        help="grade every material on every seed (M times longer)")
+    parser.add_argument(
+        "--every-material", action="store_true", help="grade every material on every seed (M times longer)"
+    )
     args = parser.parse_args()
     runs = failures = 0
     start = time.perf_counter()
@@ -108,16 +109,22 @@ def main() -> None:
                 print(f"seed {seed}: {report.material} failed {', '.join(report.failed)}", flush=True)
                 for check in report.checks:
                     if not check.passed:
-                        print(f"    {check.name}: {check.statistic} (threshold {check.threshold})",
-                              flush=True)
+                        print(
+                            f"    {check.name}: {check.statistic} (threshold {check.threshold})", flush=True
+                        )
         if (seed + 1) % 20 == 0:
-            print(f"... {seed + 1} seeds, {runs} runs, {failures} failures, "
-                  f"{time.perf_counter() - start:.0f} s", flush=True)
+            print(
+                f"... {seed + 1} seeds, {runs} runs, {failures} failures, "
+                f"{time.perf_counter() - start:.0f} s",
+                flush=True,
+            )
     low = beta.ppf(0.025, failures, runs - failures + 1) if failures else 0.0
     high = beta.ppf(0.975, failures + 1, runs - failures)
-    print(f"false alarms: {failures} of {runs} runs = {failures / runs:.2%} "
-          f"(95% interval {low:.2%} .. {high:.2%}), {time.perf_counter() - start:.0f} s, "
-          f"{args.samples:,} samples per wo")
+    print(
+        f"false alarms: {failures} of {runs} runs = {failures / runs:.2%} "
+        f"(95% interval {low:.2%} .. {high:.2%}), {time.perf_counter() - start:.0f} s, "
+        f"{args.samples:,} samples per wo"
+    )
 
 
 if __name__ == "__main__":

@@ -33,10 +33,18 @@ def side_by_side(name: str, height: int, spp: int, whitted_spp: int) -> np.ndarr
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--res", type=int, default=240, help="height of each render (default 240)")
-    parser.add_argument("--spp", type=int, default=256,
-                        help="samples per pixel of the path tracer (default 256; Whitted's: 16)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent / "docs",
-                        help="the folder to write into (default docs/)")
+    parser.add_argument(
+        "--spp",
+        type=int,
+        default=256,
+        help="samples per pixel of the path tracer (default 256; Whitted's: 16)",
+    )
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path(__file__).resolve().parent.parent / "docs",
+        help="the folder to write into (default docs/)",
+    )
     args = parser.parse_args(argv)
     if not 8 <= args.res <= 2048 or not 1 <= args.spp <= 65536:
         parser.error("--res must be from 8 to 2048 and --spp from 1 to 65536")

@@ -85,8 +85,7 @@ def write_scene(folder: Path, subdivisions: int) -> tuple[Path, Path, int]:
         sphere.export(obj)
     lines = (CORNELL / "scene.toml").read_text().replace('"meshes/', f'"{CORNELL}/meshes/')
     for box in ("shortbox", "tallbox"):
-        lines = lines.replace(f'[[mesh]]\nfile = "{CORNELL}/meshes/{box}.obj"\n'
-                              f'material = "white"\n\n', "")
+        lines = lines.replace(f'[[mesh]]\nfile = "{CORNELL}/meshes/{box}.obj"\nmaterial = "white"\n\n', "")
     scene = folder / f"sphere{subdivisions}.toml"
     scene.write_text(lines + f'\n[[mesh]]\nfile = "{obj.name}"\nmaterial = "white"\n')
     return obj, scene, len(sphere.faces)
@@ -94,18 +93,35 @@ def write_scene(folder: Path, subdivisions: int) -> tuple[Path, Path, int]:
 
 def python(code: str, *args: str) -> list[float]:
     """The numbers a Python snippet prints, run in a fresh interpreter."""
-    out = subprocess.run([sys.executable, "-c", code, *args], check=True, text=True,
-                         capture_output=True).stdout
+    out = subprocess.run(
+        [sys.executable, "-c", code, *args], check=True, text=True, capture_output=True
+    ).stdout
     return [float(x) for x in out.split()]
 
 
 def render(scene: Path, backend: str, folder: Path) -> tuple[float, float]:
     """Wall seconds and peak resident MB of a whole ``ptlab render`` process."""
-    command = ["/usr/bin/time", "-f", "%e %M", sys.executable, "-c",
-               "import sys; from ptlab.cli import main; sys.exit(main(sys.argv[1:]))",
-               "render", str(scene), "--res", "128", "--spp", "4", "--workers", "1",
-               "--backend", backend, "--out", str(folder / f"{scene.stem}-{backend}.exr"),
-               "--quiet"]
+    command = [
+        "/usr/bin/time",
+        "-f",
+        "%e %M",
+        sys.executable,
+        "-c",
+        "import sys; from ptlab.cli import main; sys.exit(main(sys.argv[1:]))",
+        "render",
+        str(scene),
+        "--res",
+        "128",
+        "--spp",
+        "4",
+        "--workers",
+        "1",
+        "--backend",
+        backend,
+        "--out",
+        str(folder / f"{scene.stem}-{backend}.exr"),
+        "--quiet",
+    ]
     err = subprocess.run(command, check=True, text=True, capture_output=True).stderr
     seconds, kilobytes = err.split()[-2:]
     return float(seconds), float(kilobytes) / 1024
@@ -113,30 +129,47 @@ def render(scene: Path, backend: str, folder: Path) -> tuple[float, float]:
 
 def spread(values: list[float], digits: int = 1) -> str:
     """The median, and the range where the runs differ at that precision."""
-    low, mid, high = (round(v, digits) for v in (min(values), statistics.median(values),
-                                                 max(values)))
+    low, mid, high = (round(v, digits) for v in (min(values), statistics.median(values), max(values)))
     return f"{mid:.{digits}f}" if low == high else f"{mid:.{digits}f} ({low:.{digits}f}-{high:.{digits}f})"
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--subdivisions", type=int, nargs="+", default=[5, 6, 7, 8],
-                        help="icosphere subdivisions to measure (default 5 6 7 8)")
+    parser.add_argument(
+        "--subdivisions",
+        type=int,
+        nargs="+",
+        default=[5, 6, 7, 8],
+        help="icosphere subdivisions to measure (default 5 6 7 8)",
+    )
     parser.add_argument("--repeat", type=int, default=3, help="runs of each (default 3)")
-    parser.add_argument("--folder", type=Path, default=None,
-                        help="where to write the meshes and scenes (default: a temporary one)")
+    parser.add_argument(
+        "--folder",
+        type=Path,
+        default=None,
+        help="where to write the meshes and scenes (default: a temporary one)",
+    )
     args = parser.parse_args()
     folder = args.folder or Path(tempfile.mkdtemp(prefix="ptlab-mesh-scale-"))
     folder.mkdir(parents=True, exist_ok=True)
 
     cold = []
     for _ in range(args.repeat):
-        err = subprocess.run(["/usr/bin/time", "-f", "%e", sys.executable, "-c",
-                              "import ptlab; ptlab.load_scene('cornell-box')"],
-                             check=True, text=True, capture_output=True).stderr
+        err = subprocess.run(
+            [
+                "/usr/bin/time",
+                "-f",
+                "%e",
+                sys.executable,
+                "-c",
+                "import ptlab; ptlab.load_scene('cornell-box')",
+            ],
+            check=True,
+            text=True,
+            capture_output=True,
+        ).stderr
         cold.append(float(err.split()[-1]))
-    print(f"cold start, import ptlab + load_scene('cornell-box'): {spread(cold, 2)} s",
-          flush=True)
+    print(f"cold start, import ptlab + load_scene('cornell-box'): {spread(cold, 2)} s", flush=True)
 
     rows = []
     for subdivisions in args.subdivisions:
@@ -144,12 +177,13 @@ def main() -> int:
         runs: dict[str, list[float]] = {}
         for _ in range(args.repeat):
             for name, values in (
-                    ("load_scene", python(LOAD_SCENE, str(scene))),
-                    ("read_mesh", python(READ_MESH, str(obj))),
-                    ("trimesh.load", python(TRIMESH_LOAD, str(obj))),
-                    ("build", python(BUILD, str(scene))),
-                    ("embree", render(scene, "embree", folder)),
-                    ("numpy", render(scene, "numpy", folder))):
+                ("load_scene", python(LOAD_SCENE, str(scene))),
+                ("read_mesh", python(READ_MESH, str(obj))),
+                ("trimesh.load", python(TRIMESH_LOAD, str(obj))),
+                ("build", python(BUILD, str(scene))),
+                ("embree", render(scene, "embree", folder)),
+                ("numpy", render(scene, "numpy", folder)),
+            ):
                 print(f"{count:8d} triangles  {name:12s} {values}", flush=True)
                 if name == "build":
                     runs.setdefault("build s", []).append(values[0])
@@ -168,11 +202,14 @@ def main() -> int:
             f"| {spread(runs['build B/tri'], 0)} | {spread(runs['embree s'])} "
             f"| {spread(runs['numpy s'])} | {spread(ratio, 2)} "
             f"| {spread(runs['embree MB'], 0)} / {spread(runs['numpy MB'], 0)} "
-            f"| {spread([m * 2**20 / count for m in runs['numpy MB']], 0)} |")
-    print("\n| triangles | load_scene s | read_mesh s | trimesh.load s | read_mesh / trimesh "
-          "| NumPy BVH build s "
-          "| build peak B/tri | render embree s | render numpy s | numpy / embree "
-          "| render peak MB, embree / numpy | numpy peak B/tri |")
+            f"| {spread([m * 2**20 / count for m in runs['numpy MB']], 0)} |"
+        )
+    print(
+        "\n| triangles | load_scene s | read_mesh s | trimesh.load s | read_mesh / trimesh "
+        "| NumPy BVH build s "
+        "| build peak B/tri | render embree s | render numpy s | numpy / embree "
+        "| render peak MB, embree / numpy | numpy peak B/tri |"
+    )
     print("|" + " --- |" * 12)
     print("\n".join(rows))
     return 0

@@ -52,10 +52,11 @@ def fingerprints(res: int, spp: int) -> dict[str, dict]:
     for name, scene, options in RENDERS:
         image = ptlab.render(scene, spp=spp, res=res, seed=7, workers=1, **options)
         image = np.ascontiguousarray(image, dtype=np.float32)
-        result[name] = {"sha256": hashlib.sha256(image.tobytes()).hexdigest(),
-                        "mean": float(image.astype(np.float64).mean())}
-        print(f"{name:22s} {result[name]['sha256'][:16]}  mean {result[name]['mean']:.6f}",
-              flush=True)
+        result[name] = {
+            "sha256": hashlib.sha256(image.tobytes()).hexdigest(),
+            "mean": float(image.astype(np.float64).mean()),
+        }
+        print(f"{name:22s} {result[name]['sha256'][:16]}  mean {result[name]['mean']:.6f}", flush=True)
     return result
 
 
@@ -74,12 +75,14 @@ def main() -> int:
     current = fingerprints(args.res, args.spp)
     if args.save:
         with open(args.save, "w") as file:
-            json.dump({"res": args.res, "spp": args.spp,
-                       "renders": current}, file, indent=1)
+            json.dump({"res": args.res, "spp": args.spp, "renders": current}, file, indent=1)
         print(f"saved {len(current)} fingerprints to {args.save}")
         return 0
-    changed = [name for name, entry in saved["renders"].items()
-               if current.get(name, {}).get("sha256") != entry["sha256"]]
+    changed = [
+        name
+        for name, entry in saved["renders"].items()
+        if current.get(name, {}).get("sha256") != entry["sha256"]
+    ]
     for name in changed:
         before = saved["renders"][name]["mean"]
         after = current[name]["mean"] if name in current else float("nan")

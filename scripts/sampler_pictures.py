@@ -29,8 +29,12 @@ def points(name: str, spp: int, pixel: int = 12_345, seed: int = 0) -> np.ndarra
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--spp", type=int, default=64, help="samples per pixel (default 64)")
-    parser.add_argument("--out", type=Path, default=Path(__file__).resolve().parent.parent
-                        / "docs" / "samplers-points.png", help="the PNG to write")
+    parser.add_argument(
+        "--out",
+        type=Path,
+        default=Path(__file__).resolve().parent.parent / "docs" / "samplers-points.png",
+        help="the PNG to write",
+    )
     args = parser.parse_args(argv)
     if not 1 <= args.spp <= 4096:
         parser.error(f"--spp {args.spp}: must be from 1 to 4096")
@@ -48,8 +52,14 @@ def main(argv: list[str] | None = None) -> int:
             axis.axvline(k / side, color="0.85", linewidth=0.6)
             axis.axhline(k / side, color="0.85", linewidth=0.6)
         axis.scatter(u[:, 0], u[:, 1], s=9, color="tab:blue", zorder=3)
-        axis.set(xlim=(0, 1), ylim=(0, 1), aspect="equal", xticks=[0, 1], yticks=[0, 1],
-                 title=f"{name}, {args.spp} samples")
+        axis.set(
+            xlim=(0, 1),
+            ylim=(0, 1),
+            aspect="equal",
+            xticks=[0, 1],
+            yticks=[0, 1],
+            title=f"{name}, {args.spp} samples",
+        )
     figure.tight_layout()
     figure.savefig(args.out)
     print(f"wrote {args.out}")

@@ -28,10 +28,13 @@ from ptlab.scene import Scene
 # default, so that the suite's time and verdict are the same on every run, and keep no
 # example database; Hypothesis's other files (caches) go to the temporary folder, not the
 # checkout. HYPOTHESIS_PROFILE=long searches afresh, far longer.
-os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY",
-                      str(Path(tempfile.gettempdir()) / "ptlab-hypothesis"))
-_FUZZ = dict(database=None, deadline=None, print_blob=True,
-             suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+os.environ.setdefault("HYPOTHESIS_STORAGE_DIRECTORY", str(Path(tempfile.gettempdir()) / "ptlab-hypothesis"))
+_FUZZ = dict(
+    database=None,
+    deadline=None,
+    print_blob=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 settings.register_profile("fixed", max_examples=100, derandomize=True, **_FUZZ)
 settings.register_profile("long", max_examples=2000, **_FUZZ)
 settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
@@ -43,8 +46,15 @@ settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "fixed"))
 # process sees each start: os.fork, exec, spawn and subprocess.Popen through their audit
 # events (PEP 578), and multiprocessing's starts (a fork server or ``spawn`` starts a process
 # without an event here) through ``BaseProcess.start``.
-PROCESS_EVENTS = {"os.fork", "os.forkpty", "os.exec", "os.posix_spawn", "os.spawn", "os.system",
-                  "subprocess.Popen"}
+PROCESS_EVENTS = {
+    "os.fork",
+    "os.forkpty",
+    "os.exec",
+    "os.posix_spawn",
+    "os.spawn",
+    "os.system",
+    "subprocess.Popen",
+}
 _started: list[str] = []
 
 
@@ -75,9 +85,9 @@ multiprocessing.process.BaseProcess.start = _recorded_start
 
 
 def pytest_runtest_setup(item) -> None:
-    _started.clear()        # (before the test's fixtures of any scope are set up)
+    _started.clear()  # (before the test's fixtures of any scope are set up)
     if item.config.getoption("untouched_modules") and sys.gettrace() is not _record_call:
-        sys.settrace(_record_call)      # (Hypothesis's explain phase leaves no tracer behind)
+        sys.settrace(_record_call)  # (Hypothesis's explain phase leaves no tracer behind)
 
 
 @pytest.fixture(autouse=True)
@@ -86,8 +96,11 @@ def marked_if_it_starts_processes(request):
     marker, so that ``-m "not subprocess"`` and the marker's promise stay true."""
     yield
     if _started and request.node.get_closest_marker("subprocess") is None:
-        pytest.fail(f"started processes ({', '.join(sorted(set(_started)))}) but is not "
-                    f"marked subprocess: add @pytest.mark.subprocess", pytrace=False)
+        pytest.fail(
+            f"started processes ({', '.join(sorted(set(_started)))}) but is not "
+            f"marked subprocess: add @pytest.mark.subprocess",
+            pytrace=False,
+        )
 
 
 # -- does a run reach every module? ---------------------------------------------------------
@@ -99,20 +112,26 @@ def marked_if_it_starts_processes(request):
 #: Modules whose functions run only in a student's process (``ptlab.untrusted.child`` sets
 #: them up there), where this one cannot trace them; the quick layer grades in such
 #: processes (test_untrusted.py, test_exercises.py).
-ONLY_IN_STUDENTS_PROCESSES = {"ptlab.untrusted.confinement", "ptlab.untrusted.no_exec",
-                              "ptlab.untrusted.traps"}
+ONLY_IN_STUDENTS_PROCESSES = {
+    "ptlab.untrusted.confinement",
+    "ptlab.untrusted.no_exec",
+    "ptlab.untrusted.traps",
+}
 _called: set = set()
 _untouched: list[str] = []
 
 
 def _record_call(frame, event: str, arg) -> None:
-    _called.add(frame.f_code)           # (returning None: no line-by-line tracing)
+    _called.add(frame.f_code)  # (returning None: no line-by-line tracing)
 
 
 def pytest_addoption(parser) -> None:
-    parser.addoption("--untouched-modules", action="store_true",
-                     help="fail the run if some module of ptlab had none of its functions called "
-                          "in this process (about twice as slow)")
+    parser.addoption(
+        "--untouched-modules",
+        action="store_true",
+        help="fail the run if some module of ptlab had none of its functions called "
+        "in this process (about twice as slow)",
+    )
 
 
 def pytest_configure(config) -> None:
@@ -124,12 +143,22 @@ def pytest_configure(config) -> None:
 def untouched_modules(called: set) -> list[str]:
     """The library's modules that define a function and had none of them ``called`` (code
     objects): module and class bodies and comprehensions run on import, so they do not count."""
-    ran = {code.co_filename for code in called if code.co_flags & inspect.CO_OPTIMIZED
-           and (code.co_name == "<lambda>" or not code.co_name.startswith("<"))}
-    return sorted(name for name, path in library_modules().items()
-                  if name not in ONLY_IN_STUDENTS_PROCESSES and str(path) not in ran
-                  and any(isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda)
-                          for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))))
+    ran = {
+        code.co_filename
+        for code in called
+        if code.co_flags & inspect.CO_OPTIMIZED
+        and (code.co_name == "<lambda>" or not code.co_name.startswith("<"))
+    }
+    return sorted(
+        name
+        for name, path in library_modules().items()
+        if name not in ONLY_IN_STUDENTS_PROCESSES
+        and str(path) not in ran
+        and any(
+            isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.Lambda)
+            for node in ast.walk(ast.parse(path.read_text(encoding="utf-8")))
+        )
+    )
 
 
 @pytest.hookimpl(tryfirst=True)
@@ -145,9 +174,12 @@ def pytest_sessionfinish(session) -> None:
 def pytest_terminal_summary(terminalreporter, config) -> None:
     if config.getoption("untouched_modules"):
         terminalreporter.write_line(
-            f"untouched modules: {', '.join(_untouched)}" if _untouched else
-            "untouched modules: none (every module of ptlab had a function called)",
-            red=bool(_untouched), green=not _untouched)
+            f"untouched modules: {', '.join(_untouched)}"
+            if _untouched
+            else "untouched modules: none (every module of ptlab had a function called)",
+            red=bool(_untouched),
+            green=not _untouched,
+        )
 
 
 @pytest.fixture(autouse=True)
@@ -199,7 +231,7 @@ def _is_multiprocessing_helper(pid: int) -> bool:
     try:
         command = Path(f"/proc/{pid}/cmdline").read_bytes()
     except OSError:
-        return True        # gone meanwhile
+        return True  # gone meanwhile
     return b"multiprocessing.forkserver" in command or b"multiprocessing.resource_tracker" in command
 
 

@@ -16,14 +16,21 @@ from ptlab.scene import Scene
 
 # -- scenes -----------------------------------------------------------------------------------
 
+
 def closed_box_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
     """A closed unit-ish box whose every inner face has ``albedo`` and emits ``emission``.
 
     Its normals point inward, so every face emits into the box. The exact radiance
     everywhere inside is Le / (1 - albedo) (the "furnace").
     """
-    return _furnace(trimesh.creation.box(extents=(2.0, 3.0, 4.0)), albedo, emission, sampling,
-                    eye=(0.1, -0.2, -1.0), name="furnace")
+    return _furnace(
+        trimesh.creation.box(extents=(2.0, 3.0, 4.0)),
+        albedo,
+        emission,
+        sampling,
+        eye=(0.1, -0.2, -1.0),
+        name="furnace",
+    )
 
 
 def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine") -> Scene:
@@ -37,20 +44,37 @@ def closed_sphere_scene(albedo: float, emission: float, sampling: str = "cosine"
     so a mean over seeds is far from normal and a test in standard errors fails far more
     often than it says, all the more with samplers that stratify the rest of the noise away.
     """
-    return _furnace(trimesh.creation.icosphere(subdivisions=3, radius=2.0), albedo, emission,
-                    sampling, eye=(0.1, -0.2, -0.5), name="sphere-furnace")
+    return _furnace(
+        trimesh.creation.icosphere(subdivisions=3, radius=2.0),
+        albedo,
+        emission,
+        sampling,
+        eye=(0.1, -0.2, -0.5),
+        name="sphere-furnace",
+    )
 
 
-def _furnace(mesh: trimesh.Trimesh, albedo: float, emission: float, sampling: str,
-             eye: tuple[float, float, float], name: str) -> Scene:
+def _furnace(
+    mesh: trimesh.Trimesh,
+    albedo: float,
+    emission: float,
+    sampling: str,
+    eye: tuple[float, float, float],
+    name: str,
+) -> Scene:
     """The inside of the closed ``mesh``, every face of one grey that emits ``emission``,
     seen from ``eye`` inside it."""
-    mesh.invert()                                   # outward normals -> inward
+    mesh.invert()  # outward normals -> inward
     triangles = mesh.vertices[mesh.faces]
     material = Diffuse(albedo=[albedo] * 3, sampling=sampling, emission=[emission] * 3)
     camera = Camera.look_at(eye, (0.3, 0.1, 1.0), fov_y=100.0)
-    return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
-                 materials=[material], camera=camera, name=name)
+    return Scene(
+        triangles=triangles,
+        material_ids=np.zeros(len(triangles), dtype=np.intp),
+        materials=[material],
+        camera=camera,
+        name=name,
+    )
 
 
 def furnace_with(inner, albedo: float = 0.5, emission: float = 0.3) -> Scene:
@@ -64,8 +88,13 @@ def furnace_with(inner, albedo: float = 0.5, emission: float = 0.3) -> Scene:
     sphere_triangles = sphere.vertices[sphere.faces] + np.array([0.2, 0.1, 0.4])
     triangles = np.concatenate([box.triangles, sphere_triangles])
     material_ids = np.concatenate([box.material_ids, np.ones(len(sphere_triangles), dtype=np.intp)])
-    return Scene(triangles=triangles, material_ids=material_ids,
-                 materials=[box.materials[0], inner], camera=box.camera, name="furnace-with")
+    return Scene(
+        triangles=triangles,
+        material_ids=material_ids,
+        materials=[box.materials[0], inner],
+        camera=box.camera,
+        name="furnace-with",
+    )
 
 
 def grazing_cameras(scene) -> dict[str, Camera]:
@@ -81,7 +110,7 @@ def grazing_cameras(scene) -> dict[str, Camera]:
     eye = scene.camera.position.copy()
     eye[1] = floor
     level = scene.camera.forward * [1, 0, 1]
-    if np.linalg.norm(level) < 1e-6:          # a camera looking straight up or down
+    if np.linalg.norm(level) < 1e-6:  # a camera looking straight up or down
         level = np.array([0.0, 0.0, 1.0])
     middle = (low + high) / 2
     middle[1] = floor
@@ -93,6 +122,7 @@ def grazing_cameras(scene) -> dict[str, Camera]:
 
 # -- materials that record their calls -------------------------------------------------------
 
+
 class Recording:
     """A right material (the library's, called through) that records the wo and n of every
     call: any object with the methods is a material to the graders."""
@@ -100,7 +130,7 @@ class Recording:
     def __init__(self, material):
         self.material, self.calls = material, []
 
-    def __getattr__(self, name: str):       # is_delta, eta: the material's
+    def __getattr__(self, name: str):  # is_delta, eta: the material's
         if name in ("material", "calls"):
             raise AttributeError(name)
         return getattr(self.material, name)
@@ -149,5 +179,4 @@ def module_name(path: Path) -> str:
 
 def library_modules() -> dict[str, Path]:
     """Every module of the library (the students' exercise files are not part of it)."""
-    return {module_name(p): p for p in PACKAGE.rglob("*.py")
-            if not {"templates", "solutions"} & set(p.parts)}
+    return {module_name(p): p for p in PACKAGE.rglob("*.py") if not {"templates", "solutions"} & set(p.parts)}

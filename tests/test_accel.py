@@ -18,9 +18,11 @@ from ptlab.accel import make_accelerator
 
 
 def closed_meshes() -> list[trimesh.Trimesh]:
-    return [trimesh.creation.icosphere(subdivisions=4, radius=1.0),
-            trimesh.creation.box(extents=(2.0, 3.0, 4.0)),
-            trimesh.creation.icosphere(subdivisions=3, radius=300.0)]
+    return [
+        trimesh.creation.icosphere(subdivisions=4, radius=1.0),
+        trimesh.creation.box(extents=(2.0, 3.0, 4.0)),
+        trimesh.creation.icosphere(subdivisions=3, radius=300.0),
+    ]
 
 
 @pytest.mark.parametrize("backend", ["embree", "numpy"])
@@ -28,8 +30,9 @@ def closed_meshes() -> list[trimesh.Trimesh]:
 def test_random_rays_from_inside_a_closed_mesh_all_hit(backend, mesh):
     rng = np.random.default_rng(5)
     count = 100_000
-    origins = (mesh.vertices.mean(axis=0)
-               + rng.uniform(-0.03, 0.03, (count, 3)) * mesh.scale).astype(np.float32)
+    origins = (mesh.vertices.mean(axis=0) + rng.uniform(-0.03, 0.03, (count, 3)) * mesh.scale).astype(
+        np.float32
+    )
     dirs = rng.normal(size=(count, 3)).astype(np.float32)
     hits = make_accelerator(mesh.vertices[mesh.faces], backend).intersect(origins, dirs)
     assert hits.hit.all(), f"{np.count_nonzero(~hits.hit)} of {count} rays escaped"

@@ -29,7 +29,8 @@ def stand_in(project: Path, body: str) -> Path:
         f"with open({str(project / 'calls')!r}, 'a') as log:\n"
         "    log.write(json.dumps(dict(args=sys.argv[1:], cwd=os.getcwd(),\n"
         "        omp=os.environ.get('OMP_NUM_THREADS'), models=os.path.isdir('../models'))) + '\\n')\n"
-        f"{body}\n")
+        f"{body}\n"
+    )
     program.chmod(program.stat().st_mode | stat.S_IXUSR)
     return program
 
@@ -42,15 +43,15 @@ def calls(project: Path) -> list[dict]:
 def test_against_times_both_programs_and_prints_their_ratio(tmp_path, capsys):
     project = tmp_path / "Assignment7"
     program = stand_in(project, f"time.sleep(0.1)\nopen('binary.ppm', 'wb').write({PPM!r})")
-    assert main(["bench", "--against", str(program), "--spp", "1", "--repeat", "1",
-                 "--workers", "1"]) == 0
+    assert main(["bench", "--against", str(program), "--spp", "1", "--repeat", "1", "--workers", "1"]) == 0
     out = capsys.readouterr().out
     # ptlab renders at the C++ image's size, with the homework's estimator.
-    assert ("ptlab render cornell-box --res 8x6 --spp 1 --sampling uniform --rr 0.8 "
-            "--workers 1 --quiet") in out
+    assert (
+        "ptlab render cornell-box --res 8x6 --spp 1 --sampling uniform --rr 0.8 --workers 1 --quiet"
+    ) in out
     rows = {line.split()[0]: line.split() for line in out.splitlines() if line.split()}
     cpp, ptlab, ratio = map(float, rows["1"][1:])
-    assert cpp >= 0.1 and ptlab > 0                      # (the stand-in sleeps 0.1 s)
+    assert cpp >= 0.1 and ptlab > 0  # (the stand-in sleeps 0.1 s)
     # (each printed to 2 decimals)
     assert ratio == pytest.approx(cpp / ptlab, abs=0.005 + 0.01 * ratio / min(cpp, ptlab))
     assert [float(x) for x in rows["median"][1:]] == [cpp, ptlab]
@@ -64,45 +65,58 @@ def test_against_times_both_programs_and_prints_their_ratio(tmp_path, capsys):
 
 def test_the_summary_gives_the_median_ratio_and_its_range_over_the_pairs():
     from ptlab.measure.against import AgainstResult
+
     result = AgainstResult((8, 6), cpp_seconds=[2.0, 4.0, 3.0], ptlab_seconds=[1.0, 1.0, 2.0])
     assert result.ratios == [2.0, 4.0, 1.5]
-    assert result.summary() == ("C++ / ptlab time: 2.00x (median of 3 pairs, range 1.50-4.00; "
-                                "above 1, ptlab is faster)")
+    assert result.summary() == (
+        "C++ / ptlab time: 2.00x (median of 3 pairs, range 1.50-4.00; above 1, ptlab is faster)"
+    )
 
 
 @pytest.mark.subprocess
-@pytest.mark.parametrize("body, options, message", [
-    ("", ["--cpp-args", "--spp {spp} --fast"], "wrote no binary.ppm into the folder it ran in"),
-    (f"open('binary.ppm', 'wb').write({PPM[:40]!r})", [], "wrote an unreadable binary.ppm"),
-    ("sys.exit('cannot open ../models/cornellbox/floor.obj')", [],
-     "failed with exit code 1: cannot open ../models/cornellbox/floor.obj"),
-    ("os.kill(os.getpid(), 9)", [], "was killed by SIGKILL"),
-])
-def test_a_program_that_fails_or_writes_no_image_is_a_one_line_error(tmp_path, capsys, body,
-                                                                    options, message):
+@pytest.mark.parametrize(
+    "body, options, message",
+    [
+        ("", ["--cpp-args", "--spp {spp} --fast"], "wrote no binary.ppm into the folder it ran in"),
+        (f"open('binary.ppm', 'wb').write({PPM[:40]!r})", [], "wrote an unreadable binary.ppm"),
+        (
+            "sys.exit('cannot open ../models/cornellbox/floor.obj')",
+            [],
+            "failed with exit code 1: cannot open ../models/cornellbox/floor.obj",
+        ),
+        ("os.kill(os.getpid(), 9)", [], "was killed by SIGKILL"),
+    ],
+)
+def test_a_program_that_fails_or_writes_no_image_is_a_one_line_error(
+    tmp_path, capsys, body, options, message
+):
     project = tmp_path / "Assignment7"
     program = stand_in(project, body)
     code = main(["bench", "--against", str(program), "--spp", "4", *options])
     captured = capsys.readouterr()
     assert code == 2 and captured.err.count("\n") == 1, captured.err
     assert captured.err.startswith(f"ptlab: error: --against {program}") and message in captured.err
-    assert "C++ / ptlab" not in captured.out             # no table pretending to be complete
+    assert "C++ / ptlab" not in captured.out  # no table pretending to be complete
     expected_args = ["--spp", "4", "--fast"] if options else ["4"]
     assert [c["args"] for c in calls(project)] == [expected_args]
 
 
-@pytest.mark.parametrize("make, options, message", [
-    (None, [], "no such file"),
-    ("folder", [], "is a folder"),
-    ("not executable", [], "is not executable"),
-    ("program", ["--res", "64"], "--res does not go with --against"),
-    ("program", ["--estimator", "default"], "--estimator does not go with --against"),
-    ("program", ["--workers", "1", "--workers", "2"], "a second --workers does not go"),
-    ("program", ["--cpp-args", "'{spp}"], "--cpp-args"),
-    ("program", ["--spp", "0"], "--spp 0: must be from 1"),
-])
-def test_bad_programs_and_options_are_one_line_errors_before_anything_runs(tmp_path, capsys, make,
-                                                                           options, message):
+@pytest.mark.parametrize(
+    "make, options, message",
+    [
+        (None, [], "no such file"),
+        ("folder", [], "is a folder"),
+        ("not executable", [], "is not executable"),
+        ("program", ["--res", "64"], "--res does not go with --against"),
+        ("program", ["--estimator", "default"], "--estimator does not go with --against"),
+        ("program", ["--workers", "1", "--workers", "2"], "a second --workers does not go"),
+        ("program", ["--cpp-args", "'{spp}"], "--cpp-args"),
+        ("program", ["--spp", "0"], "--spp 0: must be from 1"),
+    ],
+)
+def test_bad_programs_and_options_are_one_line_errors_before_anything_runs(
+    tmp_path, capsys, make, options, message
+):
     program = tmp_path / "RayTracing"
     if make == "folder":
         program.mkdir()

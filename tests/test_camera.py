@@ -17,7 +17,7 @@ def test_centre_ray_looks_forward_and_edges_span_the_field_of_view():
     u = np.array([[0.0, 0.0], [1.0, 1.0], [1.0, 1.0]], dtype=np.float32)
     origins, dirs = generate_rays(camera, 2, 2, x, y, u)
     np.testing.assert_allclose(origins, 0)
-    corner = np.array([1.0, 1.0, 1.0]) / math.sqrt(3)        # +x is left, +y up (fov 90)
+    corner = np.array([1.0, 1.0, 1.0]) / math.sqrt(3)  # +x is left, +y up (fov 90)
     np.testing.assert_allclose(dirs[0], corner, atol=1e-6)
     np.testing.assert_allclose(dirs[1], [-corner[0], -corner[1], corner[2]], atol=1e-6)
     np.testing.assert_allclose(dirs[2], [0, 0, 1], atol=1e-6)

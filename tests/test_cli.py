@@ -26,25 +26,44 @@ def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkey
 
 def test_render_exr_is_linear_float_with_metadata(tmp_path):
     out = tmp_path / "box.exr"
-    assert main(["render", "cornell-box", "--spp", "2", "--res", "24x16", "--seed", "7",
-                 "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "cornell-box",
+                "--spp",
+                "2",
+                "--res",
+                "24x16",
+                "--seed",
+                "7",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     image, metadata = read_image(out)
     assert image.shape == (16, 24, 3)
-    assert image.max() > 1.0                       # linear: the light is far above 1
+    assert image.max() > 1.0  # linear: the light is far above 1
     assert metadata["spp"] == 2 and metadata["seed"] == 7
     assert metadata["scene"] == "cornell-box" and "seconds" in metadata and "version" in metadata
 
 
-@pytest.mark.parametrize("args, problem", [
-    (["render", "cornell-box", "--spp", "0"], "spp"),
-    (["render", "cornell-box", "--res", "-5"], "resolution"),
-    (["render", "cornell-box", "--rr", "2"], "roulette"),
-    (["render", "cornell-box", "--rr", "sometimes"], "roulette"),
-    (["render", "cornell-box", "--integrator", "whitted", "--strategy", "mis"], "whitted"),
-    (["render", "no-such-scene"], "no-such-scene"),
-    (["render", "cornell-box", "--out", "image.jpg"], "format"),
-    (["render", "cornell-box", "--backend", "optix"], "backend"),
-])
+@pytest.mark.parametrize(
+    "args, problem",
+    [
+        (["render", "cornell-box", "--spp", "0"], "spp"),
+        (["render", "cornell-box", "--res", "-5"], "resolution"),
+        (["render", "cornell-box", "--rr", "2"], "roulette"),
+        (["render", "cornell-box", "--rr", "sometimes"], "roulette"),
+        (["render", "cornell-box", "--integrator", "whitted", "--strategy", "mis"], "whitted"),
+        (["render", "no-such-scene"], "no-such-scene"),
+        (["render", "cornell-box", "--out", "image.jpg"], "format"),
+        (["render", "cornell-box", "--backend", "optix"], "backend"),
+    ],
+)
 def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsys, args, problem):
     monkeypatch.chdir(tmp_path)
     code = exit_code(args)
@@ -67,9 +86,13 @@ def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
     scene = tmp_path / "bad.toml"
     scene.write_text("[camera\n")
     env = dict(os.environ, PYTHONWARNINGS="ignore")
-    result = subprocess.run([sys.executable, "-m", "ptlab.cli", "render", str(scene),
-                             "--out", str(tmp_path / "x.png")], capture_output=True, text=True,
-                            env=env, cwd=tmp_path)
+    result = subprocess.run(
+        [sys.executable, "-m", "ptlab.cli", "render", str(scene), "--out", str(tmp_path / "x.png")],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=tmp_path,
+    )
     assert result.returncode == 2
     assert "malformed TOML" in result.stderr and "Traceback" not in result.stderr
     assert not (tmp_path / "x.png").exists()
@@ -78,8 +101,12 @@ def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
 @pytest.mark.subprocess
 def test_a_reader_that_stops_early_is_not_an_error(tmp_path):
     # 'ptlab exercise list | head -1': the pipe closes before ptlab writes.
-    child = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "list"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=tmp_path)
+    child = subprocess.Popen(
+        [sys.executable, "-m", "ptlab.cli", "exercise", "list"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        cwd=tmp_path,
+    )
     child.stdout.close()
     errors = child.stderr.read().decode()
     assert child.wait(timeout=60) == 0
@@ -90,19 +117,29 @@ def test_a_reader_that_stops_early_is_not_an_error(tmp_path):
 def test_listing_and_help_import_none_of_the_heavy_libraries():
     # Start-up time: what 'ptlab scenes' and '--help' do must not wait for the grading
     # harness, Embree, SciPy, trimesh, colour-science, matplotlib or OpenImageIO.
-    heavy = ("scipy", "matplotlib", "trimesh", "colour", "embreex", "OpenImageIO",
-             "ptlab.grading", "ptlab.untrusted", "ptlab.exercises")
-    code = ("import sys, contextlib, io\n"
-            "from ptlab.cli import main\n"
-            "with contextlib.redirect_stdout(io.StringIO()):\n"
-            "    main(['scenes'])\n"
-            "    try:\n"
-            "        main(['render', '--help'])\n"
-            "    except SystemExit:\n"
-            "        pass\n"
-            f"print([m for m in {heavy!r} if m in sys.modules])\n")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            check=True)
+    heavy = (
+        "scipy",
+        "matplotlib",
+        "trimesh",
+        "colour",
+        "embreex",
+        "OpenImageIO",
+        "ptlab.grading",
+        "ptlab.untrusted",
+        "ptlab.exercises",
+    )
+    code = (
+        "import sys, contextlib, io\n"
+        "from ptlab.cli import main\n"
+        "with contextlib.redirect_stdout(io.StringIO()):\n"
+        "    main(['scenes'])\n"
+        "    try:\n"
+        "        main(['render', '--help'])\n"
+        "    except SystemExit:\n"
+        "        pass\n"
+        f"print([m for m in {heavy!r} if m in sys.modules])\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "[]"
 
 
@@ -111,44 +148,60 @@ def test_the_command_imports_no_numpy_before_it_can_start_the_workers_server():
     # ``ptlab render`` starts the workers' fork server first, so that its imports run
     # alongside the command's; a heavy import at the top of ptlab, ptlab.rendering or
     # ptlab.cli would put them back in a row.
-    code = ("import sys\nimport ptlab.cli, ptlab.rendering.executors\n"
-            "print('numpy' in sys.modules)\n")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            check=True)
+    code = "import sys\nimport ptlab.cli, ptlab.rendering.executors\nprint('numpy' in sys.modules)\n"
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "False"
 
 
-@pytest.mark.parametrize("args, starts", [
-    (["render", "cornell-box", "--workers", "2"], True),
-    (["render", "cornell-box", "--res", "784", "--workers", "2"], True),
-    (["render", "cornell-box", "--res", "64", "--spp", "32", "--workers", "2"], True),  # 2 passes
-    (["render", "cornell-box", "--workers", "1"], False),
-    (["render", "cornell-box", "--res", "16", "--spp", "1", "--workers", "2"], False),  # one job
-    (["render", "cornell-box", "--res", "100x128", "--workers", "2"], False),
-    (["render", "cornell-box", "--workers", "2", "--scheduler", "tcp://host:8786"], False),
-    (["render", "--help"], False),
-    (["render", "cornell-box", "--workers", "two"], False),
-    (["render", "cornell-box", "--spp", ""], False),
-    (["render", "cornell-box", "--res"], False),
-])
-def test_render_starts_the_workers_server_early_only_when_it_will_use_it(monkeypatch, capsys,
-                                                                          args, starts):
+@pytest.mark.parametrize(
+    "args, starts",
+    [
+        (["render", "cornell-box", "--workers", "2"], True),
+        (["render", "cornell-box", "--res", "784", "--workers", "2"], True),
+        (["render", "cornell-box", "--res", "64", "--spp", "32", "--workers", "2"], True),  # 2 passes
+        (["render", "cornell-box", "--workers", "1"], False),
+        (["render", "cornell-box", "--res", "16", "--spp", "1", "--workers", "2"], False),  # one job
+        (["render", "cornell-box", "--res", "100x128", "--workers", "2"], False),
+        (["render", "cornell-box", "--workers", "2", "--scheduler", "tcp://host:8786"], False),
+        (["render", "--help"], False),
+        (["render", "cornell-box", "--workers", "two"], False),
+        (["render", "cornell-box", "--spp", ""], False),
+        (["render", "cornell-box", "--res"], False),
+    ],
+)
+def test_render_starts_the_workers_server_early_only_when_it_will_use_it(monkeypatch, capsys, args, starts):
     import ptlab.rendering.executors as executors
 
     started = []
     monkeypatch.setattr(executors, "start_worker_server", lambda: started.append(True))
     cli._start_workers_early(args)
     assert bool(started) == starts
-    assert capsys.readouterr() == ("", "")    # a bad option is the real parser's to report
+    assert capsys.readouterr() == ("", "")  # a bad option is the real parser's to report
 
 
 def test_help_describes_every_render_option(capsys):
     with pytest.raises(SystemExit):
         main(["render", "--help"])
     text = capsys.readouterr().out
-    for option in ("--spp", "--res", "--out", "--seed", "--backend", "--sampling", "--rr",
-                   "--max-depth", "--strategy", "--heuristic", "--rr-depth", "--workers",
-                   "--checkpoint", "--resume", "--preview-every", "--scheduler", "--integrator"):
+    for option in (
+        "--spp",
+        "--res",
+        "--out",
+        "--seed",
+        "--backend",
+        "--sampling",
+        "--rr",
+        "--max-depth",
+        "--strategy",
+        "--heuristic",
+        "--rr-depth",
+        "--workers",
+        "--checkpoint",
+        "--resume",
+        "--preview-every",
+        "--scheduler",
+        "--integrator",
+    ):
         assert option in text
 
 
@@ -191,19 +244,22 @@ def test_render_takes_the_scene_files_resolution_unless_told(tmp_path):
     scene = point_lit_scene(tmp_path)
     assert main(["render", scene, "--spp", "1", "--out", str(tmp_path / "a.png"), "--quiet"]) == 0
     assert read_image(tmp_path / "a.png")[0].shape == (10, 20, 3)
-    assert main(["render", scene, "--spp", "1", "--res", "8", "--out", str(tmp_path / "b.png"),
-                 "--quiet"]) == 0
+    assert (
+        main(["render", scene, "--spp", "1", "--res", "8", "--out", str(tmp_path / "b.png"), "--quiet"]) == 0
+    )
     assert read_image(tmp_path / "b.png")[0].shape == (8, 8, 3)
 
 
-@pytest.mark.parametrize("change, problem", [
-    (dict(intensity="[1, -1, 1]"), "point_light[0].intensity: must not be negative"),
-    (dict(sky='"blue"'), "sky.radiance: must be a colour"),
-    (dict(sky="[0.1, 0.2]"), "sky.radiance: must be a list of 3 numbers"),
-    (dict(uv=", uv = [[0, 0], [1, 0]]"), "mesh[0].quad.uv: must be 4 pairs"),
-])
-def test_bad_lights_and_uvs_are_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsys,
-                                                              change, problem):
+@pytest.mark.parametrize(
+    "change, problem",
+    [
+        (dict(intensity="[1, -1, 1]"), "point_light[0].intensity: must not be negative"),
+        (dict(sky='"blue"'), "sky.radiance: must be a colour"),
+        (dict(sky="[0.1, 0.2]"), "sky.radiance: must be a list of 3 numbers"),
+        (dict(uv=", uv = [[0, 0], [1, 0]]"), "mesh[0].quad.uv: must be 4 pairs"),
+    ],
+)
+def test_bad_lights_and_uvs_are_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsys, change, problem):
     scene = point_lit_scene(tmp_path, **change)
     monkeypatch.chdir(tmp_path)
     assert exit_code(["render", scene]) == 2
@@ -214,11 +270,12 @@ def test_bad_lights_and_uvs_are_one_line_exit_2_and_no_output(tmp_path, monkeypa
 
 def test_png_is_srgb_encoded(tmp_path):
     from ptlab.image import write_image
+
     linear = np.zeros((2, 2, 3), dtype=np.float32)
-    linear[0, 0] = 0.5       # sRGB(0.5) = 0.7354 -> 188 (pow(0.5, 0.6) would give 168)
-    linear[0, 1] = 0.0031308 * 0.5   # in the linear toe: 12.92 x -> 5.2%... -> 1
-    linear[1, 0] = 2.0       # clipped to white
-    linear[1, 1] = np.nan    # never reaches the file as garbage
+    linear[0, 0] = 0.5  # sRGB(0.5) = 0.7354 -> 188 (pow(0.5, 0.6) would give 168)
+    linear[0, 1] = 0.0031308 * 0.5  # in the linear toe: 12.92 x -> 5.2%... -> 1
+    linear[1, 0] = 2.0  # clipped to white
+    linear[1, 1] = np.nan  # never reaches the file as garbage
     write_image(tmp_path / "x.png", linear)
     stored, _ = read_image(tmp_path / "x.png")
     values = np.round(stored * 255).astype(int)
@@ -228,25 +285,49 @@ def test_png_is_srgb_encoded(tmp_path):
     assert values[1, 1].tolist() == [0] * 3
 
 
-@pytest.mark.parametrize("content, message", [
-    (b"P6\n4 4\n255\n" + bytes(10), "cannot read image: Premature end of file"),
-    (b"P5\n2 2\n255\n" + bytes(4), "has 1 channel(s), not the 3 of an RGB image"),
-])
+@pytest.mark.parametrize(
+    "content, message",
+    [
+        (b"P6\n4 4\n255\n" + bytes(10), "cannot read image: Premature end of file"),
+        (b"P5\n2 2\n255\n" + bytes(4), "has 1 channel(s), not the 3 of an RGB image"),
+    ],
+)
 def test_a_cut_short_or_grey_image_is_a_one_line_error(tmp_path, content, message):
     from ptlab.errors import PtlabError
+
     (tmp_path / "x.ppm").write_bytes(content)
     with pytest.raises(PtlabError, match=re.escape(message)):
         read_image(tmp_path / "x.ppm")
 
 
 def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
-    assert main(["bench", "--res", "16", "--spp", "1", "--estimator", "homework",
-                 "--workers", "1", "--workers", "2"]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "--res",
+                "16",
+                "--spp",
+                "1",
+                "--estimator",
+                "homework",
+                "--workers",
+                "1",
+                "--workers",
+                "2",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     rows = [line.split() for line in out.splitlines()]
     rows = [r for r in rows if len(r) > 2 and r[0] in ("embree", "numpy") and r[1] == "homework"]
-    assert {(r[0], r[2], r[3]) for r in rows} == {("embree", "sobol", "1"), ("embree", "sobol", "2"),
-                                                 ("numpy", "sobol", "1"), ("numpy", "sobol", "2")}
+    assert {(r[0], r[2], r[3]) for r in rows} == {
+        ("embree", "sobol", "1"),
+        ("embree", "sobol", "2"),
+        ("numpy", "sobol", "1"),
+        ("numpy", "sobol", "2"),
+    }
     for row in rows:
         # seconds, Msamples/s (a 16 x 16 render may print 0.000); the shares of time in ray
         # queries and in the sampler
@@ -259,20 +340,43 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
 @pytest.mark.subprocess
 def test_bench_accuracy_compares_samplers_against_a_reference(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("PTLAB_CACHE", str(tmp_path))
-    assert main(["bench", "--accuracy", "--res", "16", "--spp", "4", "--repeat", "2",
-                 "--reference-spp", "64", "--sampler", "independent", "--sampler", "sobol"]) == 0
+    assert (
+        main(
+            [
+                "bench",
+                "--accuracy",
+                "--res",
+                "16",
+                "--spp",
+                "4",
+                "--repeat",
+                "2",
+                "--reference-spp",
+                "64",
+                "--sampler",
+                "independent",
+                "--sampler",
+                "sobol",
+            ]
+        )
+        == 0
+    )
     out = capsys.readouterr().out
-    rows = {line.split()[0]: line.split() for line in out.splitlines()
-            if line.split() and line.split()[0] in ("independent", "sobol", "stratified")}
+    rows = {
+        line.split()[0]: line.split()
+        for line in out.splitlines()
+        if line.split() and line.split()[0] in ("independent", "sobol", "stratified")
+    }
     assert set(rows) == {"independent", "sobol"}
     for row in rows.values():
         # relMSE (its range), ..., the share in the sampler (its range)
         assert float(row[1]) > 0 and row[-2].endswith("%") and row[-1].endswith("%)")
-    assert len(list(tmp_path.glob("*.exr"))) == 1            # the cached reference
+    assert len(list(tmp_path.glob("*.exr"))) == 1  # the cached reference
 
 
 def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
     from ptlab.atomic import write_atomically
+
     target = tmp_path / "image.exr"
     target.write_text("the previous image")
 
@@ -289,8 +393,24 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
 
 def test_depth_png_is_scaled_to_fit_and_says_by_how_much(tmp_path):
     out = tmp_path / "depth.png"
-    assert main(["render", "cornell-box", "--integrator", "depth", "--spp", "1", "--res", "16",
-                 "--out", str(out), "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "render",
+                "cornell-box",
+                "--integrator",
+                "depth",
+                "--spp",
+                "1",
+                "--res",
+                "16",
+                "--out",
+                str(out),
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     image, metadata = read_image(out)
     assert 1000 < float(metadata["depth_scale"]) < 2000 and image.max() == 1.0
-    assert metadata["spp"] == "1"                  # PNG keeps metadata as text
+    assert metadata["spp"] == "1"  # PNG keeps metadata as text

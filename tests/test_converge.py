@@ -21,11 +21,11 @@ def test_error_measures_match_their_definitions():
     reference = np.zeros((2, 2, 3))
     reference[0, 0] = 1.0
     image = reference.copy()
-    image[0, 0, 0] = 1.5                        # one channel of a bright pixel off by 0.5
-    image[1, 1, :] = 0.1                        # a black pixel turned grey
+    image[0, 0, 0] = 1.5  # one channel of a bright pixel off by 0.5
+    image[1, 1, :] = 0.1  # a black pixel turned grey
     assert rmse(image, reference) == pytest.approx(np.sqrt((0.25 + 3 * 0.01) / 12))
     # pbrt-v4's MRSE: (I - R)^2 / (R + 0.01)^2, averaged over pixels and channels.
-    expected = (0.25 / 1.01 ** 2 + 3 * 0.01 / 0.01 ** 2) / 12
+    expected = (0.25 / 1.01**2 + 3 * 0.01 / 0.01**2) / 12
     assert relmse(image, reference) == pytest.approx(expected)
     per_pixel = relative_squared_error(image, reference)
     assert per_pixel.shape == (2, 2) and per_pixel[0, 1] == 0
@@ -34,17 +34,19 @@ def test_error_measures_match_their_definitions():
 
 def test_estimators_are_parsed_and_bad_ones_named():
     labels = [(e.label, e.integrator, e.strategy) for e in parse_estimators("path:bsdf, path,whitted")]
-    assert labels == [("path:bsdf", "path", "bsdf"), ("path", "path", "nee"),
-                      ("whitted", "whitted", "nee")]
-    for bad, word in [("path:foo", "strategy"), ("bdpt", "integrator"),
-                      ("whitted:mis", "no strategy"), ("path:mis,path:mis", "once")]:
+    assert labels == [("path:bsdf", "path", "bsdf"), ("path", "path", "nee"), ("whitted", "whitted", "nee")]
+    for bad, word in [
+        ("path:foo", "strategy"),
+        ("bdpt", "integrator"),
+        ("whitted:mis", "no strategy"),
+        ("path:mis,path:mis", "once"),
+    ]:
         with pytest.raises(PtlabError, match=word):
             parse_estimators(bad)
 
 
 def _ladder(*points):
-    return [Measurement("x", 2 ** k, seconds, 0.0, error, None)
-            for k, (seconds, error) in enumerate(points)]
+    return [Measurement("x", 2**k, seconds, 0.0, error, None) for k, (seconds, error) in enumerate(points)]
 
 
 def test_time_to_reach_interpolates_log_log_and_extrapolates_with_slope_minus_one():
@@ -52,10 +54,10 @@ def test_time_to_reach_interpolates_log_log_and_extrapolates_with_slope_minus_on
     ladder = _ladder((1, 1.0), (10, 0.1), (40, 0.025))
     seconds, extrapolated = time_to_reach(ladder, 0.05)
     assert seconds == pytest.approx(20.0) and not extrapolated
-    seconds, extrapolated = time_to_reach(ladder, 0.01)   # past the last rung: 0.025 * 40 / 0.01
+    seconds, extrapolated = time_to_reach(ladder, 0.01)  # past the last rung: 0.025 * 40 / 0.01
     assert seconds == pytest.approx(100.0) and extrapolated
-    assert time_to_reach(ladder, 2.0) is None            # below the target from the start
-    assert time_to_reach(_ladder((1, 1.0), (2, 1.2)), 0.1) is None    # error not falling
+    assert time_to_reach(ladder, 2.0) is None  # below the target from the start
+    assert time_to_reach(_ladder((1, 1.0), (2, 1.2)), 0.1) is None  # error not falling
 
 
 @pytest.fixture(scope="module")
@@ -80,9 +82,24 @@ def clock_by_samples(monkeypatch, seconds_per_spp: float) -> None:
 def test_converge_writes_the_table_chart_and_strip(tmp_path, reference_file, capsys, monkeypatch):
     clock_by_samples(monkeypatch, 0.01)
     out = tmp_path / "out"
-    code = main(["converge", "cornell-box", "--integrators", "path:bsdf,path:nee", "--res", "24",
-                 "--budget", "1.5", "--reference", str(reference_file), "--out", str(out),
-                 "--workers", "1"])
+    code = main(
+        [
+            "converge",
+            "cornell-box",
+            "--integrators",
+            "path:bsdf,path:nee",
+            "--res",
+            "24",
+            "--budget",
+            "1.5",
+            "--reference",
+            str(reference_file),
+            "--out",
+            str(out),
+            "--workers",
+            "1",
+        ]
+    )
     assert code == 0
     text = capsys.readouterr().out
     assert "time to reach relMSE 0.01" in text
@@ -104,15 +121,27 @@ def test_converge_writes_the_table_chart_and_strip(tmp_path, reference_file, cap
     assert at_four["path:nee"] < at_four["path:bsdf"] / 3
     for name in ("convergence.png", "equal-time.png"):
         pixels, _ = read_image(out / name)
-        assert pixels.shape[0] > 200 and pixels.std() > 0.05       # a real picture, not blank
+        assert pixels.shape[0] > 200 and pixels.std() > 0.05  # a real picture, not blank
     reference, _ = read_image(out / "reference.exr")
     np.testing.assert_array_equal(reference, read_image(reference_file)[0])
 
 
 def test_the_rendered_reference_is_cached(tmp_path, monkeypatch, capsys):
     monkeypatch.setenv("PTLAB_CACHE", str(tmp_path / "cache"))
-    arguments = ["converge", "cornell-box", "--integrators", "path:nee", "--res", "16",
-                 "--budget", "0.2", "--reference-spp", "8", "--workers", "1"]
+    arguments = [
+        "converge",
+        "cornell-box",
+        "--integrators",
+        "path:nee",
+        "--res",
+        "16",
+        "--budget",
+        "0.2",
+        "--reference-spp",
+        "8",
+        "--workers",
+        "1",
+    ]
     assert main(arguments + ["--out", str(tmp_path / "a")]) == 0
     assert "cached" not in capsys.readouterr().out
     assert main(arguments + ["--out", str(tmp_path / "b")]) == 0
@@ -125,17 +154,32 @@ def test_the_rendered_reference_is_cached(tmp_path, monkeypatch, capsys):
     assert not np.array_equal(first, ladder_render)
 
 
-@pytest.mark.parametrize("arguments, message", [
-    (["--res", "32"], "the reference is 24x24"),
-    (["--integrators", "path:nope"], "strategy"),
-    (["--budget", "0"], "budget"),
-    (["--target", "-1"], "target"),
-])
-def test_bad_converge_options_are_one_line_errors(tmp_path, reference_file, capsys, arguments,
-                                                  message):
+@pytest.mark.parametrize(
+    "arguments, message",
+    [
+        (["--res", "32"], "the reference is 24x24"),
+        (["--integrators", "path:nope"], "strategy"),
+        (["--budget", "0"], "budget"),
+        (["--target", "-1"], "target"),
+    ],
+)
+def test_bad_converge_options_are_one_line_errors(tmp_path, reference_file, capsys, arguments, message):
     out = tmp_path / "out"
-    code = main(["converge", "cornell-box", "--reference", str(reference_file), "--res", "24",
-                 "--out", str(out), "--workers", "1"] + arguments)
+    code = main(
+        [
+            "converge",
+            "cornell-box",
+            "--reference",
+            str(reference_file),
+            "--res",
+            "24",
+            "--out",
+            str(out),
+            "--workers",
+            "1",
+        ]
+        + arguments
+    )
     assert code == 2
     error = capsys.readouterr().err
     assert message in error and error.count("\n") == 1

@@ -66,8 +66,9 @@ def test_glass_reflects_a_fresnel_fraction_and_refracts_by_snell(side, degrees):
         sin_t = np.linalg.norm(wt - dot(wt, nt)[:, None] * nt, axis=1)
         np.testing.assert_allclose(sin_t * eta_rel, math.sin(math.radians(degrees)), atol=1e-12)
         assert (dot(wi[refracted], n[refracted]) * side < 0).all()
-        np.testing.assert_allclose(weight[refracted], np.broadcast_to(material.transmittance / eta_rel**2,
-                                                                      weight[refracted].shape))
+        np.testing.assert_allclose(
+            weight[refracted], np.broadcast_to(material.transmittance / eta_rel**2, weight[refracted].shape)
+        )
     else:
         assert side < 0 and math.sin(math.radians(degrees)) * eta >= 1, "only total internal reflection"
 
@@ -76,7 +77,7 @@ def test_front_flag_with_the_renderers_normal_gives_the_same_as_the_outward_norm
     material = Dielectric(1.33)
     for side in (1.0, -1.0):
         wo, n, u = setup(30, side)
-        facing = n * np.sign(dot(wo, n))[:, None]                 # the renderer turns n toward wo
+        facing = n * np.sign(dot(wo, n))[:, None]  # the renderer turns n toward wo
         expected = material.sample_weight(wo, n, u)
         got = material.sample_weight(wo, facing, u, np.full(ROWS, side > 0))
         for a, b in zip(expected, got, strict=True):
@@ -87,7 +88,7 @@ def test_front_flag_with_the_renderers_normal_gives_the_same_as_the_outward_norm
 def test_refraction_is_reversible_and_conserves_flux():
     material = Dielectric(1.5)
     wo, n, u = setup(50)
-    u = np.full((ROWS, 2), 0.999)          # always refract (R < 0.999 at 50 degrees)
+    u = np.full((ROWS, 2), 0.999)  # always refract (R < 0.999 at 50 degrees)
     wt, weight = material.sample_weight(wo, n, u)
     back, weight_back = material.sample_weight(wt, n, u)
     np.testing.assert_allclose(back, wo, atol=1e-12)
@@ -111,9 +112,17 @@ def test_float32_and_stacking():
     np.testing.assert_array_equal(weight, [[0, 1, 0], [0, 1, 0], [1, 0, 0]])
 
 
-@pytest.mark.parametrize("material", [Mirror(), Mirror((0.9, 0.6, 0.3), fresnel=True), Dielectric(1.33),
-                                      Dielectric(1.5, transmittance=(0.9, 0.8, 0.7)), Dielectric(2.4)],
-                         ids=repr)
+@pytest.mark.parametrize(
+    "material",
+    [
+        Mirror(),
+        Mirror((0.9, 0.6, 0.3), fresnel=True),
+        Dielectric(1.33),
+        Dielectric(1.5, transmittance=(0.9, 0.8, 0.7)),
+        Dielectric(2.4),
+    ],
+    ids=repr,
+)
 def test_grader_passes_the_delta_materials(material):
     report = check_material(material)
     assert report.passed, str(report)
@@ -126,6 +135,7 @@ def test_bad_parameters_are_refused():
 
 
 # -- the probes cannot be told from a render ---------------------------------------------------
+
 
 class BrightUnlessRowsRepeat(Mirror):
     """A white mirror that weighs its reflection 1 when every row of a call has the same wo and

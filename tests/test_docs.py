@@ -17,8 +17,11 @@ LINK = re.compile(r"\]\(([^)#\s]+)(?:#[^)]*)?\)")
 
 @pytest.mark.parametrize("page", PAGES, ids=lambda p: str(p.relative_to(ROOT)))
 def test_relative_links_resolve(page):
-    broken = [target for target in LINK.findall(page.read_text())
-              if "://" not in target and not (page.parent / target).exists()]
+    broken = [
+        target
+        for target in LINK.findall(page.read_text())
+        if "://" not in target and not (page.parent / target).exists()
+    ]
     assert not broken, broken
 
 
@@ -27,14 +30,20 @@ def test_every_chapter_has_its_page_in_both_languages(found):
     for folder in (ROOT / "docs", ROOT / "docs" / "zh"):
         page = folder / found.doc
         assert page.is_file(), page
-        assert f"exercise check {found.number}" in page.read_text() or \
-            f"exercise check {found.number:02d}" in page.read_text(), page
+        assert (
+            f"exercise check {found.number}" in page.read_text()
+            or f"exercise check {found.number:02d}" in page.read_text()
+        ), page
 
 
 #: Terms the Chinese pages must not use, with the GAMES101 lectures' term that replaces each.
 NOT_THE_LECTURES_TERMS = {
-    "层次包围体": "层次包围盒", "克莱姆法则": "克拉默法则", "阴影痤疮": "自相交/阴影失真（shadow acne）",
-    "个独立的遍": "轮次", "每遍": "每个轮次", "白白": "不费任何代价",
+    "层次包围体": "层次包围盒",
+    "克莱姆法则": "克拉默法则",
+    "阴影痤疮": "自相交/阴影失真（shadow acne）",
+    "个独立的遍": "轮次",
+    "每遍": "每个轮次",
+    "白白": "不费任何代价",
 }
 
 

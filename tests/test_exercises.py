@@ -49,13 +49,12 @@ def test_the_library_answer_gets_full_marks(found, tmp_path):
 @pytest.mark.subprocess
 @pytest.mark.parametrize("found", CHAPTERS, ids=_ids(CHAPTERS))
 def test_the_untouched_exercise_file_fails_every_check_clearly(found, tmp_path):
-    copied = tmp_path / found.template.name      # as 'ptlab exercise start' copies it
+    copied = tmp_path / found.template.name  # as 'ptlab exercise start' copies it
     shutil.copyfile(found.template, copied)
     result = grade(found, copied)
     assert result.score == 0, result.table()
     for check in result.results:
-        assert "not written yet" in check.message or "NotImplementedError" in check.message, \
-            result.table()
+        assert "not written yet" in check.message or "NotImplementedError" in check.message, result.table()
         assert "Traceback" not in check.message
 
 
@@ -80,13 +79,15 @@ def _wrong_answer_text(name: str) -> str:
     for replacement in wrong["replace"]:
         found = text.count(replacement["old"])
         if found != 1:
-            pytest.fail(f"{name}: the patch of {wrong['base']} no longer applies: these lines "
-                        f"are there {found} times, not once (update wrong_answers.toml):\n"
-                        f"{replacement['old']}")
+            pytest.fail(
+                f"{name}: the patch of {wrong['base']} no longer applies: these lines "
+                f"are there {found} times, not once (update wrong_answers.toml):\n"
+                f"{replacement['old']}"
+            )
         text = text.replace(replacement["old"], replacement["new"])
     docstring = ast.parse(text).body[0]
     lines = text.splitlines(keepends=True)
-    return f'"""{wrong["about"]}"""\n' + "".join(lines[docstring.end_lineno:])
+    return f'"""{wrong["about"]}"""\n' + "".join(lines[docstring.end_lineno :])
 
 
 def _expected(name: str) -> dict:
@@ -97,9 +98,11 @@ def _expected(name: str) -> dict:
         return PATCHED[name]
     namespace: dict = {}
     exec(compile(_wrong_answer_text(name), f"{name}.py", "exec"), namespace)
-    return dict(failures=namespace["EXPECTED_FAILURES"],
-                hints=namespace.get("EXPECTED_HINTS", {}),
-                misleading=namespace.get("MISLEADING_HINTS", {}))
+    return dict(
+        failures=namespace["EXPECTED_FAILURES"],
+        hints=namespace.get("EXPECTED_HINTS", {}),
+        misleading=namespace.get("MISLEADING_HINTS", {}),
+    )
 
 
 def test_each_patched_wrong_answer_is_a_right_answer_of_its_chapter_with_lines_changed():
@@ -151,10 +154,9 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     result = grade(chapter(path.name[:2]), path)
     assert result.full_marks, result.table()
     module = import_file(path)
-    materials = [getattr(module, name)() for name in ("Lambertian", "GGXMetal")
-                 if hasattr(module, name)]
+    materials = [getattr(module, name)() for name in ("Lambertian", "GGXMetal") if hasattr(module, name)]
     if not materials:
-        return            # (a right answer of a chapter without a material)
+        return  # (a right answer of a chapter without a material)
     material = materials[0]
     report = check_material(material, seed=0, samples=100_000)
     assert [c.verdict for c in report.checks] == ["pass"] * len(report.checks), str(report)
@@ -179,7 +181,7 @@ def test_every_chapter_has_a_wrong_answer_that_fails():
 def test_code_that_hangs_or_raises_fails_its_check_and_grading_goes_on():
     result = grade(chapter(1), WRONG / "01_hangs_or_raises.py", timeout_scale=0.05)
     by_name = {r.name: r for r in result.results}
-    assert "took longer than" in by_name["centre ray"].message       # the single-ray check hung
+    assert "took longer than" in by_name["centre ray"].message  # the single-ray check hung
     # ... and the next checks still ran, each failing with the error and the student's line.
     assert "01_hangs_or_raises.py:" in by_name["unit directions"].message
     assert "ValueError: my bug with 500 rays" in by_name["unit directions"].message
@@ -224,9 +226,11 @@ def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):
     shutil.copyfile(chapter(1).template, answer)
     assert main(["exercise", "check", "1", str(answer)]) == 1
     capsys.readouterr()
-    for arguments, message in [(["check", "99", str(answer)], "no such chapter"),
-                               (["check", "1", str(tmp_path / "missing.py")], "no such file"),
-                               (["start", "x"], "no such chapter")]:
+    for arguments, message in [
+        (["check", "99", str(answer)], "no such chapter"),
+        (["check", "1", str(tmp_path / "missing.py")], "no such file"),
+        (["start", "x"], "no such chapter"),
+    ]:
         assert main(["exercise", *arguments]) == 2
         error = capsys.readouterr().err
         assert message in error and error.count("\n") == 1
@@ -241,14 +245,20 @@ def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_che
     work.mkdir()
     (work / "attempt.py").write_text(_wrong_answer_text("06_wrong_pdf_off_by_2"), encoding="utf-8")
     ptlab = [sys.executable, "-m", "ptlab.cli"]
-    run = subprocess.run([*ptlab, "exercise", "check", "6", "my work/attempt.py", "--json", "r.json"],
-                         cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [*ptlab, "exercise", "check", "6", "my work/attempt.py", "--json", "r.json"],
+        cwd=tmp_path,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 1, run.stderr
     checks = {c["name"]: c["message"] for c in json.loads((tmp_path / "r.json").read_text())["checks"]}
     command = re.search(r"see the whole table with: ptlab (grade .*)\)$", checks["material harness"])
     assert command and command.group(1) == "grade 'my work/attempt.py':Lambertian", checks
-    table = subprocess.run([*ptlab, *shlex.split(command.group(1))], cwd=tmp_path,
-                           capture_output=True, text=True, timeout=300)
+    table = subprocess.run(
+        [*ptlab, *shlex.split(command.group(1))], cwd=tmp_path, capture_output=True, text=True, timeout=300
+    )
     assert table.returncode == 1 and "chi-square" in table.stdout, table.stderr
 
 
@@ -280,14 +290,18 @@ def test_docs_without_a_chapter_shows_the_list_and_start_points_to_docs(tmp_path
 def test_docs_piped_into_a_reader_that_stops_early_is_no_error():
     """``ptlab exercise docs 7 | head -0``: the reader has closed the pipe before the page
     is written (the interpreter takes far longer to start than this takes to close it)."""
-    process = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "docs", "7"],
-                               stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    process = subprocess.Popen(
+        [sys.executable, "-m", "ptlab.cli", "exercise", "docs", "7"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
     process.stdout.close()
     error = process.stderr.read().decode()
     assert process.wait(timeout=60) == 0 and "Traceback" not in error, error
 
 
 # -- a whole class: ptlab exercise grade-all -------------------------------------------------
+
 
 def _class_folder(tmp_path) -> Path:
     """Four students: a right file, a wrong one in a folder, one that hangs on the single-ray
@@ -296,8 +310,7 @@ def _class_folder(tmp_path) -> Path:
     (folder / "bob").mkdir(parents=True)
     (folder / "dave").mkdir()
     shutil.copyfile(WRONG / "01_right_own_code.py", folder / "alice.py")
-    (folder / "bob" / "01_cameras.py").write_text(_wrong_answer_text("01_wrong_rows_up"),
-                                                  encoding="utf-8")
+    (folder / "bob" / "01_cameras.py").write_text(_wrong_answer_text("01_wrong_rows_up"), encoding="utf-8")
     shutil.copyfile(WRONG / "01_hangs_or_raises.py", folder / "carol.py")
     (folder / "dave" / "notes.txt").write_text("I ran out of time")
     return folder
@@ -309,8 +322,23 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     import csv
 
     folder, grades = _class_folder(tmp_path), tmp_path / "grades.csv"
-    assert main(["exercise", "grade-all", "1", str(folder), "--csv", str(grades),
-                 "--workers", "2", "--timeout-scale", "0.1"]) == 0
+    assert (
+        main(
+            [
+                "exercise",
+                "grade-all",
+                "1",
+                str(folder),
+                "--csv",
+                str(grades),
+                "--workers",
+                "2",
+                "--timeout-scale",
+                "0.1",
+            ]
+        )
+        == 0
+    )
     assert "4 students" in capsys.readouterr().out
     rows = {row["student"]: row for row in csv.DictReader(grades.open())}
     assert set(rows) == {"alice", "bob", "carol", "dave"}
@@ -353,8 +381,10 @@ def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
 
 # -- progress: where list looks --------------------------------------------------------------
 
+
 def _graded(path: Path, score: int):
     from ptlab.exercises.grader import CheckResult, Grade
+
     results = [CheckResult("a", score, 10, score == 10, "", 0.0)]
     return Grade(1, "Cameras", str(path), results, hashlib.sha256(path.read_bytes()).hexdigest())
 
@@ -374,18 +404,19 @@ def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, mo
         lines = capsys.readouterr().out.splitlines()
         return lines[0], {line[:2]: line for line in lines[2:]}
 
-    monkeypatch.chdir(elsewhere)                 # found in the folder start made
+    monkeypatch.chdir(elsewhere)  # found in the folder start made
     where, rows = listing()
     assert str(homework.resolve()) in where and "1 record found" in where
     assert "passed (10/10)" in rows["01"] and "01_cameras.py" in rows["01"]
     from ptlab.exercises.progress import state_file
-    state_file().unlink()                        # start's folders forgotten:
-    monkeypatch.chdir(tmp_path / "course")       # found below the current folder
+
+    state_file().unlink()  # start's folders forgotten:
+    monkeypatch.chdir(tmp_path / "course")  # found below the current folder
     where, rows = listing()
     assert "this folder and its subfolders" in where and "passed (10/10)" in rows["01"]
     (homework / "01_cameras.py").write_text("# changed\n")
     assert "10/10, file changed since" in listing()[1]["01"]
-    monkeypatch.chdir(elsewhere)                 # nothing here, nothing remembered
+    monkeypatch.chdir(elsewhere)  # nothing here, nothing remembered
     where, rows = listing()
     assert "no results recorded" in where and "passed" not in rows["01"]
 

@@ -17,7 +17,7 @@ from ptlab.rendering.jobs import Job, RenderSetup, Tile, run_job
 from ptlab.samplers import make_sampler
 from ptlab.scene_file import builtin_scene_names, builtin_scenes_dir
 
-BACKGROUND = (0.235294, 0.67451, 0.843137)   # the homework's backgroundColor, 8-bit sRGB
+BACKGROUND = (0.235294, 0.67451, 0.843137)  # the homework's backgroundColor, 8-bit sRGB
 
 
 def srgb_to_linear(c) -> np.ndarray:
@@ -49,20 +49,23 @@ def test_homework_5_scene_has_the_homeworks_geometry_lights_and_colours():
     np.testing.assert_allclose(scene.sky.radiance, srgb_to_linear(BACKGROUND), atol=1e-4)
     np.testing.assert_allclose(bounds(scene, "checkerboard"), [[-5, -3, -16], [5, -3, -6]])
     board = material(scene, "checkerboard").albedo
-    np.testing.assert_allclose(board.colours, srgb_to_linear([(0.815, 0.235, 0.031),
-                                                             (0.937, 0.937, 0.231)]), atol=1e-4)
+    np.testing.assert_allclose(
+        board.colours, srgb_to_linear([(0.815, 0.235, 0.031), (0.937, 0.937, 0.231)]), atol=1e-4
+    )
     assert board.scale == 5
-    np.testing.assert_allclose(material(scene, "diffuse_and_glossy").kd,
-                               srgb_to_linear((0.6, 0.7, 0.8)), atol=1e-4)
-    for name, center, radius in (("diffuse_and_glossy", (-1, 0, -12), 2.0),
-                                 ("glass", (0.5, -0.5, -8), 1.5)):
-        np.testing.assert_allclose(bounds(scene, name), [np.subtract(center, radius),
-                                                         np.add(center, radius)], atol=1e-9)
+    np.testing.assert_allclose(
+        material(scene, "diffuse_and_glossy").kd, srgb_to_linear((0.6, 0.7, 0.8)), atol=1e-4
+    )
+    for name, center, radius in (("diffuse_and_glossy", (-1, 0, -12), 2.0), ("glass", (0.5, -0.5, -8), 1.5)):
+        np.testing.assert_allclose(
+            bounds(scene, name), [np.subtract(center, radius), np.add(center, radius)], atol=1e-9
+        )
     assert material(scene, "glass").eta == 1.5
 
 
 def test_homework_6_scene_is_the_bunny_scaled_by_60():
     from ptlab.meshes import read_mesh_triangles
+
     scene = ptlab.load_scene("games101-hw6")
     bunny = read_mesh_triangles(builtin_scenes_dir() / "games101-hw6" / "meshes" / "bunny.obj")
     assert scene.triangle_count == len(bunny) == 4968
@@ -74,17 +77,32 @@ def test_homework_6_scene_is_the_bunny_scaled_by_60():
     np.testing.assert_allclose(scene.sky.radiance, srgb_to_linear(BACKGROUND), atol=1e-4)
 
 
-RUNS = [("path", "nee"), ("path", "bsdf"), ("path", "mis"), ("whitted", "nee"),
-        ("normals", "nee"), ("albedo", "nee"), ("depth", "nee")]
+RUNS = [
+    ("path", "nee"),
+    ("path", "bsdf"),
+    ("path", "mis"),
+    ("whitted", "nee"),
+    ("normals", "nee"),
+    ("albedo", "nee"),
+    ("depth", "nee"),
+]
 
 
-def render_job(scene, accel, backend: str, integrator: str, strategy: str, width: int,
-               height: int) -> np.ndarray:
+def render_job(
+    scene, accel, backend: str, integrator: str, strategy: str, width: int, height: int
+) -> np.ndarray:
     """(height, width, 3) one job's image, 2 spp, through a ray-query structure built once."""
     job = Job(Tile(0, 0, 0, width, height), pass_index=0, spp=2)
-    setup = RenderSetup(scene=scene, backend=backend, width=width, height=height, seed=5,
-                        settings=PathSettings(strategy=strategy, max_depth=8),
-                        integrator=integrator, sampler=make_sampler("sobol", 5, 2))
+    setup = RenderSetup(
+        scene=scene,
+        backend=backend,
+        width=width,
+        height=height,
+        seed=5,
+        settings=PathSettings(strategy=strategy, max_depth=8),
+        integrator=integrator,
+        sampler=make_sampler("sobol", 5, 2),
+    )
     return run_job(setup, job, accel).sums / job.spp
 
 
@@ -98,8 +116,9 @@ def test_every_integrator_renders_the_scene_without_nan(name, backend, bad_contr
     scene = ptlab.load_scene(name)
     accel = make_accelerator(scene.triangles, backend)
     views = {"scene camera": scene}
-    views.update({view: dataclasses.replace(scene, camera=camera)
-                  for view, camera in grazing_cameras(scene).items()})
+    views.update(
+        {view: dataclasses.replace(scene, camera=camera) for view, camera in grazing_cameras(scene).items()}
+    )
     width, height = 24, 18
     for view, viewed in views.items():
         images = {}

@@ -28,11 +28,18 @@ WRONG_FILE = str(Path(wrong.__file__))
 
 # -- correct materials pass -----------------------------------------------------------------
 
-BUILT_IN = [Diffuse((0.8, 0.5, 0.2)), Diffuse((1, 1, 1), sampling="uniform")] + [
-    Microfacet((1, 1, 1), alpha=alpha, sampling=sampling)
-    for alpha in (0.05, 0.2, 0.5, 1.0) for sampling in ("vndf", "hemisphere")] + [
-    Microfacet("copper", alpha=0.1, kd=(0.4, 0.4, 0.4), ks=0.6),
-    Microfacet("gold", roughness=0.7, kd=(0.5, 0.2, 0.1), ks=0.5, sampling="hemisphere")]
+BUILT_IN = (
+    [Diffuse((0.8, 0.5, 0.2)), Diffuse((1, 1, 1), sampling="uniform")]
+    + [
+        Microfacet((1, 1, 1), alpha=alpha, sampling=sampling)
+        for alpha in (0.05, 0.2, 0.5, 1.0)
+        for sampling in ("vndf", "hemisphere")
+    ]
+    + [
+        Microfacet("copper", alpha=0.1, kd=(0.4, 0.4, 0.4), ks=0.6),
+        Microfacet("gold", roughness=0.7, kd=(0.5, 0.2, 0.1), ks=0.5, sampling="hemisphere"),
+    ]
+)
 
 
 @pytest.mark.slow
@@ -51,9 +58,17 @@ def test_default_run_is_the_issues_and_reproducible():
     a = check_material(material, seed=3, samples=20_000)
     b = check_material(material, seed=3, samples=20_000)
     assert [c.statistic for c in a.checks] == [c.statistic for c in b.checks]
-    assert {c.name for c in a.checks} == {"consistency", "chi-square", "pdf normalisation", "energy",
-                                          "estimator agreement", "sample_weight", "reciprocity", "float32",
-                                          "row independence"}
+    assert {c.name for c in a.checks} == {
+        "consistency",
+        "chi-square",
+        "pdf normalisation",
+        "energy",
+        "estimator agreement",
+        "sample_weight",
+        "reciprocity",
+        "float32",
+        "row independence",
+    }
     text = str(a)
     for column in ("check", "statistic", "threshold", "verdict", "hint"):
         assert column in text.splitlines()[1]
@@ -90,8 +105,10 @@ MISTAKES = [
 @pytest.fixture(scope="module")
 def reports():
     """One report per wrong material, shared by the hint tests."""
-    return {name: check_material(getattr(wrong, name)(), samples=SAMPLES)
-            for name in dict.fromkeys(name for name, _, _ in MISTAKES)}
+    return {
+        name: check_material(getattr(wrong, name)(), samples=SAMPLES)
+        for name in dict.fromkeys(name for name, _, _ in MISTAKES)
+    }
 
 
 @pytest.mark.slow
@@ -133,6 +150,7 @@ def test_plots_of_a_failed_chi_square(tmp_path, reports):
 
 # -- pieces -------------------------------------------------------------------------------------
 
+
 def test_chi_square_p_value_is_scipys_and_pooling_keeps_totals():
     stats = pytest.importorskip("scipy.stats")
     assert chi2_sf(4200.0, 4095) == pytest.approx(stats.chi2.sf(4200.0, 4095), rel=1e-12)
@@ -146,6 +164,7 @@ def test_chi_square_p_value_is_scipys_and_pooling_keeps_totals():
 
 def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_functions():
     grid = SphereGrid(np.array([0.3, -0.4, 0.866]) / np.linalg.norm([0.3, -0.4, 0.866]), 16, 32)
+
     # Two lobes at once: 1 and x^2, then 2 and y^2.
     def f(lobe, w):
         return np.column_stack([1.0 + lobe, w[np.arange(len(w)), lobe] ** 2])
@@ -163,29 +182,48 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
 
 # -- the command ------------------------------------------------------------------------------
 
+
 @pytest.mark.subprocess
 def test_grade_exit_codes(tmp_path, capsys):
     assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
     assert "PASSED" in capsys.readouterr().out
-    assert ptlab_main(["grade", f"{WRONG_FILE}:PdfOffByConstant", "--samples", "20000",
-                       "--plots", str(tmp_path / "plots")]) == 1
+    assert (
+        ptlab_main(
+            [
+                "grade",
+                f"{WRONG_FILE}:PdfOffByConstant",
+                "--samples",
+                "20000",
+                "--plots",
+                str(tmp_path / "plots"),
+            ]
+        )
+        == 1
+    )
     out = capsys.readouterr().out
     assert "FAILED" in out and "2x too small" in out
     assert len(list((tmp_path / "plots").glob("*.png"))) == 9
-    assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}',
-                       "--samples", "20000"]) == 0
+    assert (
+        ptlab_main(
+            ["grade", f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}', "--samples", "20000"]
+        )
+        == 0
+    )
 
 
 @pytest.mark.subprocess
-@pytest.mark.parametrize("target, args, message", [
-    ("missing.py:Material", "{}", "no such file"),
-    ("{wrong}:NoSuchClass", "{}", "no class or object named"),
-    ("{wrong}:WalterSampling", "{not json", "not valid JSON"),
-    ("{wrong}:WalterSampling", '{"colour": 1}', "raised TypeError"),
-    ("{wrong}:ALBEDO", "{}", "is not a material"),
-    ("{wrong}", "{}", "expected FILE.py:Name"),
-    ("{syntax}:Anything", "{}", "syntax error"),
-])
+@pytest.mark.parametrize(
+    "target, args, message",
+    [
+        ("missing.py:Material", "{}", "no such file"),
+        ("{wrong}:NoSuchClass", "{}", "no class or object named"),
+        ("{wrong}:WalterSampling", "{not json", "not valid JSON"),
+        ("{wrong}:WalterSampling", '{"colour": 1}', "raised TypeError"),
+        ("{wrong}:ALBEDO", "{}", "is not a material"),
+        ("{wrong}", "{}", "expected FILE.py:Name"),
+        ("{syntax}:Anything", "{}", "syntax error"),
+    ],
+)
 def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, args, message):
     syntax = tmp_path / "broken.py"
     syntax.write_text("def f(:\n")
@@ -213,19 +251,24 @@ class PlainDiffuse:
 
     def sample(self, wo, n, u):
         from ptlab.sampling import cosine_hemisphere_around
+
         return cosine_hemisphere_around(n, u)
 
 
 def test_an_object_with_only_the_three_functions_is_a_material():
     report = check_material(PlainDiffuse(), samples=SAMPLES)
     assert report.passed, str(report)
-    assert report["sample_weight"].verdict == "pass"     # derived from the three, and checked
+    assert report["sample_weight"].verdict == "pass"  # derived from the three, and checked
 
 
 @pytest.mark.subprocess
 def test_ptlab_grade_takes_a_class_that_inherits_from_nothing(capsys):
-    assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000",
-                       "--args", '{"albedo": [0.8, 0.5, 0.2]}']) == 0
+    assert (
+        ptlab_main(
+            ["grade", f"{PLAIN}:Lambertian", "--samples", "20000", "--args", '{"albedo": [0.8, 0.5, 0.2]}']
+        )
+        == 0
+    )
     out = capsys.readouterr().out
     assert out.startswith("Lambertian object") and "PASSED" in out
 
@@ -240,8 +283,7 @@ class Float32Pi(Diffuse):
 
     def pdf(self, wo, wi, n):
         cos_theta = np.sum(wi * n, axis=1)
-        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0),
-                        cos_theta / np.float32(math.pi), 0.0)
+        return np.where((np.sum(wo * n, axis=1) > 0) & (cos_theta > 0), cos_theta / np.float32(math.pi), 0.0)
 
 
 def test_float32_rounding_in_a_material_is_not_a_mistake():
@@ -254,8 +296,10 @@ def test_float32_rounding_in_a_material_is_not_a_mistake():
 @pytest.mark.subprocess
 def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
     path = tmp_path / "slow.py"
-    path.write_text(PLAIN.read_text() + "\n\nclass Slow(Lambertian):\n"
-                    "    def pdf(self, wo, wi, n):\n        while True:\n            pass\n")
+    path.write_text(
+        PLAIN.read_text() + "\n\nclass Slow(Lambertian):\n"
+        "    def pdf(self, wo, wi, n):\n        while True:\n            pass\n"
+    )
     start = time.monotonic()
     assert ptlab_main(["grade", f"{path}:Slow", "--samples", "20000", "--time-limit", "3"]) == 1
     assert time.monotonic() - start < 30
@@ -264,6 +308,7 @@ def test_a_material_that_hangs_stops_within_its_time_limit(tmp_path, capsys):
 
 
 # -- the probes cannot be told from a render ---------------------------------------------------
+
 
 def test_no_probe_repeats_one_wo_or_n_on_every_row():
     material = Recording(Microfacet("gold", roughness=0.4))

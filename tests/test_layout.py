@@ -16,9 +16,23 @@ from helpers import PACKAGE, library_modules
 #: layer and those below it, never one above; within a layer, the no-cycle test keeps order.
 LAYERS = [
     ("foundation", ["ptlab.vectors", "ptlab.errors", "ptlab.atomic"]),
-    ("concepts", ["ptlab.sampling", "ptlab.samplers", "ptlab.scattering", "ptlab.camera",
-                  "ptlab.image", "ptlab.accel", "ptlab.textures", "ptlab.materials",
-                  "ptlab.lights", "ptlab.meshes", "ptlab.scene", "ptlab.scene_file"]),
+    (
+        "concepts",
+        [
+            "ptlab.sampling",
+            "ptlab.samplers",
+            "ptlab.scattering",
+            "ptlab.camera",
+            "ptlab.image",
+            "ptlab.accel",
+            "ptlab.textures",
+            "ptlab.materials",
+            "ptlab.lights",
+            "ptlab.meshes",
+            "ptlab.scene",
+            "ptlab.scene_file",
+        ],
+    ),
     ("integrators", ["ptlab.integrators"]),
     ("rendering", ["ptlab.rendering", "ptlab"]),
     ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
@@ -63,10 +77,12 @@ def test_every_module_has_a_layer():
 
 
 def test_imports_only_go_down_the_layers():
-    upward = [f"{module} ({LAYERS[layer_of(module)][0]}) imports {target} "
-              f"({LAYERS[layer_of(target)][0]})"
-              for module, targets in import_graph().items() for target in targets
-              if layer_of(target) > layer_of(module)]
+    upward = [
+        f"{module} ({LAYERS[layer_of(module)][0]}) imports {target} ({LAYERS[layer_of(target)][0]})"
+        for module, targets in import_graph().items()
+        for target in targets
+        if layer_of(target) > layer_of(module)
+    ]
     assert not upward, "\n".join(upward)
 
 
@@ -80,7 +96,7 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
         stack.append(node)
         for target in sorted(graph[node]):
             if state.get(target) == "open":
-                return stack[stack.index(target):] + [target]
+                return stack[stack.index(target) :] + [target]
             if target not in state and (cycle := visit(target)):
                 return cycle
         state[node] = "done"
@@ -104,19 +120,43 @@ def test_find_cycle_finds_one():
     assert find_cycle({"a": {"b"}, "b": set()}) is None
 
 
-@pytest.mark.parametrize("module", ["ptlab.render", "ptlab.render_result", "ptlab.load_scene",
-                                    "ptlab.Scene", "ptlab.RenderResult", "ptlab.RenderOptions"])
+@pytest.mark.parametrize(
+    "module",
+    [
+        "ptlab.render",
+        "ptlab.render_result",
+        "ptlab.load_scene",
+        "ptlab.Scene",
+        "ptlab.RenderResult",
+        "ptlab.RenderOptions",
+    ],
+)
 def test_the_api_is_at_the_top(module):
     import ptlab
+
     assert callable(getattr(ptlab, module.removeprefix("ptlab.")))
 
 
 def test_top_level_holds_concepts_not_machinery():
     # The machinery of a render and the measurements live in their subpackages.
     top = {p.stem for p in PACKAGE.glob("*.py")}
-    assert top <= {"__init__", "cli", "vectors", "errors", "atomic", "sampling", "samplers",
-                   "scattering", "camera", "image", "lights", "meshes", "scene", "scene_file",
-                   "textures"}, top
+    assert top <= {
+        "__init__",
+        "cli",
+        "vectors",
+        "errors",
+        "atomic",
+        "sampling",
+        "samplers",
+        "scattering",
+        "camera",
+        "image",
+        "lights",
+        "meshes",
+        "scene",
+        "scene_file",
+        "textures",
+    }, top
 
 
 def test_the_version_is_written_once():

@@ -27,14 +27,17 @@ def two_lights() -> AreaLights:
     v0 = np.array([[0.0, 0, 0], [5, 0, 0]])
     v1 = np.array([[1.0, 0, 0], [5, 3, 0]])
     v2 = np.array([[0.0, 1, 0], [6, 0, 0]])
-    return AreaLights(v0, v1, v2, radiance=np.array([[1.0, 1, 1], [2, 2, 2]]),
-                      offset=np.zeros(2))
+    return AreaLights(v0, v1, v2, radiance=np.array([[1.0, 1, 1], [2, 2, 2]]), offset=np.zeros(2))
 
 
 def test_triangle_areas_and_normals():
-    triangles = np.array([[[0.0, 0, 0], [1, 0, 0], [0, 1, 0]],      # area 1/2, facing +z
-                          [[5.0, 0, 0], [5, 3, 0], [6, 0, 0]],      # area 3/2, facing -z
-                          [[0.0, 0, 0], [1, 1, 1], [2, 2, 2]]])     # on a line: area 0
+    triangles = np.array(
+        [
+            [[0.0, 0, 0], [1, 0, 0], [0, 1, 0]],  # area 1/2, facing +z
+            [[5.0, 0, 0], [5, 3, 0], [6, 0, 0]],  # area 3/2, facing -z
+            [[0.0, 0, 0], [1, 1, 1], [2, 2, 2]],
+        ]
+    )  # on a line: area 0
     np.testing.assert_array_equal(triangle_areas(triangles), [0.5, 1.5, 0.0])
     with np.errstate(invalid="ignore"):
         normals = triangle_normals(triangles)
@@ -54,9 +57,14 @@ def test_total_area_power_pdf_and_normals():
 
 
 def test_equal_lights_are_picked_by_area_as_in_the_homework():
-    lights = AreaLights(*(np.array(v, dtype=float) for v in (
-        [[0, 0, 0], [5, 0, 0]], [[1, 0, 0], [5, 3, 0]], [[0, 1, 0], [6, 0, 0]])),
-        radiance=np.full((2, 3), 7.0), offset=np.zeros(2))
+    lights = AreaLights(
+        *(
+            np.array(v, dtype=float)
+            for v in ([[0, 0, 0], [5, 0, 0]], [[1, 0, 0], [5, 3, 0]], [[0, 1, 0], [6, 0, 0]])
+        ),
+        radiance=np.full((2, 3), 7.0),
+        offset=np.zeros(2),
+    )
     np.testing.assert_allclose(lights.pdf_area(lights.radiance), 1 / lights.total_area, rtol=1e-6)
 
 
@@ -75,7 +83,7 @@ def test_triangles_are_chosen_in_proportion_to_their_power():
     np.testing.assert_allclose(sample.points[~on_big].mean(axis=0), [1 / 3, 1 / 3, 0], atol=0.01)
 
 
-@pytest.mark.parametrize("count", [5, 40])      # few lights: counting; many: binary search
+@pytest.mark.parametrize("count", [5, 40])  # few lights: counting; many: binary search
 def test_many_lights_are_chosen_in_proportion_to_their_power(count):
     rng = np.random.default_rng(count)
     sizes = rng.uniform(0.5, 3.0, count)
@@ -88,14 +96,15 @@ def test_many_lights_are_chosen_in_proportion_to_their_power(count):
     power = lights.areas * radiance[:, 0]
     expected = N * power / power.sum()
     statistic = ((counts - expected) ** 2 / expected).sum()
-    assert stats.chi2.sf(statistic, df=count - 1) > 1e-3     # false-alarm rate 0.1%
+    assert stats.chi2.sf(statistic, df=count - 1) > 1e-3  # false-alarm rate 0.1%
 
 
 # -- point lights, the sky, and the choice between kinds of light ----------------------------
 
+
 def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance():
     positions = np.array([[0.0, 2, 0], [3, 4, 0]])
-    intensity = np.array([[10.0, 20, 30], [40, 0, 0]])     # mean 20 and 13.3: power 3 : 2
+    intensity = np.array([[10.0, 20, 30], [40, 0, 0]])  # mean 20 and 13.3: power 3 : 2
     lights = PointLights(positions, intensity, share=0.5)
     assert lights.power == pytest.approx(4 * np.pi * (20 + 40 / 3))
     np.testing.assert_allclose(lights.probability, [0.5 * 0.6, 0.5 * 0.4], rtol=1e-6)
@@ -104,7 +113,7 @@ def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance
     first = sample.target[:, 1] == 2
     counts = [np.count_nonzero(first), np.count_nonzero(~first)]
     statistic = sum((c - e) ** 2 / e for c, e in zip(counts, [0.6 * N, 0.4 * N], strict=True))
-    assert stats.chi2.sf(statistic, df=1) > 1e-3, counts          # false-alarm rate 0.1%
+    assert stats.chi2.sf(statistic, df=1) > 1e-3, counts  # false-alarm rate 0.1%
     np.testing.assert_allclose(sample.radiance[first][0], np.array([10, 20, 30]) / 4, rtol=1e-6)
     np.testing.assert_allclose(sample.radiance[~first][0], np.array([40, 0, 0]) / 25, rtol=1e-6)
     np.testing.assert_allclose(sample.wi[~first][0], [0.6, 0.8, 0], rtol=1e-6)
@@ -125,14 +134,14 @@ def test_the_sky_is_sampled_uniformly_on_the_sphere_with_its_share():
     # Uniform on the sphere: each coordinate has mean 0 and variance 1/3 (sd of the mean
     # 0.0018 with 1e5 samples; 5 sd: false-alarm rate below 1e-5).
     np.testing.assert_allclose(sample.wi.mean(axis=0), 0, atol=0.01)
-    np.testing.assert_allclose((sample.wi ** 2).mean(axis=0), 1 / 3, atol=0.01)
+    np.testing.assert_allclose((sample.wi**2).mean(axis=0), 1 / 3, atol=0.01)
     np.testing.assert_allclose(sample.pdf, 0.25 / (4 * np.pi), rtol=1e-6)
     np.testing.assert_allclose(sample.radiance, np.broadcast_to([0.2, 0.4, 0.6], (N, 3)), rtol=1e-6)
     np.testing.assert_allclose(sample.target, p + 10 * sample.wi, rtol=1e-5)
 
 
 def test_light_shares_by_power_with_half_for_the_sky():
-    assert light_shares(5.0, 0.0, sky=False) == (1.0, 0.0, 0.0)     # exactly: same numbers
+    assert light_shares(5.0, 0.0, sky=False) == (1.0, 0.0, 0.0)  # exactly: same numbers
     assert light_shares(0.0, 0.0, sky=True) == (0.0, 0.0, 1.0)
     assert light_shares(0.0, 7.0, sky=False) == (0.0, 1.0, 0.0)
     area, points, sky = light_shares(1.0, 3.0, sky=True)
@@ -142,10 +151,12 @@ def test_light_shares_by_power_with_half_for_the_sky():
 def test_area_power_is_pi_area_radiance_and_its_share_scales_the_pdf():
     lights = two_lights()
     assert lights.power == pytest.approx(np.pi * 3.5)
-    halved = AreaLights(lights.v0, lights.v0 + lights.e1, lights.v0 + lights.e2,
-                        lights.radiance, np.zeros(2), share=0.5)
-    np.testing.assert_allclose(halved.pdf_area(halved.radiance),
-                               0.5 * lights.pdf_area(lights.radiance), rtol=1e-6)
+    halved = AreaLights(
+        lights.v0, lights.v0 + lights.e1, lights.v0 + lights.e2, lights.radiance, np.zeros(2), share=0.5
+    )
+    np.testing.assert_allclose(
+        halved.pdf_area(halved.radiance), 0.5 * lights.pdf_area(lights.radiance), rtol=1e-6
+    )
 
 
 def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified():
@@ -159,8 +170,9 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
     assert np.bincount(kind).tolist() == [200, 300, 500]
     # Each kind's part of an evenly spaced u is stretched back to evenly spaced in [0, 1).
     for k, count in enumerate((200, 300, 500)):
-        np.testing.assert_allclose(np.sort(stretched[kind == k, 0]),
-                                   (np.arange(count) + 0.5) / count, atol=1e-4)
+        np.testing.assert_allclose(
+            np.sort(stretched[kind == k, 0]), (np.arange(count) + 0.5) / count, atol=1e-4
+        )
     np.testing.assert_array_equal(stretched[:, 1], u[:, 1])
     kind, stretched, scale = sampler.pick(u, np.array([True, True, False]))
     assert scale == pytest.approx(2.0) and np.bincount(kind).tolist() == [400, 600]
@@ -185,4 +197,4 @@ def test_build_lights_shares_the_samples_and_leaves_the_given_lights_as_they_are
     assert points.share == 1.0 and sky.share == 1.0 and sky.distance == 1.0
     assert sampler.point_lights is not points and sampler.sky is not sky
     np.testing.assert_array_equal(sampler.point_lights.intensity, points.intensity)
-    assert build_lights(triangles[2:], radiance[2:], np.zeros(1)) is None     # no light at all
+    assert build_lights(triangles[2:], radiance[2:], np.zeros(1)) is None  # no light at all

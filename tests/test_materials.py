@@ -28,22 +28,32 @@ ALBEDO = np.array([0.8, 0.5, 0.2])
 
 #: Every material and each of its samplings, plain and coloured, smooth and rough.
 MATERIALS = [
-    Diffuse(ALBEDO), Diffuse(ALBEDO, sampling="uniform"),
-    Microfacet("gold", roughness=0.4), Microfacet("copper", alpha=0.1, kd=(0.4, 0.4, 0.4), ks=0.6),
-    Microfacet((1, 1, 1), alpha=0.05), Microfacet((1, 1, 1), alpha=1.0, sampling="hemisphere"),
-    Mirror(), Mirror((0.9, 0.6, 0.3), fresnel=True),
-    Dielectric(1.5), Dielectric(1.33, transmittance=(0.9, 0.8, 0.7)),
+    Diffuse(ALBEDO),
+    Diffuse(ALBEDO, sampling="uniform"),
+    Microfacet("gold", roughness=0.4),
+    Microfacet("copper", alpha=0.1, kd=(0.4, 0.4, 0.4), ks=0.6),
+    Microfacet((1, 1, 1), alpha=0.05),
+    Microfacet((1, 1, 1), alpha=1.0, sampling="hemisphere"),
+    Mirror(),
+    Mirror((0.9, 0.6, 0.3), fresnel=True),
+    Dielectric(1.5),
+    Dielectric(1.33, transmittance=(0.9, 0.8, 0.7)),
 ]
 #: The materials that only reflect (all but glass): nothing below the surface.
 REFLECTIVE = [m for m in MATERIALS if not isinstance(m, Dielectric)]
 SMOOTH = [m for m in MATERIALS if not m.is_delta]
 #: White versions: each keeps at most the energy it receives.
 WHITE = [
-    Diffuse((1, 1, 1)), Diffuse((1, 1, 1), sampling="uniform"),
-    Microfacet((1, 1, 1), alpha=0.05), Microfacet((1, 1, 1), alpha=0.3),
-    Microfacet((1, 1, 1), alpha=1.0), Microfacet((1, 1, 1), alpha=0.3, sampling="hemisphere"),
+    Diffuse((1, 1, 1)),
+    Diffuse((1, 1, 1), sampling="uniform"),
+    Microfacet((1, 1, 1), alpha=0.05),
+    Microfacet((1, 1, 1), alpha=0.3),
+    Microfacet((1, 1, 1), alpha=1.0),
+    Microfacet((1, 1, 1), alpha=0.3, sampling="hemisphere"),
     Microfacet((1, 1, 1), alpha=0.3, kd=(0.5, 0.5, 0.5), ks=0.5),
-    Mirror(), Mirror((1, 1, 1), fresnel=True), Dielectric(1.5),
+    Mirror(),
+    Mirror((1, 1, 1), fresnel=True),
+    Dielectric(1.5),
 ]
 ROWS = 1 << 12
 
@@ -117,8 +127,7 @@ def test_weight_is_f_cos_over_pdf_and_eval_is_reciprocal(material):
     generic_wi, generic = Material.sample_weight(material, wo, n, u)
     np.testing.assert_allclose(sampled, generic_wi, atol=1e-12)
     np.testing.assert_allclose(weight, generic, rtol=1e-9, atol=1e-12)
-    np.testing.assert_allclose(material.eval(wo, wi, n), material.eval(wi, wo, n), rtol=1e-9,
-                               atol=1e-12)
+    np.testing.assert_allclose(material.eval(wo, wi, n), material.eval(wi, wo, n), rtol=1e-9, atol=1e-12)
 
 
 @pytest.mark.parametrize("material", WHITE, ids=repr)
@@ -131,8 +140,9 @@ def test_a_white_material_reflects_at_most_what_it_receives(material, degrees):
     n = unit(rng.normal(size=(rows, 3)))
     phi = rng.uniform(0, 2 * math.pi, rows)
     theta = math.radians(degrees)
-    local = np.column_stack([math.sin(theta) * np.cos(phi), math.sin(theta) * np.sin(phi),
-                             np.full(rows, math.cos(theta))])
+    local = np.column_stack(
+        [math.sin(theta) * np.cos(phi), math.sin(theta) * np.sin(phi), np.full(rows, math.cos(theta))]
+    )
     _, weight = material.sample_weight(to_world(local, n), n, rng.random((rows, 2)))
     mean = weight.mean(axis=0)
     standard_error = weight.std(axis=0, ddof=1) / math.sqrt(rows)
@@ -175,7 +185,7 @@ def test_pdf_integrates_to_one_and_reflectance_is_the_albedo(sampling):
     wi = rng.normal(size=(N, 3))
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
     integral = (material.pdf(wo, wi, n) * 4 * math.pi).mean()
-    assert integral == pytest.approx(1.0, abs=0.01)     # sd ~ 1.4 / sqrt(N): 3e-3
+    assert integral == pytest.approx(1.0, abs=0.01)  # sd ~ 1.4 / sqrt(N): 3e-3
     cos = np.clip((wi * n).sum(axis=1), 0, None)
     reflectance = (material.eval(wo, wi, n) * cos[:, None] * 4 * math.pi).mean(axis=0)
     np.testing.assert_allclose(reflectance, ALBEDO, atol=0.01)

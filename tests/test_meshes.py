@@ -30,7 +30,8 @@ number_texts = st.one_of(
     st.floats(-1e4, 1e4, allow_nan=False).map(repr),
     st.floats(-1e4, 1e4, allow_nan=False).map(lambda x: f"{x:.6f}"),
     st.floats(1e-30, 1e30).map(lambda x: f"{x:e}"),
-    st.integers(-1000, 1000).map(str))
+    st.integers(-1000, 1000).map(str),
+)
 separators = st.sampled_from([" ", "  ", "\t", " \t"])
 
 
@@ -46,19 +47,19 @@ def valid_obj(draw) -> tuple[bytes, bool]:
     gap = draw(separators)
     lines = ["# made up", "o part"] if draw(st.booleans()) else []
     for _ in range(n_vertices):
-        lines.append("v " + gap.join(draw(st.lists(number_texts, min_size=v_size,
-                                                   max_size=v_size))))
+        lines.append("v " + gap.join(draw(st.lists(number_texts, min_size=v_size, max_size=v_size))))
     for _ in range(n_texture):
-        lines.append("vt " + " ".join(draw(st.lists(number_texts, min_size=vt_size,
-                                                    max_size=vt_size))))
+        lines.append("vt " + " ".join(draw(st.lists(number_texts, min_size=vt_size, max_size=vt_size))))
     lines.append("vn 0 0 1")
-    negative = draw(st.booleans())       # (after every vertex: trimesh counts from the end)
+    negative = draw(st.booleans())  # (after every vertex: trimesh counts from the end)
     for _ in range(draw(st.integers(1, 8))):
         size = draw(st.integers(3, 6))
         vertices = draw(st.lists(st.integers(1, n_vertices), min_size=size, max_size=size))
         textures = draw(st.lists(st.integers(1, n_texture), min_size=size, max_size=size))
-        references = [form.format(v=v - n_vertices - 1 if negative else v, t=t, n=1)
-                      for v, t in zip(vertices, textures, strict=True)]
+        references = [
+            form.format(v=v - n_vertices - 1 if negative else v, t=t, n=1)
+            for v, t in zip(vertices, textures, strict=True)
+        ]
         lines.append("f " + gap.join(references) + draw(st.sampled_from(["", " ", "\t"])))
         if draw(st.integers(0, 4)) == 0:
             lines.append(draw(st.sampled_from(["g group", "s 1", "", "# a comment", "  # indented"])))
@@ -76,11 +77,9 @@ def trimesh_reading(data: bytes) -> tuple[np.ndarray, np.ndarray | None]:
     second ones; ptlab's reader keeps each face's two together, as trimesh does wherever the
     faces are of several sizes, and as ptlab read such files before.)
     """
-    mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", force="mesh",
-                        process=False)
+    mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", force="mesh", process=False)
     faces = np.asarray(mesh.faces)
-    if all(len(line.split()) == 5 for line in data.decode().splitlines()
-           if line.startswith("f ")):
+    if all(len(line.split()) == 5 for line in data.decode().splitlines() if line.startswith("f ")):
         faces = np.stack(np.split(faces, 2), axis=1).reshape(-1, 3)
     uv = getattr(mesh.visual, "uv", None)
     if uv is not None:
@@ -117,19 +116,22 @@ def test_obj_files_written_the_common_way_take_the_quick_scan(tmp_path):
 QUAD = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\n"
 
 
-@pytest.mark.parametrize("faces, problem", [
-    ("f 1/1 2/2 3//3\n", "line 9: the face mixes reference forms"),
-    ("f 1/1 2/2 3/3 4\n", "line 9: the face mixes reference forms"),
-    ("f 1///1 2 3\n", "line 9: '1///1' is not a vertex reference"),
-    ("f 1/ 2/ 3/\n", "line 9: '1/' is not a vertex reference"),
-    ("f 1 2 +3\n", "line 9: '+3' is not a vertex reference"),
-    ("f 1 2 99999999999999999999\n", "line 9: vertex 99999999999999999999 does not exist"),
-    ("f 1/1 2/1 3/1 4/1\nf 1 2 3 4 1 2 3 4\n", "line 10: this face (i) and line 9's (i/i)"),
-    ("f 1 2 3 # a comment\n", "line 9: a comment after the data"),
-    ("f 1 2 3\n\tf 1 2 3\n", "line 10: write `f` at the very start of the line"),
-    ("f 1 2 3\nvt 0 0 0 0\n", "line 10: `vt` needs 1 to 3 numbers, got 4"),
-    ("f 1 2 3\nv 1 2 3e\n", "line 10: '3e' is not a number"),
-])
+@pytest.mark.parametrize(
+    "faces, problem",
+    [
+        ("f 1/1 2/2 3//3\n", "line 9: the face mixes reference forms"),
+        ("f 1/1 2/2 3/3 4\n", "line 9: the face mixes reference forms"),
+        ("f 1///1 2 3\n", "line 9: '1///1' is not a vertex reference"),
+        ("f 1/ 2/ 3/\n", "line 9: '1/' is not a vertex reference"),
+        ("f 1 2 +3\n", "line 9: '+3' is not a vertex reference"),
+        ("f 1 2 99999999999999999999\n", "line 9: vertex 99999999999999999999 does not exist"),
+        ("f 1/1 2/1 3/1 4/1\nf 1 2 3 4 1 2 3 4\n", "line 10: this face (i) and line 9's (i/i)"),
+        ("f 1 2 3 # a comment\n", "line 9: a comment after the data"),
+        ("f 1 2 3\n\tf 1 2 3\n", "line 10: write `f` at the very start of the line"),
+        ("f 1 2 3\nvt 0 0 0 0\n", "line 10: `vt` needs 1 to 3 numbers, got 4"),
+        ("f 1 2 3\nv 1 2 3e\n", "line 10: '3e' is not a number"),
+    ],
+)
 def test_malformed_faces_and_records_are_named_by_their_line(faces, problem):
     with pytest.raises(ValueError) as error:
         read_obj((QUAD + faces).encode())
@@ -149,17 +151,21 @@ def test_loading_obj_scenes_imports_no_trimesh(tmp_path):
     # Start-up: trimesh, and SciPy through it, cost a render about a second; OBJ files, with
     # texture coordinates or without, are read without them.
     (tmp_path / "board.obj").write_text(QUAD + "f 1/1 2/2 3/3 4/4\n")
-    scene = (ROOT / "scenes" / "cornell-box" / "scene.toml").read_text().replace(
-        '"meshes/', f'"{ROOT}/scenes/cornell-box/meshes/') + \
-        '\n[[mesh]]\nfile = "board.obj"\nmaterial = "board"\n' \
-        '\n[materials.board]\ntype = "diffuse"\n' \
-        'albedo = { checkerboard = [[0.8, 0.1, 0], [0.2, 0.6, 0.9]] }\n'
+    scene = (
+        (ROOT / "scenes" / "cornell-box" / "scene.toml")
+        .read_text()
+        .replace('"meshes/', f'"{ROOT}/scenes/cornell-box/meshes/')
+        + '\n[[mesh]]\nfile = "board.obj"\nmaterial = "board"\n'
+        '\n[materials.board]\ntype = "diffuse"\n'
+        "albedo = { checkerboard = [[0.8, 0.1, 0], [0.2, 0.6, 0.9]] }\n"
+    )
     (tmp_path / "scene.toml").write_text(scene)
-    code = ("import sys, ptlab\n"
-            f"assert ptlab.load_scene({str(tmp_path / 'scene.toml')!r}).uvs is not None\n"
-            "print([m for m in ('trimesh', 'scipy') if m in sys.modules])\n")
-    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                            check=True)
+    code = (
+        "import sys, ptlab\n"
+        f"assert ptlab.load_scene({str(tmp_path / 'scene.toml')!r}).uvs is not None\n"
+        "print([m for m in ('trimesh', 'scipy') if m in sys.modules])\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "[]"
 
 
@@ -167,7 +173,7 @@ def test_a_big_obj_file_is_read_within_a_bounded_memory_per_triangle():
     # tracemalloc counts NumPy's arrays, so the peak is the same on any machine: about 310
     # bytes a triangle (the file's text is 37), where a reader that kept a Python string per
     # line took 500 (docs/performance.md).
-    sphere = trimesh.creation.icosphere(subdivisions=6)            # 81 920 triangles
+    sphere = trimesh.creation.icosphere(subdivisions=6)  # 81 920 triangles
     data = trimesh.exchange.obj.export_obj(sphere).encode()
     tracemalloc.start()
     try:

@@ -25,8 +25,10 @@ ALPHAS = [0.05, 0.2, 0.5, 1.0]
 
 def integral(grid: SphereGrid, f) -> float:
     """The integral of a scalar function of (P, 3) directions over the sphere."""
+
     def tolerance(fine, area):
         return 1e-7 * (np.abs(fine) + area[:, None])
+
     totals, _ = grid.integrate(lambda w: f(w)[:, None], tolerance)
     return float(totals.sum())
 
@@ -170,11 +172,18 @@ def test_mirror_limit_reflects_into_the_mirror_direction():
 
 
 def test_parameters():
-    assert Microfacet(roughness=0.5).alpha == 0.25        # alpha = roughness^2
+    assert Microfacet(roughness=0.5).alpha == 0.25  # alpha = roughness^2
     assert Microfacet(alpha=0.3).alpha == 0.3
     np.testing.assert_array_equal(Microfacet("copper").f0, METALS["copper"])
-    for bad in (dict(roughness=0.5, alpha=0.2), dict(alpha=0.0), dict(alpha=1.5), dict(f0="unobtainium"),
-                dict(f0=(1.2, 0.5, 0.5)), dict(kd=(0.6, 0.6, 0.6), ks=0.6), dict(sampling="uniform")):
+    for bad in (
+        dict(roughness=0.5, alpha=0.2),
+        dict(alpha=0.0),
+        dict(alpha=1.5),
+        dict(f0="unobtainium"),
+        dict(f0=(1.2, 0.5, 0.5)),
+        dict(kd=(0.6, 0.6, 0.6), ks=0.6),
+        dict(sampling="uniform"),
+    ):
         with pytest.raises(ValueError):
             Microfacet(**bad)
     assert "alpha=0.25" in repr(Microfacet(roughness=0.5))

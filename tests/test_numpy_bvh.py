@@ -31,12 +31,12 @@ F32_EPS = float(np.finfo(np.float32).eps)
 
 # --- scenes and rays --------------------------------------------------------------------
 
+
 def box_triangles(lo, hi, angle_deg: float = 0.0, bottom: bool = True) -> np.ndarray:
     """(12, 3, 3) triangles of the box [lo, hi] turned by ``angle_deg`` about its
     vertical (y) axis; (10, 3, 3) without the two facing -y when ``bottom`` is False."""
     mesh = trimesh.creation.box(extents=np.subtract(hi, lo))
-    mesh.apply_transform(trimesh.transformations.rotation_matrix(np.radians(angle_deg),
-                                                                 [0, 1, 0]))
+    mesh.apply_transform(trimesh.transformations.rotation_matrix(np.radians(angle_deg), [0, 1, 0]))
     mesh.apply_translation(np.add(lo, hi) / 2)
     tris = mesh.vertices[mesh.faces]
     if not bottom:
@@ -54,12 +54,14 @@ def cornell_like() -> np.ndarray:
     """(34, 3, 3): the room 0..556 (12), a short and a tall box turned by -17 and +17
     degrees standing on the floor, without their bottoms (10 + 10), and a ceiling
     light just below the ceiling (2); about the GAMES101 Cornell box."""
-    return np.concatenate([
-        box_triangles([0, 0, 0], [556, 556, 556]),
-        box_triangles([130, 0, 65], [295, 165, 230], -17, bottom=False),
-        box_triangles([265, 0, 295], [430, 330, 460], 17, bottom=False),
-        quad([213, 548.7, 227], [130, 0, 0], [0, 0, 105]),
-    ])
+    return np.concatenate(
+        [
+            box_triangles([0, 0, 0], [556, 556, 556]),
+            box_triangles([130, 0, 65], [295, 165, 230], -17, bottom=False),
+            box_triangles([265, 0, 295], [430, 330, 460], 17, bottom=False),
+            quad([213, 548.7, 227], [130, 0, 0], [0, 0, 105]),
+        ]
+    )
 
 
 def big_mesh() -> np.ndarray:
@@ -70,22 +72,21 @@ def big_mesh() -> np.ndarray:
     return np.concatenate([a.vertices[a.faces], b.vertices[b.faces]])
 
 
-def random_rays(rng: np.random.Generator, n: int, inner: tuple[float, float],
-                outer: tuple[float, float]) -> tuple[np.ndarray, np.ndarray]:
+def random_rays(
+    rng: np.random.Generator, n: int, inner: tuple[float, float], outer: tuple[float, float]
+) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3) float32 origins, half in the cube ``inner`` and half in ``outer``, and
     directions of random lengths; a fifth of them have one or two components exactly 0."""
-    origins = np.concatenate([rng.uniform(*inner, (n // 2, 3)),
-                              rng.uniform(*outer, (n - n // 2, 3))])
+    origins = np.concatenate([rng.uniform(*inner, (n // 2, 3)), rng.uniform(*outer, (n - n // 2, 3))])
     dirs = rng.normal(size=(n, 3)) * rng.uniform(0.1, 10.0, (n, 1))
     axis_aligned = rng.random(n) < 0.2
     zeros = rng.random((n, 3)) < 0.5
-    zeros[np.arange(n), rng.integers(0, 3, n)] = False       # never all three
+    zeros[np.arange(n), rng.integers(0, 3, n)] = False  # never all three
     dirs[axis_aligned[:, None] & zeros] = 0.0
     return origins.astype(np.float32), dirs.astype(np.float32)
 
 
-def assert_hits_match(ref: Hits, hits: Hits, origins: np.ndarray, dirs: np.ndarray,
-                      tris: np.ndarray):
+def assert_hits_match(ref: Hits, hits: Hits, origins: np.ndarray, dirs: np.ndarray, tris: np.ndarray):
     """The agreement with Embree described in the module docstring."""
     np.testing.assert_array_equal(hits.hit, ref.hit)
     assert hits.t.dtype == np.float32 and hits.prim.dtype == np.intp
@@ -104,22 +105,32 @@ def assert_hits_match(ref: Hits, hits: Hits, origins: np.ndarray, dirs: np.ndarr
     bad = np.abs(t - t_ref) > tol
     assert not bad.any(), f"{bad.sum()} rays with t off, e.g. {t[bad][:3]} vs {t_ref[bad][:3]}"
     same = hits.prim[hit] == ref.prim[hit]
-    assert same.mean() > 0.99                # a different triangle only at ties (t agrees)
+    assert same.mean() > 0.99  # a different triangle only at ties (t agrees)
     for name in ("u", "v"):
         err = np.abs(getattr(hits, name)[hit] - getattr(ref, name)[hit])[same]
         assert err.max() < 1e-4, f"{name} off by {err.max()}"
 
 
-def check_against_embree(tris: np.ndarray, origins: np.ndarray, dirs: np.ndarray,
-                         rng: np.random.Generator, every_triangle: bool | None = None):
+def check_against_embree(
+    tris: np.ndarray,
+    origins: np.ndarray,
+    dirs: np.ndarray,
+    rng: np.random.Generator,
+    every_triangle: bool | None = None,
+):
     embree, bvh = EmbreeAccelerator(tris), NumpyBVH(tris, every_triangle=every_triangle)
     ref = embree.intersect(origins, dirs)
     assert_hits_match(ref, bvh.intersect(origins, dirs), origins, dirs, tris)
 
     # Per-ray tmin: Embree moves the origin instead, so compare with its tolerance.
     tmin = (rng.uniform(0, 0.8, len(dirs)) * np.where(ref.hit, ref.t, 1)).astype(np.float32)
-    assert_hits_match(embree.intersect(origins, dirs, tmin=tmin),
-                      bvh.intersect(origins, dirs, tmin=tmin), origins, dirs, tris)
+    assert_hits_match(
+        embree.intersect(origins, dirs, tmin=tmin),
+        bvh.intersect(origins, dirs, tmin=tmin),
+        origins,
+        dirs,
+        tris,
+    )
 
     # Shadow rays with finite tmax, leaving out those with a hit within 1e-4 of tmax.
     tmax = np.where(ref.hit, ref.t, 1.0) * rng.uniform(0.5, 1.5, len(dirs))
@@ -127,7 +138,7 @@ def check_against_embree(tris: np.ndarray, origins: np.ndarray, dirs: np.ndarray
     tmax = tmax.astype(np.float32)
     expected = embree.occluded(origins, dirs, tmax)
     got = bvh.occluded(origins, dirs, tmax)
-    assert 0.1 < expected.mean() < 0.9                # both answers well represented
+    assert 0.1 < expected.mean() < 0.9  # both answers well represented
     np.testing.assert_array_equal(got[clear], expected[clear])
 
 
@@ -138,8 +149,9 @@ V0, V1, V2 = np.array([0.0, 0, 0]), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
 
 def mt(origin, direction):
     """ray_triangle for one ray against the triangle V0, V1, V2, as Python floats."""
-    t, u, v = ray_triangle(np.array([origin], float), np.array([direction], float),
-                           V0[None], (V1 - V0)[None], (V2 - V0)[None])
+    t, u, v = ray_triangle(
+        np.array([origin], float), np.array([direction], float), V0[None], (V1 - V0)[None], (V2 - V0)[None]
+    )
     return float(t[0]), float(u[0]), float(v[0])
 
 
@@ -164,11 +176,11 @@ def test_ray_triangle_back_face_hits():
 
 def test_ray_triangle_misses():
     with warnings.catch_warnings():
-        warnings.simplefilter("error")                # no divide-by-zero warnings either
-        assert mt([0.25, 0.5, 1.0], [1, 0, 0])[0] == np.inf     # parallel to the plane
-        assert mt([0.25, 0.5, 0.0], [1, 1, 0])[0] == np.inf     # parallel, in the plane
-        assert mt([0.8, 0.8, 1.0], [0, 0, -1])[0] == np.inf     # outside, u + v > 1
-        assert mt([-0.1, 0.5, 1.0], [0, 0, -1])[0] == np.inf    # outside, u < 0
+        warnings.simplefilter("error")  # no divide-by-zero warnings either
+        assert mt([0.25, 0.5, 1.0], [1, 0, 0])[0] == np.inf  # parallel to the plane
+        assert mt([0.25, 0.5, 0.0], [1, 1, 0])[0] == np.inf  # parallel, in the plane
+        assert mt([0.8, 0.8, 1.0], [0, 0, -1])[0] == np.inf  # outside, u + v > 1
+        assert mt([-0.1, 0.5, 1.0], [0, 0, -1])[0] == np.inf  # outside, u < 0
     # Behind the origin is a hit at negative t: keeping t > tmin is the caller's job.
     assert mt([0.25, 0.5, 1.0], [0, 0, 1])[0] == pytest.approx(-1.0)
 
@@ -189,57 +201,70 @@ def test_ray_triangle_matches_a_linear_solve():
 
 # --- slab test ------------------------------------------------------------------------
 
+
 def slab(origin, direction, lo, hi, tmin=0.0, tmax=np.inf):
     """slab_test for one ray and one box, as (bool, float)."""
     with np.errstate(divide="ignore"):
         inv = 1 / np.array([direction], np.float32)
-    hit, t_enter = slab_test(np.array([origin], np.float32), inv,
-                             np.array([lo], np.float32), np.array([hi], np.float32),
-                             tmin, tmax)
+    hit, t_enter = slab_test(
+        np.array([origin], np.float32),
+        inv,
+        np.array([lo], np.float32),
+        np.array([hi], np.float32),
+        tmin,
+        tmax,
+    )
     return bool(hit[0]), float(t_enter[0])
 
 
 def test_slab_test_box():
     assert slab([-1, 0.5, 0.5], [2, 0, 0], [0, 0, 0], [1, 1, 1]) == (True, 0.5)
     assert slab([0.5, 0.5, 0.5], [1, 1, 1], [0, 0, 0], [1, 1, 1]) == (True, 0.0)  # inside
-    assert not slab([-1, 0.5, 0.5], [-1, 0, 0], [0, 0, 0], [1, 1, 1])[0]   # box behind
+    assert not slab([-1, 0.5, 0.5], [-1, 0, 0], [0, 0, 0], [1, 1, 1])[0]  # box behind
     assert not slab([-1, 0.5, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1], tmax=0.9)[0]
-    assert not slab([-1, 0.5, 0.5], [1, 1, 0], [0, 0, 0], [1, 1, 1])[0]    # passes by
+    assert not slab([-1, 0.5, 0.5], [1, 1, 0], [0, 0, 0], [1, 1, 1])[0]  # passes by
 
 
 def test_slab_test_flat_box():
-    flat = ([0, 0, 1], [1, 1, 1])                      # the square z = 1, 0 <= x, y <= 1
-    assert slab([0.5, 0.5, 0], [0, 0, 1], *flat) == (True, 1.0)     # perpendicular
+    flat = ([0, 0, 1], [1, 1, 1])  # the square z = 1, 0 <= x, y <= 1
+    assert slab([0.5, 0.5, 0], [0, 0, 1], *flat) == (True, 1.0)  # perpendicular
     assert slab([0.5, 0.5, 3], [0, 0, -2], *flat) == (True, 1.0)
-    assert slab([0, 0, 0], [1, 1, 1], *flat) == (True, 1.0)         # through a corner
-    assert not slab([2, 0.5, 0], [0, 0, 1], *flat)[0]               # beside it
-    assert slab([-1, 0.5, 1], [1, 0, 0], *flat) == (True, 1.0)      # in its plane
+    assert slab([0, 0, 0], [1, 1, 1], *flat) == (True, 1.0)  # through a corner
+    assert not slab([2, 0.5, 0], [0, 0, 1], *flat)[0]  # beside it
+    assert slab([-1, 0.5, 1], [1, 0, 0], *flat) == (True, 1.0)  # in its plane
 
 
 def test_slab_test_ray_parallel_to_a_slab():
     box = ([0, 0, 0], [1, 1, 1])
-    assert not slab([-1, 2, 0.5], [1, 0, 0], *box)[0]       # outside the y slab: miss
-    assert slab([-1, 0.5, 0.5], [1, 0, 0], *box)[0]         # inside it: hit
-    assert slab([-1, 1, 0.5], [1, 0, 0], *box)[0]           # on its boundary plane: hit
-    assert slab([-1, 0, 0], [1, 0, 0], *box)[0]             # along an edge: hit
+    assert not slab([-1, 2, 0.5], [1, 0, 0], *box)[0]  # outside the y slab: miss
+    assert slab([-1, 0.5, 0.5], [1, 0, 0], *box)[0]  # inside it: hit
+    assert slab([-1, 1, 0.5], [1, 0, 0], *box)[0]  # on its boundary plane: hit
+    assert slab([-1, 0, 0], [1, 0, 0], *box)[0]  # along an edge: hit
 
 
 # --- the BVH ------------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("max_leaf_size", [1, 4, 8])
 def test_build_invariants(max_leaf_size):
     rng = np.random.default_rng(2)
-    tris = np.concatenate([cornell_like(), rng.uniform(0, 556, (200, 3, 3)),
-                           np.repeat(rng.uniform(0, 556, (1, 3, 3)), 20, axis=0)])  # 20 alike
+    tris = np.concatenate(
+        [
+            cornell_like(),
+            rng.uniform(0, 556, (200, 3, 3)),
+            np.repeat(rng.uniform(0, 556, (1, 3, 3)), 20, axis=0),
+        ]
+    )  # 20 alike
     bvh = build_bvh(tris, max_leaf_size=max_leaf_size)
     leaf = np.flatnonzero(bvh.count > 0)
     assert bvh.count.max() <= max_leaf_size
     np.testing.assert_array_equal(np.sort(bvh.order), np.arange(len(tris)))
-    covered = np.concatenate([np.arange(f, f + c)
-                              for f, c in zip(bvh.first[leaf], bvh.count[leaf], strict=True)])
+    covered = np.concatenate(
+        [np.arange(f, f + c) for f, c in zip(bvh.first[leaf], bvh.count[leaf], strict=True)]
+    )
     np.testing.assert_array_equal(np.sort(covered), np.arange(len(tris)))
     for i in leaf:
-        leaf_tris = tris[bvh.order[bvh.first[i]:bvh.first[i] + bvh.count[i]]]
+        leaf_tris = tris[bvh.order[bvh.first[i] : bvh.first[i] + bvh.count[i]]]
         np.testing.assert_array_equal(bvh.box_min[i], leaf_tris.min(axis=(0, 1)))
         np.testing.assert_array_equal(bvh.box_max[i], leaf_tris.max(axis=(0, 1)))
     inner = np.flatnonzero(bvh.count == 0)
@@ -265,7 +290,7 @@ def test_the_tree_is_the_same_however_many_nodes_are_binned_at_once(monkeypatch)
 def test_a_big_mesh_builds_within_a_bounded_memory_per_triangle():
     # tracemalloc counts NumPy's arrays, so the peak is the same on any machine. It was 1.1-1.4
     # KB a triangle when a deep level binned all its nodes at once (docs/performance.md).
-    sphere = trimesh.creation.icosphere(subdivisions=6)           # 81 920 triangles
+    sphere = trimesh.creation.icosphere(subdivisions=6)  # 81 920 triangles
     tris = sphere.vertices[sphere.faces]
     tracemalloc.start()
     try:
@@ -300,12 +325,13 @@ def test_both_ways_find_the_same_hits_ray_by_ray():
     tree, every = NumpyBVH(tris, every_triangle=False), NumpyBVH(tris, every_triangle=True)
     a, b = tree.intersect(origins, dirs), every.intersect(origins, dirs)
     np.testing.assert_array_equal(a.hit, b.hit)
-    assert np.mean(a.prim == b.prim) > 0.999          # another triangle only where two meet
-    assert_hits_match(a, b, origins, dirs, tris)      # t, u, v up to float32 rounding
+    assert np.mean(a.prim == b.prim) > 0.999  # another triangle only where two meet
+    assert_hits_match(a, b, origins, dirs, tris)  # t, u, v up to float32 rounding
     tmax = rng.uniform(0, 1000, len(dirs)).astype(np.float32)
     clear = ~a.hit | (np.abs(tmax - a.t) > 1e-4 * a.t)
-    np.testing.assert_array_equal(tree.occluded(origins, dirs, tmax)[clear],
-                                  every.occluded(origins, dirs, tmax)[clear])
+    np.testing.assert_array_equal(
+        tree.occluded(origins, dirs, tmax)[clear], every.occluded(origins, dirs, tmax)[clear]
+    )
 
 
 def test_big_mesh_matches_embree():
@@ -329,18 +355,19 @@ def test_float64_rays_give_the_same_hits(every_triangle):
 def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
     """A flat tree: the quad z = 1, 0 <= x, y <= 1 (with max_leaf_size 1, a flat root
     over two flat leaves), hit by rays along z and rays with zero components."""
-    bvh = NumpyBVH(quad([0, 0, 1], [1, 0, 0], [0, 1, 0]), max_leaf_size=max_leaf_size,
-                   every_triangle=every_triangle)
+    bvh = NumpyBVH(
+        quad([0, 0, 1], [1, 0, 0], [0, 1, 0]), max_leaf_size=max_leaf_size, every_triangle=every_triangle
+    )
     assert bvh.bvh.box_min[0, 2] == bvh.bvh.box_max[0, 2] == 1.0
-    xy = np.stack(np.meshgrid(np.linspace(0.05, 0.95, 7), np.linspace(0.05, 0.95, 7)),
-                  axis=-1).reshape(-1, 2)
+    xy = np.stack(np.meshgrid(np.linspace(0.05, 0.95, 7), np.linspace(0.05, 0.95, 7)), axis=-1).reshape(-1, 2)
     n = len(xy)
     origins = np.column_stack([xy, np.zeros(n)])
     for dirs, t in [((0, 0, 1), 1.0), ((0, 0, 4), 0.25)]:
         hits = bvh.intersect(origins, np.tile(dirs, (n, 1)))
         assert hits.hit.all() and np.all(hits.t == t)
-        np.testing.assert_allclose(origins + hits.t[:, None] * np.array(dirs),
-                                   np.column_stack([xy, np.ones(n)]), atol=1e-6)
+        np.testing.assert_allclose(
+            origins + hits.t[:, None] * np.array(dirs), np.column_stack([xy, np.ones(n)]), atol=1e-6
+        )
     from_above = bvh.intersect(origins + [0, 0, 2], np.tile([0, 0, -1], (n, 1)))
     assert from_above.hit.all() and np.all(from_above.t == 1.0)
     # One zero component, and rays in the quad's plane (a miss, as for Embree).
@@ -353,27 +380,32 @@ def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
 @BOTH_WAYS
 def test_tmin_and_tmax(every_triangle):
     """Two quads, at z = 1 and z = 2, and rays along +z from z = 0."""
-    tris = np.concatenate([quad([0, 0, 1], [1, 0, 0], [0, 1, 0]),
-                           quad([0, 0, 2], [1, 0, 0], [0, 1, 0])])
+    tris = np.concatenate([quad([0, 0, 1], [1, 0, 0], [0, 1, 0]), quad([0, 0, 2], [1, 0, 0], [0, 1, 0])])
     bvh = NumpyBVH(tris, every_triangle=every_triangle)
     o = np.tile([0.3, 0.6, 0.0], (5, 1))
     d = np.tile([0.0, 0.0, 1.0], (5, 1))
     assert np.all(bvh.intersect(o, d).t == 1)
-    assert not bvh.intersect(o, d, tmax=0.5).hit.any()             # scalars
+    assert not bvh.intersect(o, d, tmax=0.5).hit.any()  # scalars
     assert np.all(bvh.intersect(o, d, tmin=1.5).t == 2)
     assert np.all(bvh.intersect(o, d, tmin=1.5).prim >= 2)
-    hits = bvh.intersect(o, d, tmin=np.array([0, 1.5, 0, 2.5, 1.5]),   # per-ray arrays
-                         tmax=np.array([np.inf, np.inf, 0.5, np.inf, 1.9]))
+    hits = bvh.intersect(
+        o,
+        d,
+        tmin=np.array([0, 1.5, 0, 2.5, 1.5]),  # per-ray arrays
+        tmax=np.array([np.inf, np.inf, 0.5, np.inf, 1.9]),
+    )
     np.testing.assert_array_equal(hits.t, [1, 2, np.inf, np.inf, np.inf])
     np.testing.assert_array_equal(hits.hit, [True, True, False, False, False])
-    np.testing.assert_array_equal(bvh.occluded(o, d, np.array([0.5, 1.5, 3, 1.0, 2.0])),
-                                  [False, True, True, False, True])
-    assert not bvh.occluded(o, d, 1.0).any()                # 0 < t < tmax, strictly
-    assert np.all(bvh.intersect(o, 2 * d).t == 0.5)          # t in units of |d|
+    np.testing.assert_array_equal(
+        bvh.occluded(o, d, np.array([0.5, 1.5, 3, 1.0, 2.0])), [False, True, True, False, True]
+    )
+    assert not bvh.occluded(o, d, 1.0).any()  # 0 < t < tmax, strictly
+    assert np.all(bvh.intersect(o, 2 * d).t == 0.5)  # t in units of |d|
 
 
 @BOTH_WAYS
 def test_no_rays(every_triangle):
     hits = NumpyBVH(cornell_like(), every_triangle=every_triangle).intersect(
-        np.zeros((0, 3)), np.zeros((0, 3)))
+        np.zeros((0, 3)), np.zeros((0, 3))
+    )
     assert hits.t.shape == hits.prim.shape == (0,)

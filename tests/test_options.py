@@ -27,16 +27,20 @@ OPTIONS = [f.name for f in fields(RenderOptions)]
 @pytest.mark.parametrize("function", [ptlab.render, ptlab.render_result])
 def test_the_api_takes_every_option_with_its_default(function):
     parameters = inspect.signature(function).parameters
-    assert list(parameters)[1:len(OPTIONS) + 1] == OPTIONS
+    assert list(parameters)[1 : len(OPTIONS) + 1] == OPTIONS
     for name in OPTIONS:
         assert parameters[name].default == RenderOptions.default(name), name
-        assert f"{name}: " in function.__doc__            # and its help
+        assert f"{name}: " in function.__doc__  # and its help
 
 
 def test_defaults_come_from_the_modules_that_own_them():
     options = RenderOptions()
     assert (options.strategy, options.heuristic, options.rr, options.rr_depth) == (
-        PathSettings.strategy, PathSettings.heuristic, PathSettings.rr, PathSettings.rr_min_depth)
+        PathSettings.strategy,
+        PathSettings.heuristic,
+        PathSettings.rr,
+        PathSettings.rr_min_depth,
+    )
     assert options.sampler == DEFAULT_SAMPLER
     assert options.max_depth is None and INTEGRATORS["whitted"].max_depth == 5
     assert INTEGRATORS["path"].max_depth == PathSettings.max_depth
@@ -45,11 +49,10 @@ def test_defaults_come_from_the_modules_that_own_them():
 def test_options_given_by_name_in_order_or_as_one_object_render_alike(cornell):
     by_name = ptlab.render(cornell, spp=2, res=12, seed=3, workers=1)
     in_order = ptlab.render(cornell, 2, 12, 3, 1)
-    as_object = ptlab.render(cornell, options=RenderOptions(spp=2, res=12, seed=5), seed=3,
-                             workers=1)
+    as_object = ptlab.render(cornell, options=RenderOptions(spp=2, res=12, seed=5), seed=3, workers=1)
     assert np.array_equal(by_name, in_order) and np.array_equal(by_name, as_object)
     with pytest.raises(TypeError):
-        ptlab.render(cornell, spp=2, checkpoint="x.npz")   # render_result's, not an option
+        ptlab.render(cornell, spp=2, checkpoint="x.npz")  # render_result's, not an option
 
 
 def test_options_left_open_are_decided_for_the_scene(cornell):
@@ -72,11 +75,13 @@ BAD = [
     (dict(seed=-1), "seed -1: must be a non-negative integer"),
     (dict(workers=0), "workers 0: must be an integer from 1 to 1024"),
     (dict(backend="optix"), "backend 'optix': choose one of auto, embree, numpy"),
-    (dict(integrator="bdpt"),
-     "integrator 'bdpt': choose one of path, whitted, normals, albedo, depth"),
+    (dict(integrator="bdpt"), "integrator 'bdpt': choose one of path, whitted, normals, albedo, depth"),
     (dict(sampling="magic"), "sampling 'magic': choose one of cosine, uniform"),
-    (dict(rr=1.5), "russian roulette 1.5: the survival probability must be in [2^-24, 1] "
-                   "(the uniforms it is drawn against are float32)"),
+    (
+        dict(rr=1.5),
+        "russian roulette 1.5: the survival probability must be in [2^-24, 1] "
+        "(the uniforms it is drawn against are float32)",
+    ),
     (dict(rr="sometimes"), "russian roulette 'sometimes': give 'throughput' or a probability"),
     (dict(max_depth=-1), "max depth -1: must be a non-negative integer"),
     (dict(strategy="all"), "strategy 'all': choose one of nee, bsdf, mis"),
@@ -85,12 +90,16 @@ BAD = [
     (dict(sampler=["sobol"]), "sampler ['sobol']: choose one of independent, stratified, sobol"),
     (dict(tile_size=4), "tile size 4: must be an integer from 8 to 4096"),
     (dict(spp_per_pass=0), "spp per pass 0: must be a positive integer"),
-    (dict(integrator="whitted", strategy="mis"),
-     "strategy 'mis' / heuristic 'power': these choose how the path integrator finds light; "
-     "'whitted' has no such choice"),
-    (dict(integrator="normals", heuristic="balance"),
-     "strategy 'nee' / heuristic 'balance': these choose how the path integrator finds light; "
-     "'normals' has no such choice"),
+    (
+        dict(integrator="whitted", strategy="mis"),
+        "strategy 'mis' / heuristic 'power': these choose how the path integrator finds light; "
+        "'whitted' has no such choice",
+    ),
+    (
+        dict(integrator="normals", heuristic="balance"),
+        "strategy 'nee' / heuristic 'balance': these choose how the path integrator finds light; "
+        "'normals' has no such choice",
+    ),
 ]
 
 
@@ -126,9 +135,14 @@ def test_the_commands_options_are_render_options():
     actions = render_actions()
     for name in set(OPTIONS) - {"tile_size", "spp_per_pass"}:
         assert actions[name].default == RenderOptions.default(name), name
-    for name, owner in [("integrator", tuple(INTEGRATORS)), ("backend", BACKENDS),
-                        ("sampling", SAMPLINGS), ("strategy", STRATEGIES),
-                        ("heuristic", HEURISTICS), ("sampler", SAMPLERS)]:
+    for name, owner in [
+        ("integrator", tuple(INTEGRATORS)),
+        ("backend", BACKENDS),
+        ("sampling", SAMPLINGS),
+        ("strategy", STRATEGIES),
+        ("heuristic", HEURISTICS),
+        ("sampler", SAMPLERS),
+    ]:
         assert tuple(actions[name].choices) == owner, name
     converge = render_actions("converge")
     for name in ("seed", "backend", "workers", "sampler"):
@@ -139,8 +153,9 @@ def test_the_commands_options_are_render_options():
 def test_a_scene_that_already_samples_so_is_not_rebuilt(cornell, monkeypatch):
     built = []
     original = Scene.__init__
-    monkeypatch.setattr(Scene, "__init__",
-                        lambda scene, *args, **kw: built.append(1) or original(scene, *args, **kw))
+    monkeypatch.setattr(
+        Scene, "__init__", lambda scene, *args, **kw: built.append(1) or original(scene, *args, **kw)
+    )
     assert cornell.with_sampling("cosine") is cornell
     ptlab.render(cornell, spp=1, res=8, workers=1)
     assert built == []
@@ -152,6 +167,6 @@ def test_the_header_records_every_option(cornell):
     result = render_result(cornell, spp=2, res=(12, 8), seed=4, workers=1, rr=0.8)
     settings = result.settings
     assert (settings["width"], settings["height"], settings["seed"]) == (12, 8, 4)
-    assert settings["rr"] == "0.8" and settings["rr_depth"] == 0      # where roulette started
+    assert settings["rr"] == "0.8" and settings["rr_depth"] == 0  # where roulette started
     assert settings["max_depth"] == 100 and settings["integrator"] == "path"
     assert set(OPTIONS) - {"res"} <= set(settings)

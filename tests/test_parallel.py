@@ -50,8 +50,9 @@ def test_any_executor_gives_the_same_image(cornell, reference):
 @pytest.mark.subprocess
 def test_dask_cluster_gives_the_same_image(cornell, reference):
     distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                  dashboard_address=None) as cluster:
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
         with distributed.Client(cluster) as client:
             result = render_result(cornell, executor=client.get_executor(), **SMALL)
     assert np.array_equal(result.image, reference.image)
@@ -72,24 +73,25 @@ class StopAfter:
 
 @pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.subprocess)])
 def test_stop_keeps_whole_passes_per_tile_and_resume_finishes_identically(
-        cornell, reference, tmp_path, workers):
+    cornell, reference, tmp_path, workers
+):
     checkpoint = tmp_path / "render.npz"
-    stopper = StopAfter(jobs=13)                    # 9 tiles x 3 passes: stop in pass 2
-    partial = render_result(cornell, workers=workers, checkpoint=checkpoint,
-                            progress=stopper.progress, stop=stopper, **SMALL)
+    stopper = StopAfter(jobs=13)  # 9 tiles x 3 passes: stop in pass 2
+    partial = render_result(
+        cornell, workers=workers, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL
+    )
     assert not partial.complete and checkpoint.is_file()
     assert 0 < partial.spp < partial.spp_max <= 6 and partial.spp % 2 == 0
     resumed = render_result(cornell, workers=workers, resume=checkpoint, **SMALL)
     assert resumed.complete and resumed.spp == 6
     assert np.array_equal(resumed.image, reference.image)
-    assert resumed.samples < reference.samples          # only the missing passes ran
+    assert resumed.samples < reference.samples  # only the missing passes ran
 
 
 def test_resume_refuses_a_checkpoint_of_another_render(cornell, tmp_path):
     checkpoint = tmp_path / "render.npz"
     stopper = StopAfter(jobs=3)
-    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
-                  stop=stopper, **SMALL)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
     with pytest.raises(ptlab.errors.PtlabError, match="seed"):
         render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, seed=12))
     (tmp_path / "junk.npz").write_bytes(b"not a checkpoint")
@@ -99,9 +101,8 @@ def test_resume_refuses_a_checkpoint_of_another_render(cornell, tmp_path):
 
 def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
     checkpoint = tmp_path / "render.npz"
-    stopper = StopAfter(jobs=12)                    # 9 tiles x 3 passes: 3 tiles have 2 passes
-    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
-                  stop=stopper, **SMALL)
+    stopper = StopAfter(jobs=12)  # 9 tiles x 3 passes: 3 tiles have 2 passes
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
     with pytest.raises(ptlab.errors.PtlabError, match="started with, 6"):
         render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=2))
     longer = render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=8))
@@ -115,8 +116,7 @@ def test_a_checkpoint_from_before_render_options_still_resumes(cornell, referenc
     # ('throughput', 'None'); the identity they record is otherwise the same.
     checkpoint = tmp_path / "render.npz"
     stopper = StopAfter(jobs=13)
-    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress,
-                  stop=stopper, **SMALL)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
     with np.load(checkpoint) as data:
         arrays = {name: data[name] for name in data.files}
     identity = json.loads(str(arrays["identity"]))
@@ -169,7 +169,7 @@ def test_a_killed_worker_has_its_jobs_run_again(cornell, tmp_path):
     os.remove(marker)
     with pytest.warns(RuntimeWarning, match="worker process died"):
         result = render_result(scene, workers=2, **SMALL)
-    assert os.path.exists(marker)                   # a worker really died
+    assert os.path.exists(marker)  # a worker really died
     assert np.array_equal(result.image, expected)
 
 
@@ -198,21 +198,26 @@ def run_cli(args: list[str], cwd: Path, signum: int | None = None) -> subprocess
     """`ptlab render ARGS` in a new process (so that signals reach only it); with ``signum``,
     one that sends itself that signal after its first pass (``INTERRUPTED_RENDER``)."""
     env = dict(os.environ, PYTHONWARNINGS="ignore")
-    command = (["-m", "ptlab.cli", "render"] if signum is None
-               else ["-c", INTERRUPTED_RENDER, str(int(signum))])
-    return subprocess.Popen([sys.executable, *command, *args], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    command = (
+        ["-m", "ptlab.cli", "render"] if signum is None else ["-c", INTERRUPTED_RENDER, str(int(signum))]
+    )
+    return subprocess.Popen(
+        [sys.executable, *command, *args],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
-def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(
-        tmp_path, signum):
+def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(tmp_path, signum):
     # One tile, 8 passes of 16 samples, at most 4 jobs in flight with 2 workers: the signal
     # after the first pass leaves at most 4 passes done, so the render is always cut short.
     options = ["cornell-box", "--res", "64", "--spp", "128", "--seed", "5", "--workers", "2"]
-    process = run_cli([*options, "--out", "partial.exr", "--checkpoint", "state.npz"], tmp_path,
-                      signum)
+    process = run_cli([*options, "--out", "partial.exr", "--checkpoint", "state.npz"], tmp_path, signum)
     _, err = process.communicate(timeout=600)
     assert process.returncode == 130, err
     assert "interrupted" in err and "Traceback" not in err
@@ -231,6 +236,7 @@ def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(
 
 def test_preview_rewrites_the_output_after_a_pass(cornell, tmp_path):
     from ptlab.cli import _Preview
+
     out = tmp_path / "preview.exr"
     previews = []
 

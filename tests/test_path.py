@@ -43,20 +43,30 @@ def camera_paths(origins, dirs, seed: int = 0) -> Paths:
     path a film row of its own, sampler keys of sample 0 of pixels 0..N-1."""
     n = len(origins)
     pixel = np.arange(n)
-    return Paths(origins=np.asarray(origins, np.float32), dirs=np.asarray(dirs, np.float32),
-                 throughput=np.ones((n, 3), np.float32), pixel=pixel,
-                 sees_emission=np.ones(n, dtype=bool),
-                 sample=make_sampler("independent", seed).keys(pixel, np.zeros(n, np.intp)))
+    return Paths(
+        origins=np.asarray(origins, np.float32),
+        dirs=np.asarray(dirs, np.float32),
+        throughput=np.ones((n, 3), np.float32),
+        pixel=pixel,
+        sees_emission=np.ones(n, dtype=bool),
+        sample=make_sampler("independent", seed).keys(pixel, np.zeros(n, np.intp)),
+    )
 
 
 def floor_under_a_light(light: np.ndarray, radiance: float, albedo: float = 0.5) -> Scene:
     """A grey floor, the square [-5, 5]^2 at y = 0 (normal +y), under one emitting triangle
     ``light`` (3, 3) whose front faces the floor."""
-    floor = np.array([[[-5, 0, -5], [5, 0, 5], [5, 0, -5]], [[-5, 0, -5], [-5, 0, 5], [5, 0, 5]]],
-                     dtype=float)
+    floor = np.array(
+        [[[-5, 0, -5], [5, 0, 5], [5, 0, -5]], [[-5, 0, -5], [-5, 0, 5], [5, 0, 5]]], dtype=float
+    )
     materials = [Diffuse([albedo] * 3), Diffuse([0.0] * 3, emission=[radiance] * 3)]
-    return Scene(triangles=np.concatenate([floor, light[None]]), material_ids=[0, 0, 1],
-                 materials=materials, camera=Camera.look_at((0, 3, -3), (0, 0, 0)), name="floor")
+    return Scene(
+        triangles=np.concatenate([floor, light[None]]),
+        material_ids=[0, 0, 1],
+        materials=materials,
+        camera=Camera.look_at((0, 3, -3), (0, 0, 0)),
+        name="floor",
+    )
 
 
 def vertices_below(scene: Scene, accel, points: np.ndarray, seed: int = 0):
@@ -68,6 +78,7 @@ def vertices_below(scene: Scene, accel, points: np.ndarray, seed: int = 0):
 
 
 # -- MIS weights -------------------------------------------------------------------------
+
 
 def test_mis_weights_are_the_power_and_balance_heuristics():
     rng = np.random.default_rng(0)
@@ -120,12 +131,11 @@ def carrying(floor, throughput):
 @pytest.mark.parametrize("rr", [0.8, 0.3])
 def test_fixed_roulette_keeps_a_fraction_p_and_divides_their_throughput_by_p(floor, rr):
     count, colour = 10_000, np.array([0.2, 0.5, 1.0])
-    u = ((np.arange(count) + 0.5) / count).astype(np.float32)     # stratified: exact fractions
+    u = ((np.arange(count) + 0.5) / count).astype(np.float32)  # stratified: exact fractions
     hit = carrying(floor, np.tile(colour, (count, 1)))
     survive = russian_roulette(hit, 0, PathSettings(rr=rr), u)
     assert survive.mean() == pytest.approx(rr, abs=1 / count)
-    np.testing.assert_allclose(hit.throughput[survive], np.tile(colour / rr, (survive.sum(), 1)),
-                               rtol=1e-6)
+    np.testing.assert_allclose(hit.throughput[survive], np.tile(colour / rr, (survive.sum(), 1)), rtol=1e-6)
     # Unbiased: the survivors carry, on average over all the paths, what all of them carried.
     kept = np.where(survive[:, None], hit.throughput, 0).mean(axis=0)
     np.testing.assert_allclose(kept, colour, rtol=2 / count / rr)
@@ -138,13 +148,13 @@ def test_throughput_roulette_survives_with_the_largest_channel_at_most_one(floor
     survive = russian_roulette(hit, 5, PathSettings(rr="throughput"), u)
     np.testing.assert_array_equal(survive, [True, True, False])
     np.testing.assert_allclose(hit.throughput[0], throughput[0] / 0.25, rtol=1e-6)
-    np.testing.assert_array_equal(hit.throughput[1], throughput[1])     # bright: never dies
+    np.testing.assert_array_equal(hit.throughput[1], throughput[1])  # bright: never dies
 
 
 @pytest.mark.parametrize("rr, start", [(0.1, 3), ("throughput", None)])
 def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
     settings = PathSettings(rr=rr, rr_min_depth=start)
-    dim = np.full((100, 3), 0.01, np.float32)                # would die almost surely
+    dim = np.full((100, 3), 0.01, np.float32)  # would die almost surely
     u = np.full(100, 0.999, np.float32)
     for depth in range(settings.roulette_starts):
         hit = carrying(floor, dim)
@@ -154,6 +164,7 @@ def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
 
 
 # -- the film ------------------------------------------------------------------------------
+
 
 def test_the_film_adds_every_contribution_to_its_pixel_in_float64():
     rng = np.random.default_rng(1)
@@ -177,13 +188,14 @@ def test_a_nan_or_infinite_contribution_is_dropped_and_the_rest_of_its_pixel_kep
 
 # -- leaving a surface -----------------------------------------------------------------------
 
+
 def test_a_new_ray_starts_offset_along_the_normal_on_the_side_it_goes_to():
     rng = np.random.default_rng(2)
     n = rng.normal(size=(1000, 3))
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     wi = rng.normal(size=(1000, 3))
     wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    wi[:10] -= (wi[:10] * n[:10]).sum(axis=1, keepdims=True) * n[:10]   # tangent: counts as above
+    wi[:10] -= (wi[:10] * n[:10]).sum(axis=1, keepdims=True) * n[:10]  # tangent: counts as above
     p = rng.normal(size=(1000, 3))
     offset = rng.uniform(1e-4, 1e-2, size=1000)
     moved = leave_surface(p, n, offset, wi) - p
@@ -203,6 +215,7 @@ def test_rays_leaving_a_floor_up_or_down_never_hit_it(floor):
 
 
 # -- next-event estimation -------------------------------------------------------------------
+
 
 def polygon_irradiance(x: np.ndarray, n: np.ndarray, polygon: np.ndarray) -> float:
     """The integral over the flat ``polygon`` (K, 3) of cos(theta) cos(theta') / r^2 dA, as
@@ -227,21 +240,26 @@ def test_direct_light_from_one_triangle_is_lamberts_closed_form(floor):
     film = np.zeros((count, 3))
     u = np.random.default_rng(3).random((count, 2)).astype(np.float32)
     rays = direct_light(film, scene, accel, hit, u, PathSettings(strategy="nee"))
-    assert rays == count                       # every light point faces x: one shadow ray each
+    assert rays == count  # every light point faces x: one shadow ray each
     samples = film[:, 0]
     # L = f_r Le E = (albedo / pi) Le E, E the integral of cos cos' / r^2 over the light.
     expected = 0.5 / math.pi * 2.0 * polygon_irradiance(x, np.array([0.0, 1.0, 0.0]), light)
     standard_error = samples.std(ddof=1) / math.sqrt(count)
     assert abs(samples.mean() - expected) < Z * standard_error, (samples.mean(), expected)
-    assert Z * standard_error < 0.01 * expected         # sharp enough to see a 1% error
+    assert Z * standard_error < 0.01 * expected  # sharp enough to see a 1% error
 
 
 def test_direct_light_behind_a_blocker_is_black(floor):
     scene, _ = floor
-    blocker = np.array([[[-1, 0.5, -1], [1, 0.5, 1], [1, 0.5, -1]],
-                        [[-1, 0.5, -1], [-1, 0.5, 1], [1, 0.5, 1]]], dtype=float)
-    blocked = Scene(triangles=np.concatenate([scene.triangles, blocker]),
-                    material_ids=[0, 0, 1, 0, 0], materials=scene.materials, camera=scene.camera)
+    blocker = np.array(
+        [[[-1, 0.5, -1], [1, 0.5, 1], [1, 0.5, -1]], [[-1, 0.5, -1], [-1, 0.5, 1], [1, 0.5, 1]]], dtype=float
+    )
+    blocked = Scene(
+        triangles=np.concatenate([scene.triangles, blocker]),
+        material_ids=[0, 0, 1, 0, 0],
+        materials=scene.materials,
+        camera=scene.camera,
+    )
     accel = make_accelerator(blocked.triangles, "embree")
     # Rays from below the blocker, down to the floor under the light.
     points = np.tile([0.05, 0.0, 0.02], (256, 1))
@@ -255,8 +273,10 @@ def test_direct_light_behind_a_blocker_is_black(floor):
 
 # -- whole paths ------------------------------------------------------------------------------
 
-@pytest.mark.parametrize("strategy, rr", [("nee", "throughput"), ("bsdf", "throughput"),
-                                          ("mis", "throughput"), ("nee", 0.8)])
+
+@pytest.mark.parametrize(
+    "strategy, rr", [("nee", "throughput"), ("bsdf", "throughput"), ("mis", "throughput"), ("nee", 0.8)]
+)
 def test_paths_in_a_furnace_see_emission_over_one_minus_albedo(strategy, rr):
     # Every surface of a closed sphere emits Le and reflects albedo a: every ray sees
     # Le (1 + a + a^2 + ...) = Le / (1 - a), whichever way it looks.
@@ -267,8 +287,9 @@ def test_paths_in_a_furnace_see_emission_over_one_minus_albedo(strategy, rr):
     dirs /= np.linalg.norm(dirs, axis=1, keepdims=True)
     paths = camera_paths(np.tile(scene.camera.position, (count, 1)), dirs, seed=6)
     film = np.zeros((count, 3))
-    trace_paths(film, scene, accel, paths, make_sampler("independent", 6),
-                PathSettings(strategy=strategy, rr=rr))
+    trace_paths(
+        film, scene, accel, paths, make_sampler("independent", 6), PathSettings(strategy=strategy, rr=rr)
+    )
     samples = film[:, 0]
     standard_error = samples.std(ddof=1) / math.sqrt(count)
     expected = emission / (1 - albedo)

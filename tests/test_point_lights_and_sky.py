@@ -35,8 +35,15 @@ def plane_scene(point_lights=None, sky=None) -> ptlab.Scene:
     corners = np.array([[-50, 0, -50], [50, 0, -50], [50, 0, 50], [-50, 0, 50]], dtype=float)
     triangles = corners[np.array([[0, 2, 1], [0, 3, 2]])]
     camera = Camera.look_at((0, 6, 0), (0, 0, 0), up=(0, 0, 1), fov_y=60)
-    return ptlab.Scene(triangles, np.zeros(2, np.intp), [Diffuse(ALBEDO)], camera, name="plane",
-                       point_lights=point_lights, sky=sky)
+    return ptlab.Scene(
+        triangles,
+        np.zeros(2, np.intp),
+        [Diffuse(ALBEDO)],
+        camera,
+        name="plane",
+        point_lights=point_lights,
+        sky=sky,
+    )
 
 
 def analytic_plane(intensity, position=(0.0, HEIGHT, 0.0), sub: int = 8) -> np.ndarray:
@@ -44,12 +51,12 @@ def analytic_plane(intensity, position=(0.0, HEIGHT, 0.0), sub: int = 8) -> np.n
     pixel (a grid of sub x sub points in it), as a render's pixels are."""
     camera = plane_scene().camera
     scale = math.tan(math.radians(camera.fov_y) / 2)
-    j, i = (np.mgrid[0:RES * sub, 0:RES * sub] + 0.5) / sub
+    j, i = (np.mgrid[0 : RES * sub, 0 : RES * sub] + 0.5) / sub
     x, y = (2 * i / RES - 1) * scale, (1 - 2 * j / RES) * scale
     d = camera.forward + x[..., None] * camera.right + y[..., None] * camera.up
-    p = camera.position + d * (camera.position[1] / -d[..., 1:2])        # where it meets y = 0
+    p = camera.position + d * (camera.position[1] / -d[..., 1:2])  # where it meets y = 0
     to_light = np.asarray(position) - p
-    r2 = np.sum(to_light ** 2, axis=-1, keepdims=True)
+    r2 = np.sum(to_light**2, axis=-1, keepdims=True)
     cos_theta = to_light[..., 1:2] / np.sqrt(r2)
     radiance = ALBEDO / math.pi * np.asarray(intensity) * cos_theta / r2
     return radiance.reshape(RES, sub, RES, sub, 3).mean(axis=(1, 3))
@@ -58,16 +65,31 @@ def analytic_plane(intensity, position=(0.0, HEIGHT, 0.0), sub: int = 8) -> np.n
 ONE_LIGHT = ([[0.0, HEIGHT, 0.0]], [[10.0, 20.0, 30.0]])
 
 
-@pytest.mark.parametrize("integrator, strategy, backend", [
-    ("path", "nee", "embree"), ("path", "mis", "embree"), ("path", "bsdf", "embree"),
-    ("whitted", "nee", "embree"), ("path", "nee", "numpy")])
+@pytest.mark.parametrize(
+    "integrator, strategy, backend",
+    [
+        ("path", "nee", "embree"),
+        ("path", "mis", "embree"),
+        ("path", "bsdf", "embree"),
+        ("whitted", "nee", "embree"),
+        ("path", "nee", "numpy"),
+    ],
+)
 def test_a_point_light_over_a_diffuse_plane_gives_i_cos_over_r_squared(integrator, strategy, backend):
     # Direct light only (max_depth 1): the plane cannot light itself anyway. Even "bsdf"
     # samples the point light, which no sampled direction can hit. The light is found
     # without noise; only the pixel's average over its area differs between the render's
     # 64 camera samples and the analytic sub-grid (up to 0.2% where the light is close).
-    image = ptlab.render(plane_scene(PointLights(*ONE_LIGHT)), spp=64, res=RES, max_depth=1,
-                         integrator=integrator, strategy=strategy, backend=backend, workers=1)
+    image = ptlab.render(
+        plane_scene(PointLights(*ONE_LIGHT)),
+        spp=64,
+        res=RES,
+        max_depth=1,
+        integrator=integrator,
+        strategy=strategy,
+        backend=backend,
+        workers=1,
+    )
     expected = analytic_plane(ONE_LIGHT[1][0])
     np.testing.assert_allclose(image, expected, rtol=4e-3)
     assert abs((image / expected - 1).mean()) < 1e-4
@@ -81,8 +103,9 @@ def z_score(image: np.ndarray, expected: np.ndarray) -> float:
     return float(difference.mean() / max(standard_error, 1e-6))
 
 
-@pytest.mark.parametrize("integrator, strategy", [("path", "nee"), ("path", "mis"),
-                                                  ("path", "bsdf"), ("whitted", "nee")])
+@pytest.mark.parametrize(
+    "integrator, strategy", [("path", "nee"), ("path", "mis"), ("path", "bsdf"), ("whitted", "nee")]
+)
 def test_two_point_lights_and_a_sky_add_up(integrator, strategy):
     # Light sampling picks one of the two point lights (by power, 3 : 2) or the sky (1/2)
     # per sample; the expected image is the sum of each point light alone (rendered with the
@@ -91,8 +114,15 @@ def test_two_point_lights_and_a_sky_add_up(integrator, strategy):
     # 4 cases: false-alarm rate 3e-5.
     lights = [([[0.0, HEIGHT, 0.0]], [[10.0, 20.0, 30.0]]), ([[1.5, 3.0, -1.0]], [[40.0, 0.0, 0.0]])]
     sky = np.array([0.3, 0.2, 0.1])
-    options = dict(spp=16, res=RES, max_depth=1, integrator=integrator, strategy=strategy,
-                   workers=1, sampler="independent")
+    options = dict(
+        spp=16,
+        res=RES,
+        max_depth=1,
+        integrator=integrator,
+        strategy=strategy,
+        workers=1,
+        sampler="independent",
+    )
     alone = sum(ptlab.render(plane_scene(PointLights(*light)), **options) for light in lights)
     both = PointLights(np.concatenate([p for p, _ in lights]), np.concatenate([i for _, i in lights]))
     image = ptlab.render(plane_scene(both, Sky(sky)), **options)
@@ -107,8 +137,14 @@ def sky_furnace(radiance: float) -> ptlab.Scene:
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.0)
     triangles = sphere.vertices[sphere.faces]
     camera = Camera.look_at((0.3, 0.5, -3.0), (0, 0, 0), fov_y=50)
-    return ptlab.Scene(triangles, np.zeros(len(triangles), np.intp), [Diffuse([1.0, 1.0, 1.0])],
-                       camera, name="sky-furnace", sky=Sky([radiance] * 3))
+    return ptlab.Scene(
+        triangles,
+        np.zeros(len(triangles), np.intp),
+        [Diffuse([1.0, 1.0, 1.0])],
+        camera,
+        name="sky-furnace",
+        sky=Sky([radiance] * 3),
+    )
 
 
 @pytest.mark.parametrize("sampler", SAMPLERS)
@@ -156,16 +192,25 @@ def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
     plane = plane_scene()
     triangles = np.concatenate([plane.triangles, lamp[np.array([[0, 1, 2], [0, 2, 3]])]])
     point_lights, sky = PointLights([[1.5, 2.0, 0.0]], [[10.0, 20.0, 30.0]]), Sky([0.3, 0.2, 0.1])
-    scene = ptlab.Scene(triangles, np.array([0, 0, 1, 1]),
-                        [Diffuse(ALBEDO), Diffuse([0, 0, 0], emission=[5.0, 4.0, 3.0])],
-                        plane.camera, name="lamp-point-sky", point_lights=point_lights, sky=sky)
-    assert scene.area_lights.normals[0, 1] == -1                 # the lamp shines down
+    scene = ptlab.Scene(
+        triangles,
+        np.array([0, 0, 1, 1]),
+        [Diffuse(ALBEDO), Diffuse([0, 0, 0], emission=[5.0, 4.0, 3.0])],
+        plane.camera,
+        name="lamp-point-sky",
+        point_lights=point_lights,
+        sky=sky,
+    )
+    assert scene.area_lights.normals[0, 1] == -1  # the lamp shines down
     # The scene keeps the lights it was given; the light sampler samples copies with shares.
     assert scene.point_lights is point_lights and scene.sky is sky and sky.share == 1
     assert scene.light_sampler.sky.share == 0.5
-    images = {strategy: ptlab.render(scene, spp=64, res=RES, max_depth=1, strategy=strategy,
-                                     sampler="independent", seed=3, workers=1)
-              for strategy in ("nee", "bsdf", "mis")}
+    images = {
+        strategy: ptlab.render(
+            scene, spp=64, res=RES, max_depth=1, strategy=strategy, sampler="independent", seed=3, workers=1
+        )
+        for strategy in ("nee", "bsdf", "mis")
+    }
     for a, b in (("nee", "bsdf"), ("nee", "mis"), ("bsdf", "mis")):
         for channel in range(3):
             z = z_score(images[a][..., channel], images[b][..., channel])

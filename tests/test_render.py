@@ -27,15 +27,16 @@ def check_furnace(albedo: float, sampling: str, rr, sampler: str = "sobol") -> N
     # Every surface emits Le and reflects albedo: the radiance is Le (1 + a + a^2 + ...).
     emission = 0.3
     scene = closed_sphere_scene(albedo, emission)
-    means = image_means(scene, seeds=range(16), spp=32, res=(24, 24), sampling=sampling,
-                        rr=rr, sampler=sampler)[:, 0]
+    means = image_means(
+        scene, seeds=range(16), spp=32, res=(24, 24), sampling=sampling, rr=rr, sampler=sampler
+    )[:, 0]
     expected = emission / (1 - albedo)
     standard_error = means.std(ddof=1) / np.sqrt(len(means))
     assert abs(means.mean() - expected) < 3 * standard_error, (means.mean(), expected)
     # The band is narrow enough to catch a whole bounce of light missing (or doubled).
     # (Uniform sampling at albedo 0.9 is the noisiest case: its weight 2 albedo cos has a
     # second moment 4 albedo^2 / 3 > 1, so its variance grows with every bounce.)
-    assert 3 * standard_error < emission * albedo ** 3
+    assert 3 * standard_error < emission * albedo**3
 
 
 @pytest.mark.slow
@@ -92,8 +93,8 @@ def test_cornell_image_is_finite_and_non_negative(cornell_render):
 def test_cornell_red_wall_left_green_wall_right(cornell_render):
     image = cornell_render.image
     left, right = image[20:44, 2:6].mean(axis=(0, 1)), image[20:44, -6:-2].mean(axis=(0, 1))
-    assert left[0] > 3 * left[1], left          # red
-    assert right[1] > 2 * right[0], right       # green
+    assert left[0] > 3 * left[1], left  # red
+    assert right[1] > 2 * right[0], right  # green
 
 
 def footprint_sees_light(scene, width, height) -> np.ndarray:
@@ -116,8 +117,7 @@ def test_pixels_that_see_only_the_light_show_its_radiance(cornell):
     radiance = cornell.materials[cornell.material_names.index("light")].emission
     # Emission alone (no bounce): exactly Le.
     direct = ptlab.render(cornell, spp=4, res=64, max_depth=0)
-    np.testing.assert_allclose(direct[on_light], np.broadcast_to(radiance, (on_light.sum(), 3)),
-                               rtol=1e-5)
+    np.testing.assert_allclose(direct[on_light], np.broadcast_to(radiance, (on_light.sum(), 3)), rtol=1e-5)
     # The full estimate adds what the light's own albedo (0.65) reflects: a little more.
     full = ptlab.render(cornell, spp=16, res=64)[on_light]
     assert np.all(full >= radiance * (1 - 1e-5)) and np.all(full <= radiance * 1.06)
@@ -144,12 +144,25 @@ def test_render_accepts_a_scene_name_and_a_resolution_string():
     assert image.shape == (10, 20, 3)
 
 
-@pytest.mark.parametrize("kwargs", [dict(spp=0), dict(spp=-3), dict(res=-5), dict(res="axb"),
-                                    dict(rr=1.5), dict(rr="sometimes"), dict(sampling="magic"),
-                                    dict(backend="optix"), dict(seed=-1), dict(max_depth=-1),
-                                    dict(heuristic="magic"), dict(rr_depth=-1),
-                                    dict(integrator="whitted", strategy="mis"),
-                                    dict(integrator="normals", heuristic="balance")])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(spp=0),
+        dict(spp=-3),
+        dict(res=-5),
+        dict(res="axb"),
+        dict(rr=1.5),
+        dict(rr="sometimes"),
+        dict(sampling="magic"),
+        dict(backend="optix"),
+        dict(seed=-1),
+        dict(max_depth=-1),
+        dict(heuristic="magic"),
+        dict(rr_depth=-1),
+        dict(integrator="whitted", strategy="mis"),
+        dict(integrator="normals", heuristic="balance"),
+    ],
+)
 def test_absurd_settings_raise_a_clear_error(cornell, kwargs):
     with pytest.raises(ptlab.errors.PtlabError):
         ptlab.render(cornell, **{"spp": 1, "res": 8, **kwargs})
@@ -195,35 +208,40 @@ def test_image_is_bit_identical_whatever_the_number_of_workers(cornell):
         assert np.array_equal(render_result(cornell, workers=workers, **kwargs).image, one.image)
 
 
-@pytest.mark.parametrize("inner", [ptlab.materials.Mirror(), ptlab.materials.Dielectric(eta=1.5),
-                                   ptlab.materials.Microfacet(f0=[1, 1, 1], roughness=0.3)],
-                         ids=["mirror", "glass", "white-metal"])
+@pytest.mark.parametrize(
+    "inner",
+    [
+        ptlab.materials.Mirror(),
+        ptlab.materials.Dielectric(eta=1.5),
+        ptlab.materials.Microfacet(f0=[1, 1, 1], roughness=0.3),
+    ],
+    ids=["mirror", "glass", "white-metal"],
+)
 def test_furnace_stays_uniform_around_lossless_objects(inner):
     # The sphere neither absorbs nor emits: the radiance everywhere stays Le / (1 - albedo).
     # A wrong delta-material rule (light sampled through a mirror, emission after a mirror
     # dropped, a missing 1 / eta^2) shows the sphere brighter or darker than the walls.
     from helpers import furnace_with
+
     scene = furnace_with(inner)
-    images = np.array([ptlab.render(scene, seed=s, spp=16, res=24, workers=1)[..., 0]
-                       for s in range(8)])
+    images = np.array([ptlab.render(scene, seed=s, spp=16, res=24, workers=1)[..., 0] for s in range(8)])
     per_pixel = images.mean(axis=0)
     standard_error = images.std(axis=0, ddof=1).mean() / np.sqrt(len(images))
-    centre = per_pixel[8:16, 8:16].mean()         # the sphere fills the middle of the view
+    centre = per_pixel[8:16, 8:16].mean()  # the sphere fills the middle of the view
     assert abs(centre - 0.6) < 4 * standard_error + 0.01, (centre, standard_error)
     assert abs(per_pixel.mean() - 0.6) < 4 * standard_error + 0.01
 
 
 def test_a_mirror_shows_the_light_it_reflects():
     # Camera looks straight down at a mirror floor; the only light hangs above, facing down.
-    floor = np.array([[[-5, 0, -5], [5, 0, 5], [5, 0, -5]], [[-5, 0, -5], [-5, 0, 5], [5, 0, 5]]],
-                     dtype=float)
-    lamp = np.array([[[-3, 5, -3], [3, 5, -3], [3, 5, 3]], [[-3, 5, -3], [3, 5, 3], [-3, 5, 3]]],
-                    dtype=float)
+    floor = np.array(
+        [[[-5, 0, -5], [5, 0, 5], [5, 0, -5]], [[-5, 0, -5], [-5, 0, 5], [5, 0, 5]]], dtype=float
+    )
+    lamp = np.array([[[-3, 5, -3], [3, 5, -3], [3, 5, 3]], [[-3, 5, -3], [3, 5, 3], [-3, 5, 3]]], dtype=float)
     mirror = ptlab.materials.Mirror(reflectance=[0.5, 0.5, 0.5])
     light = ptlab.materials.Diffuse([0, 0, 0], emission=[2, 2, 2])
     camera = ptlab.camera.Camera.look_at((0, 2, 0.01), (0, 0, 0), up=(0, 0, 1), fov_y=30)
-    scene = ptlab.Scene(np.concatenate([floor, lamp]), np.array([0, 0, 1, 1]), [mirror, light],
-                        camera)
+    scene = ptlab.Scene(np.concatenate([floor, lamp]), np.array([0, 0, 1, 1]), [mirror, light], camera)
     image = ptlab.render(scene, spp=4, res=16, workers=1)
     # Every pixel sees the mirror, which shows the lamp's emitting underside at half
     # strength (reflectance 0.5), exactly and without noise: emission after a delta bounce
@@ -231,11 +249,17 @@ def test_a_mirror_shows_the_light_it_reflects():
     np.testing.assert_allclose(image, 1.0, rtol=1e-5)
 
 
-@pytest.mark.parametrize("strategy, heuristic", [("bsdf", "power"), ("mis", "power"),
-                                                 ("mis", "balance")])
+@pytest.mark.parametrize("strategy, heuristic", [("bsdf", "power"), ("mis", "power"), ("mis", "balance")])
 def test_every_strategy_renders_the_furnace(strategy, heuristic):
-    means = image_means(closed_box_scene(0.5, 0.3), seeds=range(10), spp=16, res=(16, 16),
-                        workers=1, strategy=strategy, heuristic=heuristic)[:, 0]
+    means = image_means(
+        closed_box_scene(0.5, 0.3),
+        seeds=range(10),
+        spp=16,
+        res=(16, 16),
+        workers=1,
+        strategy=strategy,
+        heuristic=heuristic,
+    )[:, 0]
     standard_error = means.std(ddof=1) / np.sqrt(len(means))
     assert abs(means.mean() - 0.6) < 3 * standard_error + 1e-3, (means.mean(), standard_error)
 
@@ -244,8 +268,9 @@ def test_roulette_starts_at_the_given_depth():
     # Fixed roulette with P = 0.5 from depth 0 ends most paths at once; started at depth 4
     # every path makes 4 bounces first: many more rays, the same expected furnace radiance.
     scene = closed_box_scene(0.5, 0.3)
-    early, late = (ptlab.render_result(scene, spp=8, res=16, workers=1, rr=0.5, rr_depth=depth)
-                   for depth in (0, 4))
+    early, late = (
+        ptlab.render_result(scene, spp=8, res=16, workers=1, rr=0.5, rr_depth=depth) for depth in (0, 4)
+    )
     assert late.rays > 2 * early.rays
     assert late.settings["rr_depth"] == 4 and early.settings["rr_depth"] == 0
     means = image_means(scene, seeds=range(10), spp=16, res=16, workers=1, rr=0.5, rr_depth=4)
@@ -258,8 +283,10 @@ def test_strategies_agree_on_the_microfacet_cornell_box():
     # Light sampling, BSDF sampling and MIS estimate the same image (4 standard errors,
     # false-alarm rate about 1e-4 per channel); MIS is at least as good as light sampling.
     scene = ptlab.load_scene("cornell-box-microfacet")
-    images = {s: np.array([ptlab.render(scene, seed=k, spp=16, res=32, workers=1, strategy=s)
-                           for k in range(6)]) for s in ("nee", "bsdf", "mis")}
+    images = {
+        s: np.array([ptlab.render(scene, seed=k, spp=16, res=32, workers=1, strategy=s) for k in range(6)])
+        for s in ("nee", "bsdf", "mis")
+    }
     means = {s: m.mean(axis=(1, 2)) for s, m in images.items()}
     errors = {s: m.std(axis=0, ddof=1) / np.sqrt(len(m)) for s, m in means.items()}
     for strategy in ("bsdf", "mis"):
@@ -275,8 +302,8 @@ def test_strategies_agree_on_the_microfacet_cornell_box():
 def test_debug_views_show_normals_albedo_and_depth(cornell):
     kwargs = dict(spp=16, res=64, workers=1)
     normals = ptlab.render(cornell, integrator="normals", **kwargs)
-    np.testing.assert_allclose(normals[56, 10], [0.5, 1.0, 0.5], atol=1e-6)   # floor: +y
-    np.testing.assert_allclose(normals[32, 2], [0.0, 0.5, 0.5], atol=0.01)    # red wall: ~-x
+    np.testing.assert_allclose(normals[56, 10], [0.5, 1.0, 0.5], atol=1e-6)  # floor: +y
+    np.testing.assert_allclose(normals[32, 2], [0.0, 0.5, 0.5], atol=0.01)  # red wall: ~-x
     albedo = ptlab.render(cornell, integrator="albedo", **kwargs)
     np.testing.assert_allclose(albedo[32, 2], [0.63, 0.065, 0.05], rtol=1e-5)  # cosine: exact
     depth = ptlab.render(cornell, integrator="depth", **kwargs)

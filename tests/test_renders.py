@@ -38,9 +38,9 @@ def test_the_same_random_numbers_make_a_sharp_test():
     rng = np.random.default_rng(2)
     mean = picture(rng)
     library = passes_of(rng, mean, 0.1)
-    compare_renders(library * (1 + 1e-4), library, "the box")      # rounding passes
+    compare_renders(library * (1 + 1e-4), library, "the box")  # rounding passes
     with pytest.raises(CheckFailed, match="brighter .1.05x"):
-        compare_renders(library * 1.05, library, "the box")         # 5% too bright fails
+        compare_renders(library * 1.05, library, "the box")  # 5% too bright fails
 
 
 def test_library_plus_big_zero_mean_noise_is_too_noisy_and_names_the_factor():
@@ -79,8 +79,11 @@ def test_nan_fails_and_says_where():
     library = passes_of(rng, mean, 0.1)
     student = library.copy()
     student[2, 5, 3, 1] = np.nan
-    with pytest.raises(CheckFailed, match=r"the box: your render has NaN at pixel \(x=3, y=5\) "
-                                          r"\(green; .*\) in pass 3 of 12"):
+    with pytest.raises(
+        CheckFailed,
+        match=r"the box: your render has NaN at pixel \(x=3, y=5\) "
+        r"\(green; .*\) in pass 3 of 12",
+    ):
         compare_renders(student, library, "the box")
     student[4, 0, 0, 0] = np.inf
     with pytest.raises(CheckFailed, match="and 1 more NaN or infinite values"):
@@ -96,7 +99,7 @@ def test_a_firefly_in_one_pass_fails_neither_test():
     mean = picture(rng)
     library = passes_of(rng, mean, 0.2)
     student = passes_of(rng, mean, 0.2)
-    student[3, :4, :4] += 4.0          # one bright pass of the top left region
+    student[3, :4, :4] += 4.0  # one bright pass of the top left region
     assert "no noisier" in compare_renders(student, library, "the box")
 
 
@@ -110,13 +113,15 @@ def test_a_spike_in_one_pass_of_every_region_does_not_hide_a_mistake():
     spikes = 50.0 * rng.choice([-1, 1], size=(4, 4))
     for row in range(4):
         for column in range(4):
-            student[rng.integers(PASSES), 4 * row:4 * row + 4, 4 * column:4 * column + 4] += \
-                spikes[row, column]
+            student[rng.integers(PASSES), 4 * row : 4 * row + 4, 4 * column : 4 * column + 4] += spikes[
+                row, column
+            ]
     with pytest.raises(CheckFailed, match="differ from the library's picture"):
         compare_renders(student, library, "the box")
 
 
 # -- chapter 7's white furnace -------------------------------------------------------------
+
 
 def furnace(rng, value: float, noise: float) -> np.ndarray:
     """(8, 16, 16, 3) grey furnace passes around ``value``."""
@@ -127,8 +132,9 @@ def furnace(rng, value: float, noise: float) -> np.ndarray:
 def test_the_furnace_verdict_passes_a_right_answer():
     rng = np.random.default_rng(8)
     expected = furnace_radiance(10)
-    mean, error = furnace_verdict(furnace(rng, expected[0], 0.02), furnace(rng, expected[0], 0.02),
-                                  expected, "the furnace")
+    mean, error = furnace_verdict(
+        furnace(rng, expected[0], 0.02), furnace(rng, expected[0], 0.02), expected, "the furnace"
+    )
     assert abs(mean - expected[0]) < 0.01 and error > 0
 
 
@@ -146,8 +152,11 @@ def test_the_furnace_verdict_fails_nan_and_says_where():
     library = furnace(rng, expected[0], 0.02)
     student = library.copy()
     student[7, 15, 0, 2] = np.nan
-    with pytest.raises(CheckFailed, match=r"your furnace image has NaN at pixel \(x=0, y=15\) "
-                                          r"\(blue; .*\) in pass 8 of 8"):
+    with pytest.raises(
+        CheckFailed,
+        match=r"your furnace image has NaN at pixel \(x=0, y=15\) "
+        r"\(blue; .*\) in pass 8 of 8",
+    ):
         furnace_verdict(student, library, expected, "the furnace")
 
 

@@ -14,8 +14,9 @@ from ptlab.rendering import render_result
 from ptlab.samplers import SAMPLERS, BounceUniforms, make_sampler
 
 
-def pixel_points(name: str, count: int, dim: int, pixel: int = 12345, seed: int = 7,
-                 spp: int | None = None) -> np.ndarray:
+def pixel_points(
+    name: str, count: int, dim: int, pixel: int = 12345, seed: int = 7, spp: int | None = None
+) -> np.ndarray:
     """(count, 2) the first ``count`` samples of one pixel in the pair starting at ``dim``."""
     sampler = make_sampler(name, seed, spp or count)
     keys = sampler.keys(np.full(count, pixel), np.arange(count))
@@ -29,11 +30,12 @@ def test_sobol_prefixes_are_nets(dim, pixel):
     # interval of area 2^-k, [i / 2^a, (i + 1) / 2^a) x [j / 2^b, (j + 1) / 2^b), a + b = k.
     points = pixel_points("sobol", 256, dim, pixel)
     for k in range(2, 9):
-        first = points[:1 << k]
+        first = points[: 1 << k]
         for a in range(k + 1):
             b = k - a
-            cells = (np.floor(first[:, 0] * (1 << a)) * (1 << b)
-                     + np.floor(first[:, 1] * (1 << b))).astype(int)
+            cells = (np.floor(first[:, 0] * (1 << a)) * (1 << b) + np.floor(first[:, 1] * (1 << b))).astype(
+                int
+            )
             assert np.bincount(cells, minlength=1 << k).tolist() == [1] * (1 << k), (k, a, b)
 
 
@@ -42,13 +44,16 @@ def test_dimensions_after_the_second_bounce_are_independent(name):
     # Only the camera's and the first two bounces' dimensions are spread evenly
     # (PATTERNED_DIMENSIONS); from there on every sampler draws independent numbers.
     from ptlab.samplers import PATTERNED_DIMENSIONS, independent_one, independent_pair
+
     assert PATTERNED_DIMENSIONS == BounceUniforms(make_sampler("sobol"), None, 2).first
     sampler = make_sampler(name, 3, 16)
     keys = sampler.keys(np.full(16, 9), np.arange(16))
-    assert np.array_equal(sampler.get(keys, PATTERNED_DIMENSIONS, 2),
-                          np.stack(independent_pair(keys, PATTERNED_DIMENSIONS)).T)
-    assert np.array_equal(sampler.get(keys, PATTERNED_DIMENSIONS + 2, 1)[:, 0],
-                          independent_one(keys, PATTERNED_DIMENSIONS + 2))
+    assert np.array_equal(
+        sampler.get(keys, PATTERNED_DIMENSIONS, 2), np.stack(independent_pair(keys, PATTERNED_DIMENSIONS)).T
+    )
+    assert np.array_equal(
+        sampler.get(keys, PATTERNED_DIMENSIONS + 2, 1)[:, 0], independent_one(keys, PATTERNED_DIMENSIONS + 2)
+    )
     # while the last pair before them is still stratified: one point per 1/16 strip
     last = sampler.get(keys, PATTERNED_DIMENSIONS - 2, 2)
     assert np.bincount((last[:, 0] * 16).astype(int), minlength=16).max() == 1
@@ -59,7 +64,7 @@ def test_sobol_one_dimension_is_stratified():
     keys = sampler.keys(np.full(64, 77), np.arange(64))
     u = sampler.get(keys, 4, 1)[:, 0]
     for k in range(1, 7):
-        assert np.bincount((u[:1 << k] * (1 << k)).astype(int), minlength=1 << k).max() == 1
+        assert np.bincount((u[: 1 << k] * (1 << k)).astype(int), minlength=1 << k).max() == 1
 
 
 def test_sobol_needs_no_spp_and_prefixes_stay_the_same():
@@ -117,11 +122,10 @@ def test_no_correlation_between_pixels_or_dimensions(name):
     bound = 5 / np.sqrt(count)
     for dim in (0, 2, 7):
         u = sampler.get(keys, dim, 2)
-        assert abs(np.corrcoef(u[:-1, 0], u[1:, 0])[0, 1]) < bound            # pixel p vs p + 1
-        assert abs(np.corrcoef(u[:-1, 0], u[:-1, 1])[0, 1]) < bound           # within a pair
+        assert abs(np.corrcoef(u[:-1, 0], u[1:, 0])[0, 1]) < bound  # pixel p vs p + 1
+        assert abs(np.corrcoef(u[:-1, 0], u[:-1, 1])[0, 1]) < bound  # within a pair
     dims = [BounceUniforms(sampler, keys, depth) for depth in range(3)]
-    first = [d.light()[:, 0] for d in dims] + [d.roulette() for d in dims] + [
-        d.bsdf()[:, 0] for d in dims]
+    first = [d.light()[:, 0] for d in dims] + [d.roulette() for d in dims] + [d.bsdf()[:, 0] for d in dims]
     for i, j in [(0, 3), (0, 6), (3, 6), (1, 4), (2, 8), (4, 7), (6, 7), (0, 1)]:
         assert abs(np.corrcoef(first[i], first[j])[0, 1]) < bound, (i, j)
 
@@ -151,6 +155,7 @@ def test_unknown_sampler_is_a_clear_error():
     with pytest.raises(ValueError, match="unknown sampler 'halton'"):
         make_sampler("halton")
     from ptlab.errors import PtlabError
+
     with pytest.raises(PtlabError, match="sampler 'halton'"):
         ptlab.render("cornell-box", spp=1, res=8, sampler="halton")
 
@@ -173,14 +178,33 @@ def test_image_does_not_depend_on_workers_tiles_or_pass_size(name):
 def test_resume_gives_the_straight_image(name, tmp_path):
     checkpoint = tmp_path / "render.npz"
     stopped = iter([False, False, True])
-    first = render_result("cornell-box", spp=48, res=(40, 24), seed=2, workers=1, sampler=name,
-                          tile_size=16, spp_per_pass=8, checkpoint=checkpoint,
-                          stop=lambda: next(stopped, True))
+    first = render_result(
+        "cornell-box",
+        spp=48,
+        res=(40, 24),
+        seed=2,
+        workers=1,
+        sampler=name,
+        tile_size=16,
+        spp_per_pass=8,
+        checkpoint=checkpoint,
+        stop=lambda: next(stopped, True),
+    )
     assert not first.complete
-    resumed = render_result("cornell-box", spp=48, res=(40, 24), seed=2, workers=1,
-                            sampler=name, tile_size=16, spp_per_pass=8, resume=checkpoint)
-    straight = render_result("cornell-box", spp=48, res=(40, 24), seed=2, workers=1,
-                             sampler=name, tile_size=16, spp_per_pass=8)
+    resumed = render_result(
+        "cornell-box",
+        spp=48,
+        res=(40, 24),
+        seed=2,
+        workers=1,
+        sampler=name,
+        tile_size=16,
+        spp_per_pass=8,
+        resume=checkpoint,
+    )
+    straight = render_result(
+        "cornell-box", spp=48, res=(40, 24), seed=2, workers=1, sampler=name, tile_size=16, spp_per_pass=8
+    )
     assert resumed.complete and np.array_equal(resumed.image, straight.image)
 
 
@@ -194,6 +218,7 @@ def test_a_sobol_render_resumes_to_more_samples(tmp_path):
 
 def test_a_stratified_render_cannot_resume_to_more_samples(tmp_path):
     from ptlab.errors import PtlabError
+
     checkpoint = tmp_path / "render.npz"
     options = dict(res=(24, 16), seed=4, workers=1, sampler="stratified", spp_per_pass=8)
     render_result("cornell-box", spp=16, checkpoint=checkpoint, **options)
@@ -208,8 +233,12 @@ def test_every_sampler_gives_the_cornell_image(name):
     # independent, with mean 0 if both are unbiased: their mean over the 4096 pixels is off by
     # more than 5 standard errors once in 1.7 million per channel.
     options = dict(spp=24, res=64, seed=3, workers=1)
-    difference = (ptlab.render("cornell-box", sampler=name, **options).astype(np.float64)
-                  - ptlab.render("cornell-box", sampler="independent", **options)).reshape(-1, 3)
+    difference = (
+        ptlab.render("cornell-box", sampler=name, **options).astype(np.float64)
+        - ptlab.render("cornell-box", sampler="independent", **options)
+    ).reshape(-1, 3)
     standard_error = difference.std(axis=0, ddof=1) / np.sqrt(len(difference))
     assert (np.abs(difference.mean(axis=0)) < 5 * standard_error).all(), (
-        difference.mean(axis=0), standard_error)
+        difference.mean(axis=0),
+        standard_error,
+    )

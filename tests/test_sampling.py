@@ -37,7 +37,7 @@ def test_cosine_hemisphere_moments(u):
 def test_to_world_maps_z_to_the_normal_and_keeps_lengths_and_angles():
     rng = np.random.default_rng(1)
     n = rng.normal(size=(1000, 3))
-    n[:3] = [[0, 0, 1], [0, 0, -1], [1, 0, 0]]          # the frame's special cases
+    n[:3] = [[0, 0, 1], [0, 0, -1], [1, 0, 0]]  # the frame's special cases
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     local = cosine_hemisphere(rng.random((1000, 2)))
     world = to_world(local, n)
@@ -65,6 +65,7 @@ def test_hemisphere_warps_are_one_to_one(name):
     from scipy.spatial import cKDTree
 
     import ptlab.sampling as sampling
+
     k = (np.arange(64) + 0.5) / 64
     u = np.stack(np.meshgrid(k, k), axis=-1).reshape(-1, 2)
     n = np.tile(np.array([[0.36, -0.48, 0.8]]), (len(u), 1))
@@ -76,11 +77,11 @@ def test_hemisphere_warps_are_one_to_one(name):
 
 def test_sampling_around_a_normal_matches_the_local_frame_warps(u):
     from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around
+
     rng = np.random.default_rng(3)
     n = rng.normal(size=(N, 3))
     n /= np.linalg.norm(n, axis=1, keepdims=True)
-    for around, expected_mean in ((uniform_hemisphere_around, 1 / 2),
-                                  (cosine_hemisphere_around, 2 / 3)):
+    for around, expected_mean in ((uniform_hemisphere_around, 1 / 2), (cosine_hemisphere_around, 2 / 3)):
         w = around(n, u)
         np.testing.assert_allclose(np.linalg.norm(w, axis=1), 1, atol=1e-12)
         cos = (w * n).sum(axis=1)

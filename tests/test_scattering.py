@@ -36,16 +36,16 @@ def test_reflect_is_an_involution_at_the_same_angle():
     wi = reflect(wo, n)
     np.testing.assert_allclose(reflect(wi, n), wo, atol=1e-14)
     np.testing.assert_allclose(np.linalg.norm(wi, axis=1), 1, atol=1e-14)
-    np.testing.assert_allclose(dot(wi, n), dot(wo, n), atol=1e-15)     # theta_r = theta_o
+    np.testing.assert_allclose(dot(wi, n), dot(wo, n), atol=1e-15)  # theta_r = theta_o
     # In the plane of wo and n, on the other side of n: wo + wi is along n.
     np.testing.assert_allclose(cross(wo + wi, n), 0, atol=1e-14)
-    np.testing.assert_allclose(reflect(n, n), n, atol=1e-14)       # straight back
+    np.testing.assert_allclose(reflect(n, n), n, atol=1e-14)  # straight back
 
 
 @pytest.mark.parametrize("eta_rel", [GLASS, 1 / GLASS, 2.4])
 def test_refract_obeys_snells_law(eta_rel):
     n, wo = frames(1)
-    if eta_rel < 1:     # leaving the denser side: only directions inside the critical angle
+    if eta_rel < 1:  # leaving the denser side: only directions inside the critical angle
         inside = sin_theta(wo, n) < eta_rel
         n, wo = n[inside], wo[inside]
     wt = refract(wo, n, eta_rel)
@@ -54,7 +54,7 @@ def test_refract_obeys_snells_law(eta_rel):
     # eta_o sin(theta_o) = eta_t sin(theta_t), and wt in the plane of wo and n, across n.
     np.testing.assert_allclose(eta_rel * sin_theta(wt, n), sin_theta(wo, n), atol=1e-14)
     np.testing.assert_allclose(dot(cross(wo, n), wt), 0, atol=1e-14)
-    np.testing.assert_allclose(refract(n, n, eta_rel), -n, atol=1e-15)    # straight through
+    np.testing.assert_allclose(refract(n, n, eta_rel), -n, atol=1e-15)  # straight through
 
 
 def test_refraction_is_reversible_with_per_row_indices():

@@ -21,13 +21,15 @@ def test_cornell_box_is_the_homework_scene(cornell):
     np.testing.assert_allclose(albedo["green"], [0.14, 0.45, 0.091])
     np.testing.assert_allclose(albedo["white"], [0.725, 0.71, 0.68])
     np.testing.assert_allclose(albedo["light"], [0.65, 0.65, 0.65])
-    homework = (8 * np.array([0.747 + 0.058, 0.747 + 0.258, 0.747])
-                + 15.6 * np.array([0.740 + 0.287, 0.740 + 0.160, 0.740])
-                + 18.4 * np.array([0.737 + 0.642, 0.737 + 0.159, 0.737]))
+    homework = (
+        8 * np.array([0.747 + 0.058, 0.747 + 0.258, 0.747])
+        + 15.6 * np.array([0.740 + 0.287, 0.740 + 0.160, 0.740])
+        + 18.4 * np.array([0.737 + 0.642, 0.737 + 0.159, 0.737])
+    )
     np.testing.assert_allclose(cornell.materials[names.index("light")].emission, homework)
     lights = cornell.area_lights
     assert lights.total_area == pytest.approx(130 * 105)
-    np.testing.assert_allclose(lights.normals, [[0, -1, 0]] * 2, atol=1e-7)   # emits downward
+    np.testing.assert_allclose(lights.normals, [[0, -1, 0]] * 2, atol=1e-7)  # emits downward
     np.testing.assert_allclose(cornell.camera.position, [278, 273, -800])
     np.testing.assert_allclose(cornell.camera.forward, [0, 0, 1])
     assert cornell.camera.fov_y == 40
@@ -40,8 +42,17 @@ def test_scene_loads_by_name_by_folder_and_by_file():
         assert ptlab.load_scene(ref).triangle_count == 32
 
 
-@pytest.mark.parametrize("name", ["load_scene", "find_scene_file", "builtin_scenes_dir",
-                                  "builtin_scene_names", "SCENE_FILE_NAME", "MAX_COORDINATE"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "load_scene",
+        "find_scene_file",
+        "builtin_scenes_dir",
+        "builtin_scene_names",
+        "SCENE_FILE_NAME",
+        "MAX_COORDINATE",
+    ],
+)
 def test_the_scene_files_names_are_still_found_in_ptlab_scene(name):
     import ptlab.scene
     import ptlab.scene_file
@@ -49,7 +60,7 @@ def test_the_scene_files_names_are_still_found_in_ptlab_scene(name):
     assert getattr(ptlab.scene, name) is getattr(ptlab.scene_file, name)
     assert ptlab.load_scene is ptlab.scene_file.load_scene
     with pytest.raises(AttributeError, match="no attribute 'read_scene'"):
-        ptlab.scene.read_scene      # noqa: B018 (an attribute it never had)
+        ptlab.scene.read_scene  # noqa: B018 (an attribute it never had)
 
 
 @pytest.fixture
@@ -108,23 +119,36 @@ def test_students_files_written_with_the_old_names_still_run(cornell):
 
 BROKEN = {
     "missing mesh file": (GOOD.replace('"quad.obj"', '"nope.obj"'), "mesh[0].file", "not found"),
-    "a folder as the mesh file": (GOOD.replace('"quad.obj"', '"."'), "mesh[0].file",
-                                  "is a folder, not a mesh file"),
-    "unknown material type": (GOOD.replace('type = "diffuse"\nalbedo = 0.5',
-                                           'type = "velvet"\nalbedo = 0.5'),
-                              "materials.grey.type", "unknown material type"),
+    "a folder as the mesh file": (
+        GOOD.replace('"quad.obj"', '"."'),
+        "mesh[0].file",
+        "is a folder, not a mesh file",
+    ),
+    "unknown material type": (
+        GOOD.replace('type = "diffuse"\nalbedo = 0.5', 'type = "velvet"\nalbedo = 0.5'),
+        "materials.grey.type",
+        "unknown material type",
+    ),
     "malformed toml": (GOOD.replace("fov = 30", "fov = = 30"), "scene.toml", "malformed TOML"),
     "no light": (GOOD.replace("emission = [1, 1, 1]", ""), "scene.toml", "no light"),
-    "no camera": (GOOD[GOOD.index("[materials.grey]"):], "scene.toml", "no [camera]"),
+    "no camera": (GOOD[GOOD.index("[materials.grey]") :], "scene.toml", "no [camera]"),
     "unknown key": (GOOD.replace("fov = 30", "fov = 30\nzoom = 2"), "camera.zoom", "unknown key"),
-    "undefined material": (GOOD.replace('material = "grey"', 'material = "gray"'),
-                           "mesh[0].material", "no material named 'gray'"),
-    "albedo above one": (GOOD.replace("albedo = 0.5", "albedo = 1.5"), "materials.grey.albedo",
-                         "at most 1"),
-    "negative emission": (GOOD.replace("emission = [1, 1, 1]", "emission = [1, -1, 1]"),
-                          "materials.lamp.emission", "negative"),
-    "bad vector": (GOOD.replace("position = [0.5, 0.5, 5]", "position = [0.5, 5]"),
-                   "camera.position", "3 numbers"),
+    "undefined material": (
+        GOOD.replace('material = "grey"', 'material = "gray"'),
+        "mesh[0].material",
+        "no material named 'gray'",
+    ),
+    "albedo above one": (GOOD.replace("albedo = 0.5", "albedo = 1.5"), "materials.grey.albedo", "at most 1"),
+    "negative emission": (
+        GOOD.replace("emission = [1, 1, 1]", "emission = [1, -1, 1]"),
+        "materials.lamp.emission",
+        "negative",
+    ),
+    "bad vector": (
+        GOOD.replace("position = [0.5, 0.5, 5]", "position = [0.5, 5]"),
+        "camera.position",
+        "3 numbers",
+    ),
     "absurd fov": (GOOD.replace("fov = 30", "fov = 180"), "camera.fov", "between 0 and 180"),
 }
 
@@ -187,29 +211,41 @@ eta = 1.33
 
 
 def test_every_material_type_and_spheres_load(scene_dir):
-    text = GOOD + MATERIALS + """
+    text = (
+        GOOD
+        + MATERIALS
+        + """
 [[mesh]]
 sphere = { center = [0.5, 0.5, 0.5], radius = 0.25, subdivisions = 2 }
 material = "glass"
 """
+    )
     scene = ptlab.load_scene(write_scene(scene_dir, text))
-    kinds = {name: type(m).__name__ for name, m in zip(scene.material_names, scene.materials,
-                                                       strict=True)}
-    assert kinds == {"grey": "Diffuse", "lamp": "Diffuse", "gold": "Microfacet",
-                     "tinted": "Microfacet", "mirror": "Mirror", "glass": "Dielectric"}
+    kinds = {name: type(m).__name__ for name, m in zip(scene.material_names, scene.materials, strict=True)}
+    assert kinds == {
+        "grey": "Diffuse",
+        "lamp": "Diffuse",
+        "gold": "Microfacet",
+        "tinted": "Microfacet",
+        "mirror": "Mirror",
+        "glass": "Dielectric",
+    }
     tinted = scene.materials[scene.material_names.index("tinted")]
     assert tinted.alpha == 0.1 and tinted.sampling == "hemisphere"
     assert scene.materials[scene.material_names.index("gold")].alpha == pytest.approx(0.09)
-    assert scene.triangle_count == 3 + 320                   # icosphere, 2 subdivisions
+    assert scene.triangle_count == 3 + 320  # icosphere, 2 subdivisions
     assert np.isfinite(ptlab.render(scene, spp=1, res=8, workers=1)).all()
 
 
-@pytest.mark.parametrize("good, bad, key, problem", [
-    ("roughness = 0.3", "roughness = 0", "materials.gold", "alpha"),
-    ('f0 = "gold"', 'f0 = "unobtainium"', "materials.gold", "unknown metal"),
-    ("eta = 1.33", 'eta = "water"', "materials.glass.eta", "number"),
-    ("fresnel = true", "fresnel = 1", "materials.mirror.fresnel", "true or false"),
-])
+@pytest.mark.parametrize(
+    "good, bad, key, problem",
+    [
+        ("roughness = 0.3", "roughness = 0", "materials.gold", "alpha"),
+        ('f0 = "gold"', 'f0 = "unobtainium"', "materials.gold", "unknown metal"),
+        ("eta = 1.33", 'eta = "water"', "materials.glass.eta", "number"),
+        ("fresnel = true", "fresnel = 1", "materials.mirror.fresnel", "true or false"),
+    ],
+)
 def test_bad_material_values_name_the_material(scene_dir, good, bad, key, problem):
     with pytest.raises(SceneError) as error:
         ptlab.load_scene(write_scene(scene_dir, GOOD + MATERIALS.replace(good, bad)))
@@ -232,8 +268,7 @@ def test_point_lights_or_a_sky_light_a_scene_without_emission(scene_dir, lights)
     scene = ptlab.load_scene(write_scene(scene_dir, UNLIT + lights))
     assert scene.area_lights is None
     kinds = [type(kind).__name__ for kind in scene.light_sampler.kinds]
-    assert kinds == [name for name, text in (("PointLights", POINT_LIGHT), ("Sky", SKY))
-                     if text in lights]
+    assert kinds == [name for name, text in (("PointLights", POINT_LIGHT), ("Sky", SKY)) if text in lights]
     if scene.point_lights is not None:
         np.testing.assert_allclose(scene.point_lights.intensity, [[1, 2, 3]])
     if scene.sky is not None:
@@ -243,44 +278,73 @@ def test_point_lights_or_a_sky_light_a_scene_without_emission(scene_dir, lights)
 
 
 BROKEN_LIGHTS_AND_MESHES = {
-    "negative intensity": (POINT_LIGHT.replace("[1, 2, 3]", "[1, -2, 3]"),
-                           "point_light[0].intensity", "must not be negative"),
-    "dark point light": (POINT_LIGHT.replace("[1, 2, 3]", "0"), "point_light[0].intensity",
-                         "must not be 0"),
-    "point light without intensity": (POINT_LIGHT.replace("intensity = [1, 2, 3]", ""),
-                                      "point_light[0].intensity", "missing"),
-    "point light far out": (POINT_LIGHT.replace("[0.5, 0.5, 3]", "[0.5, 0.5, 1e11]"),
-                            "point_light[0].position", "within"),
-    "point light typo": (POINT_LIGHT.replace("intensity", "intensty"), "point_light[0].intensty",
-                         "unknown key"),
+    "negative intensity": (
+        POINT_LIGHT.replace("[1, 2, 3]", "[1, -2, 3]"),
+        "point_light[0].intensity",
+        "must not be negative",
+    ),
+    "dark point light": (POINT_LIGHT.replace("[1, 2, 3]", "0"), "point_light[0].intensity", "must not be 0"),
+    "point light without intensity": (
+        POINT_LIGHT.replace("intensity = [1, 2, 3]", ""),
+        "point_light[0].intensity",
+        "missing",
+    ),
+    "point light far out": (
+        POINT_LIGHT.replace("[0.5, 0.5, 3]", "[0.5, 0.5, 1e11]"),
+        "point_light[0].position",
+        "within",
+    ),
+    "point light typo": (
+        POINT_LIGHT.replace("intensity", "intensty"),
+        "point_light[0].intensty",
+        "unknown key",
+    ),
     "sky not a colour": (SKY.replace("[0.1, 0.2, 0.3]", '"blue"'), "sky.radiance", "colour"),
-    "sky of two numbers": (SKY.replace("[0.1, 0.2, 0.3]", "[0.1, 0.2]"), "sky.radiance",
-                           "3 numbers"),
+    "sky of two numbers": (SKY.replace("[0.1, 0.2, 0.3]", "[0.1, 0.2]"), "sky.radiance", "3 numbers"),
     "sky as a table": (SKY.replace("[0.1, 0.2, 0.3]", "{ r = 1 }"), "sky.radiance", "colour"),
     "negative sky": (SKY.replace("[0.1, 0.2, 0.3]", "-1"), "sky.radiance", "negative"),
     "quad uv of the wrong shape": (
-        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], '
-        'uv = [[0, 0], [1, 0], [1, 1]] }\nmaterial = "grey"\n', "mesh[2].quad.uv", "4 pairs"),
+        "\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], "
+        'uv = [[0, 0], [1, 0], [1, 1]] }\nmaterial = "grey"\n',
+        "mesh[2].quad.uv",
+        "4 pairs",
+    ),
     "quad uv of three numbers": (
-        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], '
+        "\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]], "
         'uv = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]] }\nmaterial = "grey"\n',
-        "mesh[2].quad.uv", "4 pairs"),
+        "mesh[2].quad.uv",
+        "4 pairs",
+    ),
     "quad of three corners": (
         '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [1, 1, 0]] }\nmaterial = "grey"\n',
-        "mesh[2].quad.corners", "4 points"),
+        "mesh[2].quad.corners",
+        "4 points",
+    ),
     "flat quad": (
-        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]] }\n'
-        'material = "grey"\n', "mesh[2].quad.corners", "zero area"),
-    "scaled sphere": ('\n[[mesh]]\nsphere = { center = [0, 0, 0], radius = 1 }\nscale = 2\n'
-                      'material = "grey"\n', "mesh[2].scale", "mesh `file` only"),
-    "negative scale": ('\n[[mesh]]\nfile = "quad.obj"\nscale = -2\nmaterial = "grey"\n',
-                       "mesh[2].scale", "positive"),
+        '\n[[mesh]]\nquad = { corners = [[0, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]] }\nmaterial = "grey"\n',
+        "mesh[2].quad.corners",
+        "zero area",
+    ),
+    "scaled sphere": (
+        '\n[[mesh]]\nsphere = { center = [0, 0, 0], radius = 1 }\nscale = 2\nmaterial = "grey"\n',
+        "mesh[2].scale",
+        "mesh `file` only",
+    ),
+    "negative scale": (
+        '\n[[mesh]]\nfile = "quad.obj"\nscale = -2\nmaterial = "grey"\n',
+        "mesh[2].scale",
+        "positive",
+    ),
     "checkerboard of one colour": (
         '\n[materials.board]\ntype = "diffuse"\nalbedo = { checkerboard = [[1, 0, 0]] }\n',
-        "materials.board.albedo.checkerboard", "two colours"),
+        "materials.board.albedo.checkerboard",
+        "two colours",
+    ),
     "checkerboard too bright": (
         '\n[materials.board]\ntype = "diffuse"\nalbedo = { checkerboard = [[1, 0, 0], 2] }\n',
-        "materials.board.albedo.checkerboard[1]", "at most 1"),
+        "materials.board.albedo.checkerboard[1]",
+        "at most 1",
+    ),
     "bad render res": ("\n[render]\nres = [640]\n", "render.res", "[width, height]"),
     "bad render depth": ("\n[render]\nmax_depth = -1\n", "render.max_depth", "integer"),
 }
@@ -303,8 +367,10 @@ def test_a_scene_without_any_light_names_every_kind(scene_dir):
 
 def test_scale_multiplies_a_mesh_files_coordinates(scene_dir):
     scaled = GOOD.replace('file = "quad.obj"', 'file = "quad.obj"\nscale = 60')
-    np.testing.assert_allclose(ptlab.load_scene(write_scene(scene_dir, scaled)).triangles[:2],
-                               60 * ptlab.load_scene(write_scene(scene_dir, GOOD)).triangles[:2])
+    np.testing.assert_allclose(
+        ptlab.load_scene(write_scene(scene_dir, scaled)).triangles[:2],
+        60 * ptlab.load_scene(write_scene(scene_dir, GOOD)).triangles[:2],
+    )
 
 
 def test_render_table_gives_the_resolution_and_depth_unless_the_render_does(scene_dir):

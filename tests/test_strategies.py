@@ -99,8 +99,15 @@ UNBIASED = {
 #: sampling where the light is much narrower than the lobe (below 0.1: the tiny light in
 #: plates 3 and 4, the small one in plate 4).
 VEACH_UNRELIABLE = {
-    "nee": {(1, "tiny"), (1, "small"), (1, "medium"), (1, "large"), (2, "medium"),
-            (2, "large"), (3, "large")},
+    "nee": {
+        (1, "tiny"),
+        (1, "small"),
+        (1, "medium"),
+        (1, "large"),
+        (2, "medium"),
+        (2, "large"),
+        (3, "large"),
+    },
     "bsdf": {(3, "tiny"), (4, "tiny"), (4, "small")},
     "mis": set(),
 }
@@ -139,13 +146,14 @@ def disagreements(scene_name: str, seed: int) -> tuple[list[str], float]:
     setup = UNBIASED[scene_name]
     scene = ptlab.load_scene(scene_name)
     res = setup["res"]
-    images = {s: ptlab.render(scene, spp=setup["spp"][s], res=res, seed=seed + k, workers=1,
-                              strategy=s)
-              for k, s in enumerate(STRATEGIES)}
-    labels = (veach_regions(scene, res) if setup["block"] is None
-              else block_regions(res, setup["block"]))
-    tests = [(label, a, b) for label in np.unique(labels) for a, b in PAIRS
-             if compared(scene_name, label, a, b)]
+    images = {
+        s: ptlab.render(scene, spp=setup["spp"][s], res=res, seed=seed + k, workers=1, strategy=s)
+        for k, s in enumerate(STRATEGIES)
+    }
+    labels = veach_regions(scene, res) if setup["block"] is None else block_regions(res, setup["block"])
+    tests = [
+        (label, a, b) for label in np.unique(labels) for a, b in PAIRS if compared(scene_name, label, a, b)
+    ]
     rate = UNBIASED_FAMILY_RATE / len(UNBIASED) / (3 * len(tests))
     failures, worst = [], 0.0
     for label, a, b in tests:
@@ -153,8 +161,10 @@ def disagreements(scene_name: str, seed: int) -> tuple[list[str], float]:
         threshold = stats.t.isf(rate / 2, df=pixels - 1)
         worst = max(worst, float(np.abs(t).max() / threshold))
         if np.any(np.abs(t) > threshold):
-            failures.append(f"{region_name(scene_name, label)}: {a} - {b}: t = "
-                            f"{np.round(t, 1).tolist()} (threshold {threshold:.1f})")
+            failures.append(
+                f"{region_name(scene_name, label)}: {a} - {b}: t = "
+                f"{np.round(t, 1).tolist()} (threshold {threshold:.1f})"
+            )
     return failures, worst
 
 
@@ -205,8 +215,10 @@ def test_mis_weights_add_up_to_one_on_direct_light(scene_name):
     # BSDF hits of the small light and light samples in Veach's smooth plates; measured, it
     # is too heavy-tailed for a t test.)
     scene = ptlab.load_scene(scene_name)
-    nee, mis = (ptlab.render(scene, spp=DIRECT_SPP, res=DIRECT_RES, seed=7, workers=1,
-                             strategy=strategy, max_depth=1) for strategy in ("nee", "mis"))
+    nee, mis = (
+        ptlab.render(scene, spp=DIRECT_SPP, res=DIRECT_RES, seed=7, workers=1, strategy=strategy, max_depth=1)
+        for strategy in ("nee", "mis")
+    )
     half = DIRECT_RES // 2
     quadrants = block_regions(DIRECT_RES, half)
     regions = {"image": np.ones_like(quadrants, dtype=bool)}
@@ -233,13 +245,24 @@ def strategy_errors(seeds, reference_seed: int) -> dict[str, np.ndarray]:
     ``seeds``, against a MIS render of REFERENCE_SPP with ``reference_seed``."""
     scene = ptlab.load_scene("veach-mis")
     labels = veach_regions(scene, EFFICIENCY_RES)
-    reference = ptlab.render(scene, spp=REFERENCE_SPP, res=EFFICIENCY_RES, seed=reference_seed,
-                             workers=1, strategy="mis").astype(np.float64)
+    reference = ptlab.render(
+        scene, spp=REFERENCE_SPP, res=EFFICIENCY_RES, seed=reference_seed, workers=1, strategy="mis"
+    ).astype(np.float64)
     errors = {}
     for strategy in STRATEGIES:
-        squared = np.mean([(ptlab.render(scene, spp=EFFICIENCY_SPP, res=EFFICIENCY_RES, seed=seed,
-                                         workers=1, strategy=strategy) - reference) ** 2
-                           for seed in seeds], axis=(0, 3))
+        squared = np.mean(
+            [
+                (
+                    ptlab.render(
+                        scene, spp=EFFICIENCY_SPP, res=EFFICIENCY_RES, seed=seed, workers=1, strategy=strategy
+                    )
+                    - reference
+                )
+                ** 2
+                for seed in seeds
+            ],
+            axis=(0, 3),
+        )
         errors[strategy] = np.array([np.sqrt(squared[labels == k].mean()) for k in range(16)])
     return errors
 
@@ -260,8 +283,10 @@ def efficiency_table(errors) -> str:
     lines = ["region                  RMSE nee   bsdf    mis   mis/better  mis/worse"]
     for k in range(16):
         nee, bsdf, mis = errors["nee"][k], errors["bsdf"][k], errors["mis"][k]
-        lines.append(f"{region_name('veach-mis', k):22s} {nee:8.3f} {bsdf:6.3f} {mis:6.3f} "
-                     f"{mis / min(nee, bsdf):8.2f} {mis / max(nee, bsdf):10.2f}")
+        lines.append(
+            f"{region_name('veach-mis', k):22s} {nee:8.3f} {bsdf:6.3f} {mis:6.3f} "
+            f"{mis / min(nee, bsdf):8.2f} {mis / max(nee, bsdf):10.2f}"
+        )
     return "\n".join(lines)
 
 
@@ -312,23 +337,35 @@ INTEGRATORS = [("path", "nee"), ("path", "bsdf"), ("path", "mis"), ("whitted", "
 
 
 @pytest.mark.parametrize("backend", ["embree", pytest.param("numpy", marks=pytest.mark.slow)])
-@pytest.mark.parametrize("integrator, strategy", INTEGRATORS,
-                         ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS])
+@pytest.mark.parametrize(
+    "integrator, strategy", INTEGRATORS, ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS]
+)
 #: games101-hw5's 100k triangles would take the numpy backend 3 s a render to build:
 #: tests/test_games101_scenes.py checks it the same way, with one structure per backend.
 @pytest.mark.parametrize("scene_name", [n for n in builtin_scene_names() if n != "games101-hw5"])
 def test_no_pixel_is_nan_or_infinite(scene_name, integrator, strategy, backend, bad_contributions):
     scene = ptlab.load_scene(scene_name)
     views = {"scene camera": scene}
-    views.update({name: dataclasses.replace(scene, camera=camera)
-                  for name, camera in grazing_cameras(scene).items()})
+    views.update(
+        {name: dataclasses.replace(scene, camera=camera) for name, camera in grazing_cameras(scene).items()}
+    )
     for view, viewed in views.items():
         # Few samples and bounces: the numpy BVH is slow on small batches, and a NaN shows
         # up in the first bounces or not at all.
-        image = ptlab.render(viewed, spp=2, res=16, seed=5, workers=1, backend=backend,
-                             integrator=integrator, strategy=strategy, max_depth=8)
+        image = ptlab.render(
+            viewed,
+            spp=2,
+            res=16,
+            seed=5,
+            workers=1,
+            backend=backend,
+            integrator=integrator,
+            strategy=strategy,
+            max_depth=8,
+        )
         bad = ~np.isfinite(image)
         assert not bad.any(), f"{view}: {bad.any(axis=2).sum()} pixels NaN or infinite"
         assert (image >= 0).all(), f"{view}: negative pixels"
-        assert not bad_contributions, (f"{view}: {sum(bad_contributions)} path contributions "
-                                       f"NaN or infinite (dropped by the film)")
+        assert not bad_contributions, (
+            f"{view}: {sum(bad_contributions)} path contributions NaN or infinite (dropped by the film)"
+        )

@@ -14,9 +14,20 @@ A, B = (0.8, 0.1, 0.0), (0.2, 0.6, 0.9)
 
 
 def test_checkerboard_colours_at_known_uvs():
-    board = Checkerboard([A, B], scale=5)      # Homework 5's: squares of side 0.1
-    uv = np.array([[0.05, 0.05], [0.15, 0.05], [0.05, 0.15], [0.15, 0.15], [0.55, 0.05],
-                   [0.95, 0.95], [0.999, 0.001], [1.05, 0.05], [-0.05, 0.05]])
+    board = Checkerboard([A, B], scale=5)  # Homework 5's: squares of side 0.1
+    uv = np.array(
+        [
+            [0.05, 0.05],
+            [0.15, 0.05],
+            [0.05, 0.15],
+            [0.15, 0.15],
+            [0.55, 0.05],
+            [0.95, 0.95],
+            [0.999, 0.001],
+            [1.05, 0.05],
+            [-0.05, 0.05],
+        ]
+    )
     # pattern = (frac(5u) > 0.5) xor (frac(5v) > 0.5): B where it is 1.
     expected = [A, B, B, A, B, A, B, A, B]
     colours = board(uv)
@@ -44,8 +55,10 @@ material = "board"
 
 #: The quad x, y in [-1, 1] at z = 0, facing the camera, with u from 0 to 2 along x and v from
 #: 0 to 1 along y: four squares across, two up (a u-v swap would give two across, four up).
-QUAD = ("quad = { corners = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], "
-        "uv = [[0, 0], [2, 0], [2, 1], [0, 1]] }")
+QUAD = (
+    "quad = { corners = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]], "
+    "uv = [[0, 0], [2, 0], [2, 1], [0, 1]] }"
+)
 OBJ = """v -1 -1 0
 v 1 -1 0
 v 1 1 0

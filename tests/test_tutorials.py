@@ -14,6 +14,7 @@ TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("[0-9
 
 def test_there_is_a_tutorial_per_chapter():
     from ptlab.exercises import all_chapters
+
     assert [p.stem for p in TUTORIALS] == [c.stem for c in all_chapters()]
 
 
@@ -30,7 +31,11 @@ def test_every_tutorial_takes_res_spp_and_out_and_makes_the_folder(tmp_path, mon
 @pytest.mark.subprocess
 @pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
 def test_tutorial_runs_at_reduced_settings(script, tmp_path):
-    run = subprocess.run([sys.executable, str(script), "--res", "32", "--spp", "1",
-                          "--out", str(tmp_path)], capture_output=True, text=True, timeout=300)
+    run = subprocess.run(
+        [sys.executable, str(script), "--res", "32", "--spp", "1", "--out", str(tmp_path)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert run.returncode == 0, run.stderr[-2000:]
     assert list(tmp_path.glob("*.png")), f"{script.name} wrote no picture"

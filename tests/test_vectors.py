@@ -9,10 +9,15 @@ from ptlab.vectors import cross, dot, normalize
 
 def test_cross_and_dot_take_any_shape_of_3_vectors():
     rng = np.random.default_rng(0)
-    for a_shape, b_shape in [((3,), (3,)), ((50, 3), (50, 3)), ((50, 4, 3), (50, 4, 3)),
-                             ((50, 3), (3,)), ((50, 1, 3), (4, 3))]:
+    for a_shape, b_shape in [
+        ((3,), (3,)),
+        ((50, 3), (50, 3)),
+        ((50, 4, 3), (50, 4, 3)),
+        ((50, 3), (3,)),
+        ((50, 1, 3), (4, 3)),
+    ]:
         a, b = rng.normal(size=a_shape), rng.normal(size=b_shape)
-        np.testing.assert_array_equal(cross(a, b), np.cross(a, b))   # the same arithmetic
+        np.testing.assert_array_equal(cross(a, b), np.cross(a, b))  # the same arithmetic
         np.testing.assert_allclose(dot(a, b), (a * b).sum(axis=-1), rtol=1e-13, atol=1e-15)
 
 

@@ -47,13 +47,12 @@ PRISM_ETA = 1.5
 def room() -> tuple[np.ndarray, np.ndarray, list]:
     """The walls of the box [-4, 4]^3, facing in: triangles, material ids, materials."""
     box = trimesh.creation.box(extents=(8, 8, 8))
-    box.invert()                                    # outward normals -> inward
+    box.invert()  # outward normals -> inward
     triangles = box.vertices[box.faces]
     # (Not box.face_normals: after invert() trimesh still reports the outward ones.)
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     normals /= np.linalg.norm(normals, axis=1)[:, None]
-    ids = [next(k for k, name in enumerate(WALL_NAMES) if np.allclose(n, WALLS[name][0]))
-           for n in normals]
+    ids = [next(k for k, name in enumerate(WALL_NAMES) if np.allclose(n, WALLS[name][0])) for n in normals]
     materials = [Diffuse([0, 0, 0], emission=WALLS[name][1]) for name in WALL_NAMES]
     return triangles, np.array(ids), materials
 
@@ -91,8 +90,9 @@ def room_scene(objects: list[tuple[np.ndarray, object]], fov_y: float = 70.0) ->
 def quad(centre: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """The parallelogram centre +- a +- b as two triangles, facing a x b."""
     centre, a, b = (np.asarray(v, dtype=float) for v in (centre, a, b))
-    return np.array([[centre - a - b, centre + a - b, centre + a + b],
-                     [centre - a - b, centre + a + b, centre - a + b]])
+    return np.array(
+        [[centre - a - b, centre + a - b, centre + a + b], [centre - a - b, centre + a + b, centre - a + b]]
+    )
 
 
 def mirror_glass_room(more: tuple = ()) -> ptlab.Scene:
@@ -100,24 +100,34 @@ def mirror_glass_room(more: tuple = ()) -> ptlab.Scene:
     and ``more`` objects [(triangles, material)]."""
     # The mirror leans back at 45 degrees: it sends the camera's rays up to the ceiling.
     mirror = quad([2.0, 1.3, 1.5], [0.8, 0, 0], [0, 0.8, 0.8])
-    slab = trimesh.creation.box(extents=(2.4, 2.0, 0.3), transform=(
-        trimesh.transformations.translation_matrix([-1.6, -1.4, 1.2])
-        @ trimesh.transformations.rotation_matrix(math.radians(50), [0, 1, 0])))
+    slab = trimesh.creation.box(
+        extents=(2.4, 2.0, 0.3),
+        transform=(
+            trimesh.transformations.translation_matrix([-1.6, -1.4, 1.2])
+            @ trimesh.transformations.rotation_matrix(math.radians(50), [0, 1, 0])
+        ),
+    )
     prism = right_prism(-1.0, 1.0, y0=0.0, z0=0.5, h=1.8)
-    return room_scene([(mirror, Mirror(MIRROR_REFLECTANCE)),
-                       (slab.vertices[slab.faces], Dielectric(SLAB_ETA, SLAB_TRANSMITTANCE)),
-                       (prism, Dielectric(PRISM_ETA)), *more])
+    return room_scene(
+        [
+            (mirror, Mirror(MIRROR_REFLECTANCE)),
+            (slab.vertices[slab.faces], Dielectric(SLAB_ETA, SLAB_TRANSMITTANCE)),
+            (prism, Dielectric(PRISM_ETA)),
+            *more,
+        ]
+    )
 
 
 # -- Homework 5's castRay, one ray at a time, for the expected values ------------------------
+
 
 @dataclass
 class Leaf:
     """One branch of a ray's Whitted tree: the wall it ends on and the weight it arrives with."""
 
     wall: str
-    weight: np.ndarray      # (3,)
-    events: str             # what happened at each glass or mirror: "R"eflect, "T"ransmit
+    weight: np.ndarray  # (3,)
+    events: str  # what happened at each glass or mirror: "R"eflect, "T"ransmit
 
 
 def closest_hit(triangles: np.ndarray, o: np.ndarray, d: np.ndarray) -> tuple[int, float]:
@@ -142,7 +152,7 @@ def homework_fresnel(d: np.ndarray, n: np.ndarray, ior: float) -> float:
     etai, etat = (ior, 1.0) if cosi > 0 else (1.0, ior)
     sint = etai / etat * math.sqrt(max(0.0, 1 - cosi * cosi))
     if sint >= 1:
-        return 1.0                                  # total internal reflection
+        return 1.0  # total internal reflection
     cost = math.sqrt(max(0.0, 1 - sint * sint))
     cosi = abs(cosi)
     rs = (etat * cosi - etai * cost) / (etat * cosi + etai * cost)
@@ -163,8 +173,15 @@ def homework_refract(d: np.ndarray, n: np.ndarray, ior: float) -> tuple[np.ndarr
     return eta * d + (eta * cosi - math.sqrt(k)) * n, etat / etai
 
 
-def cast_ray(scene: ptlab.Scene, o: np.ndarray, d: np.ndarray, max_depth: int, depth: int = 0,
-             weight: np.ndarray | None = None, events: str = "") -> list[Leaf]:
+def cast_ray(
+    scene: ptlab.Scene,
+    o: np.ndarray,
+    d: np.ndarray,
+    max_depth: int,
+    depth: int = 0,
+    weight: np.ndarray | None = None,
+    events: str = "",
+) -> list[Leaf]:
     """The leaves of a ray's Whitted tree in the room (walls emit and reflect nothing)."""
     weight = np.ones(3) if weight is None else weight
     k, t = closest_hit(scene.triangles, o, d)
@@ -182,14 +199,22 @@ def cast_ray(scene: ptlab.Scene, o: np.ndarray, d: np.ndarray, max_depth: int, d
     p = o + t * d
     reflected = d - 2 * (d @ n) * n
     if isinstance(material, Mirror):
-        return cast_ray(scene, p, reflected, max_depth, depth + 1, weight * material.reflectance,
-                        events + "R")
+        return cast_ray(
+            scene, p, reflected, max_depth, depth + 1, weight * material.reflectance, events + "R"
+        )
     kr = homework_fresnel(d, n, material.eta)
     leaves = cast_ray(scene, p, reflected, max_depth, depth + 1, weight * kr, events + "R")
     if kr < 1:
         refracted, eta_rel = homework_refract(d, n, material.eta)
-        leaves += cast_ray(scene, p, refracted, max_depth, depth + 1,
-                           weight * (1 - kr) * material.transmittance / eta_rel**2, events + "T")
+        leaves += cast_ray(
+            scene,
+            p,
+            refracted,
+            max_depth,
+            depth + 1,
+            weight * (1 - kr) * material.transmittance / eta_rel**2,
+            events + "T",
+        )
     return leaves
 
 
@@ -201,8 +226,9 @@ def pixel_rays(scene: ptlab.Scene, res: int, y: int, x: int) -> list[tuple[np.nd
     """The camera rays through the centre and the four corners of pixel (y, x), in float64."""
     rays = []
     for u in [(0.5, 0.5), (0, 0), (0.999, 0), (0, 0.999), (0.999, 0.999)]:
-        o, d = generate_rays(scene.camera, res, res, np.array([x]), np.array([y]),
-                             np.array([u], dtype=np.float32))
+        o, d = generate_rays(
+            scene.camera, res, res, np.array([x]), np.array([y]), np.array([u], dtype=np.float32)
+        )
         rays.append((o[0].astype(float), d[0].astype(float)))
     return rays
 
@@ -215,8 +241,10 @@ RES = 32
 @pytest.fixture(scope="module")
 def room_images() -> dict:
     scene = mirror_glass_room()
-    return {backend: ptlab.render(scene, integrator="whitted", spp=8, res=RES, workers=1,
-                                  backend=backend) for backend in ("embree", "numpy")}
+    return {
+        backend: ptlab.render(scene, integrator="whitted", spp=8, res=RES, workers=1, backend=backend)
+        for backend in ("embree", "numpy")
+    }
 
 
 def check_pixel(image: np.ndarray, y: int, x: int) -> list[Leaf]:
@@ -260,8 +288,9 @@ def test_glass_slab_reflects_kr_and_transmits_the_rest_through_both_faces(room_i
     o, d = pixel_rays(scene, RES, 22, 23)[0]
     k, _ = closest_hit(scene.triangles, o, d)
     v0, v1, v2 = scene.triangles[k]
-    kr = homework_fresnel(d, np.cross(v1 - v0, v2 - v0) / np.linalg.norm(np.cross(v1 - v0, v2 - v0)),
-                          SLAB_ETA)
+    kr = homework_fresnel(
+        d, np.cross(v1 - v0, v2 - v0) / np.linalg.norm(np.cross(v1 - v0, v2 - v0)), SLAB_ETA
+    )
     assert 0.1 < kr < 0.3
     assert branches["R"].wall == "right" and np.allclose(branches["R"].weight, kr)
     assert branches["TT"].wall == "far"
@@ -284,7 +313,7 @@ def test_glass_prism_reflects_totally_inside(room_images, backend):
     branches = {leaf.events: leaf for leaf in leaves}
     assert not any(leaf.events.startswith("TT") for leaf in leaves)
     assert branches["TRT"].wall == "ceiling"
-    r0 = ((PRISM_ETA - 1) / (PRISM_ETA + 1)) ** 2              # 0.04 head-on
+    r0 = ((PRISM_ETA - 1) / (PRISM_ETA + 1)) ** 2  # 0.04 head-on
     np.testing.assert_allclose(branches["TRT"].weight, (1 - r0) ** 2, rtol=0.01)
     assert branches["R"].wall == "near"
 
@@ -311,8 +340,9 @@ def test_the_glass_split_is_the_dielectrics_own_choice_averaged():
     cos_theta = rng.uniform(0.01, 1, rows)
     phi = rng.uniform(0, 2 * math.pi, rows)
     sin_theta = np.sqrt(1 - cos_theta**2)
-    wo = np.asfortranarray(np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta],
-                                    axis=1).astype(np.float32))
+    wo = np.asfortranarray(
+        np.stack([sin_theta * np.cos(phi), sin_theta * np.sin(phi), cos_theta], axis=1).astype(np.float32)
+    )
     front = rng.random(rows) < 0.5
     (wi_r, weight_r), (wi_t, weight_t) = fresnel_split(glass, wo, n, front)
     always = np.zeros((rows, 2), dtype=np.float32)
@@ -324,12 +354,12 @@ def test_the_glass_split_is_the_dielectrics_own_choice_averaged():
     np.testing.assert_allclose(wi_r, wi_reflect, atol=1e-6)
     refracts = kr < 1
     np.testing.assert_allclose(wi_t[refracts], wi_refract[refracts], atol=1e-5)
-    np.testing.assert_allclose(weight_t[refracts], ((1 - kr)[:, None] * weight_refract)[refracts],
-                               rtol=1e-5)
+    np.testing.assert_allclose(weight_t[refracts], ((1 - kr)[:, None] * weight_refract)[refracts], rtol=1e-5)
     assert (weight_t[~refracts] == 0).all()
 
 
 # -- 2.-4. diffuse surfaces: direct light only ---------------------------------------------
+
 
 def footprint_on(scene: ptlab.Scene, res: int, wanted: np.ndarray) -> np.ndarray:
     """(res, res) float: the fraction of the rays through each pixel's centre and corners
@@ -338,8 +368,14 @@ def footprint_on(scene: ptlab.Scene, res: int, wanted: np.ndarray) -> np.ndarray
     ys, xs = np.mgrid[0:res, 0:res]
     hits = []
     for u in [(0.5, 0.5), (0, 0), (0.999, 0), (0, 0.999), (0.999, 0.999)]:
-        origins, dirs = generate_rays(scene.camera, res, res, xs.ravel(), ys.ravel(),
-                                      np.tile(np.array([u], dtype=np.float32), (res * res, 1)))
+        origins, dirs = generate_rays(
+            scene.camera,
+            res,
+            res,
+            xs.ravel(),
+            ys.ravel(),
+            np.tile(np.array([u], dtype=np.float32), (res * res, 1)),
+        )
         prim = accel.intersect(origins, dirs).prim
         hits.append((prim >= 0) & wanted[np.maximum(prim, 0)])
     return np.mean(hits, axis=0).reshape(res, res)
@@ -376,12 +412,15 @@ def assert_same_block_means(a: np.ndarray, b: np.ndarray, regions: int, sigmas: 
     the block: hundreds of degrees of freedom, so normal quantiles apply. Blocks that no
     noise reaches must agree to float32 rounding.
     """
+
     def block_mean_and_variance(images):
         h, w = images.shape[1:3]
+
         def blocks(x):
             return x.reshape(regions, h // regions, regions, w // regions, 3).sum(axis=(1, 3))
+
         pixels = (h // regions) * (w // regions)
-        pixel_variance = images.var(axis=0, ddof=1) / len(images)   # of each pixel's mean
+        pixel_variance = images.var(axis=0, ddof=1) / len(images)  # of each pixel's mean
         return blocks(images.mean(axis=0)) / pixels, blocks(pixel_variance) / pixels**2
 
     (mean_a, variance_a), (mean_b, variance_b) = map(block_mean_and_variance, (a, b))
@@ -411,8 +450,7 @@ def test_cornell_boxes_render_clean_images_and_bright_lights(name):
     radiance = scene.materials[scene.material_names.index("light")].emission
     # The camera sees the light's emission (plus what its albedo reflects of the other
     # light triangle: nothing, they lie in one plane).
-    np.testing.assert_allclose(image[on_light], np.broadcast_to(radiance, (on_light.sum(), 3)),
-                               rtol=1e-5)
+    np.testing.assert_allclose(image[on_light], np.broadcast_to(radiance, (on_light.sum(), 3)), rtol=1e-5)
     # max_depth 0: emission only, exactly what the path tracer sees at depth 0.
     emission_only = ptlab.render(scene, integrator="whitted", spp=4, res=64, workers=1, max_depth=0)
     assert np.array_equal(emission_only, ptlab.render(scene, spp=4, res=64, workers=1, max_depth=0))
@@ -421,6 +459,7 @@ def test_cornell_boxes_render_clean_images_and_bright_lights(name):
 
 
 # -- 5. the same expectation as the path tracer --------------------------------------------
+
 
 def test_whitted_has_the_path_tracers_mean_where_light_comes_through_glass_and_mirrors():
     # In the glowing room every light path that reaches the camera bounces off mirrors and
@@ -431,9 +470,12 @@ def test_whitted_has_the_path_tracers_mean_where_light_comes_through_glass_and_m
     # comparisons at 4.5 standard errors: a false alarm with probability about 3e-4 for
     # normal z-scores (measured with 10 other sets of seeds: sd 1.05, largest |z| 3.8 of 480).
     sphere = trimesh.creation.icosphere(subdivisions=3, radius=1.1)
-    scene = mirror_glass_room(more=(
-        (sphere.vertices[sphere.faces] + [2.0, -1.6, 1.0], Dielectric(1.5, (1.0, 0.9, 0.8))),
-        (quad([-1.8, 2.6, 3.0], [0.8, 0, 0], [0, 0.8, 0.5]), Mirror((0.5, 0.7, 0.9), fresnel=True))))
+    scene = mirror_glass_room(
+        more=(
+            (sphere.vertices[sphere.faces] + [2.0, -1.6, 1.0], Dielectric(1.5, (1.0, 0.9, 0.8))),
+            (quad([-1.8, 2.6, 3.0], [0.8, 0, 0], [0, 0.8, 0.5]), Mirror((0.5, 0.7, 0.9), fresnel=True)),
+        )
+    )
     whitted = renders(scene, range(4), integrator="whitted", spp=8, res=32)
     path = renders(scene, range(10, 18), integrator="path", max_depth=5, spp=8, res=32)
     assert_same_block_means(whitted, path, regions=4, sigmas=4.5)

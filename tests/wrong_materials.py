@@ -218,6 +218,7 @@ class HalfVectorPdfWithoutJacobian(WalterSampling):
 
 # -- delta materials ----------------------------------------------------------------------
 
+
 class MirrorOfIncomingDirection(Mirror):
     """GAMES101's reflect(I, N) = I - 2 (I . N) N applied to wo, which points away: wrong side."""
 
@@ -272,9 +273,26 @@ class GlassWeightedByFresnel(_Glass):
         return np.where(reflected, R, (1 - R) / eta_rel**2)[:, None] * np.ones(3)
 
 
-__all__ = ["MissingCosineInPdf", "MissingCosineInWeight", "CosineTwice", "PdfOffByConstant",
-           "UniformSamplingCosinePdf", "CosineSamplingUniformPdf", "WrongHemisphere", "AlbedoAboveOne",
-           "MissingOneOverPi", "RightOnlyForRepeatedRows", "DependsOnCallSize", "DependsOnRowOrder",
-           "DependsOnMeanWo", "NonReciprocal", "NanAtGrazing", "WalterSampling",
-           "HalfVectorPdfWithoutJacobian", "MirrorOfIncomingDirection", "MirrorWithEval",
-           "GlassWithoutInversion", "GlassWeightedByFresnel"]
+__all__ = [
+    "MissingCosineInPdf",
+    "MissingCosineInWeight",
+    "CosineTwice",
+    "PdfOffByConstant",
+    "UniformSamplingCosinePdf",
+    "CosineSamplingUniformPdf",
+    "WrongHemisphere",
+    "AlbedoAboveOne",
+    "MissingOneOverPi",
+    "RightOnlyForRepeatedRows",
+    "DependsOnCallSize",
+    "DependsOnRowOrder",
+    "DependsOnMeanWo",
+    "NonReciprocal",
+    "NanAtGrazing",
+    "WalterSampling",
+    "HalfVectorPdfWithoutJacobian",
+    "MirrorOfIncomingDirection",
+    "MirrorWithEval",
+    "GlassWithoutInversion",
+    "GlassWeightedByFresnel",
+]

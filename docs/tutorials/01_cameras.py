@@ -33,12 +33,20 @@ def main() -> None:
     scene = ptlab.load_scene("cornell-box")
     camera = scene.camera
     print(f"eye {camera.position}, forward {camera.forward}, fov_y {camera.fov_y} degrees")
-    print(f"the image plane spans tan(fov_y / 2) = {math.tan(math.radians(camera.fov_y) / 2):.3f} "
-          f"above and below the centre, at distance 1")
+    print(
+        f"the image plane spans tan(fov_y / 2) = {math.tan(math.radians(camera.fov_y) / 2):.3f} "
+        f"above and below the centre, at distance 1"
+    )
 
     # One ray through the centre of the image goes straight along forward.
-    _, centre = generate_rays(camera, args.res, args.res, np.array([args.res // 2]),
-                              np.array([args.res // 2]), np.zeros((1, 2), np.float32))
+    _, centre = generate_rays(
+        camera,
+        args.res,
+        args.res,
+        np.array([args.res // 2]),
+        np.array([args.res // 2]),
+        np.zeros((1, 2), np.float32),
+    )
     print(f"ray through the centre pixel's corner: {np.round(centre[0], 4)}")
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1)

@@ -33,11 +33,13 @@ def main() -> None:
 
     # The triangle (0,0,0), (1,0,0), (0,1,0) in the plane z = 0, and five rays.
     v0, e1, e2 = np.zeros(3), np.array([1.0, 0, 0]), np.array([0.0, 1, 0])
-    rays = {"hit from above": ([0.25, 0.5, 1], [0, 0, -1]),
-            "behind the origin": ([0.25, 0.5, 1], [0, 0, 1]),
-            "back face, from below": ([0.25, 0.5, -2], [0, 0, 1]),
-            "outside the edge v1-v2": ([0.6, 0.6, 1], [0, 0, -1]),
-            "parallel to the plane": ([0.25, 0.5, 1], [1, 0, 0])}
+    rays = {
+        "hit from above": ([0.25, 0.5, 1], [0, 0, -1]),
+        "behind the origin": ([0.25, 0.5, 1], [0, 0, 1]),
+        "back face, from below": ([0.25, 0.5, -2], [0, 0, 1]),
+        "outside the edge v1-v2": ([0.6, 0.6, 1], [0, 0, -1]),
+        "parallel to the plane": ([0.25, 0.5, 1], [1, 0, 0]),
+    }
     origins, dirs = (np.array(a, dtype=float) for a in zip(*rays.values(), strict=True))
     t, u, v = ray_triangle(origins, dirs, v0, e1, e2)
     for name, t_i, u_i, v_i in zip(rays, t, u, v, strict=True):
@@ -49,8 +51,10 @@ def main() -> None:
     write_image(out / "ray-triangle.png", ptlab.render(scene, **options))
     with plugged(ptlab.accel.numpy_bvh, ray_triangle=swapped_uv_ray_triangle):
         write_image(out / "ray-triangle-wrong.png", ptlab.render(scene, **options))
-    print(f"wrote {out / 'ray-triangle.png'} and {out / 'ray-triangle-wrong.png'} "
-          f"(the second with u and v swapped)")
+    print(
+        f"wrote {out / 'ray-triangle.png'} and {out / 'ray-triangle-wrong.png'} "
+        f"(the second with u and v swapped)"
+    )
 
 
 if __name__ == "__main__":

@@ -38,32 +38,40 @@ def main() -> None:
     args, out = tutorial_options(__doc__, res=160, spp=8)
 
     n = np.array([[0.0, 1.0, 0.0]])
-    print("Rays arriving at a surface with normal n = +y (wo points back along each ray, away "
-          "from the surface):")
+    print(
+        "Rays arriving at a surface with normal n = +y (wo points back along each ray, away "
+        "from the surface):"
+    )
     for degrees, eta, where in [(45, 1.5, "entering glass"), (30, 1 / 1.5, "leaving glass")]:
         theta = math.radians(degrees)
         wo = np.array([[math.sin(theta), math.cos(theta), 0.0]])
         wt = refract(wo, n, eta)[0]
-        print(f"  {where:14} at {degrees} degrees: wo {np.round(wo[0], 4)}, reflect "
-              f"{np.round(reflect(wo, n)[0], 4)}, refract (eta {eta:.3f}) {np.round(wt, 4)}: "
-              f"theta_t {math.degrees(math.acos(-wt[1])):.2f} degrees, F = "
-              f"{fresnel_dielectric(np.array([wo[0, 1]]), eta)[0]:.4f}")
+        print(
+            f"  {where:14} at {degrees} degrees: wo {np.round(wo[0], 4)}, reflect "
+            f"{np.round(reflect(wo, n)[0], 4)}, refract (eta {eta:.3f}) {np.round(wt, 4)}: "
+            f"theta_t {math.degrees(math.acos(-wt[1])):.2f} degrees, F = "
+            f"{fresnel_dielectric(np.array([wo[0, 1]]), eta)[0]:.4f}"
+        )
     print("The Fresnel reflectance of glass (eta 1.5) from normal to grazing incidence:")
     degrees = np.array([0, 30, 45, 60, 75, 85, 89.9])
     for eta, where in [(1.5, "entering"), (1 / 1.5, "leaving")]:
         F = fresnel_dielectric(np.cos(np.radians(degrees)), eta)  # noqa: N806 (the usual name)
         print(f"  {where:9} " + "  ".join(f"{d:4g} deg {f:.3f}" for d, f in zip(degrees, F, strict=True)))
-    print(f"  normal incidence: ((eta - 1) / (eta + 1))^2 = {(0.5 / 2.5) ** 2:.3f}; leaving glass, "
-          f"everything is reflected beyond the critical angle asin(1 / 1.5) = "
-          f"{math.degrees(math.asin(1 / 1.5)):.1f} degrees")
+    print(
+        f"  normal incidence: ((eta - 1) / (eta + 1))^2 = {(0.5 / 2.5) ** 2:.3f}; leaving glass, "
+        f"everything is reflected beyond the critical angle asin(1 / 1.5) = "
+        f"{math.degrees(math.asin(1 / 1.5)):.1f} degrees"
+    )
 
     scene = spheres_scene()
     options = dict(spp=args.spp, res=args.res, seed=0)
     right = whitted_image(scene, **options)
     wrong = whitted_image(scene, refract=refract_inverted, fresnel=fresnel_inverted, **options)
     differ = ~np.isclose(right, wrong, rtol=1e-3, atol=1e-4).all(axis=2)
-    print(f"Whitted render, {args.res} x {args.res}, {args.spp} spp: with eta the wrong way up "
-          f"{differ.mean():.0%} of the pixels change (the glass sphere, and its image in the mirror)")
+    print(
+        f"Whitted render, {args.res} x {args.res}, {args.spp} spp: with eta the wrong way up "
+        f"{differ.mean():.0%} of the pixels change (the glass sphere, and its image in the mirror)"
+    )
     write_image(out / "whitted.png", right)
     write_image(out / "whitted-wrong.png", wrong)
     print(f"wrote {out / 'whitted.png'} and {out / 'whitted-wrong.png'}")
@@ -74,9 +82,11 @@ def main() -> None:
     path = ptlab.render("games101-hw5", spp=4 * args.spp, strategy="mis", **homework)
     dark = whitted.max(axis=2) < 0.02
     lit_by_sky = f"{path[dark].mean():.3f}" if dark.any() else "-"
-    print(f"games101-hw5, Whitted: {dark.mean():.1%} of the pixels black (no point light reaches "
-          f"them: the shadows, the big sphere's far side), as in the homework; the path tracer "
-          f"lights them with the sky (mean {lit_by_sky} there)")
+    print(
+        f"games101-hw5, Whitted: {dark.mean():.1%} of the pixels black (no point light reaches "
+        f"them: the shadows, the big sphere's far side), as in the homework; the path tracer "
+        f"lights them with the sky (mean {lit_by_sky} there)"
+    )
     write_image(out / "games101-hw5.png", np.concatenate([whitted, path], axis=1))
     print(f"wrote {out / 'games101-hw5.png'}: Whitted (left) and path tracing with MIS (right)")
 

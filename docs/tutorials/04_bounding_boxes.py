@@ -35,11 +35,13 @@ def strict_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
 def main() -> None:
     args, out = tutorial_options(__doc__, res=256, spp=4)
 
-    rays = {"into the unit box along +x": ([-1, 0.5, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1]),
-            "into it along -x": ([2, 0.5, 0.5], [-1, 0, 0], [0, 0, 0], [1, 1, 1]),
-            "starting inside it": ([0.5, 0.5, 0.5], [0, 1, 0], [0, 0, 0], [1, 1, 1]),
-            "beside it, along +x": ([-1, 2, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1]),
-            "through the flat box": ([0.5, 0.5, 0], [0, 0, 1], [0, 0, 1], [1, 1, 1])}
+    rays = {
+        "into the unit box along +x": ([-1, 0.5, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1]),
+        "into it along -x": ([2, 0.5, 0.5], [-1, 0, 0], [0, 0, 0], [1, 1, 1]),
+        "starting inside it": ([0.5, 0.5, 0.5], [0, 1, 0], [0, 0, 0], [1, 1, 1]),
+        "beside it, along +x": ([-1, 2, 0.5], [1, 0, 0], [0, 0, 0], [1, 1, 1]),
+        "through the flat box": ([0.5, 0.5, 0], [0, 0, 1], [0, 0, 1], [1, 1, 1]),
+    }
     origins, dirs, lo, hi = (np.array(a, np.float32) for a in zip(*rays.values(), strict=True))
     with np.errstate(divide="ignore"):
         inv_dirs = 1 / dirs
@@ -52,15 +54,19 @@ def main() -> None:
     scene = ptlab.load_scene("cornell-box")
     bvh = build_bvh(scene.triangles)
     flat = np.any(bvh.box_min == bvh.box_max, axis=1)
-    print(f"the Cornell box's BVH: {len(flat)} boxes, {flat.sum()} of them flat (leaves around "
-          f"the axis-aligned walls)")
+    print(
+        f"the Cornell box's BVH: {len(flat)} boxes, {flat.sum()} of them flat (leaves around "
+        f"the axis-aligned walls)"
+    )
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1, backend="numpy")
     write_image(out / "bounding-boxes.png", ptlab.render(scene, **options))
     with plugged(ptlab.accel.numpy_bvh, slab_test=strict_slab_test):
         write_image(out / "bounding-boxes-wrong.png", ptlab.render(scene, **options))
-    print(f"wrote {out / 'bounding-boxes.png'} and {out / 'bounding-boxes-wrong.png'} (the second "
-          f"with the strict test)")
+    print(
+        f"wrote {out / 'bounding-boxes.png'} and {out / 'bounding-boxes-wrong.png'} (the second "
+        f"with the strict test)"
+    )
 
 
 if __name__ == "__main__":

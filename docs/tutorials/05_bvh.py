@@ -71,15 +71,14 @@ def node_levels(tree: numpy_bvh.FlatBVH) -> np.ndarray:
     """(M,) the level of each node (the root's is 0): children come after their parent."""
     level = np.zeros(len(tree.child), np.intp)
     for node in np.flatnonzero(tree.child >= 0):
-        level[tree.child[node]:tree.child[node] + 2] = level[node] + 1
+        level[tree.child[node] : tree.child[node] + 2] = level[node] + 1
     return level
 
 
 def box_edges(box_min: np.ndarray, box_max: np.ndarray) -> np.ndarray:
     """(12, 2, 3) the edges of a box: pairs of corners that differ in one coordinate."""
     corners = np.array([[(box_min, box_max)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
-    return np.array([(corners[k], corners[k | 1 << a]) for k in range(8) for a in range(3)
-                     if not k & 1 << a])
+    return np.array([(corners[k], corners[k | 1 << a]) for k in range(8) for a in range(3) if not k & 1 << a])
 
 
 def project(camera, width: int, height: int, points: np.ndarray) -> np.ndarray:
@@ -95,6 +94,7 @@ def project(camera, width: int, height: int, points: np.ndarray) -> np.ndarray:
 def main() -> None:
     args, out = tutorial_options(__doc__, res=240, spp=1, spp_help="camera rays per pixel")
     import matplotlib
+
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
@@ -102,27 +102,30 @@ def main() -> None:
     print(f"{scene.triangle_count} triangles: the Stanford bunny of Homework 6, scaled by 60")
 
     height, spp = args.res, args.spp
-    width = height * 4 // 3                              # the homework's 1280 x 960 shape
+    width = height * 4 // 3  # the homework's 1280 x 960 shape
     pixel = np.repeat(np.arange(width * height), spp)
     u = np.random.default_rng(0).random((len(pixel), 2), dtype=np.float32)
     origins, dirs = generate_rays(scene.camera, width, height, pixel % width, pixel // width, u)
 
     counts, trees = {}, {}
-    for name, pieces in [("bvh", {}), ("bvh-wrong", dict(split_costs=median_split_costs,
-                                                         child_order=low_child_first))]:
+    for name, pieces in [
+        ("bvh", {}),
+        ("bvh-wrong", dict(split_costs=median_split_costs, child_order=low_child_first)),
+    ]:
         with plugged(numpy_bvh, **pieces):
             bvh = numpy_bvh.NumpyBVH(scene.triangles)
             entered = boxes_entered(bvh, origins, dirs)
         trees[name] = bvh.bvh
         counts[name] = np.bincount(pixel, weights=entered, minlength=width * height) / spp
         label = "SAH, near child first" if name == "bvh" else "median split, low child first"
-        print(f"{label:30} SAH cost {sah_cost(bvh.bvh):5.1f}, {bvh.bvh.depth} levels, "
-              f"{entered.mean():5.1f} boxes entered per camera ray, "
-              f"{entered[entered > 0].mean():5.1f} per ray that enters the root's box")
-    top = max(np.percentile(c, 99) for c in counts.values())   # a few grazing rays enter many more
+        print(
+            f"{label:30} SAH cost {sah_cost(bvh.bvh):5.1f}, {bvh.bvh.depth} levels, "
+            f"{entered.mean():5.1f} boxes entered per camera ray, "
+            f"{entered[entered > 0].mean():5.1f} per ray that enters the root's box"
+        )
+    top = max(np.percentile(c, 99) for c in counts.values())  # a few grazing rays enter many more
     for name, per_pixel in counts.items():
-        plt.imsave(out / f"{name}.png", per_pixel.reshape(height, width), cmap="inferno", vmin=0,
-                   vmax=top)
+        plt.imsave(out / f"{name}.png", per_pixel.reshape(height, width), cmap="inferno", vmin=0, vmax=top)
 
     # The SAH tree's first levels, drawn over the bunny's normals.
     normals = ptlab.render(scene, spp=4, res=(width, height), integrator="normals", workers=1)
@@ -132,19 +135,24 @@ def main() -> None:
     axes.imshow(np.clip(normals, 0, 1))
     for k, colour in zip(LEVELS, ("white", "yellow", "orange", "red"), strict=True):
         for node in np.flatnonzero(level == k):
-            for edge in project(scene.camera, width, height,
-                                box_edges(tree.box_min[node], tree.box_max[node])):
+            for edge in project(
+                scene.camera, width, height, box_edges(tree.box_min[node], tree.box_max[node])
+            ):
                 axes.plot(edge[:, 0], edge[:, 1], color=colour, linewidth=0.6)
     axes.set_xlim(0, width)
     axes.set_ylim(height, 0)
     axes.axis("off")
     figure.savefig(out / "bvh-boxes.png")
     plt.close(figure)
-    print(f"wrote {out / 'bvh-boxes.png'}: the boxes of levels {', '.join(map(str, LEVELS))} "
-          f"(white, yellow, orange, red: {', '.join(str(int((level == k).sum())) for k in LEVELS)} "
-          f"boxes) over the bunny's normals")
-    print(f"wrote {out / 'bvh.png'} and {out / 'bvh-wrong.png'}: boxes entered per camera ray, "
-          f"inferno colours from black (0) to pale yellow ({top:.0f} or more)")
+    print(
+        f"wrote {out / 'bvh-boxes.png'}: the boxes of levels {', '.join(map(str, LEVELS))} "
+        f"(white, yellow, orange, red: {', '.join(str(int((level == k).sum())) for k in LEVELS)} "
+        f"boxes) over the bunny's normals"
+    )
+    print(
+        f"wrote {out / 'bvh.png'} and {out / 'bvh-wrong.png'}: boxes entered per camera ray, "
+        f"inferno colours from black (0) to pale yellow ({top:.0f} or more)"
+    )
 
 
 if __name__ == "__main__":

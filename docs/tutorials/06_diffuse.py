@@ -55,9 +55,11 @@ def main() -> None:
     white = (1.0, 1.0, 1.0)
     print("Monte Carlo estimates of the reflectance of a white Lambertian surface (exactly 1),")
     print("1000 estimates of 16 samples each:")
-    for name, material in [("uniform, pdf 1/(2 pi)", Diffuse(white, sampling="uniform")),
-                           ("cosine, pdf cos/pi", Diffuse(white, sampling="cosine")),
-                           ("uniform, pdf 1/(4 pi) (wrong)", SpherePdf(white))]:
+    for name, material in [
+        ("uniform, pdf 1/(2 pi)", Diffuse(white, sampling="uniform")),
+        ("cosine, pdf cos/pi", Diffuse(white, sampling="cosine")),
+        ("uniform, pdf 1/(4 pi) (wrong)", SpherePdf(white)),
+    ]:
         estimates = reflectance_estimates(material, 16, 1000, rng)
         print(f"  {name:30} mean {estimates.mean():.4f}  standard deviation {estimates.std():.4f}")
     print("cosine sampling has no noise at all here: f cos / pdf = albedo for every sample")
@@ -69,8 +71,10 @@ def main() -> None:
     options = dict(spp=args.spp, res=args.res, workers=1, max_depth=8)
     right_image = ptlab.render(scene, **options)
     wrong_image = ptlab.render(wrong, **options)
-    print(f"mean brightness: library {right_image.mean():.4f}, pdf off by 2 "
-          f"{wrong_image.mean():.4f} ({wrong_image.mean() / right_image.mean():.2f}x)")
+    print(
+        f"mean brightness: library {right_image.mean():.4f}, pdf off by 2 "
+        f"{wrong_image.mean():.4f} ({wrong_image.mean() / right_image.mean():.2f}x)"
+    )
     write_image(out / "diffuse.png", right_image)
     write_image(out / "diffuse-wrong.png", wrong_image)
     print(f"wrote {out / 'diffuse.png'} and {out / 'diffuse-wrong.png'}")

@@ -80,17 +80,24 @@ def main() -> None:
 
     cornell = ptlab.load_scene("cornell-box")
     light = cornell.materials[cornell.material_names.index("light")].emission
-    print(f"The Cornell box, {args.res} x {args.res}, {args.spp} spp, rr 0.8 (the light's Le is "
-          f"{np.round(light, 1)}):")
-    names = {None: "path-tracing.png", "black light": "path-tracing-black-light.png",
-             "double counting": "path-tracing-double-counting.png",
-             "no shadow epsilon": "path-tracing-no-epsilon.png"}
+    print(
+        f"The Cornell box, {args.res} x {args.res}, {args.spp} spp, rr 0.8 (the light's Le is "
+        f"{np.round(light, 1)}):"
+    )
+    names = {
+        None: "path-tracing.png",
+        "black light": "path-tracing-black-light.png",
+        "double counting": "path-tracing-double-counting.png",
+        "no shadow epsilon": "path-tracing-no-epsilon.png",
+    }
     right = None
     for mistake, name in names.items():
         image = render(cornell, mistake, spp=args.spp, res=args.res, rr=0.8, seed=0)
         right = image if mistake is None else right
-        print(f"  {mistake or 'library':18} brightest pixel {image.max():7.2f}, mean "
-              f"{image.mean():.4f} ({image.mean() / right.mean():.2f}x the library's)")
+        print(
+            f"  {mistake or 'library':18} brightest pixel {image.max():7.2f}, mean "
+            f"{image.mean():.4f} ({image.mean() / right.mean():.2f}x the library's)"
+        )
         write_image(out / name, image)
     print(f"wrote {', '.join(str(out / name) for name in names.values())}")
 

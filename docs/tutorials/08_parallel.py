@@ -40,23 +40,24 @@ def render_tile(setup: RenderSetup, tile, spp: int, per_worker_rng: bool):
         _accelerator[setup.token] = make_accelerator(setup.scene.triangles, setup.backend)
     if per_worker_rng:
         # The mistake: whatever tile it is, the numbers depend on this process (its pid).
-        setup = dataclasses.replace(setup, seed=os.getpid(),
-                                    sampler=make_sampler("sobol", os.getpid()))
+        setup = dataclasses.replace(setup, seed=os.getpid(), sampler=make_sampler("sobol", os.getpid()))
     return tile, run_job(setup, Job(tile, 0, spp), _accelerator[setup.token]).sums, os.getpid()
 
 
 def render_parallel(scene, spp: int, res: int, workers: int, per_worker_rng: bool = False):
     """(image, {tile index: pid}) rendered on a pool of ``workers`` processes, 32 x 32 tiles."""
-    setup = RenderSetup(scene=scene, backend=resolve_backend("auto"), width=res, height=res,
-                        seed=1, settings=PathSettings())
+    setup = RenderSetup(
+        scene=scene, backend=resolve_backend("auto"), width=res, height=res, seed=1, settings=PathSettings()
+    )
     sums = np.zeros((res, res, 3))
     pids = {}
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver")) as pool:
-        futures = [pool.submit(render_tile, setup, tile, spp, per_worker_rng)
-                   for tile in make_tiles(res, res, 32)]
-        for future in as_completed(futures):       # in whatever order the tiles finish
+        futures = [
+            pool.submit(render_tile, setup, tile, spp, per_worker_rng) for tile in make_tiles(res, res, 32)
+        ]
+        for future in as_completed(futures):  # in whatever order the tiles finish
             tile, tile_sums, pid = future.result()
-            sums[tile.y0:tile.y1, tile.x0:tile.x1] += tile_sums    # only the main process writes
+            sums[tile.y0 : tile.y1, tile.x0 : tile.x1] += tile_sums  # only the main process writes
             pids[tile.index] = pid
     return (sums / spp).astype(np.float32), pids
 
@@ -77,32 +78,45 @@ def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=16)
     scene = ptlab.load_scene("cornell-box")
     tiles = make_tiles(args.res, args.res, 32)
-    print(f"{args.res} x {args.res} pixels in {len(tiles)} tiles of at most 32 x 32, "
-          f"{args.spp} samples per pixel")
+    print(
+        f"{args.res} x {args.res} pixels in {len(tiles)} tiles of at most 32 x 32, "
+        f"{args.spp} samples per pixel"
+    )
 
     images = {}
     for workers in (1, 2):
         start = time.perf_counter()
         images[workers], pids = render_parallel(scene, args.spp, args.res, workers)
         counts = {pid: list(pids.values()).count(pid) for pid in sorted(set(pids.values()))}
-        print(f"  {workers} worker(s): {time.perf_counter() - start:.1f} s, tiles per process "
-              f"{list(counts.values())}")
-    print(f"the render's sampler: 1 and 2 workers give the same image bit for bit: "
-          f"{np.array_equal(images[1], images[2])}")
-    library = ptlab.render_result(scene, spp=args.spp, res=args.res, seed=1, workers=1,
-                                  tile_size=32, spp_per_pass=args.spp).image
-    print(f"                    and it is ptlab.render's image (seed 1, 32 x 32 tiles): "
-          f"{np.array_equal(images[2], library)}")
+        print(
+            f"  {workers} worker(s): {time.perf_counter() - start:.1f} s, tiles per process "
+            f"{list(counts.values())}"
+        )
+    print(
+        f"the render's sampler: 1 and 2 workers give the same image bit for bit: "
+        f"{np.array_equal(images[1], images[2])}"
+    )
+    library = ptlab.render_result(
+        scene, spp=args.spp, res=args.res, seed=1, workers=1, tile_size=32, spp_per_pass=args.spp
+    ).image
+    print(
+        f"                    and it is ptlab.render's image (seed 1, 32 x 32 tiles): "
+        f"{np.array_equal(images[2], library)}"
+    )
     write_image(out / "parallel-tiles.png", tiles_picture(images[2], pids, args.res))
 
-    wrong = {workers: render_parallel(scene, args.spp, args.res, workers, per_worker_rng=True)[0]
-             for workers in (1, 2)}
+    wrong = {
+        workers: render_parallel(scene, args.spp, args.res, workers, per_worker_rng=True)[0]
+        for workers in (1, 2)
+    }
     differ = np.any(wrong[1] != wrong[2], axis=2)
     print(f"a sampler per worker: 1 and 2 workers differ in {differ.mean():.0%} of the pixels")
     difference = np.abs(wrong[1] - wrong[2]).mean(axis=2)
     write_image(out / "parallel-wrong.png", np.repeat(np.clip(difference, 0, 1)[..., None], 3, axis=2))
-    print(f"wrote {out / 'parallel-tiles.png'} (tiles tinted by process) and "
-          f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with a sampler per worker)")
+    print(
+        f"wrote {out / 'parallel-tiles.png'} (tiles tinted by process) and "
+        f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with a sampler per worker)"
+    )
 
 
 if __name__ == "__main__":

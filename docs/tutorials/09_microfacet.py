@@ -51,7 +51,7 @@ class HalfVectorPdf(Material):
     def pdf(self, wo, wi, n):
         h = normalize(wo + wi)
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
-        return above * D(dot(h, n), self.alpha) * dot(h, n)     # / (4 |wo . h|) forgotten
+        return above * D(dot(h, n), self.alpha) * dot(h, n)  # / (4 |wo . h|) forgotten
 
 
 def main() -> None:
@@ -60,27 +60,33 @@ def main() -> None:
     mu = 1 - np.concatenate([[0.0], np.geomspace(1e-14, 1.0, 20001)])
     for alpha in (0.04, 0.25, 1.0):
         total = np.trapezoid(D(mu, alpha) * mu * 2 * math.pi, 1 - mu)
-        print(f"alpha {alpha:4}: integral of D cos over the hemisphere {total:.5f}, "
-              f"D(n) = 1/(pi alpha^2) = {D(np.array([1.0]), alpha)[0]:9.3f}, "
-              f"G1 at 0/60/85/89.9 degrees: "
-              + " ".join(f"{G1(np.cos(np.radians([d])), alpha)[0]:.3f}" for d in (0, 60, 85, 89.9)))
+        print(
+            f"alpha {alpha:4}: integral of D cos over the hemisphere {total:.5f}, "
+            f"D(n) = 1/(pi alpha^2) = {D(np.array([1.0]), alpha)[0]:9.3f}, "
+            f"G1 at 0/60/85/89.9 degrees: "
+            + " ".join(f"{G1(np.cos(np.radians([d])), alpha)[0]:.3f}" for d in (0, 60, 85, 89.9))
+        )
 
     scene = metals_scene()
     print(f"the metals: {', '.join(repr(m) for m in scene.materials if isinstance(m, Microfacet))}")
     options = dict(spp=args.spp, res=args.res, workers=1)
     pictures = {
         "microfacet-hemisphere.png": replace_materials(
-            scene, lambda m: m.with_sampling("hemisphere") if isinstance(m, Microfacet) else None),
+            scene, lambda m: m.with_sampling("hemisphere") if isinstance(m, Microfacet) else None
+        ),
         "microfacet.png": scene,
         "microfacet-wrong.png": replace_materials(
-            scene, lambda m: HalfVectorPdf(m) if isinstance(m, Microfacet) else None),
+            scene, lambda m: HalfVectorPdf(m) if isinstance(m, Microfacet) else None
+        ),
     }
     for name, variant in pictures.items():
         image = ptlab.render(variant, **options)
         write_image(out / name, image)
         print(f"wrote {out / name}: mean brightness {image.mean():.4f}")
-    print("same spp: the hemisphere picture is noisier on the sharp gold sphere; the wrong one is "
-          "darker in the reflections, where the pdf 4 |wo . h| times too big shrinks the weights")
+    print(
+        "same spp: the hemisphere picture is noisier on the sharp gold sphere; the wrong one is "
+        "darker in the reflections, where the pdf 4 |wo . h| times too big shrinks the weights"
+    )
 
 
 if __name__ == "__main__":

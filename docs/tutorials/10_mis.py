@@ -33,10 +33,15 @@ def main() -> None:
     pdf_light = np.array([0.1, 1.0, 5.0, 400.0], dtype=np.float32)
     pdf_bsdf = np.array([40.0, 1.0, 1.0, 2.0], dtype=np.float32)
     print("  pdf_light  pdf_bsdf   power: w_light  w_bsdf   balance: w_light  w_bsdf")
-    for light, bsdf, *w in zip(pdf_light, pdf_bsdf, mis_weight(pdf_light, pdf_bsdf),
-                               mis_weight(pdf_bsdf, pdf_light),
-                               mis_weight(pdf_light, pdf_bsdf, "balance"),
-                               mis_weight(pdf_bsdf, pdf_light, "balance"), strict=True):
+    for light, bsdf, *w in zip(
+        pdf_light,
+        pdf_bsdf,
+        mis_weight(pdf_light, pdf_bsdf),
+        mis_weight(pdf_bsdf, pdf_light),
+        mis_weight(pdf_light, pdf_bsdf, "balance"),
+        mis_weight(pdf_bsdf, pdf_light, "balance"),
+        strict=True,
+    ):
         print(f"  {light:9g} {bsdf:9g}   {w[0]:13.4f} {w[1]:7.4f}   {w[2]:15.4f} {w[3]:7.4f}")
     print("each pair of weights adds up to 1: every light path is counted once in all")
 
@@ -45,13 +50,17 @@ def main() -> None:
     for strategy, name in (("nee", "mis-nee.png"), ("bsdf", "mis-bsdf.png"), ("mis", "mis.png")):
         result = ptlab.render_result(scene, strategy=strategy, **options)
         write_image(out / name, result.image)
-        print(f"wrote {out / name}: strategy {strategy!r}, {result.seconds:.1f} s, "
-              f"mean brightness {result.image.mean():.4f}")
+        print(
+            f"wrote {out / name}: strategy {strategy!r}, {result.seconds:.1f} s, "
+            f"mean brightness {result.image.mean():.4f}"
+        )
     with plugged(ptlab.integrators.path, mis_weight=weight_one):
         image = ptlab.render(scene, strategy="mis", workers=1, **options)  # in this process
     write_image(out / "mis-wrong.png", image)
-    print(f"wrote {out / 'mis-wrong.png'}: both strategies weighted 1, mean brightness "
-          f"{image.mean():.4f} (too bright: double counting)")
+    print(
+        f"wrote {out / 'mis-wrong.png'}: both strategies weighted 1, mean brightness "
+        f"{image.mean():.4f} (too bright: double counting)"
+    )
 
 
 if __name__ == "__main__":

@@ -36,6 +36,8 @@ def make_accelerator(triangles: np.ndarray, backend: str = "auto") -> Accelerato
     backend = resolve_backend(backend)
     if backend == "embree":
         from ptlab.accel.embree import EmbreeAccelerator
+
         return EmbreeAccelerator(triangles)
     from ptlab.accel.numpy_bvh import NumpyBVH
+
     return NumpyBVH(triangles)

@@ -44,18 +44,21 @@ class Hits:
 class Accelerator(Protocol):
     """Answers ray queries against a fixed set of triangles (see module docstring)."""
 
-    name: str   # the backend's name, e.g. "embree"
+    name: str  # the backend's name, e.g. "embree"
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray,
-                  tmin: float | np.ndarray = 0.0,
-                  tmax: float | np.ndarray = np.inf) -> Hits:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        tmin: float | np.ndarray = 0.0,
+        tmax: float | np.ndarray = np.inf,
+    ) -> Hits:
         """Closest hit with ``tmin < t < tmax`` for each ray.
 
         origins, dirs: (N, 3) float arrays; tmin, tmax: scalars or (N,) arrays.
         """
         ...
 
-    def occluded(self, origins: np.ndarray, dirs: np.ndarray,
-                 tmax: float | np.ndarray) -> np.ndarray:
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, tmax: float | np.ndarray) -> np.ndarray:
         """(N,) bool, True where some triangle lies at ``0 < t < tmax`` along the ray."""
         ...

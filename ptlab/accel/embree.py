@@ -53,9 +53,13 @@ class EmbreeAccelerator:
         # graders send accelerators to the process running a student's code) builds it again.
         return (EmbreeAccelerator, (self._triangles,))
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray,
-                  tmin: float | np.ndarray = 0.0,
-                  tmax: float | np.ndarray = np.inf) -> Hits:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        tmin: float | np.ndarray = 0.0,
+        tmax: float | np.ndarray = np.inf,
+    ) -> Hits:
         origins, dirs = _as_f32(origins), _as_f32(dirs)
         n = len(origins)
         shifted = not (np.isscalar(tmin) and tmin == 0.0)
@@ -69,13 +73,11 @@ class EmbreeAccelerator:
         t = out["tfar"]
         if shifted:
             t = t + tmin
-        if missed.any():       # (none do in a closed room: spare the masked write)
+        if missed.any():  # (none do in a closed room: spare the masked write)
             t[missed] = np.inf
         return Hits(t=t, prim=prim, u=out["u"], v=out["v"])
 
-    def occluded(self, origins: np.ndarray, dirs: np.ndarray,
-                 tmax: float | np.ndarray) -> np.ndarray:
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, tmax: float | np.ndarray) -> np.ndarray:
         origins, dirs = _as_f32(origins), _as_f32(dirs)
-        result = self._scene.run(origins, dirs, dists=_far_distances(tmax, len(origins)),
-                                 query="OCCLUDED")
+        result = self._scene.run(origins, dirs, dists=_far_distances(tmax, len(origins)), query="OCCLUDED")
         return result == 0

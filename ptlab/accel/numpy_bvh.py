@@ -58,9 +58,14 @@ SMALL_SCENE = 64
 _GAMMA3 = 3 * np.finfo(np.float32).eps / (1 - 3 * np.finfo(np.float32).eps)
 
 
-def slab_test(origins: np.ndarray, inv_dirs: np.ndarray, box_min: np.ndarray,
-              box_max: np.ndarray, tmin: float | np.ndarray,
-              tmax: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def slab_test(
+    origins: np.ndarray,
+    inv_dirs: np.ndarray,
+    box_min: np.ndarray,
+    box_max: np.ndarray,
+    tmin: float | np.ndarray,
+    tmax: float | np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
     """Ray against axis-aligned box, one box per ray (Williams et al. 2005; pbrt-v4 6.1.2).
 
     A box is the intersection of three slabs ``box_min[k] <= x[k] <= box_max[k]``; the
@@ -126,8 +131,9 @@ def _half_area(lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
     return ext[..., 0] * ext[..., 1] + ext[..., 1] * ext[..., 2] + ext[..., 2] * ext[..., 0]
 
 
-def _bin_bounds(key: np.ndarray, lo: np.ndarray, hi: np.ndarray,
-                shape: tuple[int, ...]) -> tuple[np.ndarray, np.ndarray]:
+def _bin_bounds(
+    key: np.ndarray, lo: np.ndarray, hi: np.ndarray, shape: tuple[int, ...]
+) -> tuple[np.ndarray, np.ndarray]:
     """The bounds of the points in each bin: two new arrays of ``shape`` (..., 3 axes,
     3 coordinates), empty (``inf``, ``-inf``) but where the flat row ``key[p, a]`` (that of
     point p's bin along axis a) takes the minimum of the (P, 3) ``lo[p]`` and the maximum of
@@ -156,9 +162,14 @@ def _running(op: np.ufunc, a: np.ndarray) -> np.ndarray:
     return out
 
 
-def split_costs(bin_count: np.ndarray, bin_lo: np.ndarray, bin_hi: np.ndarray,
-                node_lo: np.ndarray, node_hi: np.ndarray,
-                traversal_cost: float = 1.0) -> np.ndarray:
+def split_costs(
+    bin_count: np.ndarray,
+    bin_lo: np.ndarray,
+    bin_hi: np.ndarray,
+    node_lo: np.ndarray,
+    node_hi: np.ndarray,
+    traversal_cost: float = 1.0,
+) -> np.ndarray:
     """SAH cost of every candidate split of K nodes binned into B bins along each axis.
 
     Split plane i (0 <= i < B - 1) of an axis puts bins 0..i on the left and i+1..B-1 on
@@ -181,8 +192,9 @@ def split_costs(bin_count: np.ndarray, bin_lo: np.ndarray, bin_hi: np.ndarray,
     left_n = np.cumsum(bin_count, axis=0)[:-1]
     right_n = bin_count.sum(axis=0) - left_n
     left_a = _half_area(_running(np.minimum, bin_lo)[:-1], _running(np.maximum, bin_hi)[:-1])
-    right_a = _half_area(_running(np.minimum, bin_lo[::-1])[-2::-1],
-                         _running(np.maximum, bin_hi[::-1])[-2::-1])
+    right_a = _half_area(
+        _running(np.minimum, bin_lo[::-1])[-2::-1], _running(np.maximum, bin_hi[::-1])[-2::-1]
+    )
     # Half areas: the factor 2 cancels in the ratio. `tiny` keeps a degenerate node finite.
     node_a = np.maximum(_half_area(node_lo, node_hi), np.finfo(float).tiny)
     cost = traversal_cost + (left_n * left_a + right_n * right_a) / node_a[:, None]
@@ -190,8 +202,9 @@ def split_costs(bin_count: np.ndarray, bin_lo: np.ndarray, bin_hi: np.ndarray,
     return cost
 
 
-def best_split(cost: np.ndarray, size: np.ndarray,
-               max_leaf_size: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def best_split(
+    cost: np.ndarray, size: np.ndarray, max_leaf_size: int
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The cheapest split of each node, and whether the node should rather be a leaf.
 
     A leaf of N triangles costs N triangle tests; a node is made a leaf when it may be
@@ -209,15 +222,16 @@ def best_split(cost: np.ndarray, size: np.ndarray,
         make_leaf: (K,) bool, True where the node becomes a leaf.
     """
     k = cost.shape[1]
-    flat = cost.transpose(1, 0, 2).reshape(k, -1)          # (node, plane * 3 + axis)
+    flat = cost.transpose(1, 0, 2).reshape(k, -1)  # (node, plane * 3 + axis)
     best = flat.argmin(axis=1)
     split_bin, split_axis = np.divmod(best, 3)
     make_leaf = (size <= max_leaf_size) & (flat[np.arange(k), best] >= size)
     return split_bin, split_axis, make_leaf
 
 
-def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
-              traversal_cost: float = 1.0) -> FlatBVH:
+def build_bvh(
+    triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12, traversal_cost: float = 1.0
+) -> FlatBVH:
     """Top-down binned-SAH BVH (pbrt-v4 7.3.2; Wald 2007), one tree level at a time.
 
     For a node with N triangles and half surface area A, splitting into (N_L, A_L) and
@@ -242,7 +256,7 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
         raise ValueError("a BVH needs at least one triangle")
     n_tris = len(tris)
     order = np.empty(n_tris, np.intp)
-    levels = []                                  # per level: the arrays of its nodes
+    levels = []  # per level: the arrays of its nodes
     # The nodes of the level being built: where their triangles will sit in `order`.
     start, size = np.array([0]), np.array([n_tris])
     # Their triangles, node after node: index, bounds and centroid. (Kept in this order,
@@ -253,7 +267,7 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
     next_id = 1
     while start.size:
         k = start.size
-        offset = np.cumsum(size) - size          # where each node's run begins in `tri`
+        offset = np.cumsum(size) - size  # where each node's run begins in `tri`
 
         # Node bounds and centroid bounds: min/max over each node's run of triangles.
         box_lo = np.minimum.reduceat(tri_lo, offset)
@@ -266,15 +280,17 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
         n_bins = max(2, min(max_bins, size.max()))
         extent = c_hi - c_lo
         scale = np.divide(n_bins, extent, out=np.zeros_like(extent), where=extent > 0)
-        bins = np.minimum(((centroid - np.repeat(c_lo, size, axis=0))
-                           * np.repeat(scale, size, axis=0)).astype(np.intp), n_bins - 1)
+        bins = np.minimum(
+            ((centroid - np.repeat(c_lo, size, axis=0)) * np.repeat(scale, size, axis=0)).astype(np.intp),
+            n_bins - 1,
+        )
 
         split_bin, split_axis, is_leaf, median = _choose_splits(
-            bins, n_bins, tri_lo, tri_hi, box_lo, box_hi, size, offset, max_leaf_size,
-            traversal_cost)
+            bins, n_bins, tri_lo, tri_hi, box_lo, box_hi, size, offset, max_leaf_size, traversal_cost
+        )
 
         # Partition each splitting node's run: left side first (stable sort by side).
-        node = np.repeat(np.arange(k), size)     # node of each triangle of this level
+        node = np.repeat(np.arange(k), size)  # node of each triangle of this level
         go_right = bins[np.arange(len(tri)), split_axis[node]] > split_bin[node]
         rank = np.arange(len(tri)) - offset[node]
         go_right = np.where(median[node], rank >= size[node] // 2, go_right)
@@ -285,15 +301,15 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
         in_leaf = is_leaf[node]
         order[(rank + start[node])[in_leaf]] = tri[in_leaf]
         sorted_ = sorted_[~in_leaf[sorted_]]
-        tri, tri_lo, tri_hi, centroid = (a.take(sorted_, axis=0)
-                                         for a in (tri, tri_lo, tri_hi, centroid))
+        tri, tri_lo, tri_hi, centroid = (a.take(sorted_, axis=0) for a in (tri, tri_lo, tri_hi, centroid))
 
         inner = np.flatnonzero(~is_leaf)
         child = np.full(k, -1)
         child[inner] = next_id + 2 * np.arange(inner.size)
         next_id += 2 * inner.size
-        levels.append((box_lo, box_hi, child, split_axis,
-                       np.where(is_leaf, start, 0), np.where(is_leaf, size, 0)))
+        levels.append(
+            (box_lo, box_hi, child, split_axis, np.where(is_leaf, start, 0), np.where(is_leaf, size, 0))
+        )
 
         # The children, in id order: left and right of each splitting node.
         n_left = size[inner] - n_right[inner]
@@ -301,8 +317,16 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
         size = np.stack([n_left, n_right[inner]], axis=1).ravel()
 
     box_min, box_max, child, axis, first, count = (np.concatenate(a) for a in zip(*levels, strict=True))
-    return FlatBVH(box_min=box_min, box_max=box_max, child=child, axis=axis,
-                   first=first, count=count, order=order, depth=len(levels))
+    return FlatBVH(
+        box_min=box_min,
+        box_max=box_max,
+        child=child,
+        axis=axis,
+        first=first,
+        count=count,
+        order=order,
+        depth=len(levels),
+    )
 
 
 #: The most (bin, node) cells binned at once, per triangle of the level: a deep level has
@@ -311,10 +335,18 @@ def build_bvh(triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12,
 CELLS_PER_TRIANGLE = 0.25
 
 
-def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np.ndarray,
-                   box_lo: np.ndarray, box_hi: np.ndarray, size: np.ndarray,
-                   offset: np.ndarray, max_leaf_size: int, traversal_cost: float
-                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def _choose_splits(
+    bins: np.ndarray,
+    n_bins: int,
+    tri_lo: np.ndarray,
+    tri_hi: np.ndarray,
+    box_lo: np.ndarray,
+    box_hi: np.ndarray,
+    size: np.ndarray,
+    offset: np.ndarray,
+    max_leaf_size: int,
+    traversal_cost: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The split of each of K nodes of a level (``split_costs``, ``best_split``), from its
     triangles' (P, 3) bins along each axis and (P, 3) bounds, node after node (node k's
     from ``offset[k]``, ``size[k]`` of them), and the nodes' (K, 3) bounds.
@@ -326,7 +358,7 @@ def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np
     k = len(size)
     split_bin, split_axis = np.empty(k, np.intp), np.empty(k, np.intp)
     is_leaf, median = np.empty(k, bool), np.empty(k, bool)
-    group = max(1, int(CELLS_PER_TRIANGLE * len(bins)) // n_bins)   # nodes binned at once
+    group = max(1, int(CELLS_PER_TRIANGLE * len(bins)) // n_bins)  # nodes binned at once
     for first in range(0, k, group):
         nodes = slice(first, min(first + group, k))
         m = nodes.stop - first
@@ -334,17 +366,15 @@ def _choose_splits(bins: np.ndarray, n_bins: int, tri_lo: np.ndarray, tri_hi: np
         node = np.repeat(np.arange(m), size[nodes])
         # Per (bin, node, axis): triangle count and bounds of its triangles. Bins come
         # first so that the sweeps in split_costs run over contiguous (node, axis) slices.
-        key = (bins[tris] * m + node[:, None]) * 3 + np.arange(3)       # (P, 3)
+        key = (bins[tris] * m + node[:, None]) * 3 + np.arange(3)  # (P, 3)
         bin_count = np.bincount(key.ravel(), minlength=n_bins * m * 3).reshape(n_bins, m, 3)
         # (float32: these only rank the candidate splits, and half the bytes build faster)
-        bin_lo, bin_hi = _bin_bounds(key, tri_lo[tris].astype(np.float32),
-                                     tri_hi[tris].astype(np.float32), (n_bins, m, 3, 3))
-        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo[nodes], box_hi[nodes],
-                           traversal_cost)
-        split_bin[nodes], split_axis[nodes], is_leaf[nodes] = best_split(
-            cost, size[nodes], max_leaf_size)
-        median[nodes] = ~is_leaf[nodes] & np.isinf(
-            cost[split_bin[nodes], np.arange(m), split_axis[nodes]])
+        bin_lo, bin_hi = _bin_bounds(
+            key, tri_lo[tris].astype(np.float32), tri_hi[tris].astype(np.float32), (n_bins, m, 3, 3)
+        )
+        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo[nodes], box_hi[nodes], traversal_cost)
+        split_bin[nodes], split_axis[nodes], is_leaf[nodes] = best_split(cost, size[nodes], max_leaf_size)
+        median[nodes] = ~is_leaf[nodes] & np.isinf(cost[split_bin[nodes], np.arange(m), split_axis[nodes]])
     split_axis[median] = 0
     return split_bin, split_axis, is_leaf, median
 
@@ -371,13 +401,16 @@ class NumpyBVH:
 
     name = "numpy"
 
-    def __init__(self, triangles: np.ndarray, max_leaf_size: int = 4,
-                 traversal_cost: float = 1.0, every_triangle: bool | None = None):
+    def __init__(
+        self,
+        triangles: np.ndarray,
+        max_leaf_size: int = 4,
+        traversal_cost: float = 1.0,
+        every_triangle: bool | None = None,
+    ):
         tris = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
-        self.bvh = bvh = build_bvh(tris, max_leaf_size=max_leaf_size,
-                                   traversal_cost=traversal_cost)
-        self.every_triangle = (len(tris) <= SMALL_SCENE if every_triangle is None
-                               else bool(every_triangle))
+        self.bvh = bvh = build_bvh(tris, max_leaf_size=max_leaf_size, traversal_cost=traversal_cost)
+        self.every_triangle = len(tris) <= SMALL_SCENE if every_triangle is None else bool(every_triangle)
         # For testing every triangle: each one's index, v0, edges and plane (normal . x =
         # offset), largest first: a ray that finds a near hit early has fewer planes ahead
         # of it to pass.
@@ -387,8 +420,7 @@ class NumpyBVH:
             normals = np.cross(tris32[:, 1] - tris32[:, 0], tris32[:, 2] - tris32[:, 0])
             for k in np.argsort(-np.linalg.norm(normals, axis=1), kind="stable"):
                 v0, v1, v2 = tris32[k]
-                self._triangles.append((int(k), v0, v1 - v0, v2 - v0, normals[k],
-                                        float(normals[k] @ v0)))
+                self._triangles.append((int(k), v0, v1 - v0, v2 - v0, normals[k], float(normals[k] @ v0)))
         # Everything the traversal reads is float32, like the rays, and stored
         # component-major, (3, M): see `_traverse`.
         self._box_min = _component_major(bvh.box_min)
@@ -400,19 +432,28 @@ class NumpyBVH:
         self._e1 = _component_major(tris[:, 1] - tris[:, 0])
         self._e2 = _component_major(tris[:, 2] - tris[:, 0])
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray,
-                  tmin: float | np.ndarray = 0.0,
-                  tmax: float | np.ndarray = np.inf) -> Hits:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        tmin: float | np.ndarray = 0.0,
+        tmax: float | np.ndarray = np.inf,
+    ) -> Hits:
         """Closest hit with ``tmin < t < tmax`` for each ray; see ``ptlab.accel.base``."""
         return self._traverse(origins, dirs, tmin, tmax, any_hit=False)
 
-    def occluded(self, origins: np.ndarray, dirs: np.ndarray,
-                 tmax: float | np.ndarray) -> np.ndarray:
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, tmax: float | np.ndarray) -> np.ndarray:
         """(N,) bool, True where a triangle lies at ``0 < t < tmax``; see ``base``."""
         return self._traverse(origins, dirs, 0.0, tmax, any_hit=True).hit
 
-    def _traverse(self, origins: np.ndarray, dirs: np.ndarray, tmin: float | np.ndarray,
-                  tmax: float | np.ndarray, any_hit: bool) -> Hits:
+    def _traverse(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        tmin: float | np.ndarray,
+        tmax: float | np.ndarray,
+        any_hit: bool,
+    ) -> Hits:
         """Walk the tree with all rays at once; ``any_hit`` stops a ray at its first hit.
 
         The state of the unfinished rays is kept in compacted arrays, column j for ray
@@ -430,30 +471,39 @@ class NumpyBVH:
         o = _component_major(origins)
         d = _component_major(dirs)
         if o.shape != d.shape or o.shape[0] != 3:
-            raise ValueError(f"origins and dirs must both be (N, 3), not {o.T.shape} "
-                             f"and {d.T.shape}")
+            raise ValueError(f"origins and dirs must both be (N, 3), not {o.T.shape} and {d.T.shape}")
         n = o.shape[1]
         t_lo = np.broadcast_to(np.asarray(tmin, dtype=np.float32), n).copy()
         t_best = np.broadcast_to(np.asarray(tmax, dtype=np.float32), n).copy()
-        hits = Hits(t=np.full(n, np.inf, np.float32), prim=np.full(n, -1, np.intp),
-                    u=np.zeros(n, np.float32), v=np.zeros(n, np.float32))
+        hits = Hits(
+            t=np.full(n, np.inf, np.float32),
+            prim=np.full(n, -1, np.intp),
+            u=np.zeros(n, np.float32),
+            v=np.zeros(n, np.float32),
+        )
         if self.every_triangle:
             self._test_every_triangle(o, d, t_lo, t_best, any_hit, hits)
             return hits
         with np.errstate(divide="ignore"):
-            inv_d = 1 / d                      # ±inf for zero components: see slab_test
+            inv_d = 1 / d  # ±inf for zero components: see slab_test
 
         ray = np.arange(n)
         # stack[k, j]: the k-th node on ray j's stack; every ray starts at the root, 0.
-        stack = np.zeros((self.bvh.depth + 1, n), np.int32)   # it never holds more
-        sp = np.zeros(n, np.intp)              # stack pointer: where the top node is
+        stack = np.zeros((self.bvh.depth + 1, n), np.int32)  # it never holds more
+        sp = np.zeros(n, np.intp)  # stack pointer: where the top node is
         while ray.size:
             # Pop. A ray that is done pops junk (index clipped), but cannot hit it (below).
             col = np.arange(ray.size)
             node = stack.take(sp * ray.size + col, mode="clip")
             sp -= 1
-            hit, _ = slab_test(o.T, inv_d.T, self._box_min.take(node, axis=1).T,
-                               self._box_max.take(node, axis=1).T, t_lo, t_best)
+            hit, _ = slab_test(
+                o.T,
+                inv_d.T,
+                self._box_min.take(node, axis=1).T,
+                self._box_max.take(node, axis=1).T,
+                t_lo,
+                t_best,
+            )
             at_leaf = hit & self._is_leaf.take(node)
             j = np.flatnonzero(hit ^ at_leaf)  # rays at an inner node
             if j.size:
@@ -469,16 +519,17 @@ class NumpyBVH:
                 # Compact. compress, not a[:, keep]: several times faster.
                 keep = ~done
                 ray, o, d, inv_d, t_lo, t_best, stack, sp = (
-                    a.compress(keep, axis=-1)
-                    for a in (ray, o, d, inv_d, t_lo, t_best, stack, sp))
+                    a.compress(keep, axis=-1) for a in (ray, o, d, inv_d, t_lo, t_best, stack, sp)
+                )
             elif n_done:
                 # Too few done to be worth compacting: make them miss every box.
                 k = np.flatnonzero(done)
                 t_lo[k], t_best[k] = np.inf, -np.inf
         return hits
 
-    def _test_every_triangle(self, o: np.ndarray, d: np.ndarray, t_lo: np.ndarray,
-                             t_best: np.ndarray, any_hit: bool, hits: Hits) -> None:
+    def _test_every_triangle(
+        self, o: np.ndarray, d: np.ndarray, t_lo: np.ndarray, t_best: np.ndarray, any_hit: bool, hits: Hits
+    ) -> None:
         """``_traverse`` without the tree: every ray against every triangle, one triangle
         at a time, each ray keeping its nearest hit with ``t_lo < t < t_best`` (the first
         of equal ones, largest triangle first), written into ``hits``.
@@ -494,10 +545,10 @@ class NumpyBVH:
         ox, oy, oz = o
         dx, dy, dz = d
         for k, v0, e1, e2, (nx, ny, nz), offset in self._triangles:
-            with np.errstate(divide="ignore", invalid="ignore"):   # (rays in the plane)
-                along = dx * nx + dy * ny + dz * nz                # d . n = -det
+            with np.errstate(divide="ignore", invalid="ignore"):  # (rays in the plane)
+                along = dx * nx + dy * ny + dz * nz  # d . n = -det
                 t = (offset - (ox * nx + oy * ny + oz * nz)) / along
-            rows = np.flatnonzero((t > t_lo) & (t < t_best))       # (never NaN or inf)
+            rows = np.flatnonzero((t > t_lo) & (t < t_best))  # (never NaN or inf)
             if rows.size == 0:
                 continue
             w = cross(o.take(rows, axis=1).T - v0, d.take(rows, axis=1).T)
@@ -507,14 +558,22 @@ class NumpyBVH:
             rows = rows.compress(inside)
             hits.prim[rows] = k
             if any_hit:
-                t_best[rows] = -np.inf      # found (only hit or not matters): test no more
+                t_best[rows] = -np.inf  # found (only hit or not matters): test no more
                 continue
             t_best[rows] = hits.t[rows] = t.take(rows)
             hits.u[rows], hits.v[rows] = u.compress(inside), v.compress(inside)
 
-    def _intersect_leaf(self, j: np.ndarray, node: np.ndarray, o: np.ndarray,
-                        d: np.ndarray, t_lo: np.ndarray, t_best: np.ndarray,
-                        ray: np.ndarray, hits: Hits) -> np.ndarray:
+    def _intersect_leaf(
+        self,
+        j: np.ndarray,
+        node: np.ndarray,
+        o: np.ndarray,
+        d: np.ndarray,
+        t_lo: np.ndarray,
+        t_best: np.ndarray,
+        ray: np.ndarray,
+        hits: Hits,
+    ) -> np.ndarray:
         """Test rays ``j`` against the triangles of their leaf ``node``, keeping hits
         with ``t_lo < t < t_best``: ``t_best`` is lowered in place, ``hits`` filled in
         at ``ray[j]``. Returns (len(j),) bool: which rays found a hit.
@@ -523,13 +582,17 @@ class NumpyBVH:
         each ray keeps its nearest hit (the first of equal ones, in the leaf's order).
         """
         first, count = self.bvh.first.take(node), self.bvh.count.take(node)
-        start = np.cumsum(count) - count                 # where each ray's pairs begin
-        owner = np.repeat(np.arange(len(j)), count)      # the ray (index into j) of each pair
+        start = np.cumsum(count) - count  # where each ray's pairs begin
+        owner = np.repeat(np.arange(len(j)), count)  # the ray (index into j) of each pair
         tri = np.repeat(first - start, count) + np.arange(len(owner))
         rows = j.take(owner)
-        t, u, v = ray_triangle(o.take(rows, axis=1).T, d.take(rows, axis=1).T,
-                               self._v0.take(tri, axis=1).T, self._e1.take(tri, axis=1).T,
-                               self._e2.take(tri, axis=1).T)
+        t, u, v = ray_triangle(
+            o.take(rows, axis=1).T,
+            d.take(rows, axis=1).T,
+            self._v0.take(tri, axis=1).T,
+            self._e1.take(tri, axis=1).T,
+            self._e2.take(tri, axis=1).T,
+        )
         t = np.where((t > t_lo.take(rows)) & (t < t_best.take(rows)), t, np.float32(np.inf))
         nearest = np.minimum.reduceat(t, start)
         found = nearest < np.inf
@@ -544,22 +607,21 @@ class NumpyBVH:
         hits.prim[r] = self.bvh.order.take(tri.take(best))
         return found
 
-    def _push_children(self, j: np.ndarray, node: np.ndarray, d: np.ndarray,
-                       stack: np.ndarray, sp: np.ndarray) -> None:
+    def _push_children(
+        self, j: np.ndarray, node: np.ndarray, d: np.ndarray, stack: np.ndarray, sp: np.ndarray
+    ) -> None:
         """Push the two children of inner ``node`` on the stacks of rays ``j``: the far
         one first, so the near one (``child_order``) is popped next and its hits can
         cull the far one."""
         n = d.shape[1]
-        near, far = child_order(self.bvh.child.take(node), self.bvh.axis.take(node),
-                                d.take(j, axis=1).T)
+        near, far = child_order(self.bvh.child.take(node), self.bvh.axis.take(node), d.take(j, axis=1).T)
         top = sp.take(j) * n + j
         stack.put(top + n, far)
         stack.put(top + 2 * n, near)
         sp[j] += 2
 
 
-def child_order(first_child: np.ndarray, axis: np.ndarray,
-                dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def child_order(first_child: np.ndarray, axis: np.ndarray, dirs: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Which child of each inner node a ray meets first (pbrt-v4 7.3.5's ``dirIsNeg``).
 
     Child ``first_child`` holds the triangles on the low side of the split plane along
@@ -575,7 +637,7 @@ def child_order(first_child: np.ndarray, axis: np.ndarray,
     Returns:
         near, far: (J,) node indices, the child to visit first and the other one.
     """
-    backwards = dirs[np.arange(len(axis)), axis] < 0       # meets the high child first
+    backwards = dirs[np.arange(len(axis)), axis] < 0  # meets the high child first
     return first_child + backwards, first_child + ~backwards
 
 

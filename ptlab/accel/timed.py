@@ -35,16 +35,20 @@ class TimedAccelerator:
         with self._lock:
             self.seconds += time.perf_counter() - start
 
-    def intersect(self, origins: np.ndarray, dirs: np.ndarray,
-                  tmin: float | np.ndarray = 0.0, tmax: float | np.ndarray = np.inf) -> Hits:
+    def intersect(
+        self,
+        origins: np.ndarray,
+        dirs: np.ndarray,
+        tmin: float | np.ndarray = 0.0,
+        tmax: float | np.ndarray = np.inf,
+    ) -> Hits:
         start = time.perf_counter()
         try:
             return self.inner.intersect(origins, dirs, tmin, tmax)
         finally:
             self._add(start)
 
-    def occluded(self, origins: np.ndarray, dirs: np.ndarray,
-                 tmax: float | np.ndarray) -> np.ndarray:
+    def occluded(self, origins: np.ndarray, dirs: np.ndarray, tmax: float | np.ndarray) -> np.ndarray:
         start = time.perf_counter()
         try:
             return self.inner.occluded(origins, dirs, tmax)

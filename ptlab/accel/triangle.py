@@ -20,8 +20,9 @@ import numpy as np
 from ptlab.vectors import cross, dot
 
 
-def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
-                 e1: np.ndarray, e2: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def ray_triangle(
+    origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray, e1: np.ndarray, e2: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Möller-Trumbore intersection of rays with triangles, one triangle per ray.
 
     Args:
@@ -40,7 +41,7 @@ def ray_triangle(origins: np.ndarray, dirs: np.ndarray, v0: np.ndarray,
         u, v: (N,) barycentric coordinates of the hit (meaningless where ``t`` is inf).
     """
     pvec = cross(dirs, e2)
-    det = dot(e1, pvec)                 # = -d . (e1 x e2); 0 when the ray is parallel
+    det = dot(e1, pvec)  # = -d . (e1 x e2); 0 when the ray is parallel
     # det == 0 gives inf and NaN below; those rays are marked as misses explicitly.
     with np.errstate(divide="ignore", invalid="ignore"):
         inv_det = 1.0 / det

@@ -73,8 +73,13 @@ def find_work(folder: Path, chapter: Chapter) -> list[Work]:
         if entry.name.startswith((".", "_")):
             continue
         if entry.is_symlink():
-            found.append(Work(entry.stem if entry.suffix == ".py" else entry.name, None,
-                              f"{entry.name} is a symbolic link: hand in the files themselves"))
+            found.append(
+                Work(
+                    entry.stem if entry.suffix == ".py" else entry.name,
+                    None,
+                    f"{entry.name} is a symbolic link: hand in the files themselves",
+                )
+            )
         elif entry.is_file() and entry.suffix == ".py":
             found.append(Work(entry.stem, entry))
         elif entry.is_dir():
@@ -94,8 +99,11 @@ def _work_in_folder(folder: Path, chapter: Chapter) -> Work:
 
 
 def columns(chapter: Chapter) -> list[str]:
-    return (["student", "file", "score", "max_score"] + [c.name for c in chapter.checks]
-            + ["first_failure", "seconds"])
+    return (
+        ["student", "file", "score", "max_score"]
+        + [c.name for c in chapter.checks]
+        + ["first_failure", "seconds"]
+    )
 
 
 def read_rows(path: Path, chapter: Chapter) -> dict[str, dict]:
@@ -150,9 +158,13 @@ class Record:
     def vouched(self, in_csv: dict[str, dict], work: list[Work]) -> dict[str, dict]:
         """The rows of ``in_csv`` this record holds as they are, for submissions unchanged."""
         files = {safe_cell(w.student): w.file for w in work}
-        return {student: row for student, row in in_csv.items()
-                if self.rows.get(student) == row and student in files
-                and self.sha256.get(student) == _sha256(files[student])}
+        return {
+            student: row
+            for student, row in in_csv.items()
+            if self.rows.get(student) == row
+            and student in files
+            and self.sha256.get(student) == _sha256(files[student])
+        }
 
     def keep(self, rows: dict[str, dict], work: list[Work]) -> None:
         """Record ``rows`` (and nothing else) as written."""
@@ -175,27 +187,36 @@ def _sha256(file: Path | None) -> str:
         return ""
 
 
-def grade_all(chapter: Chapter, folder: Path, csv_path: Path, workers: int = 1,
-              timeout_scale: float = 1.0, progress: bool = False,
-              user: str | None = None) -> dict[str, dict]:
+def grade_all(
+    chapter: Chapter,
+    folder: Path,
+    csv_path: Path,
+    workers: int = 1,
+    timeout_scale: float = 1.0,
+    progress: bool = False,
+    user: str | None = None,
+) -> dict[str, dict]:
     """Grade every submission in ``folder`` the grader's record does not vouch for (see the
     module docstring); all rows by student. ``user``: whom the students' code runs as
     (``--student-user``)."""
-    student_user(user)          # (an unknown user, or one that cannot run ptlab: before anything)
+    student_user(user)  # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
     import_nothing_from_here()
     work = find_work(folder, chapter)
     record = Record(csv_path, chapter)
     rows = record.vouched(read_rows(csv_path, chapter), work)
-    write_rows(csv_path, chapter, rows)     # what the grader cannot vouch for goes at once
+    write_rows(csv_path, chapter, rows)  # what the grader cannot vouch for goes at once
     record.keep(rows, work)
     todo = [w for w in work if safe_cell(w.student) not in rows]
     limit = overall_limit(chapter, timeout_scale) + EXTRA_SECONDS
     if todo:
-        print(f"chapter {chapter.number}: {len(todo)} students to grade; each takes at most "
-              f"{limit / 60:.1f} minutes (its checks' time limits, "
-              f"{limit - OVERALL_SLACK - EXTRA_SECONDS:.0f} s, and "
-              f"{OVERALL_SLACK + EXTRA_SECONDS:.0f} s to start and end)", file=sys.stderr)
+        print(
+            f"chapter {chapter.number}: {len(todo)} students to grade; each takes at most "
+            f"{limit / 60:.1f} minutes (its checks' time limits, "
+            f"{limit - OVERALL_SLACK - EXTRA_SECONDS:.0f} s, and "
+            f"{OVERALL_SLACK + EXTRA_SECONDS:.0f} s to start and end)",
+            file=sys.stderr,
+        )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
     runner = _Runner(chapter, timeout_scale, limit, user)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
@@ -214,8 +235,7 @@ def grade_all(chapter: Chapter, folder: Path, csv_path: Path, workers: int = 1,
 class _Runner:
     """Grades one student at a time per thread, each in a grader process of its own."""
 
-    def __init__(self, chapter: Chapter, timeout_scale: float, limit: float,
-                 user: str | None = None):
+    def __init__(self, chapter: Chapter, timeout_scale: float, limit: float, user: str | None = None):
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
         self.user = user
         self.guard: ProcessGuard | None = None
@@ -224,8 +244,12 @@ class _Runner:
 
     def grade(self, work: Work) -> dict:
         row = dict.fromkeys(columns(self.chapter), "")
-        row.update(student=work.student, file="" if work.file is None else work.file.name,
-                   score=0, max_score=sum(c.points for c in self.chapter.checks))
+        row.update(
+            student=work.student,
+            file="" if work.file is None else work.file.name,
+            score=0,
+            max_score=sum(c.points for c in self.chapter.checks),
+        )
         if work.file is None:
             row.update(first_failure=work.problem, seconds=0)
             return row
@@ -244,15 +268,24 @@ class _Runner:
         return row
 
     def _run(self, work: Work) -> tuple[dict | None, str]:
-        command = [sys.executable, "-I", "-m", "ptlab.exercises.batch", str(self.chapter.number),
-                   str(work.file), "--timeout-scale", repr(self.timeout_scale)]
+        command = [
+            sys.executable,
+            "-I",
+            "-m",
+            "ptlab.exercises.batch",
+            str(self.chapter.number),
+            str(work.file),
+            "--timeout-scale",
+            repr(self.timeout_scale),
+        ]
         if self.user is not None:
             command += ["--student-user", self.user]
         if work.own_folder:
             command.append("--own-folder")
         with self._lock:
-            process = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE,
-                                       stderr=subprocess.DEVNULL)
+            process = subprocess.Popen(
+                command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL
+            )
             self._running.add(process.pid)
         try:
             output, _ = process.communicate(timeout=self.limit)
@@ -276,9 +309,14 @@ def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:
     try:
         report = json.loads(output)
         names = [c["name"] for c in report["checks"]]
-        valid = (names == [c.name for c in chapter.checks] and type(report["score"]) is int
-                 and all(type(c["points"]) is int and type(c["passed"]) is bool
-                         and type(c["message"]) is str for c in report["checks"]))
+        valid = (
+            names == [c.name for c in chapter.checks]
+            and type(report["score"]) is int
+            and all(
+                type(c["points"]) is int and type(c["passed"]) is bool and type(c["message"]) is str
+                for c in report["checks"]
+            )
+        )
     except (ValueError, KeyError, TypeError):
         valid = False
     if not valid:
@@ -295,17 +333,24 @@ def main(argv: list[str] | None = None) -> int:
     from ptlab.exercises import chapter
     from ptlab.exercises.grader import grade
 
-    parser = argparse.ArgumentParser(prog="python -m ptlab.exercises.batch",
-                                     description="Grade one file; print the result as JSON.")
+    parser = argparse.ArgumentParser(
+        prog="python -m ptlab.exercises.batch", description="Grade one file; print the result as JSON."
+    )
     parser.add_argument("chapter")
     parser.add_argument("file")
     parser.add_argument("--timeout-scale", type=float, default=1.0)
     parser.add_argument("--student-user")
-    parser.add_argument("--own-folder", action="store_true",
-                        help="the Python files beside FILE are the student's too")
+    parser.add_argument(
+        "--own-folder", action="store_true", help="the Python files beside FILE are the student's too"
+    )
     args = parser.parse_args(argv)
-    result = grade(chapter(args.chapter), Path(args.file), timeout_scale=args.timeout_scale,
-                   user=args.student_user, with_folder=args.own_folder)
+    result = grade(
+        chapter(args.chapter),
+        Path(args.file),
+        timeout_scale=args.timeout_scale,
+        user=args.student_user,
+        with_folder=args.own_folder,
+    )
     print(json.dumps(result.as_dict()))
     return 0
 

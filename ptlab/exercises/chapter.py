@@ -100,10 +100,12 @@ class Chapter:
         for node in tree.body:
             if isinstance(node, ast.FunctionDef):
                 names = tuple(a.arg for a in node.args.posonlyargs + node.args.args)
-                arguments[node.name] = Arguments(names, self.writes.get(node.name, ()),
-                                                 self.scratch.get(node.name, ()))
-        return Rules(answers=self.answers, solution=self.solution, arguments=arguments,
-                     programs=self.programs)
+                arguments[node.name] = Arguments(
+                    names, self.writes.get(node.name, ()), self.scratch.get(node.name, ())
+                )
+        return Rules(
+            answers=self.answers, solution=self.solution, arguments=arguments, programs=self.programs
+        )
 
     @property
     def library_rules(self) -> Rules:
@@ -121,11 +123,11 @@ def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndar
     not have ``shape`` or holds NaN or infinite values (``nan_hint`` says what may cause them)."""
     result = np.asarray(value, dtype=np.float64)
     if result.shape != tuple(shape):
-        raise CheckFailed(f"{name} must return an array of shape {tuple(shape)}, yours has "
-                          f"shape {result.shape}")
+        raise CheckFailed(
+            f"{name} must return an array of shape {tuple(shape)}, yours has shape {result.shape}"
+        )
     if not np.isfinite(result).all():
-        raise CheckFailed(f"{name} returned NaN or infinite values"
-                          + (f" ({nan_hint})" if nan_hint else ""))
+        raise CheckFailed(f"{name} returned NaN or infinite values" + (f" ({nan_hint})" if nan_hint else ""))
     return result
 
 
@@ -149,13 +151,15 @@ def require(module: ModuleType, *names: str) -> list[Callable]:
     file holds a copy of ptlab's answers with the names changed (``ptlab.untrusted.copies``)."""
     missing = [name for name in names if not callable(getattr(module, name, None))]
     if missing:
-        raise CheckFailed(f"your file has no function {', '.join(missing)} (keep the names of "
-                          f"the exercise file)")
+        raise CheckFailed(
+            f"your file has no function {', '.join(missing)} (keep the names of the exercise file)"
+        )
     for name in names:
         origin = library_answer(module, name)
         if origin is not None:
-            raise CheckFailed(f"{name}: this is ptlab's own answer ({origin}), not yours: "
-                              f"write it in your file")
+            raise CheckFailed(
+                f"{name}: this is ptlab's own answer ({origin}), not yours: write it in your file"
+            )
     copied = copied_answer(module)
     if copied is not None:
         raise CheckFailed(f"your file holds {copied}: write your own")

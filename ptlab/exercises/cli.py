@@ -1,11 +1,11 @@
 """``ptlab exercise start | check | list | docs | grade-all``: the exercises from the command line.
 
-    ptlab exercise list                    # the chapters, and which are passed (and where)
-    ptlab exercise start 1                 # copies 01_cameras.py into this folder
-    ptlab exercise docs 1                  # chapter 1's page (--zh: in Chinese), its tutorial
-    ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full marks
-    ptlab exercise check 1 01_cameras.py --json result.json
-    ptlab exercise grade-all 1 submissions/ --csv grades.csv --workers 2   # a whole class
+ptlab exercise list                    # the chapters, and which are passed (and where)
+ptlab exercise start 1                 # copies 01_cameras.py into this folder
+ptlab exercise docs 1                  # chapter 1's page (--zh: in Chinese), its tutorial
+ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full marks
+ptlab exercise check 1 01_cameras.py --json result.json
+ptlab exercise grade-all 1 submissions/ --csv grades.csv --workers 2   # a whole class
 """
 
 from __future__ import annotations
@@ -29,63 +29,89 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     # What check and grade-all share (a parent of their parsers).
     graded = argparse.ArgumentParser(add_help=False)
     graded.add_argument("chapter", metavar="NN", help="the chapter number")
-    graded.add_argument("--timeout-scale", type=float, default=1.0, metavar="X",
-                        help="multiply every check's time limit by X (slow machines)")
+    graded.add_argument(
+        "--timeout-scale",
+        type=float,
+        default=1.0,
+        metavar="X",
+        help="multiply every check's time limit by X (slow machines)",
+    )
     add_student_user_argument(graded)
 
     start = actions.add_parser(
-        "start", help="copy a chapter's exercise file to write your functions in",
-        description="Copy chapter NN's exercise file (signatures, docstrings, hints) into DIR.")
+        "start",
+        help="copy a chapter's exercise file to write your functions in",
+        description="Copy chapter NN's exercise file (signatures, docstrings, hints) into DIR.",
+    )
     start.add_argument("chapter", metavar="NN", help="the chapter number, e.g. 1 or 01")
     start.add_argument("dir", nargs="?", default=".", help="where to put it (default here)")
     start.add_argument("--force", action="store_true", help="overwrite an existing file")
 
     check = actions.add_parser(
-        "check", parents=[graded], help="grade your functions for a chapter",
+        "check",
+        parents=[graded],
+        help="grade your functions for a chapter",
         description="Plug FILE's functions into the renderer in place of the library's own, "
-                    "run the chapter's checks, print a score table. FILE runs in a process of "
-                    "its own; what it prints is shown after '|'. Exit 0 only on full marks, 1 "
-                    "otherwise, 2 if FILE cannot be read.")
+        "run the chapter's checks, print a score table. FILE runs in a process of "
+        "its own; what it prints is shown after '|'. Exit 0 only on full marks, 1 "
+        "otherwise, 2 if FILE cannot be read.",
+    )
     check.add_argument("file", metavar="FILE", help="your exercise file")
-    check.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT "
-                       "(removed at the start, written when every check is done)")
+    check.add_argument(
+        "--json",
+        metavar="OUT",
+        help="also write the result as JSON to OUT (removed at the start, written when every check is done)",
+    )
 
     listing = actions.add_parser(
-        "list", help="list the chapters and which you have passed",
+        "list",
+        help="list the chapters and which you have passed",
         description="List the chapters with the last result of each, from the records that "
-                    "'check' keeps beside the files it checked: in DIR and its subfolders, or "
-                    "(without DIR) in this folder, its subfolders and the folders 'start' "
-                    "copied files into.")
-    listing.add_argument("dir", nargs="?", help="where to look (default: here, and the folders "
-                                                "'start' made)")
+        "'check' keeps beside the files it checked: in DIR and its subfolders, or "
+        "(without DIR) in this folder, its subfolders and the folders 'start' "
+        "copied files into.",
+    )
+    listing.add_argument("dir", nargs="?", help="where to look (default: here, and the folders 'start' made)")
 
     docs = actions.add_parser(
-        "docs", help="show a chapter's page, and where its pictures and tutorial are",
+        "docs",
+        help="show a chapter's page, and where its pictures and tutorial are",
         description="Print chapter NN's page (Markdown), then where the page, its pictures and "
-                    "its tutorial script are on this machine, and the command that runs the "
-                    "tutorial. Without NN: the list of chapters.")
+        "its tutorial script are on this machine, and the command that runs the "
+        "tutorial. Without NN: the list of chapters.",
+    )
     docs.add_argument("chapter", metavar="NN", nargs="?", help="the chapter number, e.g. 7")
     docs.add_argument("--zh", action="store_true", help="the Chinese page (中文)")
-    docs.add_argument("--path", action="store_true",
-                      help="print only the page's path (to open it in a Markdown viewer)")
+    docs.add_argument(
+        "--path", action="store_true", help="print only the page's path (to open it in a Markdown viewer)"
+    )
 
     batch = actions.add_parser(
-        "grade-all", parents=[graded], help="grade a whole class's submissions (for teachers)",
+        "grade-all",
+        parents=[graded],
+        help="grade a whole class's submissions (for teachers)",
         description="Grade every submission in DIR for chapter NN: each Python file, or each "
-                    "folder (holding the chapter's file, or one Python file), is one student. "
-                    "Each is graded in isolation, several at once; the CSV gets one row per "
-                    "student and is rewritten after each, so an interrupted run resumes "
-                    "(students already in the CSV are not graded again).")
+        "folder (holding the chapter's file, or one Python file), is one student. "
+        "Each is graded in isolation, several at once; the CSV gets one row per "
+        "student and is rewritten after each, so an interrupted run resumes "
+        "(students already in the CSV are not graded again).",
+    )
     batch.add_argument("dir", metavar="DIR", help="the folder of submissions")
     batch.add_argument("--csv", metavar="OUT", help="the grades (default grades-NN.csv here)")
-    batch.add_argument("--workers", type=int, default=max(1, (os.cpu_count() or 2) // 2),
-                       metavar="K", help="students graded at once (default: half the cores)")
+    batch.add_argument(
+        "--workers",
+        type=int,
+        default=max(1, (os.cpu_count() or 2) // 2),
+        metavar="K",
+        help="students graded at once (default: half the cores)",
+    )
 
 
 def run_exercise(args: argparse.Namespace) -> int:
     """The handler of ``ptlab exercise``."""
-    return {"start": _start, "check": _check, "list": _list, "docs": _docs,
-            "grade-all": _grade_all}[args.action](args)
+    return {"start": _start, "check": _check, "list": _list, "docs": _docs, "grade-all": _grade_all}[
+        args.action
+    ](args)
 
 
 def _start(args) -> int:
@@ -120,9 +146,11 @@ def _docs(args) -> int:
         return 0
     lines = [path.read_text(encoding="utf-8").rstrip("\n"), f"\n-- this page: {path}"]
     if found is not None:
-        lines += [f"-- its pictures: {docs_folder() / 'exercises'}",
-                  f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR"]
-    print("\n".join(lines))   # a reader that stops early (head): see ptlab.cli.main
+        lines += [
+            f"-- its pictures: {docs_folder() / 'exercises'}",
+            f"-- its tutorial, which renders them: python {tutorial(found)} --out DIR",
+        ]
+    print("\n".join(lines))  # a reader that stops early (head): see ptlab.cli.main
     return 0
 
 
@@ -142,14 +170,19 @@ def _check(args) -> int:
     path = Path(args.file)
     if path.suffix != ".py":
         raise PtlabError(f"{path}: expected a Python file (.py)")
-    student_user(args.student_user)         # (a bad user: exit 2 before anything is removed)
+    student_user(args.student_user)  # (a bad user: exit 2 before anything is removed)
     if args.json:
         _remove_old_result(Path(args.json))
     # A line per check as it finishes, on a terminal (a course's scripts get the table only).
     echo = (lambda line: print(line, file=sys.stderr)) if sys.stderr.isatty() else None
-    result = grade(found, path, timeout_scale=scale, echo=echo,
-                   on_output=lambda line: print(f"    | {line}", file=sys.stderr),
-                   user=args.student_user)
+    result = grade(
+        found,
+        path,
+        timeout_scale=scale,
+        echo=echo,
+        on_output=lambda line: print(f"    | {line}", file=sys.stderr),
+        user=args.student_user,
+    )
     # grade() has ended every process of the student's code: nothing can change what follows.
     print(result.table())
     if args.json:
@@ -187,10 +220,14 @@ def _list(args) -> int:
         places = ["this folder and its subfolders"] + [str(f) for f in started]
         folders = folders_below(Path.cwd()) + started
     progress, records = find_progress(folders)
-    print(f"looked in {'; '.join(places)}: "
-          + (f"{len(records)} record{'s' if len(records) != 1 else ''} found"
-             if records else "no results recorded ('ptlab exercise check' records them "
-                             "beside the file it checks)"))
+    print(
+        f"looked in {'; '.join(places)}: "
+        + (
+            f"{len(records)} record{'s' if len(records) != 1 else ''} found"
+            if records
+            else "no results recorded ('ptlab exercise check' records them beside the file it checks)"
+        )
+    )
     print(f"{'NN':2}  {'chapter':52}  {'status':26}  {'file':30}  write")
     for found in all_chapters():
         entry = progress.get(f"{found.number:02d}")
@@ -198,8 +235,7 @@ def _list(args) -> int:
         if entry is not None:
             state = status(*entry, f"{found.number:02d}")
             where = _shown(entry[1] / str(entry[0].get("file", "")))
-        print(f"{found.number:02d}  {found.title:52}  {state:26}  {where:30}  "
-              f"{', '.join(found.functions)}")
+        print(f"{found.number:02d}  {found.title:52}  {state:26}  {where:30}  {', '.join(found.functions)}")
     return 0
 
 
@@ -222,8 +258,15 @@ def _grade_all(args) -> int:
     csv_path = Path(args.csv or f"grades-{found.number:02d}.csv")
     if not csv_path.parent.is_dir():
         raise PtlabError(f"--csv {csv_path}: folder {csv_path.parent} does not exist")
-    rows = grade_all(found, Path(args.dir), csv_path, workers=args.workers, timeout_scale=scale,
-                     progress=sys.stderr.isatty(), user=args.student_user)
+    rows = grade_all(
+        found,
+        Path(args.dir),
+        csv_path,
+        workers=args.workers,
+        timeout_scale=scale,
+        progress=sys.stderr.isatty(),
+        user=args.student_user,
+    )
     full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
     print(f"{len(rows)} students in {csv_path}: {full} with full marks")
     return 0

@@ -27,13 +27,13 @@ Where = Callable[[tuple[int, ...], tuple[int, ...]], str]
 
 
 def at_row(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
-    """"row 17 of 500" of an (N,) array, "row 17 of 500, column 2" of an (N, K) one."""
+    """ "row 17 of 500" of an (N,) array, "row 17 of 500, column 2" of an (N, K) one."""
     place = f"row {index[0]} of {shape[0]}"
     return place + "".join(f", column {i}" for i in index[1:])
 
 
 def at_pixel(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
-    """"pixel (x=5, y=3) (red)" of an (H, W, 3) picture, with "in pass 2 of 12" (counted
+    """ "pixel (x=5, y=3) (red)" of an (H, W, 3) picture, with "in pass 2 of 12" (counted
     from 1) for (passes, H, W, 3) pass images (``ptlab.exercises.renders.pass_images``)."""
     *passes, y, x, channel = index
     place = f"pixel (x={x}, y={y}) ({CHANNELS[channel]}; x=0, y=0 is the top left)"
@@ -47,7 +47,7 @@ def require_finite(values, what: str, where: Where = at_row, hint: str = "") -> 
     has NaN at ``where(first such index)``", with how many more there are and ``hint`` (what
     may cause them)."""
     values = np.asarray(values)
-    if values.dtype.kind not in "fc":           # integers and booleans are always finite
+    if values.dtype.kind not in "fc":  # integers and booleans are always finite
         return
     bad = ~np.isfinite(values)
     if not bad.any():
@@ -56,9 +56,11 @@ def require_finite(values, what: str, where: Where = at_row, hint: str = "") -> 
     value = values[index]
     kind = "NaN" if np.isnan(value) else ("inf" if value > 0 else "-inf")
     others = int(bad.sum()) - 1
-    raise CheckFailed(f"{what} has {kind} at {where(index, values.shape)}"
-                      + (f" and {others} more NaN or infinite values" if others else "")
-                      + (f" ({hint})" if hint else ""))
+    raise CheckFailed(
+        f"{what} has {kind} at {where(index, values.shape)}"
+        + (f" and {others} more NaN or infinite values" if others else "")
+        + (f" ({hint})" if hint else "")
+    )
 
 
 def finite_array(value, name: str, shape: tuple, nan_hint: str = "", where: Where = at_row) -> np.ndarray:

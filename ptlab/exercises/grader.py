@@ -96,9 +96,16 @@ class Grade:
 
     def as_dict(self) -> dict:
         """A JSON-ready summary, for course infrastructure."""
-        return dict(chapter=self.chapter, title=self.title, file=self.file, score=self.score,
-                    max_score=self.max_score, full_marks=self.full_marks, sha256=self.sha256,
-                    checks=[asdict(r) for r in self.results])
+        return dict(
+            chapter=self.chapter,
+            title=self.title,
+            file=self.file,
+            score=self.score,
+            max_score=self.max_score,
+            full_marks=self.full_marks,
+            sha256=self.sha256,
+            checks=[asdict(r) for r in self.results],
+        )
 
     def table(self) -> str:
         """The score table, one row per check, as a course autograder prints it."""
@@ -107,17 +114,24 @@ class Grade:
         lines.append(f"  {'check':{width}}  {'points':>7}  verdict  message")
         for r in self.results:
             verdict = "pass" if r.passed else "FAIL"
-            lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  "
-                         f"{r.message}")
-        lines.append(f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
-                     f"{'full marks' if self.full_marks else ''}")
+            lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {r.message}")
+        lines.append(
+            f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
+            f"{'full marks' if self.full_marks else ''}"
+        )
         return "\n".join(lines)
 
 
-def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
-          echo: Callable[[str], None] | None = None,
-          on_output: Callable[[str], None] | None = None, user: str | None = None,
-          with_folder: bool = True, library_answer: bool = False) -> Grade:
+def grade(
+    chapter,
+    path: str | Path,
+    timeout_scale: float = 1.0,
+    echo: Callable[[str], None] | None = None,
+    on_output: Callable[[str], None] | None = None,
+    user: str | None = None,
+    with_folder: bool = True,
+    library_answer: bool = False,
+) -> Grade:
     """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
 
     Args:
@@ -139,7 +153,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
         raise PtlabError(f"{path}: no such file")
     if library_answer and path.resolve() != chapter.solution.resolve():
         raise PtlabError(f"{path}: not chapter {chapter.number}'s own answer file")
-    student_user(user)      # (an unknown user, or one that cannot run ptlab: before anything)
+    student_user(user)  # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
     import_nothing_from_here()
     rules = chapter.library_rules if library_answer else chapter.rules
@@ -147,7 +161,7 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
     try:
         taken: Taken | str = take_in(path, with_folder=with_folder, library=library_answer)
         sha256 = taken.sha256
-    except RefusedSubmission as refused:      # (its bytes are not read: it may be a link)
+    except RefusedSubmission as refused:  # (its bytes are not read: it may be a link)
         taken, sha256 = str(refused), ""
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
@@ -158,12 +172,19 @@ def grade(chapter, path: str | Path, timeout_scale: float = 1.0,
             if isinstance(taken, str):
                 result = CheckResult(check.name, 0, check.points, False, table_message(taken), 0.0)
             elif left <= 0:
-                result = CheckResult(check.name, 0, check.points, False,
-                                     f"not run: grading reached its overall limit of {overall:.0f} s", 0.0)
+                result = CheckResult(
+                    check.name,
+                    0,
+                    check.points,
+                    False,
+                    f"not run: grading reached its overall limit of {overall:.0f} s",
+                    0.0,
+                )
             else:
-                result, hung = run_check(check, taken, min(check.timeout * timeout_scale, left),
-                                         guard, on_output, rules, user)
-                if hung:        # every later check would wait as long again for nothing
+                result, hung = run_check(
+                    check, taken, min(check.timeout * timeout_scale, left), guard, on_output, rules, user
+                )
+                if hung:  # every later check would wait as long again for nothing
                     taken = f"not run: {result.message}"
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
@@ -185,16 +206,23 @@ def _import_what_checks_use(rules) -> None:
     rules.fingerprints  # noqa: B018 (computed and kept)
 
 
-def run_check(check, submission: str | Path | Taken, timeout: float, guard: ProcessGuard,
-              on_output: Callable[[str], None] | None = None, rules=None,
-              user: str | None = None) -> tuple[CheckResult, bool]:
+def run_check(
+    check,
+    submission: str | Path | Taken,
+    timeout: float,
+    guard: ProcessGuard,
+    on_output: Callable[[str], None] | None = None,
+    rules=None,
+    user: str | None = None,
+) -> tuple[CheckResult, bool]:
     """Run one check on a fresh process of the student's submission, stopped after
     ``timeout`` s. Returns the result, and whether importing the file took too long."""
     start = time.perf_counter()
     passed, hung = False, False
     try:
-        with Submission(submission, guard, time_limit=timeout, on_output=on_output, rules=rules,
-                        user=user) as running:
+        with Submission(
+            submission, guard, time_limit=timeout, on_output=on_output, rules=rules, user=user
+        ) as running:
             message, passed = str(check.run(running.module)), True
     except CheckFailed as failure:
         message = str(failure)
@@ -205,14 +233,21 @@ def run_check(check, submission: str | Path | Taken, timeout: float, guard: Proc
     except SubmissionFailed as failure:
         message = str(failure)
         if failure.kind == "timeout":
-            message = (f"took longer than {timeout:.3g} s and was stopped, in {failure.during} "
-                       f"({TIMEOUT_HINT})")
+            message = (
+                f"took longer than {timeout:.3g} s and was stopped, in {failure.during} ({TIMEOUT_HINT})"
+            )
     except PtlabError as error:
         message = str(error)
     except Exception as error:  # the checks' code failed on what the student's code returned
         message = f"{type(error).__name__}: {error} (raised outside your file)"
-    return CheckResult(check.name, check.points if passed else 0, check.points, passed,
-                       table_message(message), time.perf_counter() - start), hung
+    return CheckResult(
+        check.name,
+        check.points if passed else 0,
+        check.points,
+        passed,
+        table_message(message),
+        time.perf_counter() - start,
+    ), hung
 
 
 def table_message(text: str) -> str:
@@ -220,4 +255,4 @@ def table_message(text: str) -> str:
     quote what the student's code said, which must not forge lines of the table)."""
     printable = "".join(c if unicodedata.category(c)[0] != "C" else " " for c in text)
     line = " ".join(printable.split())
-    return line if len(line) <= MAX_MESSAGE else line[:MAX_MESSAGE - 3] + "..."
+    return line if len(line) <= MAX_MESSAGE else line[: MAX_MESSAGE - 3] + "..."

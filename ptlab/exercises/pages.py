@@ -24,8 +24,10 @@ def docs_folder() -> Path:
     for candidate in (package / "docs", package.parent / "docs"):
         if (candidate / INDEX).is_file():
             return candidate
-    raise PtlabError(f"the chapters' pages are not installed (looked in {package / 'docs'} and "
-                     f"{package.parent / 'docs'}): reinstall ptlab")
+    raise PtlabError(
+        f"the chapters' pages are not installed (looked in {package / 'docs'} and "
+        f"{package.parent / 'docs'}): reinstall ptlab"
+    )
 
 
 def page(chapter: Chapter | None = None, chinese: bool = False) -> Path:

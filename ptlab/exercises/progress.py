@@ -54,22 +54,28 @@ def remember(grade) -> Path | None:
     the path written, or None if not written."""
     folder = Path(grade.file).resolve().parent
     if folder.is_relative_to(Path(__file__).resolve().parent):
-        return None         # the library's own answers are not a student's progress
-    entry = dict(score=grade.score, max_score=grade.max_score, full_marks=grade.full_marks,
-                 file=Path(grade.file).name, sha256=grade.sha256,
-                 when=time.strftime("%Y-%m-%d %H:%M:%S"))
+        return None  # the library's own answers are not a student's progress
+    entry = dict(
+        score=grade.score,
+        max_score=grade.max_score,
+        full_marks=grade.full_marks,
+        file=Path(grade.file).name,
+        sha256=grade.sha256,
+        when=time.strftime("%Y-%m-%d %H:%M:%S"),
+    )
     key = f"{grade.chapter:02d}"
     _vouch(folder / entry["file"], key, entry)
     record = read_record(folder)
     record[key] = entry
     try:
         return _write_json(folder / RECORD, record)
-    except OSError as error:        # a read-only folder: the grade itself still stands
+    except OSError as error:  # a read-only folder: the grade itself still stands
         print(f"ptlab: note: could not record the result in {folder / RECORD}: {error}")
         return None
 
 
 # -- the grader's own copy --------------------------------------------------------------
+
 
 def private_state() -> Path:
     """The grader's own state folder, made if need be, that only its user may enter."""
@@ -93,7 +99,7 @@ def _vouch(file: Path, key: str, entry: dict) -> None:
         vouched = _vouched()
         vouched.setdefault(str(file), {})[key] = entry
         _write_json(private_state() / VOUCHED, vouched)
-    except OSError:             # no state folder here: the record shows as not vouched for
+    except OSError:  # no state folder here: the record shows as not vouched for
         pass
 
 
@@ -110,6 +116,7 @@ def _write_json(path: Path, value) -> Path:
 
 
 # -- the folders ``start`` made ---------------------------------------------------------
+
 
 def state_file() -> Path:
     """Where the folders ``ptlab exercise start`` copied files into are remembered."""
@@ -143,6 +150,7 @@ def remember_folder(folder: Path) -> None:
 
 # -- finding the records ---------------------------------------------------------------
 
+
 def folders_below(top: Path) -> list[Path]:
     """``top`` and its subfolders down to ``SEARCH_DEPTH`` (not hidden ones, caches or
     virtual environments), at most ``SEARCH_FOLDERS`` of them."""
@@ -155,11 +163,16 @@ def folders_below(top: Path) -> list[Path]:
                 entries = sorted(folder.iterdir())
             except OSError:
                 continue
-            below.extend(entry for entry in entries
-                         if entry.is_dir() and not entry.is_symlink()
-                         and not entry.name.startswith(".") and entry.name not in SKIPPED
-                         and not (entry / "pyvenv.cfg").exists())
-        level = below[:max(0, SEARCH_FOLDERS - len(found))]
+            below.extend(
+                entry
+                for entry in entries
+                if entry.is_dir()
+                and not entry.is_symlink()
+                and not entry.name.startswith(".")
+                and entry.name not in SKIPPED
+                and not (entry / "pyvenv.cfg").exists()
+            )
+        level = below[: max(0, SEARCH_FOLDERS - len(found))]
     return found
 
 

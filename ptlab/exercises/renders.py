@@ -69,9 +69,16 @@ NORMALS_TOLERANCE = 1e-3
 MISSING_TOLERANCE = 0.01
 
 
-def check_render_through(yours: str, hooks: ModuleType, replacements: dict, *,
-                         passes: dict | None = None, hint: str = "", nan_hint: str = "",
-                         missing_hint: str = "") -> str:
+def check_render_through(
+    yours: str,
+    hooks: ModuleType,
+    replacements: dict,
+    *,
+    passes: dict | None = None,
+    hint: str = "",
+    nan_hint: str = "",
+    missing_hint: str = "",
+) -> str:
     """The Cornell box rendered with the library's code, then with the student's functions
     ``replacements`` (by name) plugged into ``hooks``, the module the renderer looks them up
     in: the same picture? -> a note saying how close, or ``CheckFailed``.
@@ -107,8 +114,7 @@ def check_render_through(yours: str, hooks: ModuleType, replacements: dict, *,
         library = pass_images(scene, backend="auto", **passes)
         with plugged(hooks, **replacements):
             student = pass_images(scene, backend=backend, **passes)
-        return compare_renders(student, library, f"the path-traced Cornell box through {yours}",
-                               hint)
+        return compare_renders(student, library, f"the path-traced Cornell box through {yours}", hint)
     options = dict(NORMALS_VIEW, workers=1, backend=backend)
     library = ptlab.render(scene, **options)
     with plugged(hooks, **replacements):
@@ -117,12 +123,16 @@ def check_render_through(yours: str, hooks: ModuleType, replacements: dict, *,
     require_finite(student, what, at_pixel, hint=nan_hint)
     missing = (student.max(axis=2) == 0) & (library.max(axis=2) > 0)
     if missing_hint and missing.mean() > MISSING_TOLERANCE:
-        raise CheckFailed(f"through {yours} the camera sees nothing in {missing.mean():.0%} of "
-                          f"the pixels where the library sees a wall ({missing_hint})")
+        raise CheckFailed(
+            f"through {yours} the camera sees nothing in {missing.mean():.0%} of "
+            f"the pixels where the library sees a wall ({missing_hint})"
+        )
     difference = np.abs(student - library).mean()
     if not difference <= NORMALS_TOLERANCE:
-        raise CheckFailed(f"{what} differ from the library's by {difference:.4f} on average"
-                          + (f" ({hint})" if hint else ""))
+        raise CheckFailed(
+            f"{what} differ from the library's by {difference:.4f} on average"
+            + (f" ({hint})" if hint else "")
+        )
     return f"the Cornell box seen through {yours} matches"
 
 
@@ -147,12 +157,21 @@ def replace_materials(scene, replace: Callable):
             new = as_material(new)
             new.emission = material.emission
         materials.append(new)
-    return Scene(scene.triangles, scene.material_ids, materials, scene.camera, scene.name,
-                 scene.material_names, scene.point_lights, scene.sky, scene.uvs, scene.defaults)
+    return Scene(
+        scene.triangles,
+        scene.material_ids,
+        materials,
+        scene.camera,
+        scene.name,
+        scene.material_names,
+        scene.point_lights,
+        scene.sky,
+        scene.uvs,
+        scene.defaults,
+    )
 
 
-def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
-                **options) -> np.ndarray:
+def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, **options) -> np.ndarray:
     """(passes, res, res, 3) float64: the image of each pass of one render, on its own.
 
     The render takes independent samples (``sampler="independent"``), so the passes are
@@ -170,9 +189,17 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0,
         images.append((film.sums - done) / spp_per_pass)
         done[...] = film.sums
 
-    render_result(scene, spp=passes * spp_per_pass, res=res, seed=seed, workers=1,
-                  tile_size=res, spp_per_pass=spp_per_pass, on_pass=keep,
-                  **dict(dict(sampler="independent"), **options))
+    render_result(
+        scene,
+        spp=passes * spp_per_pass,
+        res=res,
+        seed=seed,
+        workers=1,
+        tile_size=res,
+        spp_per_pass=spp_per_pass,
+        on_pass=keep,
+        **dict(dict(sampler="independent"), **options),
+    )
     return np.stack(images)
 
 
@@ -194,9 +221,11 @@ def compare_renders(student: np.ndarray, library: np.ndarray, what: str, hint: s
     if noise is None and difference is None:
         overall = student_regions.mean() / max(library_regions.mean(), 1e-12)
         threshold = mean_threshold(len(library), student_regions[0].size)
-        return (f"{what}: every region within {threshold:.1f} standard errors of the "
-                f"library's, no noisier than a right answer (whole image {overall:.3f}x as "
-                f"bright)")
+        return (
+            f"{what}: every region within {threshold:.1f} standard errors of the "
+            f"library's, no noisier than a right answer (whole image {overall:.3f}x as "
+            f"bright)"
+        )
     if noise is None:
         raise CheckFailed(f"{what}: {difference}" + (f" ({hint})" if hint else ""))
     raise CheckFailed(f"{what}: {noise}" + (f"; and {difference}" if difference else ""))
@@ -264,19 +293,20 @@ def mean_verdict(student: np.ndarray, library: np.ndarray) -> str | None:
     passes, expected = len(library), library.mean(axis=0)
     threshold = mean_threshold(passes, mean.size)
     floor = MIN_RELATIVE_DIFFERENCE * (np.abs(expected) + 0.1 * np.abs(expected).mean())
-    wrong = ((t > threshold) & (t_without > mean_threshold(passes - 1, mean.size))
-             & (np.abs(mean) > floor))
+    wrong = (t > threshold) & (t_without > mean_threshold(passes - 1, mean.size)) & (np.abs(mean) > floor)
     if not wrong.any():
         return None
     score = np.where(wrong, np.abs(mean) / np.maximum(floor, 1e-12), 0)
     worst = np.unravel_index(np.argmax(score), score.shape)
     ratio = student.mean(axis=0)[worst] / max(expected[worst], 1e-12)
     overall = student.mean() / max(library.mean(), 1e-12)
-    return (f"{int(wrong.sum())} of {mean.size} regions and colours differ from the library's "
-            f"picture beyond the noise; the worst, {describe_region(*worst)}, is "
-            f"{'brighter' if mean[worst] > 0 else 'darker'} ({ratio:.2f}x, "
-            f"{min(t[worst], 999):.0f} standard errors off; a right answer stays within "
-            f"{threshold:.1f}); the whole image is {overall:.2f}x as bright")
+    return (
+        f"{int(wrong.sum())} of {mean.size} regions and colours differ from the library's "
+        f"picture beyond the noise; the worst, {describe_region(*worst)}, is "
+        f"{'brighter' if mean[worst] > 0 else 'darker'} ({ratio:.2f}x, "
+        f"{min(t[worst], 999):.0f} standard errors off; a right answer stays within "
+        f"{threshold:.1f}); the whole image is {overall:.2f}x as bright"
+    )
 
 
 def noise_verdict(student: np.ndarray, library: np.ndarray) -> str | None:
@@ -306,15 +336,17 @@ def noise_verdict(student: np.ndarray, library: np.ndarray) -> str | None:
     ratio = student_variance / library_variance
     half = (regions + 1) // 2
     chance = f.isf(beta.ppf(NOISE_FALSE_ALARM, half, regions - half + 1), passes - 1, passes - 1)
-    median = float(np.sort(ratio, axis=None)[-half])     # the half-th largest
+    median = float(np.sort(ratio, axis=None)[-half])  # the half-th largest
     if median <= NOISE_RATIO * chance:
         return None
     total = student_variance.sum() / library_variance.sum()
-    return (f"too noisy: your passes' variance is {median:.3g} times the library's at the same "
-            f"samples per pixel in half the picture's {regions} regions ({total:.3g} times over "
-            f"the whole picture), where a right answer's is at most {NOISE_RATIO:g} times "
-            f"(with chance, at most {NOISE_RATIO * chance:.3g}: this test fails a right answer "
-            f"with probability at most {NOISE_FALSE_ALARM:g})")
+    return (
+        f"too noisy: your passes' variance is {median:.3g} times the library's at the same "
+        f"samples per pixel in half the picture's {regions} regions ({total:.3g} times over "
+        f"the whole picture), where a right answer's is at most {NOISE_RATIO:g} times "
+        f"(with chance, at most {NOISE_RATIO * chance:.3g}: this test fails a right answer "
+        f"with probability at most {NOISE_FALSE_ALARM:g})"
+    )
 
 
 def describe_region(row: int, column: int, channel: int) -> str:
@@ -330,6 +362,6 @@ def region_name(row: int, column: int) -> str:
 def regions_of(image: np.ndarray) -> np.ndarray:
     """(..., GRID, GRID, 3): the mean of each region of (..., H, W, 3) images."""
     *batch, height, width, _ = image.shape
-    cut = image[..., :height - height % GRID, :width - width % GRID, :]
+    cut = image[..., : height - height % GRID, : width - width % GRID, :]
     shape = (*batch, GRID, height // GRID, GRID, width // GRID, 3)
     return cut.reshape(shape).mean(axis=(-4, -2))

@@ -11,8 +11,9 @@ import argparse
 from pathlib import Path
 
 
-def tutorial_options(doc: str, res: int, spp: int,
-                     spp_help: str = "samples per pixel") -> tuple[argparse.Namespace, Path]:
+def tutorial_options(
+    doc: str, res: int, spp: int, spp_help: str = "samples per pixel"
+) -> tuple[argparse.Namespace, Path]:
     """Parse ``--res N --spp N --out DIR`` with these defaults; return them and the output
     folder (created). ``doc``'s first line is the ``--help`` description."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])

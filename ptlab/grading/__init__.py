@@ -36,8 +36,7 @@ __all__ = ["Check", "Report", "check_material", "write_plots"]
 WO_DEGREES = (0.0, 45.0, 80.0)
 
 
-def check_material(material, seed: int = 0, *, samples: int = 1_000_000,
-                   wo_degrees=WO_DEGREES) -> Report:
+def check_material(material, seed: int = 0, *, samples: int = 1_000_000, wo_degrees=WO_DEGREES) -> Report:
     """Run every check on ``material`` and return the report.
 
     Args:
@@ -85,11 +84,13 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
         lobes, pointwise = checks.measure(material, grid, wo_degrees, samples, streams[2], kept)
     except checks.MaterialError as error:
         lobes, failure = None, str(error)
-    for name, check in (("chi-square", lambda: checks.check_chi_square(material, lobes, streams[3])),
-                        ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
-                        ("energy", lambda: checks.check_energy(lobes)),
-                        ("estimator agreement", lambda: checks.check_estimator(lobes)),
-                        ("sample_weight", lambda: checks.check_sample_weight(pointwise))):
+    for name, check in (
+        ("chi-square", lambda: checks.check_chi_square(material, lobes, streams[3])),
+        ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
+        ("energy", lambda: checks.check_energy(lobes)),
+        ("estimator agreement", lambda: checks.check_estimator(lobes)),
+        ("sample_weight", lambda: checks.check_sample_weight(pointwise)),
+    ):
         results.append(_guard(name, check) if lobes is not None else _failure(name, failure))
     results.append(_guard("reciprocity", checks.check_reciprocity, material, streams[5]))
     results.append(_guard("float32", checks.check_float32, material, streams[6], kept=kept))
@@ -104,8 +105,10 @@ def _delta_checks(material, streams) -> list[Check]:
     except checks.MaterialError as error:
         return [_failure(name, str(error)) for name in ("consistency", "directions", "energy")]
     scatters = scattering.scatters
-    results = [_guard("consistency", delta.check_delta_consistency, material, scattering, kept),
-               _guard("directions", delta.check_directions, material, scatters)]
+    results = [
+        _guard("consistency", delta.check_delta_consistency, material, scattering, kept),
+        _guard("directions", delta.check_directions, material, scatters),
+    ]
     if delta.transmits(scatters) and delta.relative_eta(material, scatters) is not None:
         results.append(_guard("Fresnel weights", delta.check_fresnel, material, scatters))
     results.append(_guard("energy", delta.check_delta_energy, material, scatters))

@@ -150,40 +150,44 @@ def chi2_sf(statistic: float, dof: int) -> float:
     directly saves the second that importing ``scipy.stats`` takes.
     """
     from scipy.special import chdtrc
+
     return float(chdtrc(dof, statistic))
 
 
 def z_two_sided(alpha: float) -> float:
     """The z with P(|Z| > z) = alpha for a standard normal Z."""
     from scipy.special import ndtri
+
     return float(-ndtri(alpha / 2))
 
 
 def direction_at(n: np.ndarray, degrees: float, azimuth: float) -> np.ndarray:
     """(3,) the unit vector at ``degrees`` from ``n`` (3,), at ``azimuth`` radians around it."""
     theta = math.radians(degrees)
-    local = np.array([[math.sin(theta) * math.cos(azimuth), math.sin(theta) * math.sin(azimuth),
-                       math.cos(theta)]])
+    local = np.array(
+        [[math.sin(theta) * math.cos(azimuth), math.sin(theta) * math.sin(azimuth), math.cos(theta)]]
+    )
     return to_world(local, np.asarray(n, dtype=np.float64)[None, :])[0]
 
 
 # -- measuring the wo's -------------------------------------------------------------------
+
 
 @dataclass
 class Lobe:
     """What ``measure`` found for one ``wo``: histogram, integrals, estimates."""
 
     degrees: float
-    wo: np.ndarray                  # (3,) in the grid's frame
+    wo: np.ndarray  # (3,) in the grid's frame
     grid: SphereGrid
     samples: int
-    observed: np.ndarray            # (cells,) samples with pdf > 0 in each cell
-    failed: int                     # samples with pdf == 0 or non-finite
-    failed_below: int               # ... of which below the surface
-    integrals: np.ndarray           # (cells, 4): integral of pdf, f_rgb |cos| over each cell
-    errors: np.ndarray              # (4,) quadrature error bounds of the totals
-    estimate: np.ndarray            # (3,) mean of f cos / pdf over the samples
-    estimate_sd: np.ndarray         # (3,) standard deviation of f cos / pdf
+    observed: np.ndarray  # (cells,) samples with pdf > 0 in each cell
+    failed: int  # samples with pdf == 0 or non-finite
+    failed_below: int  # ... of which below the surface
+    integrals: np.ndarray  # (cells, 4): integral of pdf, f_rgb |cos| over each cell
+    errors: np.ndarray  # (4,) quadrature error bounds of the totals
+    estimate: np.ndarray  # (3,) mean of f cos / pdf over the samples
+    estimate_sd: np.ndarray  # (3,) standard deviation of f cos / pdf
 
     @property
     def pdf_integral(self) -> float:
@@ -195,8 +199,14 @@ class Lobe:
         return self.integrals[:, 1:].sum(axis=0)
 
 
-def measure(material, grid: SphereGrid, degrees: tuple, samples: int, rng: np.random.Generator,
-            kept: list | None = None) -> tuple[list[Lobe], dict]:
+def measure(
+    material,
+    grid: SphereGrid,
+    degrees: tuple,
+    samples: int,
+    rng: np.random.Generator,
+    kept: list | None = None,
+) -> tuple[list[Lobe], dict]:
     """Sample, histogram and integrate a ``wo`` at each of ``degrees`` from ``grid.n``, together.
 
     Each wo gets ``samples`` rows; the rows of all of them are interleaved (every block of
@@ -218,7 +228,7 @@ def measure(material, grid: SphereGrid, degrees: tuple, samples: int, rng: np.ra
     weights = _Moments(count)
     pointwise = []
     for start in range(0, count * samples, samples):
-        lobe = lobe_of_row[start:start + samples]
+        lobe = lobe_of_row[start : start + samples]
         rows = len(lobe)
         probe = Probe(rng, rows, shuffle=False)
         wo, n, u = probe.send(wos[lobe]), probe.send(grid.n), rng.random((rows, 2))
@@ -239,11 +249,22 @@ def measure(material, grid: SphereGrid, degrees: tuple, samples: int, rng: np.ra
         failed_below += np.bincount(lobe[~ok & (cos_theta_i < 0)], minlength=count)
         pointwise.append(_pointwise(material, wo, n, u, wi, pdf, f, np.abs(cos_theta_i), keep))
     integrals, errors = _integrals(material, grid, wos, samples, rng)
-    lobes = [Lobe(degrees=d, wo=wos[k], grid=grid, samples=samples,
-                  observed=observed[k * grid.cells:(k + 1) * grid.cells], failed=int(failed[k]),
-                  failed_below=int(failed_below[k]), integrals=integrals[k], errors=errors[k],
-                  estimate=weights.mean[k], estimate_sd=weights.sd[k])
-             for k, d in enumerate(degrees)]
+    lobes = [
+        Lobe(
+            degrees=d,
+            wo=wos[k],
+            grid=grid,
+            samples=samples,
+            observed=observed[k * grid.cells : (k + 1) * grid.cells],
+            failed=int(failed[k]),
+            failed_below=int(failed_below[k]),
+            integrals=integrals[k],
+            errors=errors[k],
+            estimate=weights.mean[k],
+            estimate_sd=weights.sd[k],
+        )
+        for k, d in enumerate(degrees)
+    ]
     return lobes, {key: np.concatenate([p[key] for p in pointwise]) for key in pointwise[0]}
 
 
@@ -261,11 +282,16 @@ class _Moments:
         count = np.bincount(group, minlength=self.groups).astype(np.float64)
         columns = range(values.shape[1])
         with np.errstate(invalid="ignore", divide="ignore"):
-            mean = np.column_stack([np.bincount(group, weights=values[:, c], minlength=self.groups)
-                                    for c in columns]) / count[:, None]
+            mean = (
+                np.column_stack(
+                    [np.bincount(group, weights=values[:, c], minlength=self.groups) for c in columns]
+                )
+                / count[:, None]
+            )
             deviation = values - mean[group]
-            m2 = np.column_stack([np.bincount(group, weights=deviation[:, c] ** 2, minlength=self.groups)
-                                  for c in columns])
+            m2 = np.column_stack(
+                [np.bincount(group, weights=deviation[:, c] ** 2, minlength=self.groups) for c in columns]
+            )
         if self.mean is None:
             self.count, self.mean, self.m2 = count, mean, m2
             return
@@ -282,8 +308,9 @@ class _Moments:
         return np.sqrt(self.m2 / self.count[:, None])
 
 
-def _integrals(material, grid: SphereGrid, wos: np.ndarray, samples: int,
-               rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+def _integrals(
+    material, grid: SphereGrid, wos: np.ndarray, samples: int, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
     """(L, cells, 4) integrals of pdf and f_rgb |cos theta_i| over every cell for each of
     the (L, 3) ``wos``, and their (L, 4) error bounds. ``SphereGrid.integrate_lobes`` interleaves
     the lobes' points itself, so the rows need no shuffling."""
@@ -303,22 +330,38 @@ def _integrals(material, grid: SphereGrid, wos: np.ndarray, samples: int,
     return grid.integrate_lobes(integrand, tolerance, len(wos))
 
 
-def _ask_for_lobes(material, methods: tuple, wos: np.ndarray, lobe: np.ndarray, w: np.ndarray,
-                   n: np.ndarray, rng: np.random.Generator) -> list[np.ndarray]:
+def _ask_for_lobes(
+    material,
+    methods: tuple,
+    wos: np.ndarray,
+    lobe: np.ndarray,
+    w: np.ndarray,
+    n: np.ndarray,
+    rng: np.random.Generator,
+) -> list[np.ndarray]:
     """``ask_at`` for the quadrature's points: (P, 3) directions ``w``, each with the wo of its
     (P,) ``lobe`` (``wos`` (L, 3)), in ``SphereGrid.integrate_lobes``' order, which interleaves
     the lobes. When one lobe is left to refine, each point is asked for another lobe too
     (that answer dropped), so that wo . n still varies over the call's rows."""
     if len(wos) > 1 and (lobe == lobe[0]).all():
         other = (lobe + rng.integers(1, len(wos), len(lobe))) % len(wos)
-        answers = _ask_for_lobes(material, methods, wos, np.column_stack([lobe, other]).ravel(),
-                                 np.repeat(w, 2, axis=0), n, rng)
+        answers = _ask_for_lobes(
+            material, methods, wos, np.column_stack([lobe, other]).ravel(), np.repeat(w, 2, axis=0), n, rng
+        )
         return [a[::2] for a in answers]
     return ask_at(material, methods, wos[lobe], w, n, rng, shuffle=False)
 
 
-def ask_at(material, methods: tuple, wo: np.ndarray, wi: np.ndarray, n: np.ndarray, rng: np.random.Generator,
-           exact: np.ndarray | None = None, shuffle: bool = True) -> list[np.ndarray]:
+def ask_at(
+    material,
+    methods: tuple,
+    wo: np.ndarray,
+    wi: np.ndarray,
+    n: np.ndarray,
+    rng: np.random.Generator,
+    exact: np.ndarray | None = None,
+    shuffle: bool = True,
+) -> list[np.ndarray]:
     """float64 answers of ``material.<method>(wo, wi, n)`` for each of ``methods`` (``"eval"``,
     ``"pdf"``), in the checks' order of the rows.
 
@@ -330,16 +373,19 @@ def ask_at(material, methods: tuple, wo: np.ndarray, wi: np.ndarray, n: np.ndarr
     probe = Probe(rng, rows, exact, shuffle)
     sent = probe.send(wo), probe.send(wi), probe.send(n)
     shapes = {"eval": (rows, 3), "pdf": (rows,)}
-    return [probe.receive_rows(np.asarray(call(material, method, *sent, shapes=[shapes[method]]),
-                                          dtype=np.float64))
-            for method in methods]
+    return [
+        probe.receive_rows(
+            np.asarray(call(material, method, *sent, shapes=[shapes[method]]), dtype=np.float64)
+        )
+        for method in methods
+    ]
 
 
 def _pointwise(material, wo, n, u, wi, pdf, f, cos_theta_i, keep: list | None) -> dict:
     """sample_weight on the first rows, next to sample's wi and f cos / pdf there."""
     k = min(len(u), POINTWISE_ROWS)
     keep = None if derives_sample_weight(material) else keep
-    first = (rows_of(a, slice(0, k)) for a in (wo, n, u))      # (contiguous, as the renderer's)
+    first = (rows_of(a, slice(0, k)) for a in (wo, n, u))  # (contiguous, as the renderer's)
     wi_w, weight = call(material, "sample_weight", *first, shapes=[(k, 3), (k, 3)], keep=keep)
     wi_w, weight = wi_w.astype(np.float64), weight.astype(np.float64)
     # Reference at sample_weight's own direction (equal to sample's when all is well).
@@ -354,8 +400,10 @@ def _pointwise(material, wo, n, u, wi, pdf, f, cos_theta_i, keep: list | None) -
 
 # -- chi-square ---------------------------------------------------------------------------
 
-def pooled_chi_square(observed: np.ndarray, expected: np.ndarray,
-                      min_expected: float = MIN_EXPECTED) -> tuple[float, int]:
+
+def pooled_chi_square(
+    observed: np.ndarray, expected: np.ndarray, min_expected: float = MIN_EXPECTED
+) -> tuple[float, int]:
     """Pearson's statistic and degrees of freedom after pooling categories expecting < 5.
 
     Categories expecting nothing and observing nothing are dropped; those expecting fewer
@@ -397,28 +445,40 @@ def check_chi_square(material, lobes: list[Lobe], rng: np.random.Generator) -> C
     worst = int(np.argmin([p for _, _, p in results]))
     statistic, dof, p = results[worst]
     passed = p >= threshold
-    data = dict(lobes=[dict(degrees=lobe.degrees, observed=lobe.observed,
-                            expected=lobe.samples * lobe.integrals[:, 0],
-                            shape=(lobe.grid.n_cos, lobe.grid.n_phi), p=r[2])
-                       for lobe, r in zip(lobes, results, strict=True)])
-    return Check("chi-square", verdict(passed),
-                 f"min p = {p:.3g} (wo {lobes[worst].degrees:g}°: X² = {statistic:.4g}, dof {dof})",
-                 f"p >= {threshold:.2g} (Šidák, 1e-3 over {len(lobes)} wo)",
-                 "" if passed else explain_chi_square(material, lobes, threshold, rng), data=data)
+    data = dict(
+        lobes=[
+            dict(
+                degrees=lobe.degrees,
+                observed=lobe.observed,
+                expected=lobe.samples * lobe.integrals[:, 0],
+                shape=(lobe.grid.n_cos, lobe.grid.n_phi),
+                p=r[2],
+            )
+            for lobe, r in zip(lobes, results, strict=True)
+        ]
+    )
+    return Check(
+        "chi-square",
+        verdict(passed),
+        f"min p = {p:.3g} (wo {lobes[worst].degrees:g}°: X² = {statistic:.4g}, dof {dof})",
+        f"p >= {threshold:.2g} (Šidák, 1e-3 over {len(lobes)} wo)",
+        "" if passed else explain_chi_square(material, lobes, threshold, rng),
+        data=data,
+    )
 
 
 #: Mistake models: the samples follow pdf * g(wi) instead of pdf. Each entry: the model's
 #: name and the hint when the samples fit it.
 CANDIDATES = {
     "constant": "the samples follow the shape of pdf, but pdf is {factor:.3g}x too {size}: a wrong "
-                "constant (1/pi, 1/(2 pi), 1/(4 pi)?)",
+    "constant (1/pi, 1/(2 pi), 1/(4 pi)?)",
     "cos": "pdf misses a factor cos(theta_i) that the sampling has (the samples are cosine-"
-           "weighted, the pdf is not): pdf is about 2x too small near the normal. Did you use "
-           "1/(2 pi) while sampling cosine-weighted, or forget the cosine in cos(theta)/pi?",
+    "weighted, the pdf is not): pdf is about 2x too small near the normal. Did you use "
+    "1/(2 pi) while sampling cosine-weighted, or forget the cosine in cos(theta)/pi?",
     "1/cos": "pdf has a factor cos(theta_i) that the sampling lacks: a cosine pdf for uniform "
-             "sampling? (uniform hemisphere sampling has pdf 1/(2 pi))",
+    "sampling? (uniform hemisphere sampling has pdf 1/(2 pi))",
     "jacobian": "pdf is the density of the half vector h, not of wi: it misses the Jacobian "
-                "1 / (4 |wo . h|) of the reflection (pdf(wi) = pdf(h) / (4 |wo . h|))",
+    "1 / (4 |wo . h|) of the reflection (pdf(wi) = pdf(h) / (4 |wo . h|))",
 }
 
 
@@ -435,16 +495,19 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float, rng: np.ra
         n = lobe.samples
         expected_failed = n * max(0.0, 1.0 - lobe.pdf_integral)
         slack = 5 * math.sqrt(expected_failed + 1) + 0.001 * n
-        if lobe.failed > expected_failed + slack \
-                and lobe.pdf_integral <= 1.01:   # (a pdf too large says nothing of failures)
+        if (
+            lobe.failed > expected_failed + slack and lobe.pdf_integral <= 1.01
+        ):  # (a pdf too large says nothing of failures)
             unexplained_failures.append((lobe, expected_failed / n))
         elif lobe.failed < expected_failed - slack:
             missing_failures.append((lobe, expected_failed / n))
     for lobe, expected in unexplained_failures:
         if lobe.failed > 0.5 * lobe.samples and lobe.failed_below > 0.9 * lobe.failed:
-            return (f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land below the "
-                    f"surface, where pdf is 0 (expected {expected:.1%}): sample returns directions in the "
-                    "wrong hemisphere (local z not mapped to n, or a flipped sign?)")
+            return (
+                f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land below the "
+                f"surface, where pdf is 0 (expected {expected:.1%}): sample returns directions in the "
+                "wrong hemisphere (local z not mapped to n, or a flipped sign?)"
+            )
     best, best_p = None, -1.0
     models = _candidate_integrals(material, lobes, rng)
     for name in CANDIDATES:
@@ -460,24 +523,30 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float, rng: np.ra
         if p_min > best_p:
             best, best_p = name, p_min
     if best_p >= threshold / 10:
-        factor = float(np.mean([lobe.pdf_integral / max(1e-300, 1 - lobe.failed / lobe.samples)
-                                for lobe in lobes]))
+        factor = float(
+            np.mean([lobe.pdf_integral / max(1e-300, 1 - lobe.failed / lobe.samples) for lobe in lobes])
+        )
         if best != "constant":
             return CANDIDATES[best]
         if abs(factor - 1) > 1e-3:
-            return CANDIDATES[best].format(factor=factor if factor > 1 else 1 / factor,
-                                           size="large" if factor > 1 else "small")
+            return CANDIDATES[best].format(
+                factor=factor if factor > 1 else 1 / factor, size="large" if factor > 1 else "small"
+            )
     if unexplained_failures:
         lobe, expected = unexplained_failures[0]
-        return (f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land where pdf "
-                f"is 0 "
-                f"(expected {expected:.1%}): pdf returns 0 where sample goes (do pdf's conditions match "
-                "the sampler?)")
+        return (
+            f"{lobe.failed / lobe.samples:.1%} of the samples at wo {lobe.degrees:g}° land where pdf "
+            f"is 0 "
+            f"(expected {expected:.1%}): pdf returns 0 where sample goes (do pdf's conditions match "
+            "the sampler?)"
+        )
     if missing_failures:
         lobe, expected = missing_failures[0]
         return fails_too_rarely(lobe.failed / lobe.samples, expected, lobe.degrees)
-    return ("the samples' histogram does not follow pdf (see --plots): sample and pdf describe "
-            "different distributions (a wrong warp, the pdf of another sampling, a missing Jacobian?)")
+    return (
+        "the samples' histogram does not follow pdf (see --plots): sample and pdf describe "
+        "different distributions (a wrong warp, the pdf of another sampling, a missing Jacobian?)"
+    )
 
 
 def _candidate_integrals(material, lobes: list[Lobe], rng: np.random.Generator) -> list[dict]:
@@ -502,6 +571,7 @@ def _candidate_integrals(material, lobes: list[Lobe], rng: np.random.Generator) 
 
 # -- normalisation, energy, estimator -----------------------------------------------------
 
+
 def check_normalisation(lobes: list[Lobe]) -> Check:
     z = z_two_sided(sidak(ALPHA_NORMALISATION, len(lobes)))
     worst, worst_ratio, text = None, -1.0, ""
@@ -511,28 +581,43 @@ def check_normalisation(lobes: list[Lobe]) -> Check:
         ratio = abs(lobe.pdf_integral - success) / allowed
         if ratio > worst_ratio:
             worst, worst_ratio = lobe, ratio
-            text = (f"∫pdf = {lobe.pdf_integral:.5g}, {lobe.failed / lobe.samples:.3%} failed "
-                    f"(wo {lobe.degrees:g}°)")
+            text = (
+                f"∫pdf = {lobe.pdf_integral:.5g}, {lobe.failed / lobe.samples:.3%} failed "
+                f"(wo {lobe.degrees:g}°)"
+            )
     passed = worst_ratio <= 1
     hint = ""
     if not passed:
         integral, success = worst.pdf_integral, 1.0 - worst.failed / worst.samples
         if integral > 1 + 1e-3:
-            hint = (f"pdf integrates to {integral:.3g} > 1 at wo {worst.degrees:g}°: pdf is too large "
-                    f"(by {integral:.3g}x if by a constant: check its normalisation; a missing Jacobian?)")
+            hint = (
+                f"pdf integrates to {integral:.3g} > 1 at wo {worst.degrees:g}°: pdf is too large "
+                f"(by {integral:.3g}x if by a constant: check its normalisation; a missing Jacobian?)"
+            )
         elif integral < success:
             factor = success / max(integral, 1e-300)
             if any(abs(factor / simple - 1) < 0.02 for simple in SIMPLE_FACTORS):
-                hint = (f"pdf integrates to {integral:.3g} but {success:.1%} of the samples succeed: "
-                        f"pdf is about {factor:.3g}x too small (e.g. 1/(2 pi) where 1/pi belongs)")
+                hint = (
+                    f"pdf integrates to {integral:.3g} but {success:.1%} of the samples succeed: "
+                    f"pdf is about {factor:.3g}x too small (e.g. 1/(2 pi) where 1/pi belongs)"
+                )
             else:
-                hint = (fails_too_rarely(1 - success, 1 - integral, worst.degrees)
-                        + f" (or else pdf is {factor:.3g}x too small)")
+                hint = (
+                    fails_too_rarely(1 - success, 1 - integral, worst.degrees)
+                    + f" (or else pdf is {factor:.3g}x too small)"
+                )
         else:
-            hint = (f"sample fails ({1 - success:.1%}) more often than pdf admits "
-                    f"(1 - ∫pdf = {1 - integral:.1%}): samples land where pdf is 0")
-    return Check("pdf normalisation", verdict(passed), text,
-                 f"|∫pdf - (1 - failed)| <= {z:.1f} σ + quadrature error", hint)
+            hint = (
+                f"sample fails ({1 - success:.1%}) more often than pdf admits "
+                f"(1 - ∫pdf = {1 - integral:.1%}): samples land where pdf is 0"
+            )
+    return Check(
+        "pdf normalisation",
+        verdict(passed),
+        text,
+        f"|∫pdf - (1 - failed)| <= {z:.1f} σ + quadrature error",
+        hint,
+    )
 
 
 #: Factors by which a pdf written with the wrong constant is off: 2 (hemisphere against
@@ -544,10 +629,12 @@ def fails_too_rarely(failed: float, expected: float, degrees: float) -> str:
     """The hint for a sampler that fails less often than its pdf admits: it turns a sample
     that should fail into another direction, most often by flipping it back above the
     surface, which gives those directions a density pdf knows nothing of."""
-    return (f"pdf integrates to {1 - expected:.3g} at wo {degrees:g}°, so {expected:.1%} of the "
-            f"samples should fail (land where pdf is 0), but {failed:.1%} do: sample turns a "
-            f"failed sample into another direction. Did it flip a wi that landed below the "
-            f"surface back up? Let such a sample fail: return it as it is (pdf 0 there)")
+    return (
+        f"pdf integrates to {1 - expected:.3g} at wo {degrees:g}°, so {expected:.1%} of the "
+        f"samples should fail (land where pdf is 0), but {failed:.1%} do: sample turns a "
+        f"failed sample into another direction. Did it flip a wi that landed below the "
+        f"surface back up? Let such a sample fail: return it as it is (pdf 0 there)"
+    )
 
 
 def check_energy(lobes: list[Lobe]) -> Check:
@@ -558,16 +645,23 @@ def check_energy(lobes: list[Lobe]) -> Check:
     passed = max(margins) <= 0
     hint = ""
     if not passed:
-        hint = (f"∫ f cos = {value:.3g} > 1 at wo {worst.degrees:g}°: the material reflects more light "
-                "than it receives: an albedo or F0 above 1, or a factor missing from f_r")
+        hint = (
+            f"∫ f cos = {value:.3g} > 1 at wo {worst.degrees:g}°: the material reflects more light "
+            "than it receives: an albedo or F0 above 1, or a factor missing from f_r"
+        )
         if value / math.pi <= 1 + ENERGY_SLACK:
             hint += f" (if the albedo is {value / math.pi:.3g}: f_r = albedo without the 1/pi)"
         elif len(lobes) > 1 and worst.degrees == max(lobe.degrees for lobe in lobes):
-            hint += (" (it grows toward grazing wo: a missing masking term G, or a wrong "
-                     "4 cos cos denominator?)")
-    return Check("energy", verdict(passed),
-                 f"max ∫ f cos = {value:.4f} (wo {worst.degrees:g}°, {'rgb'[channel]})",
-                 f"<= 1 + {ENERGY_SLACK:g} + quadrature error", hint)
+            hint += (
+                " (it grows toward grazing wo: a missing masking term G, or a wrong 4 cos cos denominator?)"
+            )
+    return Check(
+        "energy",
+        verdict(passed),
+        f"max ∫ f cos = {value:.4f} (wo {worst.degrees:g}°, {'rgb'[channel]})",
+        f"<= 1 + {ENERGY_SLACK:g} + quadrature error",
+        hint,
+    )
 
 
 def check_estimator(lobes: list[Lobe]) -> Check:
@@ -575,8 +669,12 @@ def check_estimator(lobes: list[Lobe]) -> Check:
     worst_ratio, worst = -1.0, None
     for lobe in lobes:
         reference = lobe.reflectance
-        allowed = (z * lobe.estimate_sd / math.sqrt(lobe.samples) + 2 * lobe.errors[1:]
-                   + 1e-9 + FLOAT32_SLACK * np.abs(reference))
+        allowed = (
+            z * lobe.estimate_sd / math.sqrt(lobe.samples)
+            + 2 * lobe.errors[1:]
+            + 1e-9
+            + FLOAT32_SLACK * np.abs(reference)
+        )
         with np.errstate(invalid="ignore"):
             ratio = np.abs(lobe.estimate - reference) / allowed
         ratio = np.where(np.isfinite(ratio), ratio, np.inf)
@@ -590,16 +688,24 @@ def check_estimator(lobes: list[Lobe]) -> Check:
         estimate, reference = lobe.estimate[c], lobe.reflectance[c]
         unreached = float(lobe.integrals[lobe.integrals[:, 0] <= 0, 1 + c].sum())
         if unreached > 0.01 * max(reference, 1e-12):
-            hint = (f"eval is nonzero where pdf is 0 ({unreached / reference:.1%} of ∫ f cos at wo "
-                    f"{lobe.degrees:g}°): sample never goes there, so the estimate misses that light")
+            hint = (
+                f"eval is nonzero where pdf is 0 ({unreached / reference:.1%} of ∫ f cos at wo "
+                f"{lobe.degrees:g}°): sample never goes there, so the estimate misses that light"
+            )
         else:
             ratio = estimate / reference if reference else math.inf
-            hint = (f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.6g} but ∫ f cos = "
-                    f"{reference:.6g} at wo {lobe.degrees:g}° (ratio {_ratio_text(ratio)}): "
-                    "sample and pdf disagree (see chi-square)")
-    return Check("estimator agreement", verdict(passed),
-                 f"max |IS - ∫| / allowed = {worst_ratio:.3g} (wo {lobe.degrees:g}°, {'rgb'[c]})",
-                 f"<= 1 (allowed {z:.1f} σ + quadrature error)", hint)
+            hint = (
+                f"the importance-sampled estimate mean(f cos / pdf) = {estimate:.6g} but ∫ f cos = "
+                f"{reference:.6g} at wo {lobe.degrees:g}° (ratio {_ratio_text(ratio)}): "
+                "sample and pdf disagree (see chi-square)"
+            )
+    return Check(
+        "estimator agreement",
+        verdict(passed),
+        f"max |IS - ∫| / allowed = {worst_ratio:.3g} (wo {lobe.degrees:g}°, {'rgb'[c]})",
+        f"<= 1 (allowed {z:.1f} σ + quadrature error)",
+        hint,
+    )
 
 
 def _ratio_text(ratio: float) -> str:
@@ -611,31 +717,42 @@ def _ratio_text(ratio: float) -> str:
 
 # -- sample_weight ------------------------------------------------------------------------
 
+
 def check_sample_weight(pointwise: dict) -> Check:
     """sample_weight against (sample, f cos / pdf) on the rows ``measure`` compared (``_pointwise``)."""
-    same, weight, reference, cos_theta_i = (pointwise[key] for key in ("same", "weight", "reference",
-                                                                      "cos_theta_i"))
+    same, weight, reference, cos_theta_i = (
+        pointwise[key] for key in ("same", "weight", "reference", "cos_theta_i")
+    )
     rows = len(same)
     finite = np.isfinite(weight).all(axis=1)
     scale = np.abs(reference[same]).max(initial=0.0) if same.any() else 0.0
     with np.errstate(invalid="ignore"):
-        bad = same & ~(np.abs(weight - reference) <= SAMPLE_WEIGHT_RTOL * np.abs(reference)
-                       + 1e-12 * (1 + scale)).all(axis=1)
+        bad = same & ~(
+            np.abs(weight - reference) <= SAMPLE_WEIGHT_RTOL * np.abs(reference) + 1e-12 * (1 + scale)
+        ).all(axis=1)
     problems = int((~same).sum() + (~finite).sum() + bad.sum())
     passed = problems == 0
     hint = ""
     if not passed:
         if (~finite).any():
-            hint = (f"sample_weight returns NaN or inf in {(~finite).sum()} rows: where pdf is 0 the weight "
-                    "must be 0")
+            hint = (
+                f"sample_weight returns NaN or inf in {(~finite).sum()} rows: where pdf is 0 the weight "
+                "must be 0"
+            )
         elif (~same).any():
-            hint = (f"sample_weight's direction differs from sample's for the same u in {(~same).sum()} "
-                    "of {rows} rows: it must return the wi that sample returns").replace("{rows}", str(rows))
+            hint = (
+                f"sample_weight's direction differs from sample's for the same u in {(~same).sum()} "
+                "of {rows} rows: it must return the wi that sample returns"
+            ).replace("{rows}", str(rows))
         else:
             hint = _explain_weight(weight[bad], reference[bad], cos_theta_i[bad])
-    return Check("sample_weight", verdict(passed),
-                 f"{problems} of {rows} rows differ from (sample, f cos / pdf)",
-                 f"0 (relative {SAMPLE_WEIGHT_RTOL:g})", hint)
+    return Check(
+        "sample_weight",
+        verdict(passed),
+        f"{problems} of {rows} rows differ from (sample, f cos / pdf)",
+        f"0 (relative {SAMPLE_WEIGHT_RTOL:g})",
+        hint,
+    )
 
 
 def _explain_weight(weight: np.ndarray, reference: np.ndarray, cos_theta_i: np.ndarray) -> str:
@@ -653,8 +770,9 @@ def _explain_weight(weight: np.ndarray, reference: np.ndarray, cos_theta_i: np.n
         k = min(spreads, key=spreads.get)
         if spreads[k] < 1e-3:
             if k == -1:
-                return ("sample_weight misses the factor cos(theta_i): it returns f / pdf instead of "
-                        "f cos / pdf")
+                return (
+                    "sample_weight misses the factor cos(theta_i): it returns f / pdf instead of f cos / pdf"
+                )
             if k == 1:
                 return "sample_weight multiplies by cos(theta_i) twice (f cos^2 / pdf)"
             factor = math.exp(float(np.median(log_ratio)))
@@ -663,6 +781,7 @@ def _explain_weight(weight: np.ndarray, reference: np.ndarray, cos_theta_i: np.n
 
 
 # -- reciprocity --------------------------------------------------------------------------
+
 
 def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) -> Check:
     n = normalize(rng.normal(size=(rows, 3)))
@@ -690,9 +809,13 @@ def check_reciprocity(material, rng: np.random.Generator, rows: int = 20_000) ->
         hint = "eval returns NaN or inf for directions above the surface (see consistency)"
     elif not passed:
         hint = _explain_reciprocity(forward, backward, dot(wo, n), dot(wi, n))
-    return Check("reciprocity", verdict(passed),
-                 f"max |f(wo,wi) - f(wi,wo)| / f = {worst:.2g} ({rows} pairs)",
-                 f"<= {tolerance:g}", hint)
+    return Check(
+        "reciprocity",
+        verdict(passed),
+        f"max |f(wo,wi) - f(wi,wo)| / f = {worst:.2g} ({rows} pairs)",
+        f"<= {tolerance:g}",
+        hint,
+    )
 
 
 def _explain_reciprocity(forward, backward, cos_theta_o, cos_theta_i) -> str:
@@ -701,31 +824,56 @@ def _explain_reciprocity(forward, backward, cos_theta_o, cos_theta_i) -> str:
     if both.sum() >= 2:
         log_ratio = np.log(f[both] / b[both])
         log_cos = np.log(cos_theta_i[both] / cos_theta_o[both])
-        for k, text in ((1, "eval includes cos(theta_i), and the renderer multiplies by it again "
-                            "(the cosine counted twice); a microfacet denominator 4 cos(theta_o) "
-                            "without cos(theta_i) does the same"),
-                        (-1, "eval is divided by cos(theta_i) (or multiplied by cos(theta_o)): "
-                             "a cosine missing from the 4 cos(theta_o) cos(theta_i) denominator?")):
+        for k, text in (
+            (
+                1,
+                "eval includes cos(theta_i), and the renderer multiplies by it again "
+                "(the cosine counted twice); a microfacet denominator 4 cos(theta_o) "
+                "without cos(theta_i) does the same",
+            ),
+            (
+                -1,
+                "eval is divided by cos(theta_i) (or multiplied by cos(theta_o)): "
+                "a cosine missing from the 4 cos(theta_o) cos(theta_i) denominator?",
+            ),
+        ):
             if np.abs(log_ratio - k * log_cos).max() < 1e-6:
                 return text
-    return ("eval(wo, wi) != eval(wi, wo): a term depends on wo or wi alone (Fresnel at n . wo instead "
-            "of h . wo? G1(wo) instead of G2(wo, wi)?)")
+    return (
+        "eval(wo, wi) != eval(wi, wo): a term depends on wo or wi alone (Fresnel at n . wo instead "
+        "of h . wo? G1(wo) instead of G2(wo, wi)?)"
+    )
 
 
 # -- consistency --------------------------------------------------------------------------
 
+
 #: Directions (local frame, +z = n) at which consistency probes eval and pdf, by name.
 def _probe_directions(wo_local: np.ndarray) -> dict[str, np.ndarray]:
     mirror = np.array([-wo_local[0], -wo_local[1], wo_local[2]])
-    return {"n": np.array([0.0, 0, 1]), "-n": np.array([0.0, 0, -1]),
-            "tangent": np.array([1.0, 0, 0]), "tangent (other)": np.array([0.0, 1, 0]),
-            "1e-8 above": np.array([math.sqrt(1 - 1e-16), 0, 1e-8]),
-            "1e-8 below": np.array([0.0, math.sqrt(1 - 1e-16), -1e-8]),
-            "wo": wo_local, "-wo": -wo_local, "mirror of wo": mirror}
+    return {
+        "n": np.array([0.0, 0, 1]),
+        "-n": np.array([0.0, 0, -1]),
+        "tangent": np.array([1.0, 0, 0]),
+        "tangent (other)": np.array([0.0, 1, 0]),
+        "1e-8 above": np.array([math.sqrt(1 - 1e-16), 0, 1e-8]),
+        "1e-8 below": np.array([0.0, math.sqrt(1 - 1e-16), -1e-8]),
+        "wo": wo_local,
+        "-wo": -wo_local,
+        "mirror of wo": mirror,
+    }
 
 
-_WO_PROBES = {"0°": 0.0, "30°": 30.0, "60°": 60.0, "85°": 85.0, "89.9°": 89.9, "90° (grazing)": 90.0,
-              "95° (below)": 95.0, "180° (below)": 180.0}
+_WO_PROBES = {
+    "0°": 0.0,
+    "30°": 30.0,
+    "60°": 60.0,
+    "85°": 85.0,
+    "89.9°": 89.9,
+    "90° (grazing)": 90.0,
+    "95° (below)": 95.0,
+    "180° (below)": 180.0,
+}
 #: The local frame's normal.
 Z = np.array([0.0, 0.0, 1.0])
 #: Random directions (eval, pdf) and values of u (sample) per wo, besides the named ones.
@@ -760,8 +908,9 @@ def check_consistency(material, rng: np.random.Generator) -> Check:
     if unique:
         hint = unique[0] + (f" (and {len(unique) - 1} more problems)" if len(unique) > 1 else "")
         hint += _consistency_advice(unique[0])
-    return Check("consistency", verdict(not unique), f"{len(unique)} problems",
-                 "0 (grazing, ±n, below, edge u)", hint)
+    return Check(
+        "consistency", verdict(not unique), f"{len(unique)} problems", "0 (grazing, ±n, below, edge u)", hint
+    )
 
 
 def _look_at_directions(material, rng: np.random.Generator) -> dict[str, list[str]]:
@@ -776,8 +925,9 @@ def _look_at_directions(material, rng: np.random.Generator) -> dict[str, list[st
         wi_names += names
         wo_names += [wo_name] * len(names)
         wo.append(np.tile(wo_local, (len(names), 1)))
-    exact, wo, wi, wo_names, wi_names = _twice(len(wo_names), np.vstack(wo), np.vstack(wi),
-                                               np.array(wo_names), np.array(wi_names))
+    exact, wo, wi, wo_names, wi_names = _twice(
+        len(wo_names), np.vstack(wo), np.vstack(wi), np.array(wo_names), np.array(wi_names)
+    )
     f, pdf = ask_at(material, ("eval", "pdf"), wo, wi, Z, rng, exact)
     below = (wi[:, 2] < -1e-6) | (wo[:, 2] < -1e-6)
     problems = {}
@@ -817,7 +967,8 @@ def _look_at_samples(material, rng: np.random.Generator) -> dict[str, list[str]]
         nonzero = (weight != 0).any(axis=1)
     length = np.linalg.norm(wi_s, axis=1)
     finite, unit, pdf_finite, weight_finite, negative, nonzero, length = (
-        probe.receive_rows(a) for a in (finite, unit, pdf_finite, weight_finite, negative, nonzero, length))
+        probe.receive_rows(a) for a in (finite, unit, pdf_finite, weight_finite, negative, nonzero, length)
+    )
     problems = {}
     for wo_name, degrees in _WO_PROBES.items():
         rows = wo_names == wo_name
@@ -834,17 +985,22 @@ def _look_at_samples(material, rng: np.random.Generator) -> dict[str, list[str]]
         elif negative[rows].any():
             found.append(f"sample_weight is negative for wo at {wo_name}")
         elif degrees > 90 and nonzero[rows].any():
-            found.append(f"sample_weight is not 0 for wo at {wo_name}: a reflective material "
-                         "scatters nothing from below")
+            found.append(
+                f"sample_weight is not 0 for wo at {wo_name}: a reflective material "
+                "scatters nothing from below"
+            )
     return problems
 
 
-def _look(problems: list[str], method: str, values: np.ndarray, names: list[str], wo_name: str,
-          below: np.ndarray) -> None:
+def _look(
+    problems: list[str], method: str, values: np.ndarray, names: list[str], wo_name: str, below: np.ndarray
+) -> None:
     """Record where ``values`` (rows, K) are non-finite, negative, or nonzero below the surface."""
-    for test, text in ((~np.isfinite(values).all(axis=1), "NaN or inf"),
-                       ((values < -NEGATIVE_ROUNDING).any(axis=1), "negative"),
-                       (below & (values != 0).any(axis=1), "not 0 below the surface")):
+    for test, text in (
+        (~np.isfinite(values).all(axis=1), "NaN or inf"),
+        ((values < -NEGATIVE_ROUNDING).any(axis=1), "negative"),
+        (below & (values != 0).any(axis=1), "not 0 below the surface"),
+    ):
         with np.errstate(invalid="ignore"):
             hit = np.flatnonzero(test)
         if len(hit):
@@ -853,8 +1009,10 @@ def _look(problems: list[str], method: str, values: np.ndarray, names: list[str]
 
 def _consistency_advice(problem: str) -> str:
     if "NaN" in problem:
-        return (": NaN at grazing angles or at wi = ±n? Guard divisions by cos(theta) (and "
-                "tan(theta) = sin / cos) with np.where or a clamp")
+        return (
+            ": NaN at grazing angles or at wi = ±n? Guard divisions by cos(theta) (and "
+            "tan(theta) = sin / cos) with np.where or a clamp"
+        )
     if "below the surface" in problem:
         return ": a reflective material returns 0 when wo or wi is below the surface (test cos > 0)"
     if "negative" in problem:
@@ -863,6 +1021,7 @@ def _consistency_advice(problem: str) -> str:
 
 
 # -- float32 ------------------------------------------------------------------------------
+
 
 def check_float32(material, rng: np.random.Generator, rows: int = 4096, kept: list | None = None) -> Check:
     """The renderer's float32, column-major arrays give finite results close to float64's.
@@ -883,7 +1042,8 @@ def check_float32(material, rng: np.random.Generator, rows: int = 4096, kept: li
         results[name] = dict(
             eval=call(material, "eval", wo_, wi_, n_, shapes=[(rows, 3)], keep=keep),
             pdf=call(material, "pdf", wo_, wi_, n_, shapes=[(rows,)], keep=keep),
-            sample=call(material, "sample", wo_, n_, u_, shapes=[(rows, 3)], keep=keep))
+            sample=call(material, "sample", wo_, n_, u_, shapes=[(rows, 3)], keep=keep),
+        )
     worst, where, promoted = 0.0, "", []
     for method in ("eval", "pdf", "sample"):
         a64 = np.asarray(results["float64"][method], dtype=np.float64)
@@ -892,9 +1052,13 @@ def check_float32(material, rng: np.random.Generator, rows: int = 4096, kept: li
             promoted.append(method)
         a32 = a32.astype(np.float64)
         if not np.isfinite(a32).all():
-            return Check("float32", "FAIL", f"{method} gives NaN or inf for float32 input", "finite",
-                         f"{method} is not finite with float32 arrays (an overflow, or 1 - x*x < 0 "
-                         "from rounding?)")
+            return Check(
+                "float32",
+                "FAIL",
+                f"{method} gives NaN or inf for float32 input",
+                "finite",
+                f"{method} is not finite with float32 arrays (an overflow, or 1 - x*x < 0 from rounding?)",
+            )
         scale = np.abs(a64).max(initial=0) if method != "sample" else 1.0
         with np.errstate(invalid="ignore", divide="ignore"):
             error = np.abs(a32 - a64) / (np.abs(a64) + 1e-3 * scale + 1e-30)
@@ -903,18 +1067,28 @@ def check_float32(material, rng: np.random.Generator, rows: int = 4096, kept: li
         if np.nanmax(error, initial=0) > worst:
             worst, where = float(np.nanmax(error)), method
     if worst > 1e-2:
-        return Check("float32", "FAIL", f"max relative difference {worst:.2g} ({where})", "<= 0.01",
-                     f"{where} with float32 input differs from float64: precision lost to cancellation "
-                     "(e.g. 1 - cos for small angles) or a float32 parameter?")
+        return Check(
+            "float32",
+            "FAIL",
+            f"max relative difference {worst:.2g} ({where})",
+            "<= 0.01",
+            f"{where} with float32 input differs from float64: precision lost to cancellation "
+            "(e.g. 1 - cos for small angles) or a float32 parameter?",
+        )
     if promoted:
-        return Check("float32", "warn", f"{', '.join(promoted)} return float64 for float32 input",
-                     "float32 in, float32 out",
-                     "a np.float64 scalar or a float64 parameter array promotes the result: convert "
-                     "constants with float() and parameters with .astype(wi.dtype) (slower, still correct)")
+        return Check(
+            "float32",
+            "warn",
+            f"{', '.join(promoted)} return float64 for float32 input",
+            "float32 in, float32 out",
+            "a np.float64 scalar or a float64 parameter array promotes the result: convert "
+            "constants with float() and parameters with .astype(wi.dtype) (slower, still correct)",
+        )
     return Check("float32", "pass", f"max relative difference {worst:.2g}", "<= 0.01, float32 out")
 
 
 # -- row independence ---------------------------------------------------------------------
+
 
 def check_row_independence(material, kept: list[Kept], rng: np.random.Generator) -> Check:
     """Rows of large calls give the same answers asked one at a time and in another order.
@@ -933,8 +1107,10 @@ def check_row_independence(material, kept: list[Kept], rng: np.random.Generator)
         shuffled = _ask_again(material, record, order)
         for j, answer in enumerate(record.answer):
             single = np.concatenate([a[j] for a in alone])
-            for how, expected, got, row_of in (("alone", answer, single, np.arange(rows)),
-                                               ("in another order", answer[order], shuffled[j], order)):
+            for how, expected, got, row_of in (
+                ("alone", answer, single, np.arange(rows)),
+                ("in another order", answer[order], shuffled[j], order),
+            ):
                 differ = np.flatnonzero(~_agree(expected, got))
                 compared += rows
                 if len(differ) and first is None:
@@ -942,16 +1118,27 @@ def check_row_independence(material, kept: list[Kept], rng: np.random.Generator)
                     first = (record, int(row_of[k]), expected[k], got[k], how, len(differ))
     threshold = f"0 (relative {ROW_RTOL:g})"
     if first is None:
-        return Check("row independence", "pass",
-                     f"0 of {compared} answers differ ({len(kept)} calls asked again)", threshold)
+        return Check(
+            "row independence",
+            "pass",
+            f"0 of {compared} answers differ ({len(kept)} calls asked again)",
+            threshold,
+        )
     record, row, expected, got, how, count = first
-    hint = (f"the material's answer for a row depends on the other rows of the batch: "
-            f"{record.method} gave {_values(expected)} for row {row} of a call of {record.batch_rows} "
-            f"rows, and {_values(got)} for the same row {how} ({count} of {record.rows} rows differ). "
-            "Compute each row from its own wo, wi, n and u only (no means, sums, sorting or counts "
-            "over the rows, nothing kept from earlier calls)")
-    return Check("row independence", "FAIL", f"{record.method}: {count} of {record.rows} rows differ {how}",
-                 threshold, hint)
+    hint = (
+        f"the material's answer for a row depends on the other rows of the batch: "
+        f"{record.method} gave {_values(expected)} for row {row} of a call of {record.batch_rows} "
+        f"rows, and {_values(got)} for the same row {how} ({count} of {record.rows} rows differ). "
+        "Compute each row from its own wo, wi, n and u only (no means, sums, sorting or counts "
+        "over the rows, nothing kept from earlier calls)"
+    )
+    return Check(
+        "row independence",
+        "FAIL",
+        f"{record.method}: {count} of {record.rows} rows differ {how}",
+        threshold,
+        hint,
+    )
 
 
 def _ask_again(material, record: Kept, index) -> tuple:

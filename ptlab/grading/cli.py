@@ -48,25 +48,43 @@ from ptlab.untrusted.student_user import add_student_user_argument
 CALL_TIME_LIMIT = 120.0
 #: ptlab's own materials, whose copies are not the student's. (They are no traps: a student's
 #: material may inherit some of its methods from one, as long as it writes one itself.)
-MATERIALS = Rules(answers=("ptlab.materials.Diffuse", "ptlab.materials.Microfacet",
-                           "ptlab.materials.Mirror", "ptlab.materials.Dielectric"))
+MATERIALS = Rules(
+    answers=(
+        "ptlab.materials.Diffuse",
+        "ptlab.materials.Microfacet",
+        "ptlab.materials.Mirror",
+        "ptlab.materials.Dielectric",
+    )
+)
 
 
 def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentParser:
     """Add ``grade``'s arguments to ``parser`` (the ``ptlab grade`` subparser)."""
-    parser.add_argument("target", metavar="FILE.py:Name",
-                        help="the Python file and the material class (or object) in it")
-    parser.add_argument("--args", default="{}", metavar="JSON",
-                        help="keyword arguments for the class, as a JSON object (default {})")
-    parser.add_argument("--plots", metavar="DIR",
-                        help="write PNG pictures of a failed chi-square test into DIR")
+    parser.add_argument(
+        "target", metavar="FILE.py:Name", help="the Python file and the material class (or object) in it"
+    )
+    parser.add_argument(
+        "--args",
+        default="{}",
+        metavar="JSON",
+        help="keyword arguments for the class, as a JSON object (default {})",
+    )
+    parser.add_argument(
+        "--plots", metavar="DIR", help="write PNG pictures of a failed chi-square test into DIR"
+    )
     parser.add_argument("--seed", type=int, default=0, help="random seed of the checks (default 0)")
-    parser.add_argument("--samples", type=int, default=1_000_000,
-                        help="directions sampled per wo (default 10^6)")
-    parser.add_argument("--time-limit", type=float, default=900.0, metavar="SECONDS",
-                        help="stop the material's process after this long (default 900; its "
-                             f"import may take {IMPORT_TIME_LIMIT:.0f}, one call "
-                             f"{CALL_TIME_LIMIT:.0f})")
+    parser.add_argument(
+        "--samples", type=int, default=1_000_000, help="directions sampled per wo (default 10^6)"
+    )
+    parser.add_argument(
+        "--time-limit",
+        type=float,
+        default=900.0,
+        metavar="SECONDS",
+        help="stop the material's process after this long (default 900; its "
+        f"import may take {IMPORT_TIME_LIMIT:.0f}, one call "
+        f"{CALL_TIME_LIMIT:.0f})",
+    )
     add_student_user_argument(parser)
     return parser
 
@@ -96,9 +114,14 @@ def run_grade(args: argparse.Namespace) -> int:
         return 1
     with ProcessGuard() as guard:
         try:
-            with Submission(taken, guard, time_limit=args.time_limit,
-                            call_time_limit=CALL_TIME_LIMIT, on_output=_show_output,
-                            user=args.student_user) as submission:
+            with Submission(
+                taken,
+                guard,
+                time_limit=args.time_limit,
+                call_time_limit=CALL_TIME_LIMIT,
+                on_output=_show_output,
+                user=args.student_user,
+            ) as submission:
                 origin = library_answer(submission.module, name)
                 if origin is not None:
                     failure = f"{name} is ptlab's own answer ({origin}), not yours"

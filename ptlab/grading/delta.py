@@ -68,15 +68,15 @@ def hammersley(count: int) -> np.ndarray:
 class Scatter:
     """What ``sample_weight`` did with one ``wo``, in the checks' frame (+z the outward normal)."""
 
-    side: str              # "outside" or "inside"
-    degrees: float         # angle between wo and the normal on wo's side
-    wo: np.ndarray         # (3,)
-    n: np.ndarray          # (3,) the outward normal
-    wi: np.ndarray         # (M, 3)
-    weight: np.ndarray     # (M, 3)
+    side: str  # "outside" or "inside"
+    degrees: float  # angle between wo and the normal on wo's side
+    wo: np.ndarray  # (3,)
+    n: np.ndarray  # (3,) the outward normal
+    wi: np.ndarray  # (M, 3)
+    weight: np.ndarray  # (M, 3)
     reflected: np.ndarray  # (M,) bool: wi is the mirror direction
     refracted: np.ndarray  # (M,) bool: wi is on the other side, in the plane of wo and n
-    ratio: np.ndarray      # (M,) sin(theta_o) / sin(theta_t) where refracted (NaN elsewhere)
+    ratio: np.ndarray  # (M,) sin(theta_o) / sin(theta_t) where refracted (NaN elsewhere)
 
     @property
     def cos_theta_o(self) -> float:
@@ -95,11 +95,11 @@ class Scattering:
 
     scatters: list[Scatter]
     probe: Probe
-    wo: np.ndarray         # (rows, 3) as sent
-    n: np.ndarray          # (rows, 3) as sent
-    u: np.ndarray          # (rows, 2) as sent
-    wi: np.ndarray         # (rows, 3) sample_weight's directions, as the material returned them
-    weight: np.ndarray     # (rows, 3) sample_weight's weights, as the material returned them
+    wo: np.ndarray  # (rows, 3) as sent
+    n: np.ndarray  # (rows, 3) as sent
+    u: np.ndarray  # (rows, 2) as sent
+    wi: np.ndarray  # (rows, 3) sample_weight's directions, as the material returned them
+    weight: np.ndarray  # (rows, 3) sample_weight's weights, as the material returned them
 
     def by_scatter(self, mask: np.ndarray) -> np.ndarray:
         """(scatters, SAMPLES) the (rows,) per-row ``mask`` (sent order) of each scatter's rows."""
@@ -138,7 +138,7 @@ def scatter_all(material, rng: np.random.Generator, kept: list | None = None) ->
     for side in ("outside", "inside"):
         for degrees in ANGLES:
             wo = direction_at(Z if side == "outside" else -Z, degrees, rng.uniform(0, 2 * math.pi))
-            if degrees == 90.0:   # exactly in the tangent plane, not 6e-17 off it
+            if degrees == 90.0:  # exactly in the tangent plane, not 6e-17 off it
                 wo = normalize((wo - (wo @ Z) * Z)[None, :])[0]
             setups.append((side, degrees, wo))
     exact = np.repeat([degrees == 90.0 for _, degrees, _ in setups], SAMPLES)
@@ -154,8 +154,9 @@ def scatter_all(material, rng: np.random.Generator, kept: list | None = None) ->
     for k, (side, degrees, wo) in enumerate(setups):
         part = slice(k * SAMPLES, (k + 1) * SAMPLES)
         reflected, refracted, ratio = classify(wo, Z, wi_back[part])
-        scatters.append(Scatter(side, degrees, wo, Z, wi_back[part], weight_back[part], reflected, refracted,
-                                ratio))
+        scatters.append(
+            Scatter(side, degrees, wo, Z, wi_back[part], weight_back[part], reflected, refracted, ratio)
+        )
     return Scattering(scatters, probe, wo_s, n_s, u_s, wi, weight)
 
 
@@ -180,8 +181,9 @@ def check_delta_consistency(material, scattering: Scattering, kept: list | None 
     problems = []
     transmissive = transmits(scattering.scatters)
     rows = len(scattering.wi)
-    wi = call(material, "sample", scattering.wo, scattering.n, scattering.u, shapes=[(rows, 3)],
-              keep=kept).astype(np.float64)
+    wi = call(
+        material, "sample", scattering.wo, scattering.n, scattering.u, shapes=[(rows, 3)], keep=kept
+    ).astype(np.float64)
     differs = scattering.by_scatter(~(np.abs(wi - scattering.wi) <= 1e-9).all(axis=1))
     finite = np.isfinite(scattering.wi).all(axis=1)
     nonzero = np.zeros(rows, dtype=bool)
@@ -199,23 +201,30 @@ def check_delta_consistency(material, scattering: Scattering, kept: list | None 
         length = np.linalg.norm(s.wi, axis=1)
         if (np.abs(length - 1) > 1e-6).any():
             worst = length[np.argmax(np.abs(length - 1))]
-            problems.append(f"sample_weight returns directions of length {worst:.6g} at {s.label}: "
-                            "normalise them")
+            problems.append(
+                f"sample_weight returns directions of length {worst:.6g} at {s.label}: normalise them"
+            )
         if not np.isfinite(s.weight).all() or (s.weight < 0).any():
             problems.append(f"sample_weight returns NaN, inf or negative weights at {s.label}")
         elif s.wo @ s.n < -1e-9 and not transmissive and (s.weight != 0).any():
-            problems.append(f"the weight is not 0 at {s.label}: a material that does not transmit scatters "
-                            "nothing from below its surface")
+            problems.append(
+                f"the weight is not 0 at {s.label}: a material that does not transmit scatters "
+                "nothing from below its surface"
+            )
         if differs[k].any():
-            problems.append("sample and sample_weight return different directions for the same u "
-                            f"at {s.label}")
+            problems.append(
+                f"sample and sample_weight return different directions for the same u at {s.label}"
+            )
         if nonzero[k].any():
-            problems.append(f"eval or pdf is not 0 at {s.label}: for a delta material both return 0 "
-                            "(pbrt's convention: the weight comes from sample_weight alone)")
+            problems.append(
+                f"eval or pdf is not 0 at {s.label}: for a delta material both return 0 "
+                "(pbrt's convention: the weight comes from sample_weight alone)"
+            )
     problems = list(dict.fromkeys(problems))
     hint = problems[0] + (f" (and {len(problems) - 1} more)" if len(problems) > 1 else "") if problems else ""
-    return Check("consistency", verdict(not problems), f"{len(problems)} problems",
-                 "0 (grazing, ±n, both sides)", hint)
+    return Check(
+        "consistency", verdict(not problems), f"{len(problems)} problems", "0 (grazing, ±n, both sides)", hint
+    )
 
 
 def check_directions(material, scatters: list[Scatter]) -> Check:
@@ -224,11 +233,15 @@ def check_directions(material, scatters: list[Scatter]) -> Check:
     if stray:
         s = stray[0]
         count = int((~(s.reflected | s.refracted)).sum())
-        return Check("directions", "FAIL", f"{count} of {len(s.wi)} directions at {s.label} are neither "
-                     "reflected nor refracted", "0",
-                     f"at {s.label}, sample returns directions that are neither the mirror reflection "
-                     "2 (wo . n) n - wo (with wo pointing away from the surface) nor a refraction in the "
-                     "plane of wo and n")
+        return Check(
+            "directions",
+            "FAIL",
+            f"{count} of {len(s.wi)} directions at {s.label} are neither reflected nor refracted",
+            "0",
+            f"at {s.label}, sample returns directions that are neither the mirror reflection "
+            "2 (wo . n) n - wo (with wo pointing away from the surface) nor a refraction in the "
+            "plane of wo and n",
+        )
     worst, worst_error, tir = None, 0.0, None
     for s in scatters:
         if not s.refracted.any() or eta is None:
@@ -246,14 +259,18 @@ def check_directions(material, scatters: list[Scatter]) -> Check:
     hint = ""
     if not passed:
         measured = float(np.nanmedian(worst.ratio))
-        hint = (f"refracted directions break Snell's law at {worst.label}: sin theta_o / sin theta_t = "
-                f"{measured:.4g}, expected {eta if worst.side == 'outside' else 1 / eta:.4g}")
+        hint = (
+            f"refracted directions break Snell's law at {worst.label}: sin theta_o / sin theta_t = "
+            f"{measured:.4g}, expected {eta if worst.side == 'outside' else 1 / eta:.4g}"
+        )
         if worst.side == "inside" and abs(measured - eta) < 1e-3 * eta:
             hint += " (leaving the glass uses eta instead of 1/eta: inside and outside swapped?)"
     elif tir is not None:
         passed = False
-        hint = ("light leaving the glass beyond the critical angle must be totally reflected "
-                f"(at {tir.label}, sin^2 theta_t >= 1: Fresnel reflectance 1)")
+        hint = (
+            "light leaving the glass beyond the critical angle must be totally reflected "
+            f"(at {tir.label}, sin^2 theta_t >= 1: Fresnel reflectance 1)"
+        )
     statistic = f"max Snell error {worst_error:.2g}" + (f", eta = {eta:.4g}" if eta else "")
     return Check("directions", verdict(passed), statistic, "<= 1e-05, reflection exact to 1e-06", hint)
 
@@ -282,8 +299,18 @@ def _fresnel_fit(material, scatters: list[Scatter]):
         fits[convention] = (c_t, residual, s)
     convention = min(fits, key=lambda k: fits[k][1].max())
     c_t, residual_t, s = fits[convention]
-    return dict(rows=rows, c_r=c_r, residual_r=residual_r, c_t=c_t, residual_t=residual_t, s=s,
-                convention=convention, R_hat=R_hat, T_hat=T_hat, F=F)
+    return dict(
+        rows=rows,
+        c_r=c_r,
+        residual_r=residual_r,
+        c_t=c_t,
+        residual_t=residual_t,
+        s=s,
+        convention=convention,
+        R_hat=R_hat,
+        T_hat=T_hat,
+        F=F,
+    )
 
 
 def check_fresnel(material, scatters: list[Scatter]) -> Check:
@@ -295,13 +322,19 @@ def check_fresnel(material, scatters: list[Scatter]) -> Check:
     if not passed:
         k = worst_r if fit["residual_r"][worst_r] >= fit["residual_t"][worst_t] else worst_t
         s = fit["rows"][k][0]
-        hint = (f"the weights do not follow the Fresnel equations at {s.label}: reflected "
-                f"{fit['R_hat'][k].max():.4f}, refracted {fit['T_hat'][k].max():.4f}, Fresnel reflectance "
-                f"F = {fit['F'][k]:.4f}. Choose reflection with probability F and weigh it 1 (or F / P); "
-                "Schlick's approximation, the cosine of the wrong side, or eta inverted when leaving?")
-    return Check("Fresnel weights", verdict(passed),
-                 f"max |weight - c F| = {error:.2g} (transmission {fit['convention']})",
-                 f"<= {FRESNEL_TOLERANCE:g}", hint)
+        hint = (
+            f"the weights do not follow the Fresnel equations at {s.label}: reflected "
+            f"{fit['R_hat'][k].max():.4f}, refracted {fit['T_hat'][k].max():.4f}, Fresnel reflectance "
+            f"F = {fit['F'][k]:.4f}. Choose reflection with probability F and weigh it 1 (or F / P); "
+            "Schlick's approximation, the cosine of the wrong side, or eta inverted when leaving?"
+        )
+    return Check(
+        "Fresnel weights",
+        verdict(passed),
+        f"max |weight - c F| = {error:.2g} (transmission {fit['convention']})",
+        f"<= {FRESNEL_TOLERANCE:g}",
+        hint,
+    )
 
 
 def check_delta_energy(material, scatters: list[Scatter]) -> Check:
@@ -311,17 +344,25 @@ def check_delta_energy(material, scatters: list[Scatter]) -> Check:
         worst = int(np.argmax(flux.max(axis=1)))
         value = float(max(flux.max(), fit["c_r"].max(), fit["c_t"].max()))
         label = fit["rows"][worst][0].label
-        hint = ("more light leaves than arrives: a reflectance or transmittance above 1, or the refracted "
-                "weight multiplied by eta^2 where it should be divided?")
+        hint = (
+            "more light leaves than arrives: a reflectance or transmittance above 1, or the refracted "
+            "weight multiplied by eta^2 where it should be divided?"
+        )
     else:
         means = [s.weight.mean(axis=0).max() for s in scatters]
         worst = int(np.argmax(means))
         value, label = float(means[worst]), scatters[worst].label
-        hint = ("the mean weight is above 1: the material reflects more light than it receives "
-                "(reflectance > 1?)")
+        hint = (
+            "the mean weight is above 1: the material reflects more light than it receives (reflectance > 1?)"
+        )
     passed = value <= 1 + ENERGY_SLACK
-    return Check("energy", verdict(passed), f"max reflected + transmitted = {value:.4f} ({label})",
-                 f"<= {1 + ENERGY_SLACK:g}", "" if passed else hint)
+    return Check(
+        "energy",
+        verdict(passed),
+        f"max reflected + transmitted = {value:.4f} ({label})",
+        f"<= {1 + ENERGY_SLACK:g}",
+        "" if passed else hint,
+    )
 
 
 def check_front(material, scattering: Scattering) -> Check | None:
@@ -343,14 +384,27 @@ def check_front(material, scattering: Scattering) -> Check | None:
     cos_theta_o = np.repeat([s.wo @ s.n for s in scattering.scatters], SAMPLES)
     outside = cos_theta_o > 0
     n_facing = probe.send(np.where((cos_theta_o >= 0)[:, None], Z, -Z))
-    wi, weight = call(material, "sample_weight", scattering.wo, n_facing, scattering.u,
-                      probe.send_rows(outside), shapes=[(rows, 3), (rows, 3)])
-    same = (np.isclose(wi, scattering.wi, rtol=0, atol=1e-9).all(axis=1)
-            & np.isclose(weight, scattering.weight, rtol=1e-9, atol=1e-12).all(axis=1))
+    wi, weight = call(
+        material,
+        "sample_weight",
+        scattering.wo,
+        n_facing,
+        scattering.u,
+        probe.send_rows(outside),
+        shapes=[(rows, 3), (rows, 3)],
+    )
+    same = np.isclose(wi, scattering.wi, rtol=0, atol=1e-9).all(axis=1) & np.isclose(
+        weight, scattering.weight, rtol=1e-9, atol=1e-12
+    ).all(axis=1)
     differs = scattering.by_scatter(~same)
     for k, s in enumerate(scattering.scatters):
         if abs(s.wo @ s.n) >= 1e-9 and differs[k].any():
-            return Check("front", "FAIL", f"results differ at {s.label}", "identical",
-                         "with front given and n turned toward wo (as the renderer calls it), sample_weight "
-                         "must return what it returns for the outward n without front")
+            return Check(
+                "front",
+                "FAIL",
+                f"results differ at {s.label}",
+                "identical",
+                "with front given and n turned toward wo (as the renderer calls it), sample_weight "
+                "must return what it returns for the outward n without front",
+            )
     return Check("front", "pass", "same results with front and n facing wo", "identical")

@@ -42,8 +42,7 @@ class AdaptedMaterial(Material):
     def __init__(self, material):
         missing = [name for name in MATERIAL_METHODS if not callable(getattr(material, name, None))]
         if missing:
-            raise NotAMaterialError(f"it has no {', '.join(missing)} (a material has eval, pdf "
-                                    f"and sample)")
+            raise NotAMaterialError(f"it has no {', '.join(missing)} (a material has eval, pdf and sample)")
         self.material = material
         self._eval, self._pdf, self._sample = (getattr(material, name) for name in MATERIAL_METHODS)
         weight = getattr(material, "sample_weight", None)
@@ -62,8 +61,9 @@ class AdaptedMaterial(Material):
     def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
         return self._sample(wo, n, u)
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         if self._sample_weight is None:
             return super().sample_weight(wo, n, u, front)
         if front is not None and self._weight_takes_front:
@@ -74,8 +74,13 @@ class AdaptedMaterial(Material):
         """Stand-ins of one student's process, alike in what they define, shade together."""
         if not isinstance(self.material, RemoteObject):
             return id(self)
-        return ("student", id(submission_of(self.material)), self.is_delta,
-                self._sample_weight is None, self._weight_takes_front)
+        return (
+            "student",
+            id(submission_of(self.material)),
+            self.is_delta,
+            self._sample_weight is None,
+            self._weight_takes_front,
+        )
 
     @classmethod
     def stack(cls, materials: list[AdaptedMaterial]) -> Material:
@@ -147,8 +152,9 @@ class MaterialGroup(Material):
     def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
         return self._each("sample", wo, n, u)
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         if self._derived_weight:
             return super().sample_weight(wo, n, u, front)
         if front is not None and self._takes_front:

@@ -58,8 +58,10 @@ def write_plots(report, directory: str | Path) -> list[Path]:
         top = max(observed.max(), expected.max(), 1)
         residual = (observed - expected) / np.sqrt(np.maximum(expected, 1.0))
         stem = f"chi2-wo{lobe['degrees']:g}"
-        for name, image in (("observed", _colour_map(_image(observed / top, shape), _HEAT)),
-                            ("expected", _colour_map(_image(expected / top, shape), _HEAT)),
-                            ("residual", _colour_map(_image((residual / 5 + 1) / 2, shape), _DIVERGING))):
+        for name, image in (
+            ("observed", _colour_map(_image(observed / top, shape), _HEAT)),
+            ("expected", _colour_map(_image(expected / top, shape), _HEAT)),
+            ("residual", _colour_map(_image((residual / 5 + 1) / 2, shape), _DIVERGING)),
+        ):
             written.append(write_image(directory / f"{stem}-{name}.png", image))
     return written

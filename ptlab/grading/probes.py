@@ -60,7 +60,7 @@ class Rotations:
     def apply(self, v: np.ndarray) -> np.ndarray:
         """(rows, 3) column-major: each row's rotation of ``v``, (3,) or (rows, 3)."""
         m = self.m
-        if v.ndim == 1:      # one unit vector for every row: its zero components cost nothing
+        if v.ndim == 1:  # one unit vector for every row: its zero components cost nothing
             return vec3(*(sum(m[i][j] * v[j] for j in np.flatnonzero(v)) for i in range(3)))
         x, y, z = v[:, 0], v[:, 1], v[:, 2]
         return vec3(*(m[i][0] * x + m[i][1] * y + m[i][2] * z for i in range(3)))
@@ -77,14 +77,16 @@ def _uniform(rng: np.random.Generator, rows: int) -> list[list[np.ndarray]]:
     normal vector in R^4, normalised, is uniform on the unit sphere S^3 (Shoemake, Graphics
     Gems III)."""
     w, x, y, z = (rng.standard_normal(rows) for _ in range(4))
-    scale = np.sqrt(2.0 / (w * w + x * x + y * y + z * z))   # |q| = sqrt(2): the 2s of the formula
+    scale = np.sqrt(2.0 / (w * w + x * x + y * y + z * z))  # |q| = sqrt(2): the 2s of the formula
     for part in (w, x, y, z):
         part *= scale
     xx, yy, zz = x * x, y * y, z * z
     xy, xz, yz, wx, wy, wz = x * y, x * z, y * z, w * x, w * y, w * z
-    return [[1.0 - (yy + zz), xy - wz, xz + wy],
-            [xy + wz, 1.0 - (xx + zz), yz - wx],
-            [xz - wy, yz + wx, 1.0 - (xx + yy)]]
+    return [
+        [1.0 - (yy + zz), xy - wz, xz + wy],
+        [xy + wz, 1.0 - (xx + zz), yz - wx],
+        [xz - wy, yz + wx, 1.0 - (xx + yy)],
+    ]
 
 
 def _exact(rng: np.random.Generator, rows: int) -> list[list[np.ndarray]]:
@@ -107,8 +109,9 @@ class Probe:
     shuffled (sent row k is the checks' row ``order[k]``) unless the checks' order already
     mixes them."""
 
-    def __init__(self, rng: np.random.Generator, rows: int, exact: np.ndarray | None = None,
-                 shuffle: bool = True):
+    def __init__(
+        self, rng: np.random.Generator, rows: int, exact: np.ndarray | None = None, shuffle: bool = True
+    ):
         """``exact``: (rows,) bool in the checks' order, rows that need exact cosines to +z."""
         self.order = rng.permutation(rows) if shuffle else None
         if exact is not None and shuffle:
@@ -150,8 +153,12 @@ class Kept:
     @classmethod
     def first_rows(cls, method: str, arguments: tuple, answer, rows: int) -> Kept:
         parts = answer if isinstance(answer, tuple) else (answer,)
-        return cls(method, tuple(rows_of(a, slice(0, rows)) for a in arguments),
-                   tuple(rows_of(np.asarray(p), slice(0, rows)) for p in parts), len(arguments[0]))
+        return cls(
+            method,
+            tuple(rows_of(a, slice(0, rows)) for a in arguments),
+            tuple(rows_of(np.asarray(p), slice(0, rows)) for p in parts),
+            len(arguments[0]),
+        )
 
     @property
     def rows(self) -> int:
@@ -189,5 +196,5 @@ class Turned:
         turn = Rotations.draw(self.rng, len(wo))
         wi = np.asarray(self.material.sample(turn.apply(wo), turn.apply(n), u))
         if wi.shape != (len(wo), 3) or wi.dtype.kind != "f":
-            return wi           # (for the check to report as it is)
+            return wi  # (for the check to report as it is)
         return turn.undo(wi.astype(np.float64))

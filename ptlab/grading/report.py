@@ -94,8 +94,11 @@ class Report:
             return [f"{first}  {hint_lines[0]}".rstrip()] + [" " * indent + h for h in hint_lines[1:]]
 
         verdict_line = "PASSED" if self.passed else f"FAILED: {', '.join(self.failed)}"
-        lines = [f"{self.material}: seed {self.seed}, {self.samples:,} samples per wo, {self.seconds:.1f} s",
-                 *line(header), "  ".join("-" * w for w in widths) + "  " + "-" * 4]
+        lines = [
+            f"{self.material}: seed {self.seed}, {self.samples:,} samples per wo, {self.seconds:.1f} s",
+            *line(header),
+            "  ".join("-" * w for w in widths) + "  " + "-" * 4,
+        ]
         for row in rows:
             lines += line(row)
         return "\n".join(lines + [verdict_line])

@@ -76,9 +76,11 @@ class SphereGrid:
         """(N, 3) unit vectors (column-major) at the given (N,) cos theta and phi."""
         sin_theta = np.sqrt(np.maximum(0.0, 1.0 - cos_theta * cos_theta))
         x, y = sin_theta * np.cos(phi), sin_theta * np.sin(phi)
-        return vec3(x * self.t[0] + y * self.s[0] + cos_theta * self.n[0],
-                    x * self.t[1] + y * self.s[1] + cos_theta * self.n[1],
-                    x * self.t[2] + y * self.s[2] + cos_theta * self.n[2])
+        return vec3(
+            x * self.t[0] + y * self.s[0] + cos_theta * self.n[0],
+            x * self.t[1] + y * self.s[1] + cos_theta * self.n[1],
+            x * self.t[2] + y * self.s[2] + cos_theta * self.n[2],
+        )
 
     def cell_of(self, w: np.ndarray) -> np.ndarray:
         """(N,) intp index of the cell holding each of the (N, 3) unit vectors."""
@@ -91,8 +93,13 @@ class SphereGrid:
         """(cells,) number of the (N, 3) unit vectors in each cell."""
         return np.bincount(self.cell_of(w), minlength=self.cells)
 
-    def integrate(self, f: Callable[[np.ndarray], np.ndarray], tolerance: Callable,
-                  max_levels: int = 7, max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+    def integrate(
+        self,
+        f: Callable[[np.ndarray], np.ndarray],
+        tolerance: Callable,
+        max_levels: int = 7,
+        max_regions: int = 100_000,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Integrals of one vector-valued function over every cell, and their error bounds:
         ``integrate_lobes`` with one lobe, ``f`` mapping (P, 3) directions to (P, K) values.
 
@@ -102,9 +109,14 @@ class SphereGrid:
         totals, errors = self.integrate_lobes(lambda lobe, w: f(w), tolerance, 1, max_levels, max_regions)
         return totals[0], errors[0]
 
-    def integrate_lobes(self, f: Callable[[np.ndarray, np.ndarray], np.ndarray], tolerance: Callable,
-                        lobes: int, max_levels: int = 7,
-                        max_regions: int = 100_000) -> tuple[np.ndarray, np.ndarray]:
+    def integrate_lobes(
+        self,
+        f: Callable[[np.ndarray, np.ndarray], np.ndarray],
+        tolerance: Callable,
+        lobes: int,
+        max_levels: int = 7,
+        max_regions: int = 100_000,
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Integrals of ``lobes`` vector-valued functions over every cell, and their error bounds.
 
         The functions are integrated together, so that each step asks ``f`` about the
@@ -130,9 +142,14 @@ class SphereGrid:
         d_theta = np.arccos(np.clip(-1.0 + rows * self.d_cos, -1.0, 1.0)) - theta0
         # Every region: theta0, phi0, d_theta, d_phi, its cell and its lobe; the lobes of a
         # cell side by side, so that every call of f has the points of all lobes interleaved.
-        regions = (np.repeat(theta0, lobes), np.repeat(columns * self.d_phi, lobes),
-                   np.repeat(d_theta, lobes), np.full(lobes * self.cells, self.d_phi),
-                   np.repeat(np.arange(self.cells), lobes), np.tile(np.arange(lobes), self.cells))
+        regions = (
+            np.repeat(theta0, lobes),
+            np.repeat(columns * self.d_phi, lobes),
+            np.repeat(d_theta, lobes),
+            np.full(lobes * self.cells, self.d_phi),
+            np.repeat(np.arange(self.cells), lobes),
+            np.tile(np.arange(lobes), self.cells),
+        )
         coarse = self._rule(f, *regions[:4], regions[5])
         values = coarse.shape[1]
         totals = np.zeros((lobes * self.cells, values))
@@ -171,8 +188,9 @@ class SphereGrid:
         x = (_NODES + 1.0) / 2.0
         theta = (theta0[:, None, None] + d_theta[:, None, None] * x[None, :, None]).repeat(3, axis=2)
         phi = (phi0[:, None, None] + d_phi[:, None, None] * x[None, None, :]).repeat(3, axis=1)
-        values = np.asarray(f(np.repeat(lobe, 9), self.directions(np.cos(theta).ravel(), phi.ravel())),
-                            dtype=np.float64)
+        values = np.asarray(
+            f(np.repeat(lobe, 9), self.directions(np.cos(theta).ravel(), phi.ravel())), dtype=np.float64
+        )
         values = values.reshape(len(theta0), 9, -1) * np.sin(theta).reshape(len(theta0), 9, 1)
         weights = np.outer(_WEIGHTS, _WEIGHTS).ravel() / 4.0
         return np.einsum("rpk,p->rk", values, weights) * (d_theta * d_phi)[:, None]
@@ -184,5 +202,10 @@ def _split(theta0, phi0, d_theta, d_phi, *labels):
     half_theta, half_phi = d_theta / 2.0, d_phi / 2.0
     theta_children = np.stack([theta0, theta0, theta0 + half_theta, theta0 + half_theta], axis=1).ravel()
     phi_children = np.stack([phi0, phi0 + half_phi, phi0, phi0 + half_phi], axis=1).ravel()
-    return (theta_children, phi_children, np.repeat(half_theta, 4), np.repeat(half_phi, 4),
-            *(np.repeat(label, 4) for label in labels))
+    return (
+        theta_children,
+        phi_children,
+        np.repeat(half_theta, 4),
+        np.repeat(half_phi, 4),
+        *(np.repeat(label, 4) for label in labels),
+    )

@@ -44,6 +44,8 @@ INTEGRATORS: dict[str, Integrator] = {
     # The homework's maxDepth = 5: a Whitted ray bounces only off mirrors and glass.
     "whitted": Integrator(trace_whitted, max_depth=5),
     # (A debug view stops at the first hit: its max depth is only recorded with the image.)
-    **{view.__name__: Integrator(partial(trace_debug, view=view), max_depth=PathSettings.max_depth)
-       for view in (normals, albedo, depth)},
+    **{
+        view.__name__: Integrator(partial(trace_debug, view=view), max_depth=PathSettings.max_depth)
+        for view in (normals, albedo, depth)
+    },
 }

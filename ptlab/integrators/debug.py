@@ -40,9 +40,15 @@ def depth(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
     return np.repeat(hit.t[:, None], 3, axis=1)
 
 
-def trace_debug(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                sampler: Sampler, settings: PathSettings,
-                view: Callable[[SurfaceHit, Sampler], np.ndarray]) -> int:
+def trace_debug(
+    film: np.ndarray,
+    scene: Scene,
+    accel: Accelerator,
+    paths: Paths,
+    sampler: Sampler,
+    settings: PathSettings,
+    view: Callable[[SurfaceHit, Sampler], np.ndarray],
+) -> int:
     """Add one ``view`` value per camera ray into ``film``; return the rays traced.
     (``settings``, which no view needs, keeps the call the same as every integrator's.)"""
     hits = accel.intersect(paths.origins, paths.dirs)

@@ -92,12 +92,12 @@ HEURISTICS = ("power", "balance")
 class Paths:
     """The live paths of a batch, as structure-of-arrays (one row per path)."""
 
-    origins: np.ndarray      # (N, 3) float32
-    dirs: np.ndarray         # (N, 3) float32 unit
-    throughput: np.ndarray   # (N, 3) float32, product of f cos / pdf so far
-    pixel: np.ndarray        # (N,) intp, the film row each path adds its radiance to
+    origins: np.ndarray  # (N, 3) float32
+    dirs: np.ndarray  # (N, 3) float32 unit
+    throughput: np.ndarray  # (N, 3) float32, product of f cos / pdf so far
+    pixel: np.ndarray  # (N,) intp, the film row each path adds its radiance to
     sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
-    sample: np.ndarray       # (N,) uint64 sampler keys: whose random numbers the path uses
+    sample: np.ndarray  # (N,) uint64 sampler keys: whose random numbers the path uses
     pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
 
 
@@ -105,24 +105,25 @@ class Paths:
 class SurfaceHit:
     """The live paths at their current vertex (one row per path)."""
 
-    prim: np.ndarray         # (N,) intp triangle ids
-    p: np.ndarray            # (N, 3) float32 hit points
-    n: np.ndarray            # (N, 3) unit shading normal, turned to the side of wo
-    wo: np.ndarray           # (N, 3) unit direction back along the ray
-    front: np.ndarray        # (N,) bool: the ray hit the triangle's front face
-    offset: np.ndarray       # (N,) float32: how far new rays start off the surface
-    throughput: np.ndarray   # (N, 3) float32
-    pixel: np.ndarray        # (N,) intp
+    prim: np.ndarray  # (N,) intp triangle ids
+    p: np.ndarray  # (N, 3) float32 hit points
+    n: np.ndarray  # (N, 3) unit shading normal, turned to the side of wo
+    wo: np.ndarray  # (N, 3) unit direction back along the ray
+    front: np.ndarray  # (N,) bool: the ray hit the triangle's front face
+    offset: np.ndarray  # (N,) float32: how far new rays start off the surface
+    throughput: np.ndarray  # (N, 3) float32
+    pixel: np.ndarray  # (N,) intp
     sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
-    sample: np.ndarray       # (N,) uint64 sampler keys (``ptlab.samplers``)
-    materials: list          # [(rows, material)]: who shades which rows (``material_groups``)
-    delta: np.ndarray        # (N,) bool: the material here is a mirror or glass
-    t: np.ndarray            # (N,) distance from the previous vertex
-    pdf: np.ndarray | None   # (N,) pdf with which the previous vertex chose this direction
+    sample: np.ndarray  # (N,) uint64 sampler keys (``ptlab.samplers``)
+    materials: list  # [(rows, material)]: who shades which rows (``material_groups``)
+    delta: np.ndarray  # (N,) bool: the material here is a mirror or glass
+    t: np.ndarray  # (N,) distance from the previous vertex
+    pdf: np.ndarray | None  # (N,) pdf with which the previous vertex chose this direction
 
 
-def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                sampler: Sampler, settings: PathSettings) -> int:
+def trace_paths(
+    film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths, sampler: Sampler, settings: PathSettings
+) -> int:
     """Trace a batch of camera paths to the end, adding their radiance into ``film``.
 
     Args:
@@ -140,20 +141,25 @@ def trace_paths(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths
         rays += len(hits.prim)
         if scene.sky is not None:
             add_sky(film, scene, paths, hits, settings)  # the paths that escape see the sky
-        hit = surface_hit(scene, paths, hits)            # drops the paths that missed
+        hit = surface_hit(scene, paths, hits)  # drops the paths that missed
         if len(hit.prim) == 0:
             break
         if settings.strategy != "nee" or hit.sees_emission.any():
-            add_emission(film, scene, hit, settings)   # the fix for the black light
+            add_emission(film, scene, hit, settings)  # the fix for the black light
         if depth == settings.max_depth:
             break
-        u = BounceUniforms(sampler, hit.sample, depth)     # this bounce's random numbers
+        u = BounceUniforms(sampler, hit.sample, depth)  # this bounce's random numbers
         if sampled_lights(scene, settings).any():
             rays += direct_light(film, scene, accel, hit, u.light(), settings)
         u_roulette = u.roulette() if depth >= settings.roulette_starts else None
         survive = russian_roulette(hit, depth, settings, u_roulette)
-        paths = scatter(scene, hit, u.bsdf(), survive,   # keeps the survivors only
-                        with_pdf=settings.strategy == "mis")
+        paths = scatter(
+            scene,
+            hit,
+            u.bsdf(),
+            survive,  # keeps the survivors only
+            with_pdf=settings.strategy == "mis",
+        )
         if len(paths.pixel) == 0:
             break
     return rays
@@ -167,8 +173,9 @@ def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> No
     dropped rather than poisoning its pixel for good; it is checked on the per-pixel sums,
     which are far fewer than the contributions, so the common case costs nothing extra.
     """
-    sums = np.stack([np.bincount(pixel, weights=radiance[:, c], minlength=len(film))
-                     for c in range(3)], axis=1)
+    sums = np.stack(
+        [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)], axis=1
+    )
     if not np.isfinite(sums).all():
         finite = np.isfinite(radiance).all(axis=1)
         return add_to_film(film, pixel[finite], radiance[finite])
@@ -191,7 +198,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     every = len(alive) == len(hits.prim)
     prim = kept(hits.prim, alive, every)
     # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
-    data = scene.triangle_data.take(prim, axis=1)   # (13, N); .T gives (N, 3) views
+    data = scene.triangle_data.take(prim, axis=1)  # (13, N); .T gives (N, 3) views
     v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
     u, v = kept(hits.u, alive, every)[:, None], kept(hits.v, alive, every)[:, None]
     # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5),
@@ -209,12 +216,22 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     for rows, material in materials:
         if material.is_delta:
             delta[slice(None) if rows is None else rows] = True
-    return SurfaceHit(prim=prim, p=p, n=n, wo=wo, front=front, offset=offset,
-                      throughput=kept(paths.throughput, alive, every),
-                      pixel=kept(paths.pixel, alive, every),
-                      sees_emission=kept(paths.sees_emission, alive, every),
-                      sample=kept(paths.sample, alive, every), materials=materials, delta=delta,
-                      t=kept(hits.t, alive, every), pdf=kept(paths.pdf, alive, every))
+    return SurfaceHit(
+        prim=prim,
+        p=p,
+        n=n,
+        wo=wo,
+        front=front,
+        offset=offset,
+        throughput=kept(paths.throughput, alive, every),
+        pixel=kept(paths.pixel, alive, every),
+        sees_emission=kept(paths.sees_emission, alive, every),
+        sample=kept(paths.sample, alive, every),
+        materials=materials,
+        delta=delta,
+        t=kept(hits.t, alive, every),
+        pdf=kept(paths.pdf, alive, every),
+    )
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
@@ -230,12 +247,13 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     if len(rows) == 0:
         return
     emitted = take_rows(scene.emission, hit.prim.take(rows))
-    if settings.strategy == "mis" and hit.pdf is not None:   # (camera rays have no pdf: weight 1)
+    if settings.strategy == "mis" and hit.pdf is not None:  # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
         t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
         pdf_light = solid_angle_pdf(scene.area_lights.pdf_area(emitted), t * t, dot(n, wo))
-        weight = np.where(hit.sees_emission.take(rows), 1.0,
-                          mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic))
+        weight = np.where(
+            hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
+        )
         emitted *= weight.astype(np.float32)[:, None]
     add_to_film(film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted)
 
@@ -252,8 +270,9 @@ def mis_weight(pdf: np.ndarray, other: np.ndarray, heuristic: str = "power") -> 
     return np.nan_to_num(weight, nan=0.0)
 
 
-def direct_light(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
-                 u: np.ndarray, settings: PathSettings) -> int:
+def direct_light(
+    film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit, u: np.ndarray, settings: PathSettings
+) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
     Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
@@ -307,12 +326,18 @@ def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
     light_sampler = scene.light_sampler
     if light_sampler is None:
         return np.zeros(0, dtype=bool)
-    return np.array([kind.is_delta or (settings.strategy != "bsdf" and (
-        kind is not light_sampler.sky or settings.sample_sky)) for kind in light_sampler.kinds])
+    return np.array(
+        [
+            kind.is_delta
+            or (settings.strategy != "bsdf" and (kind is not light_sampler.sky or settings.sample_sky))
+            for kind in light_sampler.kinds
+        ]
+    )
 
 
-def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit,
-                           u: np.ndarray, settings: PathSettings) -> int:
+def direct_light_all_kinds(
+    film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit, u: np.ndarray, settings: PathSettings
+) -> int:
     """``direct_light`` in a scene with point lights or a sky: one light sample of any kind
     per path, and its shadow ray.
 
@@ -334,18 +359,20 @@ def direct_light_all_kinds(film: np.ndarray, scene: Scene, accel: Accelerator, h
             continue
         sample = light.sample_li(take_rows(hit.p, rows), take_rows(u, rows))
         wi[rows], radiance[rows], target[rows] = sample.wi, sample.radiance, sample.target
-        pdf[rows] = sample.pdf * np.float32(scale)     # (the share among the sampled kinds)
+        pdf[rows] = sample.pdf * np.float32(scale)  # (the share among the sampled kinds)
         delta[rows] = light.is_delta
     cos_theta = dot(hit.n, wi)
-    usable = np.flatnonzero((cos_theta > 0) & (pdf > 0) & np.isfinite(pdf)
-                            & (radiance.max(axis=1) > 0) & ~hit.delta)
+    usable = np.flatnonzero(
+        (cos_theta > 0) & (pdf > 0) & np.isfinite(pdf) & (radiance.max(axis=1) > 0) & ~hit.delta
+    )
     visible = sees(accel, hit, usable, take_rows(target, usable))
     weight = np.where(visible, cos_theta / np.where(visible, pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
         bsdf_pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
         weight *= np.where(delta, 1, mis_weight(pdf, bsdf_pdf, settings.heuristic)).astype(np.float32)
-    add_to_film(film, hit.pixel,
-                hit.throughput * shade(hit, "eval", hit.wo, wi, hit.n) * radiance * weight[:, None])
+    add_to_film(
+        film, hit.pixel, hit.throughput * shade(hit, "eval", hit.wo, wi, hit.n) * radiance * weight[:, None]
+    )
     return len(usable)
 
 
@@ -354,7 +381,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
     and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
     unless light sampling does not sample the sky (``sampled_lights``): then in full."""
-    sky = scene.light_sampler.sky     # (its pdf holds its share of the light samples)
+    sky = scene.light_sampler.sky  # (its pdf holds its share of the light samples)
     sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
     escaped = hits.prim < 0
     counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission
@@ -363,15 +390,19 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
         return
     weight = np.ones(len(rows), dtype=np.float32)
     if settings.strategy == "mis" and sampled and paths.pdf is not None:
-        weight = np.where(paths.sees_emission.take(rows), 1.0,
-                          mis_weight(paths.pdf.take(rows), np.float32(sky.pdf),
-                                     settings.heuristic)).astype(np.float32)
-    add_to_film(film, paths.pixel.take(rows), take_rows(paths.throughput, rows)
-                * (sky.radiance.astype(np.float32) * weight[:, None]))
+        weight = np.where(
+            paths.sees_emission.take(rows),
+            1.0,
+            mis_weight(paths.pdf.take(rows), np.float32(sky.pdf), settings.heuristic),
+        ).astype(np.float32)
+    add_to_film(
+        film,
+        paths.pixel.take(rows),
+        take_rows(paths.throughput, rows) * (sky.radiance.astype(np.float32) * weight[:, None]),
+    )
 
 
-def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
-                     u: np.ndarray) -> np.ndarray:
+def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray) -> np.ndarray:
     """(N,) bool: which paths go on. Their throughput is divided by the survival odds.
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
@@ -389,8 +420,9 @@ def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings,
     return survive
 
 
-def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
-            with_pdf: bool = False) -> Paths:
+def scatter(
+    scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray, with_pdf: bool = False
+) -> Paths:
     """The next rays of the surviving paths: directions sampled from their materials.
 
     ``with_pdf`` keeps the pdf of each sampled direction, which MIS weighs emission with.
@@ -398,14 +430,20 @@ def scatter(scene: Scene, hit: SurfaceHit, u: np.ndarray, survive: np.ndarray,
     wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
     pdf = shade(hit, "pdf", hit.wo, wi, hit.n) if with_pdf else None
     throughput = hit.throughput * weight
-    go_on = np.flatnonzero(survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0)
-                                      | (throughput[:, 2] > 0)))
+    go_on = np.flatnonzero(
+        survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0) | (throughput[:, 2] > 0))
+    )
     every = len(go_on) == len(survive)
     wi, n, p, offset = (kept(a, go_on, every) for a in (wi, hit.n, hit.p, hit.offset))
-    return Paths(origins=leave_surface(p, n, offset, wi), dirs=wi,
-                 throughput=kept(throughput, go_on, every), pixel=kept(hit.pixel, go_on, every),
-                 sees_emission=kept(hit.delta, go_on, every), sample=kept(hit.sample, go_on, every),
-                 pdf=kept(pdf, go_on, every))
+    return Paths(
+        origins=leave_surface(p, n, offset, wi),
+        dirs=wi,
+        throughput=kept(throughput, go_on, every),
+        pixel=kept(hit.pixel, go_on, every),
+        sees_emission=kept(hit.delta, go_on, every),
+        sample=kept(hit.sample, go_on, every),
+        pdf=kept(pdf, go_on, every),
+    )
 
 
 def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarray) -> np.ndarray:
@@ -432,8 +470,16 @@ def material_groups(scene: Scene, prim: np.ndarray, uv: np.ndarray | None = None
     for g, stacked in enumerate(table.groups):
         rows = np.flatnonzero(group_of == g)
         if len(rows):
-            groups.append((rows, taken(stacked, table.triangle_row.take(prim.take(rows)),
-                                       None if uv is None else take_rows(uv, rows))))
+            groups.append(
+                (
+                    rows,
+                    taken(
+                        stacked,
+                        table.triangle_row.take(prim.take(rows)),
+                        None if uv is None else take_rows(uv, rows),
+                    ),
+                )
+            )
     return groups
 
 
@@ -455,8 +501,7 @@ def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
         result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
         parts = result if isinstance(result, tuple) else (result,)
         if outputs is None:
-            outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F")
-                            for r in parts)
+            outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
         for out, part in zip(outputs, parts, strict=True):
             out[rows] = part
     return outputs if len(outputs) > 1 else outputs[0]

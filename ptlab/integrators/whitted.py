@@ -77,8 +77,15 @@ LIGHT_SAMPLING = PathSettings(strategy="nee", sample_sky=False)
 MAX_BATCH = 1 << 18
 
 
-def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths,
-                  sampler: Sampler, settings: PathSettings, first_depth: int = 0) -> int:
+def trace_whitted(
+    film: np.ndarray,
+    scene: Scene,
+    accel: Accelerator,
+    paths: Paths,
+    sampler: Sampler,
+    settings: PathSettings,
+    first_depth: int = 0,
+) -> int:
     """Trace a batch of camera rays the Whitted way, adding their radiance into ``film``.
 
     Args:
@@ -94,25 +101,27 @@ def trace_whitted(film: np.ndarray, scene: Scene, accel: Accelerator, paths: Pat
     """
     rays = 0
     for depth in range(first_depth, settings.max_depth + 1):
-        if len(paths.pixel) > MAX_BATCH:                 # grown by glass splits: trace it in parts
-            return rays + sum(trace_whitted(film, scene, accel, part, sampler, settings, depth)
-                              for part in batches(paths, MAX_BATCH))
+        if len(paths.pixel) > MAX_BATCH:  # grown by glass splits: trace it in parts
+            return rays + sum(
+                trace_whitted(film, scene, accel, part, sampler, settings, depth)
+                for part in batches(paths, MAX_BATCH)
+            )
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
         if scene.sky is not None:
-            add_sky(film, scene, paths, hits, LIGHT_SAMPLING)   # the rays that escape see it
-        hit = surface_hit(scene, paths, hits)            # drops the rays that missed
+            add_sky(film, scene, paths, hits, LIGHT_SAMPLING)  # the rays that escape see it
+        hit = surface_hit(scene, paths, hits)  # drops the rays that missed
         if len(hit.prim) == 0:
             break
-        add_emission(film, scene, hit, LIGHT_SAMPLING)   # camera rays and mirror/glass rays
+        add_emission(film, scene, hit, LIGHT_SAMPLING)  # camera rays and mirror/glass rays
         if depth == settings.max_depth:
             break
         u = BounceUniforms(sampler, hit.sample, depth)
         if sampled_lights(scene, LIGHT_SAMPLING).any():  # diffuse and glossy: direct light only
             rays += direct_light(film, scene, accel, hit, u.light(), LIGHT_SAMPLING)
-        if not hit.delta.any():                          # no mirror or glass: every ray ends
+        if not hit.delta.any():  # no mirror or glass: every ray ends
             break
-        paths = reflect_and_refract(hit, u.bsdf())       # glass: two rays for one
+        paths = reflect_and_refract(hit, u.bsdf())  # glass: two rays for one
         if len(paths.pixel) == 0:
             break
     return rays
@@ -142,8 +151,9 @@ def reflect_and_refract(hit: SurfaceHit, u: np.ndarray) -> Paths:
     return next_rays(hit, np.concatenate(rows), concatenate_rows(wi), concatenate_rows(weight))
 
 
-def fresnel_split(glass: Dielectric, wo: np.ndarray, n: np.ndarray,
-                  front: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+def fresnel_split(
+    glass: Dielectric, wo: np.ndarray, n: np.ndarray, front: np.ndarray
+) -> list[tuple[np.ndarray, np.ndarray]]:
     """Homework 5's ``REFLECTION_AND_REFRACTION`` case: both rays, each with its weight.
 
     Args:
@@ -157,7 +167,7 @@ def fresnel_split(glass: Dielectric, wo: np.ndarray, n: np.ndarray,
         Under total internal reflection kr = 1 and the refracted weight is 0.
     """
     eta = np.asarray(glass.eta, dtype=n.dtype)
-    eta_rel = np.where(front, eta, 1 / eta)     # the index beyond the surface over wo's side
+    eta_rel = np.where(front, eta, 1 / eta)  # the index beyond the surface over wo's side
     cos_theta_o = dot(wo, n)
     kr = fresnel_dielectric(cos_theta_o, eta_rel)
     transmittance = glass.transmittance.astype(n.dtype, copy=False)
@@ -175,11 +185,15 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
     throughput = take_rows(hit.throughput, rows) * weight
     go_on = np.flatnonzero((throughput > 0).any(axis=1))
     rows, wi, throughput = rows.take(go_on), take_rows(wi, go_on), take_rows(throughput, go_on)
-    origins = leave_surface(take_rows(hit.p, rows), take_rows(hit.n, rows),
-                            hit.offset.take(rows), wi)
-    return Paths(origins=origins, dirs=wi,
-                 throughput=throughput, pixel=hit.pixel.take(rows),
-                 sees_emission=np.ones(len(rows), dtype=bool), sample=hit.sample.take(rows))
+    origins = leave_surface(take_rows(hit.p, rows), take_rows(hit.n, rows), hit.offset.take(rows), wi)
+    return Paths(
+        origins=origins,
+        dirs=wi,
+        throughput=throughput,
+        pixel=hit.pixel.take(rows),
+        sees_emission=np.ones(len(rows), dtype=bool),
+        sample=hit.sample.take(rows),
+    )
 
 
 def concatenate_rows(arrays: list[np.ndarray]) -> np.ndarray:
@@ -191,6 +205,11 @@ def batches(paths: Paths, size: int):
     """``paths`` in consecutive parts of at most ``size`` rays (views, not copies)."""
     for start in range(0, len(paths.pixel), size):
         rows = slice(start, start + size)
-        yield Paths(origins=paths.origins[rows], dirs=paths.dirs[rows],
-                    throughput=paths.throughput[rows], pixel=paths.pixel[rows],
-                    sees_emission=paths.sees_emission[rows], sample=paths.sample[rows])
+        yield Paths(
+            origins=paths.origins[rows],
+            dirs=paths.dirs[rows],
+            throughput=paths.throughput[rows],
+            pixel=paths.pixel[rows],
+            sees_emission=paths.sees_emission[rows],
+            sample=paths.sample[rows],
+        )

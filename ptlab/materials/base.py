@@ -53,13 +53,15 @@ class Material(MaterialParameters):
         """(N,) solid-angle density with which ``sample`` picks ``wi``."""
         raise NotImplementedError
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-               front: np.ndarray | None = None) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
         """(N, 3) unit directions drawn with density ``pdf``; u: (N, 2) in [0, 1)."""
         raise NotImplementedError
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Sample ``wi`` and return it with its Monte Carlo weight f_r cos / pdf.
 
         This is the factor by which a path's throughput is multiplied at a bounce

@@ -43,7 +43,6 @@ class Dielectric(DeltaMaterial):
         transmittance: (3,) colour of refracted light, in [0, 1] (default 1: clear).
     """
 
-
     batched = ("eta", "transmittance")
     #: Real indices lie between 1 and about 4; relative ones (an air bubble in water, 0.75)
     #: a little beyond. Refraction scales radiance by eta^2, which this range keeps far
@@ -53,12 +52,17 @@ class Dielectric(DeltaMaterial):
     def __init__(self, eta: float = 1.5, transmittance=(1.0, 1.0, 1.0)):
         lowest, highest = self.ETA_RANGE
         if not lowest <= eta <= highest:
-            raise ValueError(f"eta must be an index of refraction from {lowest:g} to "
-                             f"{highest:g}, got {eta!r}")
+            raise ValueError(
+                f"eta must be an index of refraction from {lowest:g} to {highest:g}, got {eta!r}"
+            )
         self.eta = float(eta)
         self.transmittance = np.asarray(transmittance, dtype=np.float64)
-        if (self.transmittance.shape != (3,) or not np.isfinite(self.transmittance).all()
-                or (self.transmittance < 0).any() or (self.transmittance > 1).any()):
+        if (
+            self.transmittance.shape != (3,)
+            or not np.isfinite(self.transmittance).all()
+            or (self.transmittance < 0).any()
+            or (self.transmittance > 1).any()
+        ):
             raise ValueError(f"transmittance must be three numbers in [0, 1], got {transmittance!r}")
 
     def __repr__(self) -> str:
@@ -66,13 +70,15 @@ class Dielectric(DeltaMaterial):
             return f"Dielectric(stacked, {np.size(self.eta)} rows)"
         return f"Dielectric(eta={self.eta:g}, transmittance={self.transmittance.tolist()})"
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-               front: np.ndarray | None = None) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
         """(N, 3) reflected or refracted directions, chosen by Fresnel with u[:, 0]."""
         return self.sample_weight(wo, n, u, front)[0]
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(N, 3) directions and (N, 3) weights: 1 reflected, transmittance / eta_rel^2 refracted.
 
         Args:
@@ -98,4 +104,3 @@ class Dielectric(DeltaMaterial):
 
     def batch_key(self) -> object:
         return "dielectric"
-

@@ -124,22 +124,30 @@ class Microfacet(Material):
     samplings = SAMPLINGS
     batched = ("f0", "kd", "ks", "alpha", "p_specular")
 
-    def __init__(self, f0="gold", roughness: float | None = None, alpha: float | None = None,
-                 kd=(0.0, 0.0, 0.0), ks=1.0, sampling: str = "vndf"):
+    def __init__(
+        self,
+        f0="gold",
+        roughness: float | None = None,
+        alpha: float | None = None,
+        kd=(0.0, 0.0, 0.0),
+        ks=1.0,
+        sampling: str = "vndf",
+    ):
         if sampling not in SAMPLINGS:
             raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
         if roughness is not None and alpha is not None:
             raise ValueError("give roughness or alpha, not both (alpha = roughness ** 2)")
         if alpha is None:
             roughness = 0.5 if roughness is None else float(roughness)
-            if not roughness >= 0:      # (squaring would hide the sign)
-                raise ValueError(f"roughness must be in (0, 1] (alpha = roughness ** 2), "
-                                 f"got {roughness}")
+            if not roughness >= 0:  # (squaring would hide the sign)
+                raise ValueError(f"roughness must be in (0, 1] (alpha = roughness ** 2), got {roughness}")
             alpha = roughness * roughness
         if not MIN_ALPHA <= alpha <= 1:
-            raise ValueError(f"alpha must be in [{MIN_ALPHA}, 1] (roughness in "
-                             f"[{math.sqrt(MIN_ALPHA):.3f}, 1]), got {alpha}; "
-                             "use Mirror for a perfect mirror")
+            raise ValueError(
+                f"alpha must be in [{MIN_ALPHA}, 1] (roughness in "
+                f"[{math.sqrt(MIN_ALPHA):.3f}, 1]), got {alpha}; "
+                "use Mirror for a perfect mirror"
+            )
         if isinstance(f0, str):
             if f0 not in METALS:
                 raise ValueError(f"unknown metal {f0!r}; choose one of {', '.join(METALS)} or give an RGB F0")
@@ -148,8 +156,9 @@ class Microfacet(Material):
         self.kd = _colour("kd", kd)
         self.ks = _colour("ks", np.broadcast_to(np.asarray(ks, dtype=np.float64), (3,)))
         if (self.kd + self.ks > 1 + 1e-12).any():
-            raise ValueError("kd + ks must be at most 1 in every channel, "
-                             f"got {(self.kd + self.ks).tolist()}")
+            raise ValueError(
+                f"kd + ks must be at most 1 in every channel, got {(self.kd + self.ks).tolist()}"
+            )
         self.alpha = float(alpha)
         self.sampling = sampling
         specular, diffuse = float(np.mean(self.ks * self.f0)), float(np.mean(self.kd))
@@ -193,8 +202,9 @@ class Microfacet(Material):
         pdf_specular = G1(cos_o, alpha) * D(dot(h, n), alpha) / (4.0 * cos_o)
         return above * (p_specular * pdf_specular + (1.0 - p_specular) * pdf_diffuse)
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-               front: np.ndarray | None = None) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
         """(N, 3) unit directions with density ``pdf``; u: (N, 2) uniforms in [0, 1)."""
         u = u.astype(n.dtype, copy=False)
         if self.sampling == "hemisphere":
@@ -207,8 +217,11 @@ class Microfacet(Material):
         # [0, 1) so that it can sample the lobe too.
         u0 = u[:, 0]
         specular = u0 < p_specular
-        u0 = np.where(specular, u0 / _at_least(p_specular, 1e-30),
-                      (u0 - p_specular) / _at_least(1.0 - p_specular, 1e-30))
+        u0 = np.where(
+            specular,
+            u0 / _at_least(p_specular, 1e-30),
+            (u0 - p_specular) / _at_least(1.0 - p_specular, 1e-30),
+        )
         below_one = np.nextafter(u.dtype.type(1), u.dtype.type(0))
         u = np.stack([np.minimum(u0, below_one), u[:, 1]], axis=1)
         wi_specular = reflect(wo, ggx_visible_normals(wo, n, alpha, u))
@@ -218,7 +231,6 @@ class Microfacet(Material):
     # Every Microfacet with the same sampling shades in one vectorized call.
     def batch_key(self) -> object:
         return ("microfacet", self.sampling)
-
 
 
 def _at_least(value, floor: float):

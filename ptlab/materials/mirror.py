@@ -32,26 +32,31 @@ class Mirror(DeltaMaterial):
             grazing angles (default False: the same reflectance at every angle).
     """
 
-
     batched = ("reflectance",)
 
     def __init__(self, reflectance=(1.0, 1.0, 1.0), fresnel: bool = False):
         self.reflectance = np.asarray(reflectance, dtype=np.float64)
-        if (self.reflectance.shape != (3,) or not np.isfinite(self.reflectance).all()
-                or (self.reflectance < 0).any() or (self.reflectance > 1).any()):
+        if (
+            self.reflectance.shape != (3,)
+            or not np.isfinite(self.reflectance).all()
+            or (self.reflectance < 0).any()
+            or (self.reflectance > 1).any()
+        ):
             raise ValueError(f"reflectance must be three numbers in [0, 1], got {reflectance!r}")
         self.fresnel = bool(fresnel)
 
     def __repr__(self) -> str:
         return f"Mirror(reflectance={self.reflectance.tolist()}, fresnel={self.fresnel})"
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-               front: np.ndarray | None = None) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
         """(N, 3) the mirror directions reflect(wo, n); ``u`` and ``front`` are not used."""
         return reflect(wo, n)
 
-    def sample_weight(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray,
-                      front: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    def sample_weight(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> tuple[np.ndarray, np.ndarray]:
         """(N, 3) mirror directions and (N, 3) weights R (0 where wo is below the surface)."""
         cos_theta_o = dot(wo, n)
         reflectance = self.reflectance.astype(n.dtype, copy=False)
@@ -64,4 +69,3 @@ class Mirror(DeltaMaterial):
 
     def batch_key(self) -> object:
         return ("mirror", self.fresnel)
-

@@ -43,8 +43,10 @@ class MaterialParameters:
         """This material if it samples by ``sampling`` already, else a copy (of the same class)
         that does."""
         if sampling not in self.samplings:
-            raise ValueError(f"unknown sampling {sampling!r} for {type(self).__name__}; "
-                             f"choose one of {', '.join(self.samplings) or 'none'}")
+            raise ValueError(
+                f"unknown sampling {sampling!r} for {type(self).__name__}; "
+                f"choose one of {', '.join(self.samplings) or 'none'}"
+            )
         if self.sampling == sampling:
             return self
         twin = copy.copy(self)
@@ -84,8 +86,9 @@ class MaterialParameters:
             value = getattr(self, name)
             if isinstance(value, Texture):
                 if uv is None:
-                    raise ValueError(f"{type(self).__name__}.{name} is a texture: it needs the "
-                                     f"hits' uv coordinates")
+                    raise ValueError(
+                        f"{type(self).__name__}.{name} is a texture: it needs the hits' uv coordinates"
+                    )
                 setattr(taken, name, value(uv))
             else:
                 setattr(taken, name, take_rows(value, index))

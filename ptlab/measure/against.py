@@ -57,10 +57,12 @@ class AgainstResult:
     def summary(self) -> str:
         """The median ratio and, over several pairs, its range."""
         ratios = self.ratios
-        spread = "1 pair" if len(ratios) == 1 else (f"median of {len(ratios)} pairs, range "
-                                                    f"{min(ratios):.2f}-{max(ratios):.2f}")
-        return (f"C++ / ptlab time: {statistics.median(ratios):.2f}x ({spread}; above 1, "
-                "ptlab is faster)")
+        spread = (
+            "1 pair"
+            if len(ratios) == 1
+            else (f"median of {len(ratios)} pairs, range {min(ratios):.2f}-{max(ratios):.2f}")
+        )
+        return f"C++ / ptlab time: {statistics.median(ratios):.2f}x ({spread}; above 1, ptlab is faster)"
 
 
 def reject_options(given: dict[str, object]) -> None:
@@ -68,8 +70,10 @@ def reject_options(given: dict[str, object]) -> None:
     with ``--against`` they would be silently ignored."""
     for option, value in given.items():
         if value:
-            raise PtlabError(f"{option} does not go with --against: it times ptlab render at "
-                             "the C++ image's size with the homework's estimator")
+            raise PtlabError(
+                f"{option} does not go with --against: it times ptlab render at "
+                "the C++ image's size with the homework's estimator"
+            )
 
 
 def check_program(binary: str | Path) -> Path:
@@ -78,8 +82,9 @@ def check_program(binary: str | Path) -> Path:
     if not path.exists():
         raise PtlabError(f"--against {binary}: no such file")
     if path.is_dir():
-        raise PtlabError(f"--against {binary}: is a folder; give the compiled program "
-                         "(for the homework: build/RayTracing)")
+        raise PtlabError(
+            f"--against {binary}: is a folder; give the compiled program (for the homework: build/RayTracing)"
+        )
     if not os.access(path, os.X_OK):
         raise PtlabError(f"--against {binary}: is not executable")
     return path.resolve()
@@ -88,16 +93,20 @@ def check_program(binary: str | Path) -> Path:
 def _timed(command: list[str], cwd: Path, env: dict[str, str]) -> tuple[float, int, str]:
     """Run ``command`` in ``cwd``: its wall seconds, exit code and last line on stderr."""
     start = time.perf_counter()
-    done = subprocess.run(command, cwd=cwd, env=env, stdin=subprocess.DEVNULL,
-                          stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    done = subprocess.run(
+        command, cwd=cwd, env=env, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE
+    )
     seconds = time.perf_counter() - start
     lines = done.stderr.decode(errors="replace").strip().splitlines()
     return seconds, done.returncode, lines[-1] if lines else ""
 
 
 def _exit_reason(code: int, last_line: str) -> str:
-    reason = (f"was killed by {signal.Signals(-code).name}" if code < 0 and
-              -code in signal.valid_signals() else f"failed with exit code {code}")
+    reason = (
+        f"was killed by {signal.Signals(-code).name}"
+        if code < 0 and -code in signal.valid_signals()
+        else f"failed with exit code {code}"
+    )
     return f"{reason}: {last_line}" if last_line else reason
 
 
@@ -107,8 +116,9 @@ def models_folder(binary: Path) -> Path:
     return binary.parent.parent / "models"
 
 
-def run_cpp(binary: Path, args: list[str], folder: Path, env: dict[str, str],
-            expected: tuple[int, int] | None = None) -> tuple[float, tuple[int, int]]:
+def run_cpp(
+    binary: Path, args: list[str], folder: Path, env: dict[str, str], expected: tuple[int, int] | None = None
+) -> tuple[float, tuple[int, int]]:
     """Run the C++ program once in ``folder`` (emptied of an old image first): its wall
     seconds and the (width, height) of the image it wrote, which must be ``expected``."""
     image = folder / CPP_IMAGE
@@ -129,16 +139,29 @@ def run_cpp(binary: Path, args: list[str], folder: Path, env: dict[str, str],
         raise PtlabError(f"--against {binary} wrote an unreadable {CPP_IMAGE}: {error}") from None
     size = pixels.shape[1], pixels.shape[0]
     if expected is not None and size != expected:
-        raise PtlabError(f"--against {binary} wrote a {size[0]}x{size[1]} image after a "
-                         f"{expected[0]}x{expected[1]} one")
+        raise PtlabError(
+            f"--against {binary} wrote a {size[0]}x{size[1]} image after a {expected[0]}x{expected[1]} one"
+        )
     return seconds, size
 
 
 def ptlab_args(resolution: tuple[int, int], spp: int, workers: int, out: Path) -> list[str]:
     """``ptlab render cornell-box``'s arguments with the homework's estimator."""
     width, height = resolution
-    return ["render", "cornell-box", "--res", f"{width}x{height}", "--spp", str(spp),
-            *HOMEWORK_OPTIONS, "--workers", str(workers), "--quiet", "--out", str(out)]
+    return [
+        "render",
+        "cornell-box",
+        "--res",
+        f"{width}x{height}",
+        "--spp",
+        str(spp),
+        *HOMEWORK_OPTIONS,
+        "--workers",
+        str(workers),
+        "--quiet",
+        "--out",
+        str(out),
+    ]
 
 
 def run_ptlab(args: list[str], folder: Path, env: dict[str, str]) -> float:
@@ -160,8 +183,14 @@ def scratch_folders(scratch: Path, binary: Path) -> Path:
     return folder
 
 
-def run_against(binary: str | Path, cpp_args: str = DEFAULT_CPP_ARGS, spp: int = 16,
-                repeat: int = 3, workers: int | None = None, echo=print) -> AgainstResult:
+def run_against(
+    binary: str | Path,
+    cpp_args: str = DEFAULT_CPP_ARGS,
+    spp: int = 16,
+    repeat: int = 3,
+    workers: int | None = None,
+    echo=print,
+) -> AgainstResult:
     """Time the C++ program ``binary`` and ``ptlab render``, alternately, ``repeat`` times.
 
     ``cpp_args`` is the C++ program's command line after its name (split like a shell's,
@@ -183,16 +212,17 @@ def run_against(binary: str | Path, cpp_args: str = DEFAULT_CPP_ARGS, spp: int =
     except ValueError as error:
         raise PtlabError(f"--cpp-args {cpp_args!r}: {error}") from None
     env = dict(os.environ, OMP_NUM_THREADS=str(workers))
-    echo(f"C++:   {shlex.join([str(program), *args])}  (in a scratch folder, "
-         f"OMP_NUM_THREADS={workers})")
+    echo(f"C++:   {shlex.join([str(program), *args])}  (in a scratch folder, OMP_NUM_THREADS={workers})")
     with tempfile.TemporaryDirectory(prefix="ptlab-against-") as scratch:
         scratch = Path(scratch)
         cpp_folder = scratch_folders(scratch, program)
         cpp, resolution = run_cpp(program, args, cpp_folder, env)
         ptlab = ptlab_args(resolution, spp, workers, scratch / "ptlab.png")
         echo(f"ptlab: {shlex.join(['ptlab', *ptlab])}")
-        echo(f"{resolution[0]}x{resolution[1]} (the C++ image's size), {spp} spp; wall seconds "
-             "of whole processes, run alternately")
+        echo(
+            f"{resolution[0]}x{resolution[1]} (the C++ image's size), {spp} spp; wall seconds "
+            "of whole processes, run alternately"
+        )
         echo(f"{'run':6} {'C++':>8} {'ptlab':>8} {'C++ / ptlab':>12}")
         result = AgainstResult(resolution)
         for k in range(repeat):
@@ -200,9 +230,10 @@ def run_against(binary: str | Path, cpp_args: str = DEFAULT_CPP_ARGS, spp: int =
                 cpp, _ = run_cpp(program, args, cpp_folder, env, expected=resolution)
             result.cpp_seconds.append(cpp)
             result.ptlab_seconds.append(run_ptlab(ptlab, scratch, env))
-            echo(f"{k + 1:<6} {cpp:8.2f} {result.ptlab_seconds[-1]:8.2f} "
-                 f"{result.ratios[-1]:12.2f}")
-    echo(f"{'median':6} {statistics.median(result.cpp_seconds):8.2f} "
-         f"{statistics.median(result.ptlab_seconds):8.2f}")
+            echo(f"{k + 1:<6} {cpp:8.2f} {result.ptlab_seconds[-1]:8.2f} {result.ratios[-1]:12.2f}")
+    echo(
+        f"{'median':6} {statistics.median(result.cpp_seconds):8.2f} "
+        f"{statistics.median(result.ptlab_seconds):8.2f}"
+    )
     echo(result.summary())
     return result

@@ -26,6 +26,7 @@ def _pyplot():
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+
     return plt
 
 
@@ -33,8 +34,7 @@ def _save(figure, path: Path) -> None:
     write_atomically(path, lambda temporary: figure.savefig(temporary, format="png", dpi=110))
 
 
-def convergence_chart(ladders: list, path: Path, title: str,
-                      target: float | None = None) -> None:
+def convergence_chart(ladders: list, path: Path, title: str, target: float | None = None) -> None:
     """Write the log-log chart of relMSE against seconds (``ladders``: lists of
     ``ptlab.measure.converge.Measurement``, one list per estimator)."""
     plt = _pyplot()
@@ -44,16 +44,25 @@ def convergence_chart(ladders: list, path: Path, title: str,
         errors = [rung.relmse for rung in ladder]
         axes.loglog(seconds, errors, marker="o", markersize=4, label=ladder[0].estimator)
         last = ladder[-1]
-        axes.annotate(f"{last.spp} spp", (last.seconds, last.relmse), fontsize=7,
-                      textcoords="offset points", xytext=(4, 2))
+        axes.annotate(
+            f"{last.spp} spp",
+            (last.seconds, last.relmse),
+            fontsize=7,
+            textcoords="offset points",
+            xytext=(4, 2),
+        )
     best = min(ladders, key=lambda ladder: ladder[0].relmse * ladder[0].seconds)[0]
-    span = np.array([min(r.seconds for ladder in ladders for r in ladder),
-                     max(r.seconds for ladder in ladders for r in ladder)])
-    axes.loglog(span, best.relmse * best.seconds / span, ":", color="grey", linewidth=1,
-                label="slope -1 (1 / time)")
+    span = np.array(
+        [
+            min(r.seconds for ladder in ladders for r in ladder),
+            max(r.seconds for ladder in ladders for r in ladder),
+        ]
+    )
+    axes.loglog(
+        span, best.relmse * best.seconds / span, ":", color="grey", linewidth=1, label="slope -1 (1 / time)"
+    )
     if target is not None:
-        axes.axhline(target, color="black", linewidth=0.8, linestyle="--",
-                     label=f"relMSE {target:g}")
+        axes.axhline(target, color="black", linewidth=0.8, linestyle="--", label=f"relMSE {target:g}")
     axes.set_xlabel("render time (seconds)")
     axes.set_ylabel("relMSE against the reference")
     axes.set_title(title, fontsize=10)
@@ -78,8 +87,9 @@ def equal_time_strip(ladders: list, reference: np.ndarray, path: Path) -> float:
     columns = 1 + len(shown)
     height, width = reference.shape[:2]
     panel = 2.4
-    figure, axes = plt.subplots(2, columns, squeeze=False,
-                                figsize=(panel * columns, 2 * panel * height / width + 0.9))
+    figure, axes = plt.subplots(
+        2, columns, squeeze=False, figsize=(panel * columns, 2 * panel * height / width + 0.9)
+    )
     axes[0, 0].imshow(encode_srgb8(reference))
     axes[0, 0].set_title("reference", fontsize=8)
     axes[1, 0].axis("off")
@@ -87,8 +97,7 @@ def equal_time_strip(ladders: list, reference: np.ndarray, path: Path) -> float:
     heat = None
     for column, rung in enumerate(shown, start=1):
         axes[0, column].imshow(encode_srgb8(rung.image))
-        axes[0, column].set_title(f"{rung.estimator}\n{rung.spp} spp, {rung.seconds:.1f} s",
-                                  fontsize=8)
+        axes[0, column].set_title(f"{rung.estimator}\n{rung.spp} spp, {rung.seconds:.1f} s", fontsize=8)
         error = np.maximum(relative_squared_error(rung.image, reference), norm.vmin)
         heat = axes[1, column].imshow(error, cmap="inferno", norm=norm)
         axes[1, column].set_title(f"relMSE {rung.relmse:.3g}", fontsize=8)

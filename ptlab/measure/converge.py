@@ -66,19 +66,18 @@ def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Es
     for label in (part.strip() for part in text.split(",")):
         method, at, chosen = label.partition("@")
         if at and chosen not in SAMPLERS:
-            raise PtlabError(f"estimator {label!r}: the sampler after @ must be one of "
-                             f"{', '.join(SAMPLERS)}")
+            raise PtlabError(f"estimator {label!r}: the sampler after @ must be one of {', '.join(SAMPLERS)}")
         integrator, _, strategy = method.partition(":")
         if integrator not in ESTIMATOR_INTEGRATORS:
-            raise PtlabError(f"estimator {label!r}: the integrator must be one of "
-                             f"{', '.join(ESTIMATOR_INTEGRATORS)} (e.g. path:mis)")
+            raise PtlabError(
+                f"estimator {label!r}: the integrator must be one of "
+                f"{', '.join(ESTIMATOR_INTEGRATORS)} (e.g. path:mis)"
+            )
         if integrator == "path" and strategy and strategy not in STRATEGIES:
-            raise PtlabError(f"estimator {label!r}: the strategy must be one of "
-                             f"{', '.join(STRATEGIES)}")
+            raise PtlabError(f"estimator {label!r}: the strategy must be one of {', '.join(STRATEGIES)}")
         if integrator != "path" and strategy:
             raise PtlabError(f"estimator {label!r}: {integrator} takes no strategy")
-        estimators.append(Estimator(label, integrator, strategy or RenderOptions.strategy,
-                                    chosen or sampler))
+        estimators.append(Estimator(label, integrator, strategy or RenderOptions.strategy, chosen or sampler))
     if len({e.label for e in estimators}) != len(estimators):
         raise PtlabError(f"estimators {text!r}: each may appear once")
     return estimators
@@ -96,9 +95,15 @@ class Measurement:
     image: np.ndarray
 
 
-def measure_ladder(scene: Scene, estimator: Estimator, reference: np.ndarray, budget: float,
-                   max_spp: int = 1 << 16, echo: Callable[[str], None] = print,
-                   **render_options) -> list[Measurement]:
+def measure_ladder(
+    scene: Scene,
+    estimator: Estimator,
+    reference: np.ndarray,
+    budget: float,
+    max_spp: int = 1 << 16,
+    echo: Callable[[str], None] = print,
+    **render_options,
+) -> list[Measurement]:
     """Render at 1, 2, 4, ... spp while the next rung fits in ``budget`` seconds in total.
 
     Each rung takes about twice as long as the one before, so the ladder stops when the
@@ -108,13 +113,20 @@ def measure_ladder(scene: Scene, estimator: Estimator, reference: np.ndarray, bu
     height, width = reference.shape[:2]
     ladder, spent, spp = [], 0.0, 1
     while True:
-        result = render_result(scene, spp=spp, res=(width, height), **estimator.options(),
-                               **render_options)
-        rung = Measurement(estimator.label, spp, result.seconds, rmse(result.image, reference),
-                           relmse(result.image, reference), result.image)
+        result = render_result(scene, spp=spp, res=(width, height), **estimator.options(), **render_options)
+        rung = Measurement(
+            estimator.label,
+            spp,
+            result.seconds,
+            rmse(result.image, reference),
+            relmse(result.image, reference),
+            result.image,
+        )
         ladder.append(rung)
-        echo(f"{rung.estimator:12} {rung.spp:7d} spp {rung.seconds:9.2f} s   "
-             f"rmse {rung.rmse:.4g}   relMSE {rung.relmse:.4g}")
+        echo(
+            f"{rung.estimator:12} {rung.spp:7d} spp {rung.seconds:9.2f} s   "
+            f"rmse {rung.rmse:.4g}   relMSE {rung.relmse:.4g}"
+        )
         spent += result.seconds
         if spp * 2 > max_spp or spent + 2 * result.seconds > budget:
             return ladder
@@ -141,17 +153,25 @@ def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool
     return last.seconds * last.relmse / target, True
 
 
-def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
-                    cache_dir: Path | None, echo: Callable[[str], None] = print,
-                    quiet: bool = False, **render_options) -> np.ndarray:
+def reference_image(
+    scene: Scene,
+    res: tuple[int, int],
+    spp: int,
+    seed: int,
+    cache_dir: Path | None,
+    echo: Callable[[str], None] = print,
+    quiet: bool = False,
+    **render_options,
+) -> np.ndarray:
     """A ``spp``-sample ``path:mis`` render of the scene, from the cache if it is there
     (with a progress bar on the terminal while it renders, unless ``quiet``)."""
     from ptlab.rendering import pass_schedule
     from ptlab.rendering.progress import ProgressBar
 
     estimator = parse_estimators(REFERENCE_ESTIMATOR)[0]
-    key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed, estimator.sampler))
-                         .encode()).hexdigest()[:16]
+    key = hashlib.sha256(repr((scene_digest(scene), res, spp, seed, estimator.sampler)).encode()).hexdigest()[
+        :16
+    ]
     cached = None if cache_dir is None else cache_dir / f"{scene.name}-{key}.exr"
     if cached is not None and cached.is_file():
         image, _ = read_image(cached)
@@ -160,8 +180,15 @@ def reference_image(scene: Scene, res: tuple[int, int], spp: int, seed: int,
     echo(f"reference: rendering {spp} spp with {REFERENCE_ESTIMATOR}@{estimator.sampler} ...")
     bar = ProgressBar(res[0] * res[1] * spp, len(pass_schedule(spp)), quiet=quiet)
     try:
-        result = render_result(scene, spp=spp, res=res, seed=seed + REFERENCE_SEED_OFFSET,
-                               progress=bar, **estimator.options(), **render_options)
+        result = render_result(
+            scene,
+            spp=spp,
+            res=res,
+            seed=seed + REFERENCE_SEED_OFFSET,
+            progress=bar,
+            **estimator.options(),
+            **render_options,
+        )
     finally:
         bar.close()
     echo(f"reference: {result.seconds:.1f} s")
@@ -179,8 +206,10 @@ def load_reference(path: str | Path, res: tuple[int, int]) -> np.ndarray:
     image, _ = read_image(path)
     width, height = res
     if image.shape[:2] != (height, width):
-        raise PtlabError(f"{path}: the reference is {image.shape[1]}x{image.shape[0]}, the "
-                         f"renders {width}x{height}: give --res {image.shape[1]}x{image.shape[0]}")
+        raise PtlabError(
+            f"{path}: the reference is {image.shape[1]}x{image.shape[0]}, the "
+            f"renders {width}x{height}: give --res {image.shape[1]}x{image.shape[0]}"
+        )
     if not np.isfinite(image).all():
         raise PtlabError(f"{path}: the reference has NaN or infinite pixels")
     return image
@@ -196,24 +225,41 @@ def default_cache_dir() -> Path:
 
 def write_csv(path: Path, ladders: list[list[Measurement]]) -> None:
     """The table: one row per rung, columns integrator, spp, seconds, rmse, relmse."""
+
     def write(temporary: str) -> None:
         with open(temporary, "w", newline="") as out:
             table = csv.writer(out)
             table.writerow(["integrator", "spp", "seconds", "rmse", "relmse"])
             for ladder in ladders:
                 for rung in ladder:
-                    table.writerow([rung.estimator, rung.spp, f"{rung.seconds:.4f}",
-                                    f"{rung.rmse:.6g}", f"{rung.relmse:.6g}"])
+                    table.writerow(
+                        [
+                            rung.estimator,
+                            rung.spp,
+                            f"{rung.seconds:.4f}",
+                            f"{rung.rmse:.6g}",
+                            f"{rung.relmse:.6g}",
+                        ]
+                    )
 
     write_atomically(path, write)
 
 
-def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
-                 res: tuple[int, int], budget: float, seed: int = 0,
-                 reference: str | Path | None = None, reference_spp: int = 1024,
-                 cache_dir: Path | None = None, target: float = 0.01,
-                 echo: Callable[[str], None] = print, quiet: bool = False,
-                 **render_options) -> list[list[Measurement]]:
+def run_converge(
+    scene: Scene,
+    estimators: list[Estimator],
+    out_dir: Path,
+    res: tuple[int, int],
+    budget: float,
+    seed: int = 0,
+    reference: str | Path | None = None,
+    reference_spp: int = 1024,
+    cache_dir: Path | None = None,
+    target: float = 0.01,
+    echo: Callable[[str], None] = print,
+    quiet: bool = False,
+    **render_options,
+) -> list[list[Measurement]]:
     """Measure every estimator's ladder and write the CSV, the chart and the strip.
 
     Writes ``convergence.csv``, ``convergence.png``, ``equal-time.png`` and
@@ -227,17 +273,19 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
     if reference is not None:
         reference_pixels = load_reference(reference, res)
     else:
-        reference_pixels = reference_image(scene, res, reference_spp, seed, cache_dir, echo,
-                                           quiet, **render_options)
+        reference_pixels = reference_image(
+            scene, res, reference_spp, seed, cache_dir, echo, quiet, **render_options
+        )
     # Warm up imports and first calls, so that the first rung is not charged for them.
     render_result(scene, spp=1, res=16, workers=1)
-    ladders = [measure_ladder(scene, estimator, reference_pixels, budget, echo=echo, seed=seed,
-                              **render_options) for estimator in estimators]
-    out_dir.mkdir(parents=True, exist_ok=True)      # only now: no empty folder on an error
+    ladders = [
+        measure_ladder(scene, estimator, reference_pixels, budget, echo=echo, seed=seed, **render_options)
+        for estimator in estimators
+    ]
+    out_dir.mkdir(parents=True, exist_ok=True)  # only now: no empty folder on an error
     write_csv(out_dir / "convergence.csv", ladders)
     width, height = res
-    convergence_chart(ladders, out_dir / "convergence.png",
-                      f"{scene.name}, {width}x{height}", target)
+    convergence_chart(ladders, out_dir / "convergence.png", f"{scene.name}, {width}x{height}", target)
     common = equal_time_strip(ladders, reference_pixels, out_dir / "equal-time.png")
     write_image(out_dir / "reference.exr", reference_pixels)
     echo(f"time to reach relMSE {target:g}:")
@@ -250,8 +298,10 @@ def run_converge(scene: Scene, estimators: list[Estimator], out_dir: Path,
         echo(f"  {ladder[0].estimator:12} {text}")
     most_spp = max(ladder[-1].spp for ladder in ladders)
     if reference is None and most_spp * 8 > reference_spp:
-        echo(f"note: the ladder reached {most_spp} spp and the reference has {reference_spp}: "
-             f"its noise inflates the last errors; use --reference-spp {most_spp * 16}")
+        echo(
+            f"note: the ladder reached {most_spp} spp and the reference has {reference_spp}: "
+            f"its noise inflates the last errors; use --reference-spp {most_spp * 16}"
+        )
     echo(f"equal-time strip at about {common:.1f} s")
     for name in ("convergence.csv", "convergence.png", "equal-time.png", "reference.exr"):
         echo(f"wrote {(out_dir / name).resolve()}")

@@ -36,8 +36,17 @@ if TYPE_CHECKING:
         resolution,
     )
 
-__all__ = ["SPP_PER_PASS", "TILE_SIZE", "DEFAULT_RES", "RenderOptions", "RenderResult",
-           "pass_schedule", "render", "render_result", "resolution"]
+__all__ = [
+    "SPP_PER_PASS",
+    "TILE_SIZE",
+    "DEFAULT_RES",
+    "RenderOptions",
+    "RenderResult",
+    "pass_schedule",
+    "render",
+    "render_result",
+    "resolution",
+]
 #: The names that ``api`` holds.
 _API = __all__[2:]
 

@@ -30,8 +30,15 @@ from ptlab.samplers import make_sampler
 from ptlab.scene import Scene
 from ptlab.scene_file import load_scene
 
-__all__ = ["DEFAULT_RES", "RenderOptions", "RenderResult", "pass_schedule", "render",
-           "render_result", "resolution"]
+__all__ = [
+    "DEFAULT_RES",
+    "RenderOptions",
+    "RenderResult",
+    "pass_schedule",
+    "render",
+    "render_result",
+    "resolution",
+]
 
 
 @dataclass
@@ -71,12 +78,18 @@ class RenderResult:
 
 
 @takes_options
-def render_result(scene: Scene | str, *args, options: RenderOptions | None = None,
-                  executor: Executor | None = None, checkpoint: str | Path | None = None,
-                  resume: str | Path | None = None,
-                  progress: Callable[[Film], None] | None = None,
-                  on_pass: Callable[[Film], None] | None = None,
-                  stop: Callable[[], bool] | None = None, **keywords: Any) -> RenderResult:
+def render_result(
+    scene: Scene | str,
+    *args,
+    options: RenderOptions | None = None,
+    executor: Executor | None = None,
+    checkpoint: str | Path | None = None,
+    resume: str | Path | None = None,
+    progress: Callable[[Film], None] | None = None,
+    on_pass: Callable[[Film], None] | None = None,
+    stop: Callable[[], bool] | None = None,
+    **keywords: Any,
+) -> RenderResult:
     """Render and return the image with its statistics (arguments as for ``render``).
 
     Args (beyond ``render``'s):
@@ -111,14 +124,25 @@ def render_result(scene: Scene | str, *args, options: RenderOptions | None = Non
     samples_at_start = film.samples
 
     start = time.perf_counter()
-    setup = RenderSetup(scene=scene, backend=options.backend, width=width, height=height,
-                        seed=options.seed, settings=settings, integrator=options.integrator,
-                        sampler=sampler)
+    setup = RenderSetup(
+        scene=scene,
+        backend=options.backend,
+        width=width,
+        height=height,
+        seed=options.seed,
+        settings=settings,
+        integrator=options.integrator,
+        sampler=sampler,
+    )
     first_sample = np.concatenate([[0], np.cumsum(passes)])
-    jobs = [Job(tile, k, n, int(first_sample[k])) for k, n in enumerate(passes) for tile in tiles
-            if k >= film.passes_done[tile.index]]
+    jobs = [
+        Job(tile, k, n, int(first_sample[k]))
+        for k, n in enumerate(passes)
+        for tile in tiles
+        if k >= film.passes_done[tile.index]
+    ]
     if executor is None:
-        workers = min(workers, len(jobs))   # a pool for one job would only cost its start-up
+        workers = min(workers, len(jobs))  # a pool for one job would only cost its start-up
     complete_passes = int(film.passes_done.min())
     for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False)):
         film.add(result)
@@ -135,11 +159,23 @@ def render_result(scene: Scene | str, *args, options: RenderOptions | None = Non
         save_checkpoint(checkpoint, film, identity)
     seconds = time.perf_counter() - start
     return RenderResult(
-        image=film.image(), spp=film.spp, spp_max=film.spp_max, complete=complete,
-        seconds=seconds, samples=film.samples - samples_at_start, rays=film.rays,
-        query_seconds=film.query_seconds, sampler_seconds=film.sampler_seconds,
-        settings=dict(record, scene=scene.name, spp=film.spp, rr_depth=settings.roulette_starts,
-                      workers=workers if executor is None else "executor"))
+        image=film.image(),
+        spp=film.spp,
+        spp_max=film.spp_max,
+        complete=complete,
+        seconds=seconds,
+        samples=film.samples - samples_at_start,
+        rays=film.rays,
+        query_seconds=film.query_seconds,
+        sampler_seconds=film.sampler_seconds,
+        settings=dict(
+            record,
+            scene=scene.name,
+            spp=film.spp,
+            rr_depth=settings.roulette_starts,
+            workers=workers if executor is None else "executor",
+        ),
+    )
 
 
 def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
@@ -152,8 +188,13 @@ def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
 
 
 @takes_options
-def render(scene: Scene | str, *args, options: RenderOptions | None = None,
-           executor: Executor | None = None, **keywords: Any) -> np.ndarray:
+def render(
+    scene: Scene | str,
+    *args,
+    options: RenderOptions | None = None,
+    executor: Executor | None = None,
+    **keywords: Any,
+) -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
 
     The options are ``RenderOptions``' fields (below), given by name, in order, or all at

@@ -31,8 +31,13 @@ FORMAT_VERSION = 3
 def scene_digest(scene) -> str:
     """A fingerprint of the scene's geometry, materials, lights and camera."""
     digest = hashlib.sha256()
-    for array in (scene.triangles, scene.material_ids, scene.camera.position,
-                  scene.camera.forward, scene.camera.up):
+    for array in (
+        scene.triangles,
+        scene.material_ids,
+        scene.camera.position,
+        scene.camera.forward,
+        scene.camera.up,
+    ):
         digest.update(np.ascontiguousarray(array).tobytes())
     if scene.uvs is not None:
         digest.update(np.ascontiguousarray(scene.uvs).tobytes())
@@ -43,13 +48,19 @@ def scene_digest(scene) -> str:
 
 def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     """Write the film and the render's identity to ``path``, atomically."""
+
     def write(temporary: str) -> None:
         with open(temporary, "wb") as out:
-            np.savez(out, sums=film.sums, passes=np.asarray(film.passes, dtype=np.int64),
-                     passes_done=film.passes_done, rays=np.int64(film.rays),
-                     query_seconds=np.float64(film.query_seconds),
-                     sampler_seconds=np.float64(film.sampler_seconds),
-                     identity=json.dumps(dict(identity, format=FORMAT_VERSION)))
+            np.savez(
+                out,
+                sums=film.sums,
+                passes=np.asarray(film.passes, dtype=np.int64),
+                passes_done=film.passes_done,
+                rays=np.int64(film.rays),
+                query_seconds=np.float64(film.query_seconds),
+                sampler_seconds=np.float64(film.sampler_seconds),
+                identity=json.dumps(dict(identity, format=FORMAT_VERSION)),
+            )
 
     write_atomically(path, write)
 
@@ -62,8 +73,10 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     try:
         with open(path, "rb") as file, np.load(file, allow_pickle=False) as data:
             saved = json.loads(str(data["identity"]))
-            arrays = {k: data[k] for k in ("sums", "passes", "passes_done", "rays",
-                                           "query_seconds", "sampler_seconds")}
+            arrays = {
+                k: data[k]
+                for k in ("sums", "passes", "passes_done", "rays", "query_seconds", "sampler_seconds")
+            }
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
     if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
@@ -72,8 +85,9 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     for key, value in identity.items():
         # Compared as text: checkpoints written before RenderOptions kept rr_depth as text.
         if key != "spp" and (key not in saved or str(saved[key]) != str(value)):
-            raise PtlabError(f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, "
-                             f"this render has {value!r}")
+            raise PtlabError(
+                f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, this render has {value!r}"
+            )
     if not _fits(arrays, film):
         raise PtlabError(f"{path}: the checkpoint's film does not fit this render")
     # The passes done must be the first passes of this render's schedule (a render may be
@@ -81,9 +95,11 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     done = int(arrays["passes_done"].max(initial=0))
     saved_passes = [int(n) for n in arrays["passes"]]
     if done > len(film.passes) or saved_passes[:done] != film.passes[:done]:
-        raise PtlabError(f"{path}: the checkpoint's {done} passes (of {saved_passes[0]} spp) are "
-                         f"not the first passes of a {sum(film.passes)}-spp render: resume "
-                         f"with the --spp it was started with, {sum(saved_passes)}")
+        raise PtlabError(
+            f"{path}: the checkpoint's {done} passes (of {saved_passes[0]} spp) are "
+            f"not the first passes of a {sum(film.passes)}-spp render: resume "
+            f"with the --spp it was started with, {sum(saved_passes)}"
+        )
     film.sums[:] = arrays["sums"]
     film.passes_done[:] = arrays["passes_done"]
     film.rays = int(arrays["rays"])
@@ -93,11 +109,20 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
 
 def _fits(arrays: dict, film: Film) -> bool:
     """Whether a checkpoint's arrays have the shapes and kinds of number this film needs."""
-    expected = {"sums": (film.sums.shape, np.floating),
-                "passes_done": ((len(film.tiles),), np.integer),
-                "rays": ((), np.integer), "query_seconds": ((), np.floating),
-                "sampler_seconds": ((), np.floating)}
+    expected = {
+        "sums": (film.sums.shape, np.floating),
+        "passes_done": ((len(film.tiles),), np.integer),
+        "rays": ((), np.integer),
+        "query_seconds": ((), np.floating),
+        "sampler_seconds": ((), np.floating),
+    }
     passes = arrays["passes"]
-    return (all(arrays[name].shape == shape and np.issubdtype(arrays[name].dtype, kind)
-                for name, (shape, kind) in expected.items())
-            and passes.ndim == 1 and len(passes) > 0 and np.issubdtype(passes.dtype, np.integer))
+    return (
+        all(
+            arrays[name].shape == shape and np.issubdtype(arrays[name].dtype, kind)
+            for name, (shape, kind) in expected.items()
+        )
+        and passes.ndim == 1
+        and len(passes) > 0
+        and np.issubdtype(passes.dtype, np.integer)
+    )

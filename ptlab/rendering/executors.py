@@ -66,15 +66,16 @@ def start_worker_server() -> None:
 def _init_worker(setup: RenderSetup) -> None:
     from ptlab.rendering.jobs import install_setup
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)   # the main process handles Ctrl-C
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the main process handles Ctrl-C
     keep_freed_memory()
     install_setup(setup)
 
 
 def process_pool(workers: int, setup: RenderSetup) -> ProcessPoolExecutor:
     """N worker processes, each holding ``setup`` and its accelerator from the start."""
-    return ProcessPoolExecutor(workers, mp_context=worker_context(), initializer=_init_worker,
-                               initargs=(setup,))
+    return ProcessPoolExecutor(
+        workers, mp_context=worker_context(), initializer=_init_worker, initargs=(setup,)
+    )
 
 
 @contextmanager

@@ -41,7 +41,7 @@ class Film:
         while (index, int(self.passes_done[index])) in self.pending:
             ready = self.pending.pop((index, int(self.passes_done[index])))
             tile = ready.job.tile
-            self.sums[tile.y0:tile.y1, tile.x0:tile.x1] += ready.sums
+            self.sums[tile.y0 : tile.y1, tile.x0 : tile.x1] += ready.sums
             self.passes_done[index] += 1
             self.rays += ready.rays
             self.query_seconds += ready.query_seconds
@@ -56,8 +56,12 @@ class Film:
     @property
     def samples(self) -> int:
         """Camera samples (paths) added so far, over the whole image."""
-        return int(sum(int(count) * t.shape[0] * t.shape[1]
-                       for t, count in zip(self.tiles, self.tile_spp, strict=True)))
+        return int(
+            sum(
+                int(count) * t.shape[0] * t.shape[1]
+                for t, count in zip(self.tiles, self.tile_spp, strict=True)
+            )
+        )
 
     @property
     def spp(self) -> int:

@@ -80,7 +80,7 @@ class JobResult:
     """What a job sends back: per-pixel radiance sums and counts of its work."""
 
     job: Job
-    sums: np.ndarray            # (tile height, tile width, 3) float64
+    sums: np.ndarray  # (tile height, tile width, 3) float64
     rays: int
     query_seconds: float
     sampler_seconds: float = 0.0
@@ -124,19 +124,28 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     sampler = TimedSampler(setup.sampler)
     sample = sampler.keys(pixel_y * setup.width + pixel_x, index)
     jitter = sampler.get(sample, BounceUniforms.PIXEL, 2)
-    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x,
-                                  pixel_y, jitter)
-    paths = Paths(origins=origins, dirs=dirs,
-                  throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"), pixel=pixel,
-                  sees_emission=np.ones(len(pixel), dtype=bool), sample=sample)
+    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x, pixel_y, jitter)
+    paths = Paths(
+        origins=origins,
+        dirs=dirs,
+        throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"),
+        pixel=pixel,
+        sees_emission=np.ones(len(pixel), dtype=bool),
+        sample=sample,
+    )
     film = np.zeros((n_pixels, 3))
     timed = TimedAccelerator(accel)
     # The path loop is called by its name in this module, where chapter 7's grader puts a
     # student's in its place (ptlab.exercises.plug).
     trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
     rays = trace(film, setup.scene, timed, paths, sampler, setup.settings)
-    return JobResult(job=job, sums=film.reshape(tile_height, tile_width, 3), rays=rays,
-                     query_seconds=timed.seconds, sampler_seconds=sampler.seconds)
+    return JobResult(
+        job=job,
+        sums=film.reshape(tile_height, tile_width, 3),
+        rays=rays,
+        query_seconds=timed.seconds,
+        sampler_seconds=sampler.seconds,
+    )
 
 
 # What a worker process keeps between jobs: the setup and accelerator of recent renders.
@@ -148,7 +157,7 @@ def install_setup(setup: RenderSetup) -> None:
     """Keep ``setup`` in this process, with its accelerator built once."""
     with _worker_lock:
         if setup.token not in _worker_renders:
-            _worker_renders.clear()          # one render at a time: free the last one
+            _worker_renders.clear()  # one render at a time: free the last one
             accel = make_accelerator(setup.scene.triangles, setup.backend)
             _worker_renders[setup.token] = (setup, accel)
 

@@ -71,14 +71,14 @@ def option(default: Any, help: str, check: Callable[[str, Any], Any], **about) -
 def choice(default: str, choices: tuple[str, ...] | list[str], help: str) -> Any:
     """An option that is one of the names ``choices``."""
     choices = tuple(choices)
-    return option(default, help, lambda label, value: check_choice(label, value, choices),
-                  choices=choices)
+    return option(default, help, lambda label, value: check_choice(label, value, choices), choices=choices)
 
 
 def integer(default: int | None, help: str, low: int, high: int | None = None, **about) -> Any:
     """An option that is an integer from ``low`` to ``high`` (None: no upper bound)."""
-    return option(default, help, lambda label, value: check_integer(label, value, low, high),
-                  parse=int, **about)
+    return option(
+        default, help, lambda label, value: check_integer(label, value, low, high), parse=int, **about
+    )
 
 
 def _number_or_word(text: str) -> float | str:
@@ -99,63 +99,97 @@ class RenderOptions:
 
     spp: int = integer(DEFAULT_SPP, "samples (camera paths) per pixel", 1, MAX_SPP)
     res: tuple[int, int] | int | str | None = option(
-        None, "N (square) or WxH (default: the scene file's [render] res, else "
-              f"{DEFAULT_RES[0]}x{DEFAULT_RES[1]})",
-        lambda label, value: parse_resolution(value))
-    seed: int = integer(0, "random seed; the same seed gives the same image, bit for bit, "
-                           "whatever the number of workers", 0)
-    workers: int | None = integer(None, "processes rendering tiles at once (default: one per "
-                                        "core; 1: this process only); the image does not "
-                                        "depend on it", 1, MAX_WORKERS)
-    backend: str = choice("auto", BACKENDS, "ray queries by embree, the numpy BVH, or auto: "
-                                            "embree if it imports")
-    integrator: str = choice("path", INTEGRATORS, "path tracing; whitted, Homework 5's ray "
-                                                  "tracer (mirrors, glass and direct light "
-                                                  "only); or a debug view: normals, albedo or "
-                                                  "depth")
-    sampling: str = choice("cosine", SAMPLINGS, "how diffuse materials sample directions: "
-                                                "cosine, or uniform like the homework")
-    rr: float | str = option(PathSettings.rr, "Russian roulette: a survival probability P (the "
-                                              "homework's 0.8), or 'throughput' for pbrt-v4's P "
-                                              "from the path's throughput",
-                             lambda label, value: check_roulette(value), parse=_number_or_word,
-                             metavar="throughput|P")
+        None,
+        f"N (square) or WxH (default: the scene file's [render] res, else {DEFAULT_RES[0]}x{DEFAULT_RES[1]})",
+        lambda label, value: parse_resolution(value),
+    )
+    seed: int = integer(
+        0, "random seed; the same seed gives the same image, bit for bit, whatever the number of workers", 0
+    )
+    workers: int | None = integer(
+        None,
+        "processes rendering tiles at once (default: one per "
+        "core; 1: this process only); the image does not "
+        "depend on it",
+        1,
+        MAX_WORKERS,
+    )
+    backend: str = choice(
+        "auto", BACKENDS, "ray queries by embree, the numpy BVH, or auto: embree if it imports"
+    )
+    integrator: str = choice(
+        "path",
+        INTEGRATORS,
+        "path tracing; whitted, Homework 5's ray "
+        "tracer (mirrors, glass and direct light "
+        "only); or a debug view: normals, albedo or "
+        "depth",
+    )
+    sampling: str = choice(
+        "cosine", SAMPLINGS, "how diffuse materials sample directions: cosine, or uniform like the homework"
+    )
+    rr: float | str = option(
+        PathSettings.rr,
+        "Russian roulette: a survival probability P (the "
+        "homework's 0.8), or 'throughput' for pbrt-v4's P "
+        "from the path's throughput",
+        lambda label, value: check_roulette(value),
+        parse=_number_or_word,
+        metavar="throughput|P",
+    )
     max_depth: int | None = integer(
-        None, "the most bounces per path (default: the scene file's [render] max_depth, else "
-              f"{INTEGRATORS['path'].max_depth}; {INTEGRATORS['whitted'].max_depth} for whitted)",
-        0)
-    strategy: str = choice(PathSettings.strategy, STRATEGIES,
-                           "how direct light is found: nee, by light sampling like the "
-                           "homework; bsdf, by BSDF sampling only; mis, by both with multiple "
-                           "importance sampling")
-    heuristic: str = choice(PathSettings.heuristic, HEURISTICS,
-                            "the MIS weights of the strategy mis: power or balance")
+        None,
+        "the most bounces per path (default: the scene file's [render] max_depth, else "
+        f"{INTEGRATORS['path'].max_depth}; {INTEGRATORS['whitted'].max_depth} for whitted)",
+        0,
+    )
+    strategy: str = choice(
+        PathSettings.strategy,
+        STRATEGIES,
+        "how direct light is found: nee, by light sampling like the "
+        "homework; bsdf, by BSDF sampling only; mis, by both with multiple "
+        "importance sampling",
+    )
+    heuristic: str = choice(
+        PathSettings.heuristic, HEURISTICS, "the MIS weights of the strategy mis: power or balance"
+    )
     rr_depth: int | None = integer(
-        PathSettings.rr_min_depth, "bounces before Russian roulette starts (default 0 with a "
-                                   "fixed P, like the homework; 2 with throughput, like pbrt-v4)",
-        0, label="russian roulette depth", metavar="N")
-    sampler: str = choice(DEFAULT_SAMPLER, SAMPLERS,
-                          "where the random numbers come from: independent, or stratified and "
-                          "sobol, which spread them evenly")
-    tile_size: int = integer(TILE_SIZE, "tile edge in pixels; the image does not depend on it",
-                             8, 4096)
+        PathSettings.rr_min_depth,
+        "bounces before Russian roulette starts (default 0 with a "
+        "fixed P, like the homework; 2 with throughput, like pbrt-v4)",
+        0,
+        label="russian roulette depth",
+        metavar="N",
+    )
+    sampler: str = choice(
+        DEFAULT_SAMPLER,
+        SAMPLERS,
+        "where the random numbers come from: independent, or stratified and sobol, which spread them evenly",
+    )
+    tile_size: int = integer(TILE_SIZE, "tile edge in pixels; the image does not depend on it", 8, 4096)
     spp_per_pass: int | None = integer(
-        None, f"samples per pixel in each pass (default {SPP_PER_PASS}); part of the image's "
-              "identity, since each pass's sums are added up on their own", 1)
+        None,
+        f"samples per pixel in each pass (default {SPP_PER_PASS}); part of the image's "
+        "identity, since each pass's sums are added up on their own",
+        1,
+    )
 
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
             if value is None and f.default is None:
-                continue        # left to the scene, the integrator or the machine
+                continue  # left to the scene, the integrator or the machine
             about = f.metadata["about"]
-            object.__setattr__(self, f.name,
-                               about.check(about.label or f.name.replace("_", " "), value))
+            object.__setattr__(self, f.name, about.check(about.label or f.name.replace("_", " "), value))
         if self.integrator != "path" and (self.strategy, self.heuristic) != (
-                PathSettings.strategy, PathSettings.heuristic):
-            raise PtlabError(f"strategy {self.strategy!r} / heuristic {self.heuristic!r}: these "
-                             f"choose how the path integrator finds light; {self.integrator!r} "
-                             f"has no such choice")
+            PathSettings.strategy,
+            PathSettings.heuristic,
+        ):
+            raise PtlabError(
+                f"strategy {self.strategy!r} / heuristic {self.heuristic!r}: these "
+                f"choose how the path integrator finds light; {self.integrator!r} "
+                f"has no such choice"
+            )
 
     @staticmethod
     def about(name: str) -> About:
@@ -192,14 +226,23 @@ class RenderOptions:
             max_depth = scene.defaults.max_depth
         if max_depth is None:
             max_depth = INTEGRATORS[self.integrator].max_depth
-        return replace(self, res=resolution(scene, self.res), max_depth=max_depth,
-                       backend=resolve_backend(self.backend),
-                       spp_per_pass=min(self.spp, self.spp_per_pass or SPP_PER_PASS))
+        return replace(
+            self,
+            res=resolution(scene, self.res),
+            max_depth=max_depth,
+            backend=resolve_backend(self.backend),
+            spp_per_pass=min(self.spp, self.spp_per_pass or SPP_PER_PASS),
+        )
 
     def path_settings(self) -> PathSettings:
         """How the integrators trace paths (of options ``for_scene``)."""
-        return PathSettings(rr=self.rr, max_depth=self.max_depth, strategy=self.strategy,
-                            heuristic=self.heuristic, rr_min_depth=self.rr_depth)
+        return PathSettings(
+            rr=self.rr,
+            max_depth=self.max_depth,
+            strategy=self.strategy,
+            heuristic=self.heuristic,
+            rr_min_depth=self.rr_depth,
+        )
 
     def record(self) -> dict[str, Any]:
         """The options as an image's header and a checkpoint keep them (of options
@@ -236,13 +279,19 @@ def takes_options(function: Callable) -> Callable:
     """
     signature = inspect.signature(function)
     scene, *rest = signature.parameters.values()
-    options = [inspect.Parameter(f.name, inspect.Parameter.POSITIONAL_OR_KEYWORD,
-                                 default=f.default, annotation=f.type)
-               for f in fields(RenderOptions)]
+    options = [
+        inspect.Parameter(
+            f.name, inspect.Parameter.POSITIONAL_OR_KEYWORD, default=f.default, annotation=f.type
+        )
+        for f in fields(RenderOptions)
+    ]
     keyword_only = [p for p in rest if p.kind is inspect.Parameter.KEYWORD_ONLY]
     function.__signature__ = signature.replace(parameters=[scene, *options, *keyword_only])
-    lines = [textwrap.fill(f"{name}: {RenderOptions.describe(name)}.", 92,
-                           initial_indent=" " * 8, subsequent_indent=" " * 12)
-             for name in _FIELDS]
+    lines = [
+        textwrap.fill(
+            f"{name}: {RenderOptions.describe(name)}.", 92, initial_indent=" " * 8, subsequent_indent=" " * 12
+        )
+        for name in _FIELDS
+    ]
     function.__doc__ += "\n    Options (``RenderOptions``):\n" + "\n".join(lines) + "\n"
     return function

@@ -24,9 +24,16 @@ class ProgressBar:
 
     def __init__(self, total_samples: int, passes: int, initial: int = 0, quiet: bool = False):
         self.passes = passes
-        self.bar = tqdm(total=total_samples, initial=initial, unit="sample", unit_scale=True,
-                        dynamic_ncols=True, leave=False, file=sys.stderr,
-                        disable=quiet or not sys.stderr.isatty())
+        self.bar = tqdm(
+            total=total_samples,
+            initial=initial,
+            unit="sample",
+            unit_scale=True,
+            dynamic_ncols=True,
+            leave=False,
+            file=sys.stderr,
+            disable=quiet or not sys.stderr.isatty(),
+        )
 
     def __call__(self, film: Film) -> None:
         self.bar.update(film.samples - self.bar.n)

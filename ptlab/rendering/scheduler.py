@@ -26,13 +26,14 @@ MAX_POOL_RESTARTS = 3
 POLL_SECONDS = 0.1
 
 
-def run_jobs(jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None,
-             stop: Callable[[], bool]) -> Iterator[JobResult]:
+def run_jobs(
+    jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None, stop: Callable[[], bool]
+) -> Iterator[JobResult]:
     """Yield each job's result as it finishes (in any order) until done or ``stop()``."""
     if executor is not None:
         yield from _run_on_executor(
-            jobs, lambda job: executor.submit(run_job_in_worker, setup, job),
-            window=2 * workers, stop=stop)
+            jobs, lambda job: executor.submit(run_job_in_worker, setup, job), window=2 * workers, stop=stop
+        )
     elif workers == 1:
         accel = make_accelerator(setup.scene.triangles, setup.backend)
         for job in jobs:
@@ -43,8 +44,9 @@ def run_jobs(jobs: list[Job], setup: RenderSetup, workers: int, executor: Execut
         yield from _run_on_process_pool(jobs, setup, workers, stop)
 
 
-def _run_on_executor(jobs: list[Job], submit: Callable[[Job], Future], window: int,
-                     stop: Callable[[], bool]) -> Iterator[JobResult]:
+def _run_on_executor(
+    jobs: list[Job], submit: Callable[[Job], Future], window: int, stop: Callable[[], bool]
+) -> Iterator[JobResult]:
     pending, in_flight = deque(jobs), {}
     try:
         while pending or in_flight:
@@ -62,25 +64,33 @@ def _run_on_executor(jobs: list[Job], submit: Callable[[Job], Future], window: i
             future.cancel()
 
 
-def _run_on_process_pool(jobs: list[Job], setup: RenderSetup, workers: int,
-                         stop: Callable[[], bool]) -> Iterator[JobResult]:
+def _run_on_process_pool(
+    jobs: list[Job], setup: RenderSetup, workers: int, stop: Callable[[], bool]
+) -> Iterator[JobResult]:
     remaining = list(jobs)
     for restart in range(MAX_POOL_RESTARTS + 1):
         finished: set[Job] = set()
         pool = process_pool(workers, setup)
         try:
             for result in _run_on_executor(
-                    remaining, lambda job, pool=pool: pool.submit(run_job_in_worker, setup.token, job),
-                    window=2 * workers, stop=stop):
+                remaining,
+                lambda job, pool=pool: pool.submit(run_job_in_worker, setup.token, job),
+                window=2 * workers,
+                stop=stop,
+            ):
                 finished.add(result.job)
                 yield result
             return
         except BrokenProcessPool:
             remaining = [job for job in remaining if job not in finished]
             if restart == MAX_POOL_RESTARTS:
-                raise PtlabError(f"worker processes died {MAX_POOL_RESTARTS + 1} times "
-                                 "(out of memory?); giving up") from None
-            warnings.warn(f"a worker process died; starting new workers for the "
-                          f"{len(remaining)} unfinished jobs", RuntimeWarning, stacklevel=2)
+                raise PtlabError(
+                    f"worker processes died {MAX_POOL_RESTARTS + 1} times (out of memory?); giving up"
+                ) from None
+            warnings.warn(
+                f"a worker process died; starting new workers for the {len(remaining)} unfinished jobs",
+                RuntimeWarning,
+                stacklevel=2,
+            )
         finally:
             pool.shutdown(wait=True, cancel_futures=True)

@@ -16,7 +16,7 @@ MAX_WORKERS = 1024
 #: Russian roulette compares float32 uniforms, multiples of 2^-24, with the survival
 #: probability: a smaller one would survive more often than it says (and then divide the
 #: throughput by almost nothing, to infinity).
-MIN_SURVIVAL = 2.0 ** -24
+MIN_SURVIVAL = 2.0**-24
 
 
 def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
@@ -47,7 +47,8 @@ def check_integer(label: str, value: object, low: int, high: int | None = None) 
         wanted = f"an integer from {low} to {high}"
     else:
         wanted = {0: "a non-negative integer", 1: "a positive integer"}.get(
-            low, f"an integer of at least {low}")
+            low, f"an integer of at least {low}"
+        )
     raise PtlabError(f"{label} {value!r}: must be {wanted}")
 
 
@@ -68,8 +69,10 @@ def check_roulette(rr: object) -> float | str:
     except (TypeError, ValueError):
         raise PtlabError(f"russian roulette {rr!r}: give 'throughput' or a probability") from None
     if not MIN_SURVIVAL <= probability <= 1:
-        raise PtlabError(f"russian roulette {rr!r}: the survival probability must be in "
-                         f"[2^-24, 1] (the uniforms it is drawn against are float32)")
+        raise PtlabError(
+            f"russian roulette {rr!r}: the survival probability must be in "
+            f"[2^-24, 1] (the uniforms it is drawn against are float32)"
+        )
     return probability
 
 

@@ -61,8 +61,13 @@ class Channel:
         on_output: called with each line the child printed, up to ``MAX_OUTPUT`` bytes.
     """
 
-    def __init__(self, send_fd: int, receive_fd: int, output_fd: int | None = None,
-                 on_output: Callable[[str], None] | None = None):
+    def __init__(
+        self,
+        send_fd: int,
+        receive_fd: int,
+        output_fd: int | None = None,
+        on_output: Callable[[str], None] | None = None,
+    ):
         for fd in (send_fd, receive_fd, output_fd):
             if fd is not None:
                 os.set_blocking(fd, False)
@@ -70,7 +75,7 @@ class Channel:
         self.on_output = on_output
         self._output = bytearray()
         self._output_passed = 0
-        self._pending = bytearray()     # bytes read ahead, past the part being read
+        self._pending = bytearray()  # bytes read ahead, past the part being read
 
     # -- sending ----------------------------------------------------------------------
 
@@ -79,7 +84,7 @@ class Channel:
         while chunks:
             try:
                 written = os.writev(self.send_fd, chunks[:512])
-            except BlockingIOError:        # the pipe is full: wait until the child reads
+            except BlockingIOError:  # the pipe is full: wait until the child reads
                 self._wait(self.send_fd, select.POLLOUT, deadline)
                 continue
             except (BrokenPipeError, ConnectionResetError):
@@ -110,7 +115,7 @@ class Channel:
                 if size - filled < READ_AHEAD:
                     data = os.read(self.receive_fd, READ_AHEAD)
                     got = min(len(data), size - filled)
-                    view[filled:filled + got] = data[:got]
+                    view[filled : filled + got] = data[:got]
                     self._pending += data[got:]
                 else:
                     got = os.readv(self.receive_fd, [view[filled:]])
@@ -195,6 +200,7 @@ class Channel:
 
 # -- the child's side -----------------------------------------------------------------
 
+
 class Reader:
     """The child's end of the request pipe: whole messages, read ahead in large chunks
     (one system call for a small message: every call's round trip counts)."""
@@ -265,8 +271,11 @@ def _chunks(parts: list) -> list[memoryview]:
     tuple of buffers, sent one after the other, to save joining them)."""
     lengths, views = [], []
     for part in parts:
-        pieces = [memoryview(b).cast("B") for b in part] if isinstance(part, tuple) \
+        pieces = (
+            [memoryview(b).cast("B") for b in part]
+            if isinstance(part, tuple)
             else [memoryview(part).cast("B")]
+        )
         lengths.append(sum(map(len, pieces)))
         views.extend(pieces)
     header = COUNT.pack(len(parts)) + struct.pack(f"<{len(lengths)}Q", *lengths)

@@ -66,8 +66,16 @@ INTERFACE = PTLAB / "materials" / "base.py"
 MAX_MESSAGE_TEXT = 2000
 PR_SET_PDEATHSIG = 1
 #: Environment variables the student's process keeps (the rest may hold the grader's secrets).
-KEPT_ENVIRONMENT = ("PATH", "LANG", "LC_ALL", "LC_CTYPE", "TZ", "OMP_NUM_THREADS",
-                    "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS")
+KEPT_ENVIRONMENT = (
+    "PATH",
+    "LANG",
+    "LC_ALL",
+    "LC_CTYPE",
+    "TZ",
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+)
 
 
 class GradeLoadError(PtlabError):
@@ -124,33 +132,35 @@ def import_file(path: Path):
     module = importlib.util.module_from_spec(spec)
     folder = str(path.resolve().parent)
     sys.path.insert(0, folder)
-    sys.modules[module_name] = module   # (dataclasses and pickling look modules up there)
+    sys.modules[module_name] = module  # (dataclasses and pickling look modules up there)
     try:
         spec.loader.exec_module(module)
     except SyntaxError as error:
         del sys.modules[module_name]
         raise GradeLoadError(f"{path.name}:{error.lineno}: syntax error: {error.msg}") from None
-    except Refused as error:    # one of the grader's rules (ptlab.untrusted.confinement)
+    except Refused as error:  # one of the grader's rules (ptlab.untrusted.confinement)
         sys.modules.pop(module_name, None)
         raise GradeLoadError(f"{path.name}: {_text(error)}") from None
     except BaseException as error:  # anything the student's module raises on import  # noqa: B036
         sys.modules.pop(module_name, None)
-        raise GradeLoadError(f"{path.name}: importing it raised {type(error).__name__}: "
-                             f"{_text(error)}") from None
+        raise GradeLoadError(
+            f"{path.name}: importing it raised {type(error).__name__}: {_text(error)}"
+        ) from None
     finally:
         sys.path.remove(folder)
     return module
 
 
-def serve(path: str, receive: Connection, send: Connection, output: Connection,
-          confinement: Confinement) -> None:
+def serve(
+    path: str, receive: Connection, send: Connection, output: Connection, confinement: Confinement
+) -> None:
     """The child's whole life: set up, import the student's file, answer until told to stop.
 
     ``receive``, ``send`` and ``output`` are the pipes' ends (as ``Connection`` objects,
     which the fork server passes to a new process; only their file descriptors are used).
     """
     _leave_the_grader(output.fileno(), keep={receive.fileno(), send.fileno()})
-    keep_freed_memory()     # every call's arrays arrive in new buffers: no page faults for them
+    keep_freed_memory()  # every call's arrays arrive in new buffers: no page faults for them
     # All of ptlab, before reading its files is refused: done already if the fork server was
     # started for the graders, not if a render of this process started it first.
     importlib.import_module("ptlab.untrusted.fork_server")
@@ -172,7 +182,7 @@ def serve(path: str, receive: Connection, send: Connection, output: Connection,
 
 
 def _leave_the_grader(output_fd: int, keep: set[int]) -> None:
-    os.setsid()     # a session and process group of its own: the grader's terminal signals stay there
+    os.setsid()  # a session and process group of its own: the grader's terminal signals stay there
     _close_inherited(keep | {output_fd})
     null = os.open(os.devnull, os.O_RDONLY)
     os.dup2(null, 0)
@@ -192,17 +202,19 @@ def _confine(confinement: Confinement) -> None:
     if confinement.user is not None:
         isolate_network()
         become(confinement.user)
-    make_undumpable()       # (a change of user does it too, where fs.suid_dumpable is 0): two
+    make_undumpable()  # (a change of user does it too, where fs.suid_dumpable is 0): two
     # students graded at once as the same user cannot ptrace each other
     if sys.platform.startswith("linux"):
         ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     _move_into(Path(confinement.folder))
     limits = confinement.limits
-    for name, value in ((resource.RLIMIT_CPU, limits.cpu_seconds),
-                        (resource.RLIMIT_AS, limits.memory_bytes),
-                        (resource.RLIMIT_FSIZE, limits.file_bytes),
-                        (resource.RLIMIT_CORE, 0),
-                        (resource.RLIMIT_NPROC, _user_tasks() + limits.processes)):
+    for name, value in (
+        (resource.RLIMIT_CPU, limits.cpu_seconds),
+        (resource.RLIMIT_AS, limits.memory_bytes),
+        (resource.RLIMIT_FSIZE, limits.file_bytes),
+        (resource.RLIMIT_CORE, 0),
+        (resource.RLIMIT_NPROC, _user_tasks() + limits.processes),
+    ):
         _lower_limit(name, value)
     if not confinement.programs:
         forbid_programs()
@@ -220,7 +232,7 @@ def _move_into(folder: Path) -> None:
     os.environ.clear()
     os.environ.update(kept, HOME=str(folder), TMPDIR=str(folder))
     tempfile.tempdir = str(folder)
-    multiprocessing.current_process()._config.pop("tempdir", None)   # (the grader's, else)
+    multiprocessing.current_process()._config.pop("tempdir", None)  # (the grader's, else)
 
 
 def _close_inherited(keep: set[int]) -> None:
@@ -320,18 +332,19 @@ class _Server:
     def do_repr(self, encoder: Encoder, handle: int) -> dict:
         return {"value": repr(self.handles[handle])[:200]}
 
-    def do_call(self, encoder: Encoder, handle: int, args: tuple, kwargs: dict,
-                writeback: bool) -> dict:
+    def do_call(self, encoder: Encoder, handle: int, args: tuple, kwargs: dict, writeback: bool) -> dict:
         before = _Snapshot(args, kwargs) if writeback else None
         result = self.handles[handle](*args, **kwargs)
         envelope = {"value": encoder.encode(result)}
         if before is not None:
-            envelope["writeback"] = [[path, how, encoder.encode(value)]
-                                     for path, how, value in before.changes()]
+            envelope["writeback"] = [
+                [path, how, encoder.encode(value)] for path, how, value in before.changes()
+            ]
         return envelope
 
-    def do_call_each(self, encoder: Encoder, handles: list[int], which: np.ndarray, method: str,
-                     args: tuple) -> dict:
+    def do_call_each(
+        self, encoder: Encoder, handles: list[int], which: np.ndarray, method: str, args: tuple
+    ) -> dict:
         """``method`` of several objects, each on its rows (``which[k]`` is the object of row
         k): the library's ``shade``, here, so that all the rows take one request."""
         from types import SimpleNamespace
@@ -364,8 +377,12 @@ class _Server:
         except (TypeError, ValueError):
             parameters = None
         name = getattr(value, "__qualname__", None)
-        return {"name": name if isinstance(name, str) else type(value).__name__, "kind": kind,
-                "origin": self.library_origin(value), "parameters": parameters}
+        return {
+            "name": name if isinstance(name, str) else type(value).__name__,
+            "kind": kind,
+            "origin": self.library_origin(value),
+            "parameters": parameters,
+        }
 
     def library_origin(self, value) -> str | None:
         """``module.name`` if ``value`` is ptlab's own function, or a class whose material
@@ -385,16 +402,22 @@ class _Server:
         return file.is_relative_to(PTLAB) and file != self.path.resolve()
 
     def describe_error(self, error: BaseException) -> dict:
-        return {"type": type(error).__name__, "message": _text(error),
-                "where": self.where(error),
-                "not_implemented": isinstance(error, NotImplementedError)}
+        return {
+            "type": type(error).__name__,
+            "message": _text(error),
+            "where": self.where(error),
+            "not_implemented": isinstance(error, NotImplementedError),
+        }
 
     def where(self, error: BaseException) -> str | None:
         """``file.py:line`` of the deepest frame of the student's file in the traceback
         (from the frames alone: reading the source lines of ptlab's files is refused)."""
         graded = str(self.path.resolve())
-        lines = [line for frame, line in traceback.walk_tb(error.__traceback__)
-                 if os.path.realpath(frame.f_code.co_filename) == graded]
+        lines = [
+            line
+            for frame, line in traceback.walk_tb(error.__traceback__)
+            if os.path.realpath(frame.f_code.co_filename) == graded
+        ]
         return f"{self.path.name}:{lines[-1]}" if lines else None
 
 
@@ -426,7 +449,7 @@ class _Unpickler(pickle.Unpickler):
         self.server, self.arrays = server, arrays
 
     def persistent_load(self, pid):
-        if isinstance(pid, str):        # "array <part> <dtype> <shape> <order>"
+        if isinstance(pid, str):  # "array <part> <dtype> <shape> <order>"
             _, part, dtype, shape, order = pid.split(" ")
             dtype, shape = np.dtype(dtype), tuple(int(n) for n in shape.split(",") if n)
             count = math.prod(shape)
@@ -436,7 +459,7 @@ class _Unpickler(pickle.Unpickler):
         kind, key, *payload = pid
         if kind == "handle":
             return self.server.handles[key]
-        if kind == "rows":      # an array whose rows are all ``key`` (one row)
+        if kind == "rows":  # an array whose rows are all ``key`` (one row)
             rows, order = payload
             array = np.empty((rows, key.shape[1]), key.dtype, order=order)
             array[...] = key

@@ -48,17 +48,43 @@ ALWAYS_WRITABLE = ("/dev/null",)
 WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_TRUNC | os.O_APPEND
 #: Events that change the file system: the positions of their paths, and of their folder
 #: descriptors (-1 or None when there is none).
-FILE_CHANGES = {"os.rename": ((0, 1), (2, 3)), "os.remove": ((0,), (1,)), "os.rmdir": ((0,), (1,)),
-                "os.mkdir": ((0,), (2,)), "os.symlink": ((1,), (2,)), "os.link": ((1,), (2, 3)),
-                "os.chmod": ((0,), (2,)), "os.chown": ((0,), (3,)), "os.utime": ((0,), (3,)),
-                "os.truncate": ((0,), ()), "os.chflags": ((0,), ()), "os.lchflags": ((0,), ()),
-                "os.setxattr": ((0,), ()), "os.removexattr": ((0,), ()), "shutil.rmtree": ((0,), ()),
-                "sqlite3.connect": ((0,), ())}
-PROGRAM_EVENTS = ("subprocess.Popen", "os.system", "os.exec", "os.posix_spawn", "os.spawn",
-                  "os.startfile", "pty.spawn")
+FILE_CHANGES = {
+    "os.rename": ((0, 1), (2, 3)),
+    "os.remove": ((0,), (1,)),
+    "os.rmdir": ((0,), (1,)),
+    "os.mkdir": ((0,), (2,)),
+    "os.symlink": ((1,), (2,)),
+    "os.link": ((1,), (2, 3)),
+    "os.chmod": ((0,), (2,)),
+    "os.chown": ((0,), (3,)),
+    "os.utime": ((0,), (3,)),
+    "os.truncate": ((0,), ()),
+    "os.chflags": ((0,), ()),
+    "os.lchflags": ((0,), ()),
+    "os.setxattr": ((0,), ()),
+    "os.removexattr": ((0,), ()),
+    "shutil.rmtree": ((0,), ()),
+    "sqlite3.connect": ((0,), ()),
+}
+PROGRAM_EVENTS = (
+    "subprocess.Popen",
+    "os.system",
+    "os.exec",
+    "os.posix_spawn",
+    "os.spawn",
+    "os.startfile",
+    "pty.spawn",
+)
 #: ctypes' events: loading a library or a symbol, reading memory at an address.
-CTYPES_EVENTS = ("ctypes.dlopen", "ctypes.dlsym", "ctypes.dlsym/handle", "ctypes.cdata",
-                 "ctypes.string_at", "ctypes.wstring_at", "ctypes.call_function")
+CTYPES_EVENTS = (
+    "ctypes.dlopen",
+    "ctypes.dlsym",
+    "ctypes.dlsym/handle",
+    "ctypes.cdata",
+    "ctypes.string_at",
+    "ctypes.wstring_at",
+    "ctypes.call_function",
+)
 #: Frames whose decoding of bytecode is Python's own import system.
 IMPORT_SYSTEM = ("<frozen importlib._bootstrap_external>", "<frozen importlib._bootstrap>")
 
@@ -82,9 +108,11 @@ def confine(folder: Path, answers: dict[str, Answer], programs: bool) -> None:
 
 
 def _no_programs(*args, **kwargs):
-    raise Refused("your code may not start programs while it is graded (a process pool that "
-                  "starts new interpreters, 'forkserver' or 'spawn', is one; in this chapter "
-                  "your code has no need of one)")
+    raise Refused(
+        "your code may not start programs while it is graded (a process pool that "
+        "starts new interpreters, 'forkserver' or 'spawn', is one; in this chapter "
+        "your code has no need of one)"
+    )
 
 
 class _Rules:
@@ -93,13 +121,21 @@ class _Rules:
     def __init__(self, folder: Path, answers: dict[str, Answer], programs: bool):
         self.folder = Path(os.path.realpath(folder))
         self.answers, self.programs = answers, programs
-        self.checking = threading.local()       # (compiling inside the hook raises events)
-        self.handlers = {"open": self.open, "compile": self.compile,
-                         "marshal.loads": self.decode, "marshal.load": self.decode,
-                         "code.__new__": self.decode, "os.kill": self.signal,
-                         "os.killpg": self.signal, "socket.__new__": self.socket,
-                         "socket.connect": self.address, "socket.bind": self.address,
-                         "socket.sendto": self.address, "os.chdir": self.stay}
+        self.checking = threading.local()  # (compiling inside the hook raises events)
+        self.handlers = {
+            "open": self.open,
+            "compile": self.compile,
+            "marshal.loads": self.decode,
+            "marshal.load": self.decode,
+            "code.__new__": self.decode,
+            "os.kill": self.signal,
+            "os.killpg": self.signal,
+            "socket.__new__": self.socket,
+            "socket.connect": self.address,
+            "socket.bind": self.address,
+            "socket.sendto": self.address,
+            "os.chdir": self.stay,
+        }
         self.handlers.update(dict.fromkeys(FILE_CHANGES, self.change))
         self.handlers.update(dict.fromkeys(CTYPES_EVENTS, self.ctypes))
         if not programs:
@@ -115,22 +151,28 @@ class _Rules:
     def open(self, event: str, arguments: tuple) -> None:
         path, mode, flags = arguments
         if isinstance(path, int):
-            return                          # an open descriptor: checked when it was opened
+            return  # an open descriptor: checked when it was opened
         where = self._resolved(path)
         if where is None:
             return
-        if where.is_relative_to(PTLAB) and (where.suffix in CODE_SUFFIXES or "__pycache__" in where.parts
-                                            or any(where.is_relative_to(f) for f in CODE_FOLDERS)):
-            raise Refused(f"reading ptlab's own code ({where}) is not allowed while your code "
-                          f"is graded")
-        writes = (isinstance(mode, str) and any(c in mode for c in "wax+")) or \
-            (isinstance(flags, int) and flags & WRITE_FLAGS)
+        if where.is_relative_to(PTLAB) and (
+            where.suffix in CODE_SUFFIXES
+            or "__pycache__" in where.parts
+            or any(where.is_relative_to(f) for f in CODE_FOLDERS)
+        ):
+            raise Refused(f"reading ptlab's own code ({where}) is not allowed while your code is graded")
+        writes = (isinstance(mode, str) and any(c in mode for c in "wax+")) or (
+            isinstance(flags, int) and flags & WRITE_FLAGS
+        )
         if writes and not self._mine(where) and str(where) not in ALWAYS_WRITABLE:
-            raise Refused(f"your code may write only in its own folder (the current one) while "
-                          f"it is graded, not {where}")
+            raise Refused(
+                f"your code may write only in its own folder (the current one) while "
+                f"it is graded, not {where}"
+            )
         if not writes and not self._mine(where) and where.is_dir():
-            raise Refused(f"your code may open folders only in its own folder while it is "
-                          f"graded, not {where}")
+            raise Refused(
+                f"your code may open folders only in its own folder while it is graded, not {where}"
+            )
 
     def change(self, event: str, arguments: tuple) -> None:
         paths, folders = FILE_CHANGES[event]
@@ -142,8 +184,10 @@ class _Rules:
                 raise Refused(f"{event} on a file descriptor is not allowed while your code is graded")
             where = None if isinstance(path, int) else self._resolved(path, follow=False)
             if where is not None and not self._mine(where):
-                raise Refused(f"your code may change files only in its own folder while it is "
-                              f"graded, not {where} ({event})")
+                raise Refused(
+                    f"your code may change files only in its own folder while it is "
+                    f"graded, not {where} ({event})"
+                )
 
     def stay(self, event: str, arguments: tuple) -> None:
         """Relative paths are judged from the private folder, so the process stays in it."""
@@ -157,7 +201,7 @@ class _Rules:
         except TypeError:
             return None
         absolute = os.path.join(os.getcwd(), text)
-        if not follow:      # (the link itself is what changes, not what it points to)
+        if not follow:  # (the link itself is what changes, not what it points to)
             head, tail = os.path.split(absolute)
             return Path(os.path.realpath(head)) / tail
         return Path(os.path.realpath(absolute))
@@ -173,22 +217,23 @@ class _Rules:
         try:
             tree = source if isinstance(source, ast.AST) else ast.parse(source)
         except (SyntaxError, ValueError, TypeError, MemoryError, RecursionError):
-            return                          # compile() itself will say what is wrong
+            return  # compile() itself will say what is wrong
         finally:
             self.checking.now = False
         found = copies_in(tree, self.answers)
         if is_a_copy(found):
-            raise Refused(f"compiling {describe_copies(found, os.path.basename(os.fsdecode(filename)))} "
-                          f"is not allowed while your code is graded")
+            raise Refused(
+                f"compiling {describe_copies(found, os.path.basename(os.fsdecode(filename)))} "
+                f"is not allowed while your code is graded"
+            )
 
     def decode(self, event: str, arguments: tuple) -> None:
         try:
-            caller = sys._getframe(2).f_code.co_filename     # (this method, the hook, its caller)
-        except ValueError:      # called from C with no Python frame above
+            caller = sys._getframe(2).f_code.co_filename  # (this method, the hook, its caller)
+        except ValueError:  # called from C with no Python frame above
             caller = None
         if caller not in IMPORT_SYSTEM:
-            raise Refused(f"making code from bytes ({event}) is not allowed while your code is "
-                          f"graded")
+            raise Refused(f"making code from bytes ({event}) is not allowed while your code is graded")
 
     # -- processes, sockets, C ---------------------------------------------------------------
 
@@ -200,8 +245,10 @@ class _Rules:
                 return
         elif target == me or _descends_from(target, me):
             return
-        raise Refused(f"your code may signal only its own processes while it is graded (not "
-                      f"{'group ' if event == 'os.killpg' or target <= 0 else 'pid '}{abs(target)})")
+        raise Refused(
+            f"your code may signal only its own processes while it is graded (not "
+            f"{'group ' if event == 'os.killpg' or target <= 0 else 'pid '}{abs(target)})"
+        )
 
     def socket(self, event: str, arguments: tuple) -> None:
         family = arguments[1]
@@ -218,8 +265,9 @@ class _Rules:
             raise Refused("your code may use sockets only in its own folder while it is graded")
 
     def program(self, event: str, arguments: tuple) -> None:
-        raise Refused("your code may not start programs while it is graded (in this chapter "
-                      "it has no need to)")
+        raise Refused(
+            "your code may not start programs while it is graded (in this chapter it has no need to)"
+        )
 
     def ctypes(self, event: str, arguments: tuple) -> None:
         raise Refused(f"calling C through ctypes ({event}) is not allowed while your code is graded")
@@ -232,7 +280,7 @@ def _descends_from(pid: int, ancestor: int) -> bool:
             stat = Path(f"/proc/{pid}/stat").read_bytes()
         except OSError:
             return False
-        pid = int(stat[stat.rfind(b")") + 2:].split()[1])
+        pid = int(stat[stat.rfind(b")") + 2 :].split()[1])
         if pid == ancestor:
             return True
         if pid <= 1:

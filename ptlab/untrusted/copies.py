@@ -104,14 +104,23 @@ class _Anonymise(ast.NodeTransformer):
 
 def _statements(body: list) -> list:
     """``body`` without docstrings, strings standing alone and ``pass``."""
-    return [s for s in body if not (isinstance(s, ast.Pass) or
-                                    (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)
-                                     and isinstance(s.value.value, str)))]
+    return [
+        s
+        for s in body
+        if not (
+            isinstance(s, ast.Pass)
+            or (
+                isinstance(s, ast.Expr)
+                and isinstance(s.value, ast.Constant)
+                and isinstance(s.value.value, str)
+            )
+        )
+    ]
 
 
 def fingerprint(function: FunctionNode) -> tuple[str, int]:
     """(digest, size) of ``function``'s normalised syntax tree (see the module docstring)."""
-    tree = _Anonymise().visit(copy.deepcopy(function))     # (the visitor changes what it visits)
+    tree = _Anonymise().visit(copy.deepcopy(function))  # (the visitor changes what it visits)
     text = ast.dump(tree, annotate_fields=False, include_attributes=False)
     return hashlib.sha256(text.encode()).hexdigest(), sum(1 for _ in ast.walk(tree))
 
@@ -122,6 +131,7 @@ def functions_in(tree: ast.AST) -> list[FunctionNode]:
 
 
 # -- the library's side ------------------------------------------------------------------
+
 
 def answers_of(names: Iterable[str], solution: Path | None = None) -> dict[str, Answer]:
     """{digest: Answer} of the functions ``names`` (dotted: a function, or a class whose
@@ -169,6 +179,7 @@ def _library_functions(name: str) -> list[tuple[str, FunctionNode]]:
 
 # -- the student's side -------------------------------------------------------------------
 
+
 def copies_in(tree: ast.AST, answers: dict[str, Answer]) -> list[tuple[int, Answer]]:
     """(line, answer) of every function in ``tree`` that is one of ``answers``."""
     found = []
@@ -184,8 +195,11 @@ def copied_class(tree: ast.Module, name: str, answers: dict[str, Answer]) -> lis
     every one it defines is a copy; else [] (a class that writes some of them itself is the
     student's, as a subclass that overrides some is)."""
     classes = [node for node in tree.body if isinstance(node, ast.ClassDef) and node.name == name]
-    methods = [node for node in classes[-1].body if isinstance(node, FunctionNode)
-               and node.name in ANSWER_METHODS] if classes else []
+    methods = (
+        [node for node in classes[-1].body if isinstance(node, FunctionNode) and node.name in ANSWER_METHODS]
+        if classes
+        else []
+    )
     found = copies_in(ast.Module(body=methods, type_ignores=[]), answers)
     return found if methods and len(found) == len(methods) else []
 
@@ -196,7 +210,7 @@ def is_a_copy(found: list[tuple[int, Answer]]) -> bool:
 
 
 def describe_copies(found: list[tuple[int, Answer]], file: str) -> str:
-    """"a copy of ptlab's own answer (ptlab.x.f at 07.py:12, ...)"."""
+    """ "a copy of ptlab's own answer (ptlab.x.f at 07.py:12, ...)"."""
     places = ", ".join(f"{answer.origin} at {file}:{line}" for line, answer in found[:3])
     more = f" and {len(found) - 3} more" if len(found) > 3 else ""
     return f"a copy of ptlab's own answer, with the names changed ({places}{more})"

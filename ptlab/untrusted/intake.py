@@ -65,8 +65,10 @@ def take_in(path: str | Path, with_folder: bool = False, library: bool = False) 
     if path.is_symlink():
         raise RefusedSubmission(f"{path} is a symbolic link: hand in the file itself")
     if not library and Path(os.path.realpath(path)).is_relative_to(PTLAB):
-        raise RefusedSubmission(f"{path} is part of ptlab itself, not a submission: copy the "
-                                f"exercise with 'ptlab exercise start' and write your own")
+        raise RefusedSubmission(
+            f"{path} is part of ptlab itself, not a submission: copy the "
+            f"exercise with 'ptlab exercise start' and write your own"
+        )
     source = _read_regular(path)
     files = {path.name: source}
     if with_folder:
@@ -85,7 +87,7 @@ def _beside(path: Path) -> dict[str, bytes]:
         try:
             found[other.name] = _read_regular(other)
         except RefusedSubmission:
-            continue                # a link or a special file beside it: not handed in
+            continue  # a link or a special file beside it: not handed in
         if len(found) >= MAX_FILES or sum(map(len, found.values())) > MAX_BYTES:
             return {}
     return found
@@ -119,8 +121,9 @@ def _parse(path: Path, source: bytes) -> ast.Module:
     except SyntaxError as error:
         raise RefusedSubmission(f"{path}:{error.lineno}: syntax error: {error.msg}") from None
     except (ValueError, RecursionError, MemoryError) as error:
-        raise RefusedSubmission(f"{path}: not a Python file Python can read "
-                                f"({type(error).__name__})") from None
+        raise RefusedSubmission(
+            f"{path}: not a Python file Python can read ({type(error).__name__})"
+        ) from None
 
 
 def private_folder(taken: Taken, user: StudentUser | None) -> Path:

@@ -30,11 +30,11 @@ SECCOMP_RET_ALLOW = 0x7FFF0000
 SECCOMP_RET_ERRNO = 0x00050000
 
 # BPF opcodes: load a 32-bit word at an offset of struct seccomp_data; jumps; return.
-LOAD_WORD = 0x20          # BPF_LD | BPF_W | BPF_ABS
-JUMP_IF_EQUAL = 0x15      # BPF_JMP | BPF_JEQ | BPF_K
-JUMP_IF_AT_LEAST = 0x35   # BPF_JMP | BPF_JGE | BPF_K
-RETURN = 0x06             # BPF_RET | BPF_K
-NUMBER, ARCH = 0, 4       # offsetof(struct seccomp_data, nr), offsetof(..., arch)
+LOAD_WORD = 0x20  # BPF_LD | BPF_W | BPF_ABS
+JUMP_IF_EQUAL = 0x15  # BPF_JMP | BPF_JEQ | BPF_K
+JUMP_IF_AT_LEAST = 0x35  # BPF_JMP | BPF_JGE | BPF_K
+RETURN = 0x06  # BPF_RET | BPF_K
+NUMBER, ARCH = 0, 4  # offsetof(struct seccomp_data, nr), offsetof(..., arch)
 X32_FIRST = 0x40000000
 
 #: The kernel's name of each machine (AUDIT_ARCH_*), and its execve and execveat numbers.
@@ -58,10 +58,10 @@ def forbid_programs() -> None:
     refuse = SECCOMP_RET_ERRNO | errno.EPERM
     program = [
         (LOAD_WORD, 0, 0, ARCH),
-        (JUMP_IF_EQUAL, 1, 0, arch),           # this architecture: go on; else refuse
+        (JUMP_IF_EQUAL, 1, 0, arch),  # this architecture: go on; else refuse
         (RETURN, 0, 0, refuse),
         (LOAD_WORD, 0, 0, NUMBER),
-        (JUMP_IF_AT_LEAST, 3, 0, X32_FIRST),   # the x32 ABI's numbers: refuse
+        (JUMP_IF_AT_LEAST, 3, 0, X32_FIRST),  # the x32 ABI's numbers: refuse
         (JUMP_IF_EQUAL, 2, 0, execve),
         (JUMP_IF_EQUAL, 1, 0, execveat),
         (RETURN, 0, 0, SECCOMP_RET_ALLOW),
@@ -69,14 +69,16 @@ def forbid_programs() -> None:
     ]
     # struct sock_filter { u16 code; u8 jt; u8 jf; u32 k; }
     filters = ctypes.create_string_buffer(b"".join(struct.pack("=HBBI", *i) for i in program))
+
     # struct sock_fprog { unsigned short len; struct sock_filter *filter; }
     class SockFprog(ctypes.Structure):
         _fields_ = [("len", ctypes.c_ushort), ("filter", ctypes.c_void_p)]
 
     fprog = SockFprog(len(program), ctypes.addressof(filters))
     libc = ctypes.CDLL(None, use_errno=True)
-    libc.prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p, ctypes.c_ulong,
-                           ctypes.c_ulong]
-    if libc.prctl(PR_SET_NO_NEW_PRIVS, 1, None, 0, 0) != 0 or \
-            libc.prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ctypes.addressof(fprog), 0, 0) != 0:
+    libc.prctl.argtypes = [ctypes.c_int, ctypes.c_ulong, ctypes.c_void_p, ctypes.c_ulong, ctypes.c_ulong]
+    if (
+        libc.prctl(PR_SET_NO_NEW_PRIVS, 1, None, 0, 0) != 0
+        or libc.prctl(PR_SET_SECCOMP, SECCOMP_MODE_FILTER, ctypes.addressof(fprog), 0, 0) != 0
+    ):
         raise OSError(ctypes.get_errno(), "prctl failed while forbidding programs")

@@ -69,8 +69,12 @@ def _top_level(tree: ast.Module) -> list[ast.stmt]:
     for node in tree.body:
         statements.append(node)
         if isinstance(node, ast.If | ast.Try):
-            for block in (node.body, node.orelse, getattr(node, "finalbody", []),
-                          *[handler.body for handler in getattr(node, "handlers", [])]):
+            for block in (
+                node.body,
+                node.orelse,
+                getattr(node, "finalbody", []),
+                *[handler.body for handler in getattr(node, "handlers", [])],
+            ):
                 statements.extend(block)
     return statements
 
@@ -106,7 +110,7 @@ def _origin(expression: ast.expr, imported: dict[str, str]) -> str | None:
 def _returns_library_function(function: ast.FunctionDef, imported: dict[str, str]) -> str | None:
     body = function.body
     if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
-        body = body[1:]      # the docstring
+        body = body[1:]  # the docstring
     if len(body) == 1 and isinstance(body[0], ast.Return) and isinstance(body[0].value, ast.Call):
         origin = _origin(body[0].value.func, imported)
         if origin and origin.rsplit(".", 1)[-1] == function.name:
@@ -114,8 +118,9 @@ def _returns_library_function(function: ast.FunctionDef, imported: dict[str, str
     return None
 
 
-def _inherited_material(cls: ast.ClassDef, imported: dict[str, str],
-                        classes: dict[str, ast.ClassDef]) -> str | None:
+def _inherited_material(
+    cls: ast.ClassDef, imported: dict[str, str], classes: dict[str, ast.ClassDef]
+) -> str | None:
     """The ptlab material that ``cls`` takes its material methods from, if neither it nor
     any of its bases in the file writes one of them."""
     if _writes_material_methods(cls, classes, set()):
@@ -123,19 +128,24 @@ def _inherited_material(cls: ast.ClassDef, imported: dict[str, str],
     return _library_base(cls, imported, classes, set())
 
 
-def _writes_material_methods(cls: ast.ClassDef, classes: dict[str, ast.ClassDef],
-                             seen: set[str]) -> bool:
+def _writes_material_methods(cls: ast.ClassDef, classes: dict[str, ast.ClassDef], seen: set[str]) -> bool:
     """Whether ``cls`` or one of its bases in the file defines a material method."""
     seen.add(cls.name)
-    if any(isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.name in MATERIAL_METHODS
-           for node in cls.body):
+    if any(
+        isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef) and node.name in MATERIAL_METHODS
+        for node in cls.body
+    ):
         return True
-    return any(_writes_material_methods(classes[base.id], classes, seen) for base in cls.bases
-               if isinstance(base, ast.Name) and base.id in classes and base.id not in seen)
+    return any(
+        _writes_material_methods(classes[base.id], classes, seen)
+        for base in cls.bases
+        if isinstance(base, ast.Name) and base.id in classes and base.id not in seen
+    )
 
 
-def _library_base(cls: ast.ClassDef, imported: dict[str, str], classes: dict[str, ast.ClassDef],
-                  seen: set[str]) -> str | None:
+def _library_base(
+    cls: ast.ClassDef, imported: dict[str, str], classes: dict[str, ast.ClassDef], seen: set[str]
+) -> str | None:
     """The first ptlab base of ``cls`` (or of its bases in the file) that is no interface."""
     seen.add(cls.name)
     for base in cls.bases:

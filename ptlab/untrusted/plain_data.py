@@ -36,8 +36,9 @@ from ptlab.lights import ShapeSample
 from ptlab.rendering.jobs import Job, JobResult, Tile
 
 #: The library's own dataclasses that cross as records (rebuilt by name, field by field).
-RECORDS = {cls.__name__: cls for cls in (Hits, Paths, PathSettings, SurfaceHit, ShapeSample,
-                                         Tile, Job, JobResult)}
+RECORDS = {
+    cls.__name__: cls for cls in (Hits, Paths, PathSettings, SurfaceHit, ShapeSample, Tile, Job, JobResult)
+}
 #: The array element kinds that cross: bool, signed and unsigned integers, floats, complex.
 ARRAY_KINDS = "biufc"
 MAX_DEPTH = 40
@@ -55,6 +56,7 @@ class UnsendableError(Exception):
 
 
 # -- the child's side -------------------------------------------------------------------
+
 
 class Encoder:
     """Turns values into the schema; arrays become ``.npy`` parts in ``self.parts``.
@@ -81,12 +83,16 @@ class Encoder:
         if isinstance(value, np.ndarray):
             return {"array": self._array(value)}
         if kind.__name__ in RECORDS and kind is RECORDS[kind.__name__]:
-            return {"record": kind.__name__,
-                    "fields": {f.name: self.encode(getattr(value, f.name), depth + 1)
-                               for f in fields(value) if f.init}}
+            return {
+                "record": kind.__name__,
+                "fields": {
+                    f.name: self.encode(getattr(value, f.name), depth + 1) for f in fields(value) if f.init
+                },
+            }
         if isinstance(value, dict):
-            return {"dict": [[self.encode(k, depth + 1), self.encode(v, depth + 1)]
-                             for k, v in value.items()]}
+            return {
+                "dict": [[self.encode(k, depth + 1), self.encode(v, depth + 1)] for k, v in value.items()]
+            }
         for container, tag in ((tuple, "tuple"), (list, "list"), (set | frozenset, "set")):
             if isinstance(value, container):
                 return {tag: [self.encode(item, depth + 1) for item in value]}
@@ -126,14 +132,17 @@ def npy_part(array: np.ndarray) -> tuple[bytes, memoryview]:
 
 @functools.lru_cache(maxsize=256)
 def _npy_header(dtype: np.dtype, shape: tuple, fortran: bool) -> bytes:
-    header = (f"{{'descr': {np.lib.format.dtype_to_descr(dtype)!r}, "
-              f"'fortran_order': {fortran}, 'shape': {shape!r}, }}").encode("latin1")
-    padding = -(len(NPY_MAGIC) + 2 + len(header) + 1) % 64      # numpy aligns data to 64 bytes
+    header = (
+        f"{{'descr': {np.lib.format.dtype_to_descr(dtype)!r}, "
+        f"'fortran_order': {fortran}, 'shape': {shape!r}, }}"
+    ).encode("latin1")
+    padding = -(len(NPY_MAGIC) + 2 + len(header) + 1) % 64  # numpy aligns data to 64 bytes
     header += b" " * padding + b"\n"
     return NPY_MAGIC + len(header).to_bytes(2, "little") + header
 
 
 # -- the grader's side -------------------------------------------------------------------
+
 
 def read_array(part: bytearray) -> np.ndarray:
     """The array in one ``.npy`` part, viewed in place; ``MalformedError`` unless it is a plain
@@ -153,13 +162,15 @@ def read_array(part: bytearray) -> np.ndarray:
 NPY_MAGIC = b"\x93NUMPY\x01\x00"
 #: The header ``numpy.save`` writes for an array of a simple type (format 1.0): parsed
 #: directly, 100x faster than numpy's general parser, which takes every other header.
-_SIMPLE_HEADER = re.compile(rb"\{'descr': '([<>|=][a-z]\d+)', 'fortran_order': (True|False), "
-                            rb"'shape': \(((?:\d+, )*\d+,?)?\), \} *\n")
+_SIMPLE_HEADER = re.compile(
+    rb"\{'descr': '([<>|=][a-z]\d+)', 'fortran_order': (True|False), "
+    rb"'shape': \(((?:\d+, )*\d+,?)?\), \} *\n"
+)
 
 
 def _read_header(part: bytearray) -> tuple[tuple, bool, np.dtype, int]:
     """(shape, fortran_order, dtype, data offset) from an ``.npy`` part's header."""
-    if bytes(part[:len(NPY_MAGIC)]) == NPY_MAGIC and len(part) >= 10:
+    if bytes(part[: len(NPY_MAGIC)]) == NPY_MAGIC and len(part) >= 10:
         end = 10 + int.from_bytes(bytes(part[8:10]), "little")
         simple = _simple_header(bytes(part[10:end]))
         if simple is not None:
@@ -167,8 +178,10 @@ def _read_header(part: bytearray) -> tuple[tuple, bool, np.dtype, int]:
     stream = io.BytesIO(bytes(part[:65536]))
     try:
         version = np.lib.format.read_magic(stream)
-        read_header = {(1, 0): np.lib.format.read_array_header_1_0,
-                       (2, 0): np.lib.format.read_array_header_2_0}.get(version)
+        read_header = {
+            (1, 0): np.lib.format.read_array_header_1_0,
+            (2, 0): np.lib.format.read_array_header_2_0,
+        }.get(version)
         if read_header is None:
             raise MalformedError(f"an .npy part of version {version}")
         shape, fortran_order, dtype = read_header(stream)
@@ -263,8 +276,7 @@ class Decoder:
             raise MalformedError(f"a scalar of type {dtype}")
         value = body[1]
         if dtype.kind == "c":
-            if type(value) is not list or len(value) != 2 or \
-                    not all(type(v) in (int, float) for v in value):
+            if type(value) is not list or len(value) != 2 or not all(type(v) in (int, float) for v in value):
                 raise MalformedError("a complex scalar that is not [real, imag]")
             value = complex(*value)
         elif type(value) not in ((bool,) if dtype.kind == "b" else (bool, int, float)):
@@ -286,14 +298,24 @@ class Decoder:
     @staticmethod
     def _callable_tag(tree: dict) -> dict:
         name, kind, origin, parameters = (tree[k] for k in ("name", "kind", "origin", "parameters"))
-        if type(tree["function"]) is not int or type(name) is not str or kind not in CALLABLE_KINDS \
-                or not (origin is None or type(origin) is str):
+        if (
+            type(tree["function"]) is not int
+            or type(name) is not str
+            or kind not in CALLABLE_KINDS
+            or not (origin is None or type(origin) is str)
+        ):
             raise MalformedError("a function tag with a bad field")
         if parameters is not None:
             if type(parameters) is not list or not all(
-                    type(p) is list and len(p) == 2 and type(p[0]) is str and type(p[1]) is int
-                    for p in parameters):
+                type(p) is list and len(p) == 2 and type(p[0]) is str and type(p[1]) is int
+                for p in parameters
+            ):
                 raise MalformedError("a function tag with bad parameters")
             parameters = [(clean_text(p[0]), p[1]) for p in parameters]
-        return {"function": tree["function"], "name": clean_text(name), "kind": kind,
-                "origin": None if origin is None else clean_text(origin), "parameters": parameters}
+        return {
+            "function": tree["function"],
+            "name": clean_text(name),
+            "kind": kind,
+            "origin": None if origin is None else clean_text(origin),
+            "parameters": parameters,
+        }

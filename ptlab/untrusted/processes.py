@@ -65,10 +65,10 @@ def _scan() -> dict[int, tuple[int, bool]]:
             continue
         try:
             stat = (entry / "stat").read_bytes()
-        except OSError:      # gone meanwhile
+        except OSError:  # gone meanwhile
             continue
         # pid (comm) state ppid ...; comm may hold spaces and parentheses: split after the last ')'.
-        state, parent = stat[stat.rfind(b")") + 2:].split()[:2]
+        state, parent = stat[stat.rfind(b")") + 2 :].split()[:2]
         table[int(entry.name)] = (int(parent), state == b"Z")
     return table
 
@@ -76,8 +76,7 @@ def _scan() -> dict[int, tuple[int, bool]]:
 def process_table(alive_only: bool = False) -> dict[int, int]:
     """{pid: parent pid} of every process this user can see; with ``alive_only``, without
     zombies (processes that ended and wait for their parent to reap them)."""
-    return {pid: parent for pid, (parent, zombie) in _scan().items()
-            if not (alive_only and zombie)}
+    return {pid: parent for pid, (parent, zombie) in _scan().items() if not (alive_only and zombie)}
 
 
 def descendants(roots: Iterable[int], table: dict[int, int]) -> set[int]:
@@ -134,8 +133,7 @@ class ProcessGuard:
         ``process_table`` the caller just took, if it has one."""
         self._servers.add(pid)
         table = process_table() if table is None else table
-        self._helpers |= {child for child, parent in table.items()
-                          if parent == pid and child != started}
+        self._helpers |= {child for child, parent in table.items() if parent == pid and child != started}
 
     def end(self, *roots: int, keep: Iterable[int] = ()) -> None:
         """End ``roots``, every process below them, every orphan re-parented here and every
@@ -148,9 +146,11 @@ class ProcessGuard:
         stopped: set[int] = set()
         for _ in range(MAX_SWEEPS):
             table = process_table()
-            orphans = {pid for pid, parent in table.items()
-                       if pid not in keep and pid not in self._helpers
-                       and (parent == me or parent in self._servers)}
+            orphans = {
+                pid
+                for pid, parent in table.items()
+                if pid not in keep and pid not in self._helpers and (parent == me or parent in self._servers)
+            }
             victims = descendants(set(roots) | orphans, table) - stopped - keep - {me}
             if not victims:
                 break

@@ -61,7 +61,7 @@ class StudentError(Exception):
         if self.not_implemented:
             name = f"{self} " if str(self) else ""
             return f"{name}is not written yet: it still raises NotImplementedError ({place})"
-        if self.type_name == "LibraryAnswerCalled":     # a trap (ptlab.untrusted.traps)
+        if self.type_name == "LibraryAnswerCalled":  # a trap (ptlab.untrusted.traps)
             return f"{self} ({place})"
         return f"{self.type_name}: {self} ({place})"
 
@@ -81,8 +81,7 @@ _error_classes: dict[str, type] = {}
 _object_classes: dict[str, type] = {}
 
 
-def student_error(type_name: str, message: str, where: str | None,
-                  not_implemented: bool) -> StudentError:
+def student_error(type_name: str, message: str, where: str | None, not_implemented: bool) -> StudentError:
     """A ``StudentError`` of a class named ``type_name`` (made once per name)."""
     name = _safe_name(type_name, "StudentError")
     cls = _error_classes.get(name)
@@ -111,9 +110,12 @@ class RemoteFunction:
         if tag["parameters"] is not None:
             try:
                 self.__signature__ = inspect.Signature(
-                    [inspect.Parameter(name, inspect._ParameterKind(kind))
-                     for name, kind in tag["parameters"]])
-            except (TypeError, ValueError):     # names or an order Python would not accept
+                    [
+                        inspect.Parameter(name, inspect._ParameterKind(kind))
+                        for name, kind in tag["parameters"]
+                    ]
+                )
+            except (TypeError, ValueError):  # names or an order Python would not accept
                 pass
 
     @property
@@ -156,8 +158,7 @@ class RemoteObject:
         if name.startswith("_"):
             raise AttributeError(f"cannot set {name} on the student's object")
         self._callables.pop(name, None)
-        self._submission.request("set", self._handle, name, value,
-                                 during=f"setting {self._name_of(name)}")
+        self._submission.request("set", self._handle, name, value, during=f"setting {self._name_of(name)}")
 
     def _name_of(self, attribute: str) -> str:
         return f"{self._type_name}.{attribute}"

@@ -60,10 +60,12 @@ def student_user(name: str | None = None) -> StudentUser | None:
         return None
     entry = _password_entry(name)
     if entry.pw_uid == os.geteuid():
-        return None                 # the grader's own user: nothing to change
+        return None  # the grader's own user: nothing to change
     if not is_root():
-        raise PtlabError(f"--student-user {name}: only root can run students' code as another "
-                         f"user (this grader runs as {pwd.getpwuid(os.geteuid()).pw_name})")
+        raise PtlabError(
+            f"--student-user {name}: only root can run students' code as another "
+            f"user (this grader runs as {pwd.getpwuid(os.geteuid()).pw_name})"
+        )
     user = StudentUser(entry.pw_name, entry.pw_uid, entry.pw_gid)
     _check_can_run_ptlab(user)
     return user
@@ -71,11 +73,14 @@ def student_user(name: str | None = None) -> StudentUser | None:
 
 def add_student_user_argument(parser: argparse.ArgumentParser) -> None:
     """The graders' ``--student-user`` option."""
-    parser.add_argument("--student-user", metavar="USER",
-                        help=f"run the student's code as USER (a name or a number); only root "
-                             f"may, and by default root runs it as {DEFAULT_STUDENT_USER!r}. "
-                             f"'--student-user root' runs it as root: never for grades that "
-                             f"count (docs/grading-security.md)")
+    parser.add_argument(
+        "--student-user",
+        metavar="USER",
+        help=f"run the student's code as USER (a name or a number); only root "
+        f"may, and by default root runs it as {DEFAULT_STUDENT_USER!r}. "
+        f"'--student-user root' runs it as root: never for grades that "
+        f"count (docs/grading-security.md)",
+    )
 
 
 def _password_entry(name: str) -> pwd.struct_passwd:
@@ -94,19 +99,27 @@ def _check_can_run_ptlab(user: StudentUser) -> None:
     if user in _checked:
         return
     try:
-        ran = subprocess.run([sys.executable, "-I", "-c", "import numpy, ptlab.untrusted.child"],
-                             user=user.uid, group=user.gid, extra_groups=[],
-                             stdin=subprocess.DEVNULL, capture_output=True, timeout=120,
-                             cwd="/")
+        ran = subprocess.run(
+            [sys.executable, "-I", "-c", "import numpy, ptlab.untrusted.child"],
+            user=user.uid,
+            group=user.gid,
+            extra_groups=[],
+            stdin=subprocess.DEVNULL,
+            capture_output=True,
+            timeout=120,
+            cwd="/",
+        )
         failed = ran.returncode != 0
     except OSError:
         failed = True
     if failed:
         blocked = _closed_folder([Path(sys.executable), *map(Path, sys.path), Path(__file__)])
         where = f"{blocked} is closed to other users" if blocked else "it cannot import ptlab"
-        raise PtlabError(f"--student-user {user.name}: that user cannot run this Python and ptlab "
-                         f"({where}); install them where every user can read them (see "
-                         f"docs/grading-security.md), or name a user who can")
+        raise PtlabError(
+            f"--student-user {user.name}: that user cannot run this Python and ptlab "
+            f"({where}); install them where every user can read them (see "
+            f"docs/grading-security.md), or name a user who can"
+        )
     _checked.add(user)
 
 

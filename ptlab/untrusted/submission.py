@@ -102,11 +102,13 @@ def shared_types() -> frozenset[type]:
     """The classes whose objects cross once per check (see the module docstring)."""
     from ptlab.accel.numpy_bvh import NumpyBVH
     from ptlab.scene import Scene
+
     kinds = [Scene, NumpyBVH]
     try:
         from ptlab.accel.embree import EmbreeAccelerator
+
         kinds.append(EmbreeAccelerator)
-    except ImportError:      # no Embree here: nothing of that kind to send
+    except ImportError:  # no Embree here: nothing of that kind to send
         pass
     return frozenset(kinds)
 
@@ -134,15 +136,26 @@ class Submission:
             or took too long.
     """
 
-    def __init__(self, submission: str | Path | Taken, guard: ProcessGuard, time_limit: float,
-                 call_time_limit: float | None = None,
-                 on_output: Callable[[str], None] | None = None,
-                 limits: Limits | None = None, *, rules: Rules | None = None,
-                 user: str | None = None, import_time_limit: float | None = None):
+    def __init__(
+        self,
+        submission: str | Path | Taken,
+        guard: ProcessGuard,
+        time_limit: float,
+        call_time_limit: float | None = None,
+        on_output: Callable[[str], None] | None = None,
+        limits: Limits | None = None,
+        *,
+        rules: Rules | None = None,
+        user: str | None = None,
+        import_time_limit: float | None = None,
+    ):
         self.rules = rules or Rules()
         try:
-            self.taken = submission if isinstance(submission, Taken) else \
-                take_in(submission, library=self.rules.library)
+            self.taken = (
+                submission
+                if isinstance(submission, Taken)
+                else take_in(submission, library=self.rules.library)
+            )
         except RefusedSubmission as refused:
             raise ImportFailed(str(refused)) from None
         self.path = self.taken.path
@@ -159,8 +172,9 @@ class Submission:
         self._special: tuple[int, frozenset[type]] | None = None
         self.folder = private_folder(self.taken, self.user)
         try:
-            self.process, self.channel = self._start(on_output, limits or Limits(
-                cpu_seconds=int(time_limit) + 10))
+            self.process, self.channel = self._start(
+                on_output, limits or Limits(cpu_seconds=int(time_limit) + 10)
+            )
         except BaseException:
             remove_folder(self.folder)
             raise
@@ -174,7 +188,7 @@ class Submission:
     # -- starting and ending -------------------------------------------------------------
 
     def _start(self, on_output, limits: Limits):
-        keep_freed_memory()     # replies arrive in new buffers, as they do in the student's process
+        keep_freed_memory()  # replies arrive in new buffers, as they do in the student's process
         context = multiprocessing.get_context("forkserver")
         context.set_forkserver_preload(PRELOAD)
         multiprocessing.forkserver.ensure_running()
@@ -185,18 +199,24 @@ class Submission:
         for fd in (request_w, reply_w):
             enlarge(fd)
         ends = [multiprocessing.connection.Connection(fd) for fd in (request_r, reply_w, output_w)]
-        confinement = Confinement(folder=str(self.folder), user=self.user, traps=self.rules.traps,
-                                  answers=self.rules.fingerprints, programs=self.rules.programs,
-                                  limits=limits)
+        confinement = Confinement(
+            folder=str(self.folder),
+            user=self.user,
+            traps=self.rules.traps,
+            answers=self.rules.fingerprints,
+            programs=self.rules.programs,
+            limits=limits,
+        )
         # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
-        process = context.Process(target=serve, args=(str(self.folder / self.taken.name), *ends,
-                                                      confinement), name="ptlab-student")
+        process = context.Process(
+            target=serve, args=(str(self.folder / self.taken.name), *ends, confinement), name="ptlab-student"
+        )
         try:
             process.start()
         finally:
             for end in ends:
                 end.close()
-        table = process_table() if LINUX else {}     # (one snapshot for both questions)
+        table = process_table() if LINUX else {}  # (one snapshot for both questions)
         server = table.get(process.pid)
         if server is not None and server != os.getpid():
             self.guard.add_server(server, started=process.pid, table=table)
@@ -226,8 +246,9 @@ class Submission:
     def end_started_processes(self) -> None:
         """End the processes the student's code started (its pools), not the process itself."""
         if LINUX:
-            self.guard.end(*[pid for pid, parent in process_table().items() if parent == self.pid],
-                           keep={self.pid})
+            self.guard.end(
+                *[pid for pid, parent in process_table().items() if parent == self.pid], keep={self.pid}
+            )
 
     def import_by_file_name(self) -> RemoteModule | str:
         """The student's file imported again in its process, under its own name
@@ -248,8 +269,11 @@ class Submission:
             self.close()
             if failure.kind == "timeout":
                 limit = deadline - (self.deadline - self.time_limit)
-                raise ImportFailed(f"importing {self.path.name} took longer than {limit:.3g} s "
-                                   f"(does it run something at import?)", "import timeout") from None
+                raise ImportFailed(
+                    f"importing {self.path.name} took longer than {limit:.3g} s "
+                    f"(does it run something at import?)",
+                    "import timeout",
+                ) from None
             raise ImportFailed(str(failure)) from None
         if "import_failed" in envelope and type(envelope["import_failed"]) is str:
             self.close()
@@ -265,8 +289,15 @@ class Submission:
         changes to the arguments it writes (``Rules.arguments``) are copied into them here;
         a change to one it may only read fails the check (``ArgumentChanged``)."""
         arguments = function.arguments if function.kind == "function" else None
-        value, changes = self.request("call", function._handle, args, kwargs,
-                                      arguments is not None, during=function.__name__, changes=True)
+        value, changes = self.request(
+            "call",
+            function._handle,
+            args,
+            kwargs,
+            arguments is not None,
+            during=function.__name__,
+            changes=True,
+        )
         if arguments is not None:
             self._take_changes((args, kwargs), changes, arguments, function.__name__)
         return value
@@ -274,8 +305,14 @@ class Submission:
     def call_each(self, objects: list[RemoteObject], which: np.ndarray, method: str, *args):
         """``objects[which[k]].<method>`` on row k of ``args``, for all rows in one request
         (materials of the student's that shade one batch of hits)."""
-        return self.request("call_each", [o._handle for o in objects], which, method, args,
-                            during=f"{objects[0]._type_name}.{method}")
+        return self.request(
+            "call_each",
+            [o._handle for o in objects],
+            which,
+            method,
+            args,
+            during=f"{objects[0]._type_name}.{method}",
+        )
 
     def request(self, operation: str, *arguments, during: str, changes: bool = False):
         """Send one request and return its decoded answer (with ``changes``: and the
@@ -298,11 +335,14 @@ class Submission:
             if "raised" in envelope:
                 raise self._student_error(envelope["raised"])
             if "unreadable" in envelope and type(envelope["unreadable"]) is str:
-                raise UnreadableResultError("TypeError", f"{during} returned {envelope['unreadable']}",
-                                       None, False)
+                raise UnreadableResultError(
+                    "TypeError", f"{during} returned {envelope['unreadable']}", None, False
+                )
             if "unreceived" in envelope:
-                raise RuntimeError(f"the grader could not send {during} its arguments: "
-                                   f"{_collapse_whitespace(str(envelope['unreceived']))}")
+                raise RuntimeError(
+                    f"the grader could not send {during} its arguments: "
+                    f"{_collapse_whitespace(str(envelope['unreceived']))}"
+                )
             if "value" not in envelope:
                 raise MalformedError("a reply without a value")
             value = decoder.decode(envelope["value"])
@@ -315,8 +355,9 @@ class Submission:
         except MalformedError as error:
             self._fail("malformed", during, str(error))
 
-    def _receive(self, request_id: int, during: str, deadline: float | None = None,
-                 limit: float | None = None):
+    def _receive(
+        self, request_id: int, during: str, deadline: float | None = None, limit: float | None = None
+    ):
         deadline = self.deadline if deadline is None else deadline
         try:
             parts = self.channel.receive(deadline, MAX_REPLY)
@@ -346,12 +387,21 @@ class Submission:
         if type(raised) is not dict or set(raised) != {"type", "message", "where", "not_implemented"}:
             raise MalformedError("an error report without its fields")
         type_name, message, where, not_implemented = (
-            raised[k] for k in ("type", "message", "where", "not_implemented"))
-        if type(type_name) is not str or type(message) is not str or \
-                not (where is None or type(where) is str) or type(not_implemented) is not bool:
+            raised[k] for k in ("type", "message", "where", "not_implemented")
+        )
+        if (
+            type(type_name) is not str
+            or type(message) is not str
+            or not (where is None or type(where) is str)
+            or type(not_implemented) is not bool
+        ):
             raise MalformedError("an error report with a bad field")
-        return student_error(_collapse_whitespace(type_name)[:60], _collapse_whitespace(message),
-                             None if where is None else _collapse_whitespace(where)[:200], not_implemented)
+        return student_error(
+            _collapse_whitespace(type_name)[:60],
+            _collapse_whitespace(message),
+            None if where is None else _collapse_whitespace(where)[:200],
+            not_implemented,
+        )
 
     def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None):
         """Record the failure, end the process, raise ``SubmissionFailed`` (now and for
@@ -389,7 +439,7 @@ class Submission:
         if id(value) in self._shared:
             return ("shared", self._shared[id(value)][0])
         key = len(self._shared)
-        self._shared[id(value)] = (key, value)      # (kept alive, so its id stays its own)
+        self._shared[id(value)] = (key, value)  # (kept alive, so its id stays its own)
         stream = io.BytesIO()
         _Pickler(stream, self, arrays, top=value).dump(value)
         return ("shared", key, stream.getvalue())
@@ -398,13 +448,21 @@ class Submission:
 
     @staticmethod
     def _change(entry, decoder: Decoder) -> tuple:
-        if type(entry) is not list or len(entry) != 3 or type(entry[0]) is not list or \
-                entry[1] not in ("array", "state", "value"):
+        if (
+            type(entry) is not list
+            or len(entry) != 3
+            or type(entry[0]) is not list
+            or entry[1] not in ("array", "state", "value")
+        ):
             raise MalformedError("a change that is not [path, how, value]")
         path = entry[0]
-        if len(path) < 2 or not all(type(step) is list and len(step) == 2 and
-                                    step[0] in ("item", "key", "field") for step in path) \
-                or path[0] not in (["item", 0], ["item", 1]):
+        if (
+            len(path) < 2
+            or not all(
+                type(step) is list and len(step) == 2 and step[0] in ("item", "key", "field") for step in path
+            )
+            or path[0] not in (["item", 0], ["item", 1])
+        ):
             raise MalformedError("a change with a bad path")
         return path, entry[1], decoder.decode(entry[2])
 
@@ -417,8 +475,10 @@ class Submission:
             if name in arguments.scratch:
                 continue
             if name not in arguments.writes:
-                raise ArgumentChanged(f"{during} changed its argument {name}, which it must only "
-                                      f"read (change a copy: {name}.copy(), or make a new array)")
+                raise ArgumentChanged(
+                    f"{during} changed its argument {name}, which it must only "
+                    f"read (change a copy: {name}.copy(), or make a new array)"
+                )
             self._write_back(call, path, how, value, during)
 
     def _write_back(self, call: tuple, path: list, how: str, value, during: str) -> None:
@@ -429,8 +489,11 @@ class Submission:
             kind, key = path[-1]
             target = _step(container, kind, key)
             if how == "array":
-                if not (isinstance(target, np.ndarray) and isinstance(value, np.ndarray)
-                        and target.shape == value.shape):
+                if not (
+                    isinstance(target, np.ndarray)
+                    and isinstance(value, np.ndarray)
+                    and target.shape == value.shape
+                ):
                     raise MalformedError("an array change that does not fit the argument")
                 if target.flags.writeable:
                     np.copyto(target, value, casting="unsafe")
@@ -442,7 +505,7 @@ class Submission:
                 _rebind(container, kind, key, value)
         except MalformedError as error:
             self._fail("malformed", during, str(error))
-        except (TypeError, ValueError, KeyError) as error:   # a state numpy refuses, ...
+        except (TypeError, ValueError, KeyError) as error:  # a state numpy refuses, ...
             self._fail("malformed", during, f"a change the grader cannot make: {error}")
 
 
@@ -458,7 +521,7 @@ class _Pickler(pickle.Pickler):
         self.special = submission._special_types()
 
     def persistent_id(self, value):
-        kind = type(value)      # (called for every object pickled: exact types, looked up)
+        kind = type(value)  # (called for every object pickled: exact types, looked up)
         if kind not in self.special or value is self.top:
             return None
         if kind is np.ndarray:
@@ -471,7 +534,7 @@ class _Pickler(pickle.Pickler):
 
     def _array(self, value: np.ndarray):
         if value.dtype.hasobject or value.dtype.fields is not None:
-            return None                     # (pickled as usual)
+            return None  # (pickled as usual)
         order = "F" if value.flags.f_contiguous and not value.flags.c_contiguous else "C"
         if _same_rows(value):
             return ("rows", value[:1].copy(), len(value), order)
@@ -490,8 +553,13 @@ SAME_ROWS_BYTES = 1 << 18
 def _same_rows(array: np.ndarray) -> bool:
     """Whether every row of a large 2-D array is, bit for bit, its first (most arrays that
     are not differ in their second row, which is looked at first)."""
-    if array.ndim != 2 or len(array) < 2 or array.nbytes < SAME_ROWS_BYTES \
-            or array.dtype.kind not in "biuf" or array.dtype.fields is not None:
+    if (
+        array.ndim != 2
+        or len(array) < 2
+        or array.nbytes < SAME_ROWS_BYTES
+        or array.dtype.kind not in "biuf"
+        or array.dtype.fields is not None
+    ):
         return False
     bits = array.view(f"u{array.dtype.itemsize}")
     first = bits[0]
@@ -502,13 +570,21 @@ def _same_rows(array: np.ndarray) -> bool:
 
 def _step(container, kind: str, key):
     """One step of a change's path into the grader's arguments."""
-    if kind == "item" and isinstance(container, list | tuple) and type(key) is int \
-            and 0 <= key < len(container):
+    if (
+        kind == "item"
+        and isinstance(container, list | tuple)
+        and type(key) is int
+        and 0 <= key < len(container)
+    ):
         return container[key]
     if kind == "key" and isinstance(container, dict) and type(key) is str and key in container:
         return container[key]
-    if kind == "field" and type(container) in RECORDS.values() and type(key) is str \
-            and key in {f.name for f in fields(container)}:
+    if (
+        kind == "field"
+        and type(container) in RECORDS.values()
+        and type(key) is str
+        and key in {f.name for f in fields(container)}
+    ):
         return getattr(container, key)
     raise MalformedError(f"a change at {kind} {key!r}, which the arguments do not have")
 
@@ -518,8 +594,7 @@ def _rebind(container, kind: str, key, value) -> None:
         container[key] = value
     elif kind == "key" and isinstance(container, dict):
         container[key] = value
-    elif kind == "field" and is_dataclass(container) and \
-            not type(container).__dataclass_params__.frozen:
+    elif kind == "field" and is_dataclass(container) and not type(container).__dataclass_params__.frozen:
         setattr(container, key, value)
     else:
         raise MalformedError(f"a new value at {kind} {key!r}, which cannot be given one")
@@ -547,12 +622,13 @@ def import_nothing_from_here() -> None:
     ptlab from there too, and only the grader's own user may write to it."""
     here = os.getcwd()
     home = str(Path(__file__).resolve().parents[2])
-    sys.path[:] = [entry for entry in sys.path
-                   if entry not in ("", here) or os.path.abspath(entry or ".") == home]
+    sys.path[:] = [
+        entry for entry in sys.path if entry not in ("", here) or os.path.abspath(entry or ".") == home
+    ]
 
 
 def copied_answer(module: RemoteModule) -> str | None:
-    """"a copy of ptlab's own answer (...)" if the student's file holds copies of the
+    """ "a copy of ptlab's own answer (...)" if the student's file holds copies of the
     rules' answers that add up to one (``ptlab.untrusted.copies``), else None."""
     submission = submission_of(module)
     found = copies_in(submission.tree, submission.rules.fingerprints)
@@ -565,8 +641,13 @@ def _exit_cause(code: int | None) -> str:
     if code >= 0:
         return f"it exited with code {code}: os._exit or sys.exit?"
     name = signal.Signals(-code).name if -code in signal.valid_signals() else f"signal {-code}"
-    cause = {"SIGXCPU": "its CPU-time limit", "SIGXFSZ": "its file-size limit",
-             "SIGSEGV": "a crash", "SIGABRT": "a crash", "SIGKILL": "killed, perhaps for memory"}
+    cause = {
+        "SIGXCPU": "its CPU-time limit",
+        "SIGXFSZ": "its file-size limit",
+        "SIGSEGV": "a crash",
+        "SIGABRT": "a crash",
+        "SIGKILL": "killed, perhaps for memory",
+    }
     return f"{name}: {cause.get(name, 'a signal')}"
 
 

@@ -59,5 +59,5 @@ def _replace(owner, attribute: str, function, origin: str) -> None:
     code = _trap.__code__.replace(co_name=attribute, co_qualname=origin)
     try:
         function.__code__ = code
-    except ValueError:      # a method with a closure (super()): rebind it where it lives
+    except ValueError:  # a method with a closure (super()): rebind it where it lives
         setattr(owner, attribute, types.FunctionType(code, {"__builtins__": __builtins__}))

@@ -20,8 +20,10 @@ def _nothing_left_behind(nothing_left_behind):
 def attack(tmp_path):
     """Copy a hostile submission into a fresh folder (where it writes its markers) and
     return its path."""
+
     def copy(name: str, as_name: str | None = None) -> Path:
         target = tmp_path / (as_name or name)
         shutil.copyfile(SUBMISSIONS / name, target)
         return target
+
     return copy

@@ -19,8 +19,11 @@ def alive(pids) -> list[int]:
 
 def printed_pids(output: str) -> list[int]:
     """The pids a hostile submission printed, from the grader's stderr (``    | 1234``)."""
-    return [int(line.split("|", 1)[1]) for line in output.splitlines()
-            if "|" in line and line.split("|", 1)[1].strip().isdigit()]
+    return [
+        int(line.split("|", 1)[1])
+        for line in output.splitlines()
+        if "|" in line and line.split("|", 1)[1].strip().isdigit()
+    ]
 
 
 def assert_honest_failure(result, reason: str = "") -> None:

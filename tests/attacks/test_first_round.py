@@ -17,9 +17,10 @@ from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade, run_check
 from ptlab.untrusted import ProcessGuard
 
-pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
 # -- attacks on the exercise grader ---------------------------------------------------------
+
 
 def test_forged_replies_and_verdicts_earn_nothing(attack):
     result = grade(chapter(1), attack("forges_replies.py"), timeout_scale=0.2)
@@ -38,16 +39,19 @@ def test_the_grader_never_unpickles_what_the_student_sends(attack):
     result = grade(chapter(1), path, timeout_scale=0.2)
     assert result.score == 0, result.table()
     ran = path.with_suffix(".ran").read_text().split() if path.with_suffix(".ran").exists() else []
-    assert str(os.getpid()) not in ran       # (the student's own process may run it)
+    assert str(os.getpid()) not in ran  # (the student's own process may run it)
 
 
-@pytest.mark.parametrize("source, reason", [
-    ("import os\nos._exit(0)\n", "ended during importing your file"),
-    ("import time\ntime.sleep(3600)\n", "took longer than"),
-    ("import os, signal\nos.kill(os.getpid(), signal.SIGSEGV)\n", "SIGSEGV"),
-], ids=["exit", "sleep", "crash"])
-def test_exiting_hanging_or_crashing_at_import_fails_every_check_in_bounded_time(tmp_path, source,
-                                                                                 reason):
+@pytest.mark.parametrize(
+    "source, reason",
+    [
+        ("import os\nos._exit(0)\n", "ended during importing your file"),
+        ("import time\ntime.sleep(3600)\n", "took longer than"),
+        ("import os, signal\nos.kill(os.getpid(), signal.SIGSEGV)\n", "SIGSEGV"),
+    ],
+    ids=["exit", "sleep", "crash"],
+)
+def test_exiting_hanging_or_crashing_at_import_fails_every_check_in_bounded_time(tmp_path, source, reason):
     path = tmp_path / "01_cameras.py"
     path.write_text(source)
     start = time.monotonic()
@@ -59,11 +63,12 @@ def test_exiting_hanging_or_crashing_at_import_fails_every_check_in_bounded_time
 def test_processes_that_outlive_the_grader_are_ended_before_it_writes_results(attack, capsys):
     path = attack("outlives_the_grader.py")
     result_file = path.parent / "result.json"
-    assert main(["exercise", "check", "1", str(path), "--json", str(result_file),
-                 "--timeout-scale", "0.3"]) == 1
+    assert (
+        main(["exercise", "check", "1", str(path), "--json", str(result_file), "--timeout-scale", "0.3"]) == 1
+    )
     pids = printed_pids(capsys.readouterr().err)
     assert len(pids) >= 2 and alive(pids) == []
-    time.sleep(0.5)                       # time for a survivor to rewrite the result
+    time.sleep(0.5)  # time for a survivor to rewrite the result
     written = json.loads(result_file.read_text())
     assert written["score"] == 0 and written["full_marks"] is False
     # The forged progress record: chapter 1's entry is the real result now, and chapter 9's
@@ -79,10 +84,23 @@ def test_a_process_holding_the_graders_stdout_does_not_keep_its_reader_waiting(a
     # its output), none of them may be left; then its output ends at once.
     path = attack("holds_stdout.py")
     with open(tmp_path / "stderr.txt", "w+") as stderr:
-        grader = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "check", "1",
-                                   str(path), "--timeout-scale", "0.3"],
-                                  stdout=subprocess.PIPE, stderr=stderr, text=True)
-        grader.wait(timeout=600)           # (a guard against a hang, not a measure of speed)
+        grader = subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "ptlab.cli",
+                "exercise",
+                "check",
+                "1",
+                str(path),
+                "--timeout-scale",
+                "0.3",
+            ],
+            stdout=subprocess.PIPE,
+            stderr=stderr,
+            text=True,
+        )
+        grader.wait(timeout=600)  # (a guard against a hang, not a measure of speed)
         stderr.seek(0)
         err = stderr.read()
     pids = printed_pids(err)
@@ -104,7 +122,7 @@ MALFORMED = {
 }
 #: What the forger does after writing: the half message is left unfinished for good.
 AFTER = {"a half message": "time.sleep(60)"}
-FORGER = '''
+FORGER = """
 import io, json, os, struct, time
 import numpy as np
 
@@ -125,7 +143,7 @@ def generate_rays(camera, width, height, pixel_x, pixel_y, u):
             pass
     {after}
     return np.zeros((len(pixel_x), 3)), np.zeros((len(pixel_x), 3))
-'''
+"""
 
 
 @pytest.mark.parametrize("what", MALFORMED)
@@ -155,9 +173,11 @@ def test_the_librarys_answers_under_the_students_names_earn_nothing(attack):
 
 def test_what_the_students_code_says_cannot_forge_lines_of_the_table(tmp_path):
     path = tmp_path / "01_cameras.py"
-    path.write_text("def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
-                    "    raise ValueError('oops\\n  render   2/2    pass     ok\\n  total"
-                    "  10/10  full marks\\x1b[2J')\n")
+    path.write_text(
+        "def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
+        "    raise ValueError('oops\\n  render   2/2    pass     ok\\n  total"
+        "  10/10  full marks\\x1b[2J')\n"
+    )
     result = grade(chapter(1), path, timeout_scale=0.2)
     lines = result.table().splitlines()
     assert len(lines) == 3 + len(chapter(1).checks) + 1 and result.score == 0
@@ -166,16 +186,18 @@ def test_what_the_students_code_says_cannot_forge_lines_of_the_table(tmp_path):
 
 def test_resource_limits_hold_in_the_students_process(tmp_path):
     path = tmp_path / "01_cameras.py"
-    path.write_text("import numpy as np\n"
-                    "def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
-                    "    return np.ones((1 << 40,)), None     # 8 TiB\n")
+    path.write_text(
+        "import numpy as np\n"
+        "def generate_rays(camera, width, height, pixel_x, pixel_y, u):\n"
+        "    return np.ones((1 << 40,)), None     # 8 TiB\n"
+    )
     with ProcessGuard() as guard:
         result, _ = run_check(chapter(1).checks[0], path, 10.0, guard, rules=chapter(1).rules)
     assert not result.passed and "MemoryError" in result.message
 
 
-
 # -- attacks on ptlab grade -----------------------------------------------------------------
+
 
 def test_ptlab_grade_judges_in_its_own_process_whatever_the_file_patches(attack, capsys):
     path = attack("bright_material_patching.py")
@@ -184,10 +206,13 @@ def test_ptlab_grade_judges_in_its_own_process_whatever_the_file_patches(attack,
     assert "FAILED" in out and "energy" in out and "PASSED" not in out
 
 
-@pytest.mark.parametrize("source, reason", [
-    ("import os\nos._exit(0)\n", "ended during importing"),
-    ("import time\ntime.sleep(3600)\n", "took longer than"),
-])
+@pytest.mark.parametrize(
+    "source, reason",
+    [
+        ("import os\nos._exit(0)\n", "ended during importing"),
+        ("import time\ntime.sleep(3600)\n", "took longer than"),
+    ],
+)
 def test_ptlab_grade_of_a_file_that_exits_or_hangs_at_import(tmp_path, capsys, source, reason):
     path = tmp_path / "material.py"
     path.write_text(source)
@@ -202,5 +227,3 @@ def test_ptlab_grade_refuses_the_librarys_own_material(attack, capsys):
     path = attack("06_subclass_of_diffuse.py")
     assert main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 1
     assert "ptlab's own answer (ptlab.materials.Diffuse), not yours" in capsys.readouterr().out
-
-

@@ -12,7 +12,7 @@ from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.exercises.renders import NOISE_RATIO
 
-pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
 
 def _results(path, number: int) -> dict:
@@ -30,7 +30,7 @@ def test_a_loop_that_traces_nothing_and_adds_huge_noise_is_too_noisy(attack):
 def test_nan_written_into_the_film_fails_and_says_where(attack):
     results = _results(attack("07_nan_film.py"), 7)
     loop = ("light not black", "lights one-sided", "white furnace", "Cornell box")
-    assert sum(results[name].points for name in loop) == 0      # (its pieces are right)
+    assert sum(results[name].points for name in loop) == 0  # (its pieces are right)
     for name in loop:
         message = results[name].message
         assert "has NaN at pixel (x=" in message, message

@@ -19,7 +19,7 @@ from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 
-pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
 #: What the static reading of the file says, or the trap in the student's process.
 OWN_ANSWER = "ptlab's own answer"
@@ -31,14 +31,13 @@ def test_the_librarys_functions_under_other_names_are_traps(attack, name):
     assert result.score == 0, result.table()
     messages = {r.name: r.message for r in result.results}
     assert f"{OWN_ANSWER} (ptlab.integrators.path.direct_light)" in messages["direct light"]
-    if name == "07_alias.py":       # every function is the library's, through the alias
+    if name == "07_alias.py":  # every function is the library's, through the alias
         assert f"{OWN_ANSWER} (ptlab.integrators.path.trace_paths)" in messages["Cornell box"]
         assert f"{OWN_ANSWER} (ptlab.integrators.path.scatter)" in messages["indirect bounce"]
 
 
 def test_the_library_compiled_at_import_under_the_students_name_earns_nothing(attack):
-    result = grade(chapter(7), attack("07_compiled_from_source.py", "07_path_tracing.py"),
-                   timeout_scale=0.5)
+    result = grade(chapter(7), attack("07_compiled_from_source.py", "07_path_tracing.py"), timeout_scale=0.5)
     assert_honest_failure(result, "reading ptlab's own code")
 
 
@@ -49,15 +48,23 @@ def _encoded_library(names: list[str]) -> str:
 
     source = "\n\n".join(textwrap.dedent(inspect.getsource(resolve(n))) for n in names)
     blob = base64.b64encode(source.encode()).decode()
-    return (f"import base64\nfrom ptlab.integrators.path import *  # noqa\n"
-            f"from ptlab.integrators.path import SurfaceHit, kept, leave_surface, sees\n"
-            f"exec(compile(base64.b64decode({blob!r}), __file__, 'exec'))\n")
+    return (
+        f"import base64\nfrom ptlab.integrators.path import *  # noqa\n"
+        f"from ptlab.integrators.path import SurfaceHit, kept, leave_surface, sees\n"
+        f"exec(compile(base64.b64decode({blob!r}), __file__, 'exec'))\n"
+    )
 
 
 def test_the_library_decoded_and_compiled_at_run_time_earns_nothing(tmp_path):
     path = tmp_path / "07_path_tracing.py"
-    path.write_text(_encoded_library([f"ptlab.integrators.path.{name}" for name in
-                                      ("trace_paths", "direct_light", "scatter", "russian_roulette")]))
+    path.write_text(
+        _encoded_library(
+            [
+                f"ptlab.integrators.path.{name}"
+                for name in ("trace_paths", "direct_light", "scatter", "russian_roulette")
+            ]
+        )
+    )
     result = grade(chapter(7), path, timeout_scale=0.5)
     assert_honest_failure(result, "compiling a copy of ptlab's own answer")
 
@@ -72,8 +79,12 @@ def _renamed(source: str, names: dict[str, str]) -> str:
             if isinstance(value, str) and value in names:
                 setattr(node, field, names[value])
         body = getattr(node, "body", None)
-        if isinstance(body, list) and body and isinstance(body[0], ast.Expr) \
-                and isinstance(body[0].value, ast.Constant):
+        if (
+            isinstance(body, list)
+            and body
+            and isinstance(body[0], ast.Expr)
+            and isinstance(body[0].value, ast.Constant)
+        ):
             node.body = body[1:] or [ast.Pass()]
     return ast.unparse(tree)
 
@@ -81,15 +92,30 @@ def _renamed(source: str, names: dict[str, str]) -> str:
 def test_the_librarys_diffuse_copied_with_the_names_changed_earns_nothing(tmp_path, capsys):
     from ptlab.materials.diffuse import Diffuse
 
-    copy = _renamed(inspect.getsource(Diffuse), {
-        "Diffuse": "Lambertian", "albedo": "colour", "wo": "outgoing", "wi": "incoming",
-        "n": "normal", "u": "random", "cos_theta_i": "cosine", "above": "visible",
-        "density": "p", "scale": "factor", "SAMPLINGS": "WAYS", "sampling": "way"})
+    copy = _renamed(
+        inspect.getsource(Diffuse),
+        {
+            "Diffuse": "Lambertian",
+            "albedo": "colour",
+            "wo": "outgoing",
+            "wi": "incoming",
+            "n": "normal",
+            "u": "random",
+            "cos_theta_i": "cosine",
+            "above": "visible",
+            "density": "p",
+            "scale": "factor",
+            "SAMPLINGS": "WAYS",
+            "sampling": "way",
+        },
+    )
     path = tmp_path / "06_diffuse.py"
-    path.write_text("import math\nimport numpy as np\nfrom ptlab.materials.base import Material\n"
-                    "from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around\n"
-                    "from ptlab.textures import Texture\nfrom ptlab.vectors import dot\n"
-                    "WAYS = ('cosine', 'uniform')\n\n" + copy)
+    path.write_text(
+        "import math\nimport numpy as np\nfrom ptlab.materials.base import Material\n"
+        "from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around\n"
+        "from ptlab.textures import Texture\nfrom ptlab.vectors import dot\n"
+        "WAYS = ('cosine', 'uniform')\n\n" + copy
+    )
     assert "class Lambertian(Material)" in path.read_text()
     result = grade(chapter(6), path, timeout_scale=0.5)
     assert_honest_failure(result, "a copy of ptlab's own answer, with the names changed")

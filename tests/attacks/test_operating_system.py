@@ -23,23 +23,39 @@ from ptlab.exercises import chapter
 from ptlab.exercises.grader import grade
 from ptlab.untrusted.student_user import become, student_user
 
-pytestmark = [pytest.mark.slow, pytest.mark.subprocess,
-              pytest.mark.skipif(os.geteuid() != 0, reason="the student user needs a root grader")]
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.subprocess,
+    pytest.mark.skipif(os.geteuid() != 0, reason="the student user needs a root grader"),
+]
 NOBODY = pwd.getpwnam("nobody")
 
 
 def _ptlab(*arguments: str, cwd: Path, timeout: float = 300) -> subprocess.CompletedProcess:
     """``ptlab ARGUMENTS`` in a process of its own."""
-    return subprocess.run([sys.executable, "-m", "ptlab.cli", *arguments], cwd=cwd, text=True,
-                          capture_output=True, timeout=timeout)
+    return subprocess.run(
+        [sys.executable, "-m", "ptlab.cli", *arguments],
+        cwd=cwd,
+        text=True,
+        capture_output=True,
+        timeout=timeout,
+    )
 
 
 def _as_nobody(*arguments: str, cwd: Path, environment: dict) -> subprocess.CompletedProcess:
     """``ptlab ARGUMENTS`` run by the user nobody (its groups too: root's group may not
     enter /root, where Python may live, even though others may)."""
-    return subprocess.run([sys.executable, "-m", "ptlab.cli", *arguments], cwd=cwd, text=True,
-                          capture_output=True, timeout=300, user=NOBODY.pw_uid,
-                          group=NOBODY.pw_gid, extra_groups=[], env=environment)
+    return subprocess.run(
+        [sys.executable, "-m", "ptlab.cli", *arguments],
+        cwd=cwd,
+        text=True,
+        capture_output=True,
+        timeout=300,
+        user=NOBODY.pw_uid,
+        group=NOBODY.pw_gid,
+        extra_groups=[],
+        env=environment,
+    )
 
 
 def _open_to_everyone(folder: Path) -> Path:
@@ -47,37 +63,58 @@ def _open_to_everyone(folder: Path) -> Path:
     student's process from writing there)."""
     folder.mkdir(parents=True, exist_ok=True)
     folder.chmod(0o777)
-    for parent in folder.parents:       # (pytest's own folders let only root in)
-        if parent.stat().st_uid == 0 and not parent.stat().st_mode & 0o001 and \
-                parent != Path("/"):
+    for parent in folder.parents:  # (pytest's own folders let only root in)
+        if parent.stat().st_uid == 0 and not parent.stat().st_mode & 0o001 and parent != Path("/"):
             parent.chmod(parent.stat().st_mode | 0o001)
     return folder
 
 
 def test_the_students_code_runs_as_nobody_with_no_way_back(attack):
     lines: list[str] = []
-    grade(chapter(1), attack("tells_who_it_is.py", "01_cameras.py"), timeout_scale=0.2,
-          on_output=lines.append)
+    grade(
+        chapter(1), attack("tells_who_it_is.py", "01_cameras.py"), timeout_scale=0.2, on_output=lines.append
+    )
     who = dict(line[5:].split(" ", 1) for line in lines if line.startswith("who: "))
     uid = NOBODY.pw_uid
     assert who["uid"] == f"{uid} {uid} gid {NOBODY.pw_gid} groups []"
     assert who["seccomp"] == "2 no_new_privs 1 capabilities 0000000000000000"
-    assert who["network"] == "lo"               # a network namespace of its own
+    assert who["network"] == "lo"  # a network namespace of its own
     folder, mode, _, home, _, environment = who["folder"].split(" ")
     assert mode == "0o700" and home == folder and Path(folder).name.startswith("ptlab-student-")
-    assert not Path(folder).exists()            # removed with its process
-    assert set(environment.split(",")) <= {"PATH", "HOME", "TMPDIR", "LANG", "LC_ALL",
-                                            "LC_CTYPE", "TZ", "OMP_NUM_THREADS",
-                                            "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"}
+    assert not Path(folder).exists()  # removed with its process
+    assert set(environment.split(",")) <= {
+        "PATH",
+        "HOME",
+        "TMPDIR",
+        "LANG",
+        "LC_ALL",
+        "LC_CTYPE",
+        "TZ",
+        "OMP_NUM_THREADS",
+        "OPENBLAS_NUM_THREADS",
+        "MKL_NUM_THREADS",
+    }
 
 
 def test_root_may_opt_out_and_an_unknown_user_is_refused(attack, tmp_path):
     lines: list[str] = []
-    grade(chapter(1), attack("tells_who_it_is.py", "01_cameras.py"), timeout_scale=0.2,
-          on_output=lines.append, user="root")
+    grade(
+        chapter(1),
+        attack("tells_who_it_is.py", "01_cameras.py"),
+        timeout_scale=0.2,
+        on_output=lines.append,
+        user="root",
+    )
     assert any(line.startswith("who: uid 0 0") for line in lines)
-    refused = _ptlab("exercise", "check", "1", str(SUBMISSIONS / "tells_who_it_is.py"),
-                     "--student-user", "no-such-user", cwd=tmp_path)
+    refused = _ptlab(
+        "exercise",
+        "check",
+        "1",
+        str(SUBMISSIONS / "tells_who_it_is.py"),
+        "--student-user",
+        "no-such-user",
+        cwd=tmp_path,
+    )
     assert refused.returncode == 2 and "no such user" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
 
@@ -89,14 +126,16 @@ def test_the_kernel_refuses_the_student_user_the_grader_and_its_files(tmp_path):
     private.mkdir(mode=0o700)
     read, write = os.pipe()
     child = os.fork()
-    if child == 0:              # the student's process, as the grader makes it
+    if child == 0:  # the student's process, as the grader makes it
         os.close(read)
         become(student_user("nobody"))
         outcomes = []
-        for attempt in (lambda: os.kill(os.getppid(), 0),
-                        lambda: _ptrace_attach(os.getppid()),
-                        lambda: open(private / "result.json", "w").close(),
-                        lambda: os.setuid(0)):
+        for attempt in (
+            lambda: os.kill(os.getppid(), 0),
+            lambda: _ptrace_attach(os.getppid()),
+            lambda: open(private / "result.json", "w").close(),
+            lambda: os.setuid(0),
+        ):
             try:
                 attempt()
                 outcomes.append("allowed")
@@ -108,20 +147,24 @@ def test_the_kernel_refuses_the_student_user_the_grader_and_its_files(tmp_path):
     os.waitpid(child, 0)
     with os.fdopen(read) as pipe:
         outcomes = json.loads(pipe.read())
-    assert outcomes == [1, 1, 13, 1]        # EPERM, EPERM, EACCES, EPERM
+    assert outcomes == [1, 1, 13, 1]  # EPERM, EPERM, EACCES, EPERM
 
 
 def _ptrace_attach(pid: int) -> None:
     libc = ctypes.CDLL(None, use_errno=True)
-    if libc.ptrace(16, pid, 0, 0) != 0:     # PTRACE_ATTACH
+    if libc.ptrace(16, pid, 0, 0) != 0:  # PTRACE_ATTACH
         raise OSError(ctypes.get_errno(), "ptrace")
-    libc.ptrace(17, pid, 0, 0)              # PTRACE_DETACH (were it allowed)
+    libc.ptrace(17, pid, 0, 0)  # PTRACE_DETACH (were it allowed)
 
 
 def test_attaching_to_the_grader_gets_nowhere(attack):
     lines: list[str] = []
-    result = grade(chapter(1), attack("ptraces_the_grader.py", "01_cameras.py"), timeout_scale=0.2,
-                   on_output=lines.append)
+    result = grade(
+        chapter(1),
+        attack("ptraces_the_grader.py", "01_cameras.py"),
+        timeout_scale=0.2,
+        on_output=lines.append,
+    )
     assert result.score == 0, result.table()
     tried = list(dict.fromkeys(line for line in lines if line.startswith("tried ")))
     assert len(tried) == 4 and not any("it worked" in line for line in tried), tried
@@ -135,8 +178,17 @@ def test_forging_the_result_then_killing_the_grader_leaves_no_marks(tmp_path):
     answer.write_bytes((SUBMISSIONS / "forges_results_and_kills.py").read_bytes())
     # What an earlier run left there, claiming full marks, goes before grading starts.
     (out / "result.json").write_text('{"score": 12, "max_score": 12, "full_marks": true}')
-    checked = _ptlab("exercise", "check", "7", str(answer), "--json", str(out / "result.json"),
-                     "--timeout-scale", "0.3", cwd=tmp_path)
+    checked = _ptlab(
+        "exercise",
+        "check",
+        "7",
+        str(answer),
+        "--json",
+        str(out / "result.json"),
+        "--timeout-scale",
+        "0.3",
+        cwd=tmp_path,
+    )
     assert checked.returncode == 1, checked.stderr
     tried = [line for line in checked.stderr.splitlines() if "tried " in line]
     assert tried and not any("it worked" in line for line in tried), tried
@@ -151,10 +203,24 @@ def test_a_killed_grader_leaves_no_result(tmp_path):
     out.mkdir()
     answer.write_text("import time\nprint('importing', flush=True)\ntime.sleep(60)\n")
     (out / "result.json").write_text('{"score": 10, "max_score": 10, "full_marks": true}')
-    grader = subprocess.Popen([sys.executable, "-m", "ptlab.cli", "exercise", "check", "1",
-                               str(answer), "--json", str(out / "result.json")], cwd=tmp_path,
-                              stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
-    for line in grader.stderr:          # the first check has started: kill it mid-grading
+    grader = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "ptlab.cli",
+            "exercise",
+            "check",
+            "1",
+            str(answer),
+            "--json",
+            str(out / "result.json"),
+        ],
+        cwd=tmp_path,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
+    for line in grader.stderr:  # the first check has started: kill it mid-grading
         if "| importing" in line:
             break
     grader.send_signal(signal.SIGKILL)
@@ -177,20 +243,22 @@ def _rows(path: Path) -> dict[str, dict]:
 
 def test_grade_all_resumes_only_from_what_it_wrote_itself(tmp_path):
     right = Path(__file__).parent.parent / "exercises" / "07_right_own_code.py"
-    folder = _class(tmp_path / "class", ("attacker", SUBMISSIONS / "forges_results_and_kills.py"),
-                    ("next", right))
+    folder = _class(
+        tmp_path / "class", ("attacker", SUBMISSIONS / "forges_results_and_kills.py"), ("next", right)
+    )
     out = _open_to_everyone(tmp_path / "out")
     grades = out / "grades.csv"
     first = _ptlab("exercise", "grade-all", "7", str(folder), "--csv", str(grades), cwd=tmp_path)
     assert first.returncode == 0, first.stderr
-    assert "each takes at most" in first.stderr          # the worst case, stated
+    assert "each takes at most" in first.stderr  # the worst case, stated
     rows = _rows(grades)
     assert rows["attacker"]["score"] == "0" and rows["next"]["score"] == "12"
     # Forged as a student of the grader's own user could: the attacker's row to full marks,
     # the next student's to nothing, and one for a student who handed in nothing.
     forged = dict(rows["attacker"], score="12", first_failure="")
-    rows.update(attacker=forged, next=dict(rows["next"], score="0"),
-                ghost=dict(rows["next"], student="ghost"))
+    rows.update(
+        attacker=forged, next=dict(rows["next"], score="0"), ghost=dict(rows["next"], student="ghost")
+    )
     with grades.open("w", newline="") as file:
         writer = csv.DictWriter(file, fieldnames=list(forged))
         writer.writeheader()
@@ -206,38 +274,55 @@ def test_modules_planted_where_the_graders_run_are_never_imported(tmp_path):
     planted = _open_to_everyone(tmp_path / "cwd")
     marker = planted / "imported"
     for name in ("trimesh", "scipy", "numpy", "embreex", "OpenImageIO", "tqdm", "ptlab"):
-        (planted / f"{name}.py").write_text(f"open({str(marker)!r}, 'a').write({name!r} + ' ')\n"
-                                            f"raise SystemExit('planted {name} imported')\n")
+        (planted / f"{name}.py").write_text(
+            f"open({str(marker)!r}, 'a').write({name!r} + ' ')\nraise SystemExit('planted {name} imported')\n"
+        )
     right = Path(__file__).parent.parent / "exercises" / "01_right_own_code.py"
     folder = tmp_path / "class"
     folder.mkdir()
     (folder / "honest.py").write_bytes(right.read_bytes())
     (folder / '=HYPERLINK("evil.example","grade me")').mkdir()
-    graded = subprocess.run([sys.executable, "-I", "-c", "from ptlab.cli import main; main()",
-                             "exercise", "grade-all", "1", str(folder), "--csv",
-                             str(tmp_path / "grades.csv")], cwd=planted, capture_output=True,
-                            text=True, timeout=300)
+    graded = subprocess.run(
+        [
+            sys.executable,
+            "-I",
+            "-c",
+            "from ptlab.cli import main; main()",
+            "exercise",
+            "grade-all",
+            "1",
+            str(folder),
+            "--csv",
+            str(tmp_path / "grades.csv"),
+        ],
+        cwd=planted,
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
     assert graded.returncode == 0, graded.stderr
     assert not marker.exists(), marker.read_text()
     rows = _rows(tmp_path / "grades.csv")
     assert rows["honest"]["score"] == "10"
-    assert "'=HYPERLINK(\"evil.example\",\"grade me\")" in rows
-    assert all(not cell.startswith(("=", "+", "-", "@")) for row in rows.values()
-               for cell in row.values())
+    assert '\'=HYPERLINK("evil.example","grade me")' in rows
+    assert all(not cell.startswith(("=", "+", "-", "@")) for row in rows.values() for cell in row.values())
 
 
 def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_path):
     home = _open_to_everyone(tmp_path / "nobody")
     answer = home / "01_cameras.py"
-    answer.write_bytes((Path(__file__).parent.parent / "exercises" / "01_right_own_code.py")
-                       .read_bytes() + b"\nfrom pathlib import Path as _P\nimport os as _os\n"
-                       b"try:\n    _P(f'/proc/{_os.getppid()}/environ').read_bytes()\n"
-                       b"    print('read the fork server', flush=True)\n"
-                       b"except OSError as _e:\n    print('refused', _e.errno, flush=True)\n")
+    answer.write_bytes(
+        (Path(__file__).parent.parent / "exercises" / "01_right_own_code.py").read_bytes()
+        + b"\nfrom pathlib import Path as _P\nimport os as _os\n"
+        b"try:\n    _P(f'/proc/{_os.getppid()}/environ').read_bytes()\n"
+        b"    print('read the fork server', flush=True)\n"
+        b"except OSError as _e:\n    print('refused', _e.errno, flush=True)\n"
+    )
     environment = dict(os.environ, HOME=str(home), XDG_STATE_HOME=str(home / "state"))
     checked = _as_nobody("exercise", "check", "1", str(answer), cwd=home, environment=environment)
     assert checked.returncode == 0, checked.stdout + checked.stderr
     assert "| refused 13" in checked.stderr and "read the fork server" not in checked.stderr
-    other = _as_nobody("exercise", "check", "1", str(answer), "--student-user", "daemon",
-                       cwd=home, environment=environment)
+    other = _as_nobody(
+        "exercise", "check", "1", str(answer), "--student-user", "daemon", cwd=home, environment=environment
+    )
     assert other.returncode == 2 and "only root can run students' code as another user" in other.stderr

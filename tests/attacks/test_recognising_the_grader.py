@@ -9,7 +9,7 @@ import pytest
 
 from ptlab.cli import main
 
-pytestmark = [pytest.mark.slow, pytest.mark.subprocess]   # graders, in processes
+pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
 
 def test_a_material_right_only_for_repeated_rows_fails(attack, capsys):

@@ -18,6 +18,7 @@ from ptlab.exercises.finite import require_finite
 
 def _camera():
     from ptlab.camera import Camera
+
     return Camera.look_at((1.0, 2.0, 3.0), (1.5, 1.8, -2.0), up=(0.1, 1.0, 0.0), fov_y=50.0)
 
 
@@ -27,19 +28,20 @@ def _rays(module, camera, width, height, pixel_x, pixel_y, u):
     is the grader's own."""
     (generate_rays,) = require(module, "generate_rays")
     pixel_x, pixel_y = np.atleast_1d(pixel_x), np.atleast_1d(pixel_y)
-    result = generate_rays(copy.deepcopy(camera), width, height, pixel_x.copy(), pixel_y.copy(),
-                           np.array(u, dtype=np.float32))
+    result = generate_rays(
+        copy.deepcopy(camera), width, height, pixel_x.copy(), pixel_y.copy(), np.array(u, dtype=np.float32)
+    )
     if not (isinstance(result, tuple) and len(result) == 2):
         raise CheckFailed("generate_rays must return two arrays: (origins, dirs)")
     origins, dirs = (np.asarray(a, dtype=np.float64) for a in result)
     n = len(pixel_x)
     if origins.shape != (n, 3) or dirs.shape != (n, 3):
-        raise CheckFailed(f"expected origins and dirs of shape ({n}, 3), got {origins.shape} "
-                          f"and {dirs.shape}")
+        raise CheckFailed(
+            f"expected origins and dirs of shape ({n}, 3), got {origins.shape} and {dirs.shape}"
+        )
 
     def ray(index, shape) -> str:
-        return (f"row {index[0]} (the ray through pixel x={pixel_x[index[0]]}, "
-                f"y={pixel_y[index[0]]})")
+        return f"row {index[0]} (the ray through pixel x={pixel_x[index[0]]}, y={pixel_y[index[0]]})"
 
     require_finite(origins, "the origin array generate_rays returned", ray)
     require_finite(dirs, "the direction array generate_rays returned", ray)
@@ -52,20 +54,24 @@ def check_centre_ray(module) -> str:
     if not np.allclose(origins[0], camera.position, atol=1e-5):
         raise CheckFailed(f"the ray should start at the eye {camera.position}, not {origins[0]}")
     if not np.allclose(dirs[0], camera.forward, atol=1e-5):
-        raise CheckFailed(f"the ray through the image's centre should go along forward "
-                          f"{np.round(camera.forward, 4)}, not {np.round(dirs[0], 4)}")
+        raise CheckFailed(
+            f"the ray through the image's centre should go along forward "
+            f"{np.round(camera.forward, 4)}, not {np.round(dirs[0], 4)}"
+        )
     return "the centre ray goes along forward"
 
 
 def check_unit_length(module) -> str:
     rng = np.random.default_rng(1)
-    _, dirs = _rays(module, _camera(), 64, 48, rng.integers(0, 64, 500), rng.integers(0, 48, 500),
-                    rng.random((500, 2)))
+    _, dirs = _rays(
+        module, _camera(), 64, 48, rng.integers(0, 64, 500), rng.integers(0, 48, 500), rng.random((500, 2))
+    )
     length = np.linalg.norm(dirs, axis=1)
     worst = np.argmax(np.abs(length - 1))
     if not abs(length[worst] - 1) <= 1e-5:
-        raise CheckFailed(f"directions must have length 1; one has length {length[worst]:.4f} "
-                          "(normalise them)")
+        raise CheckFailed(
+            f"directions must have length 1; one has length {length[worst]:.4f} (normalise them)"
+        )
     return "every direction has length 1"
 
 
@@ -77,14 +83,18 @@ def check_field_of_view(module) -> str:
     half_fov = math.radians(camera.fov_y) / 2
     top_angle = math.acos(np.clip(dirs[0] @ camera.forward, -1, 1))
     if not abs(top_angle - half_fov) <= 1e-4:
-        raise CheckFailed(f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
-                          f"degrees off forward, yours is {math.degrees(top_angle):.2f}")
+        raise CheckFailed(
+            f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
+            f"degrees off forward, yours is {math.degrees(top_angle):.2f}"
+        )
     expected_side = math.atan(math.tan(half_fov) * width / height)
     side_angle = math.acos(np.clip(dirs[1] @ camera.forward, -1, 1))
     if not abs(side_angle - expected_side) <= 1e-4:
-        raise CheckFailed(f"the left edge should be atan(tan(fov_y / 2) * width / height) = "
-                          f"{math.degrees(expected_side):.2f} degrees off forward, yours is "
-                          f"{math.degrees(side_angle):.2f} (the aspect ratio?)")
+        raise CheckFailed(
+            f"the left edge should be atan(tan(fov_y / 2) * width / height) = "
+            f"{math.degrees(expected_side):.2f} degrees off forward, yours is "
+            f"{math.degrees(side_angle):.2f} (the aspect ratio?)"
+        )
     return "the image spans fov_y vertically, times the aspect ratio across"
 
 
@@ -100,6 +110,7 @@ def check_orientation(module) -> str:
 
 def check_known_rays(module) -> str:
     from ptlab.camera import generate_rays
+
     camera = _camera()
     rng = np.random.default_rng(7)
     pixel_x, pixel_y, u = rng.integers(0, 32, 200), rng.integers(0, 24, 200), rng.random((200, 2))
@@ -107,8 +118,10 @@ def check_known_rays(module) -> str:
     _, dirs = _rays(module, camera, 32, 24, pixel_x, pixel_y, u)
     worst = np.abs(dirs - expected).max()
     if not worst <= 1e-4:
-        raise CheckFailed(f"rays through jittered points differ from the pinhole model's by up "
-                          f"to {worst:.4f} (is u added to the pixel coordinates?)")
+        raise CheckFailed(
+            f"rays through jittered points differ from the pinhole model's by up "
+            f"to {worst:.4f} (is u added to the pixel coordinates?)"
+        )
     return "200 jittered rays match the pinhole model"
 
 
@@ -118,16 +131,20 @@ def check_render(module) -> str:
 
     def student_rays(camera, width, height, pixel_x, pixel_y, u):
         origins, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
-        return (np.asfortranarray(origins, dtype=np.float32),
-                np.asfortranarray(dirs, dtype=np.float32))
+        return (np.asfortranarray(origins, dtype=np.float32), np.asfortranarray(dirs, dtype=np.float32))
 
-    return check_render_through("your rays", ptlab.rendering.jobs,
-                                dict(generate_rays=student_rays),
-                                nan_hint="rays too long for float32, the renderer's precision?")
+    return check_render_through(
+        "your rays",
+        ptlab.rendering.jobs,
+        dict(generate_rays=student_rays),
+        nan_hint="rays too long for float32, the renderer's precision?",
+    )
 
 
 CHAPTER = Chapter(
-    number=1, slug="cameras", title="Cameras and primary rays",
+    number=1,
+    slug="cameras",
+    title="Cameras and primary rays",
     functions=("generate_rays",),
     answers=("ptlab.camera.generate_rays",),
     checks=(

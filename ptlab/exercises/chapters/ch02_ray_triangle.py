@@ -36,14 +36,16 @@ def _call(module, origins, dirs, v0, e1, e2):
     """The student's (t, u, v) as float64 (N,) arrays, or a clear failure."""
     (ray_triangle,) = require(module, "ray_triangle")
     n = len(origins)
-    with np.errstate(all="ignore"):       # NaN and inf are judged below, not warned about
+    with np.errstate(all="ignore"):  # NaN and inf are judged below, not warned about
         result = ray_triangle(origins, dirs, v0, e1, e2)
     if not (isinstance(result, tuple) and len(result) == 3):
         raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
     t, u, v = (np.asarray(a, dtype=np.float64) for a in result)
     if t.shape != (n,) or u.shape != (n,) or v.shape != (n,):
-        raise CheckFailed(f"expected t, u and v of shape ({n},), got {t.shape}, {u.shape} and "
-                          f"{v.shape} (one answer per ray)")
+        raise CheckFailed(
+            f"expected t, u and v of shape ({n},), got {t.shape}, {u.shape} and "
+            f"{v.shape} (one answer per ray)"
+        )
     _require_finite_hits(t, u, v)
     return t, u, v
 
@@ -51,11 +53,11 @@ def _call(module, origins, dirs, v0, e1, e2):
 def _require_finite_hits(t: np.ndarray, u: np.ndarray, v: np.ndarray, during: str = "") -> None:
     """Fail if t is NaN for a ray (a miss is inf), or u or v is NaN or infinite for a ray
     that hits (finite t), naming the first such ray."""
+
     def ray(index, shape) -> str:
         return f"ray {index[0]} of the {shape[0]} {during}".rstrip()
 
-    require_finite(np.where(np.isinf(t), 0.0, t), "t", ray,
-                   hint="a division by det = 0? misses must be inf")
+    require_finite(np.where(np.isinf(t), 0.0, t), "t", ray, hint="a division by det = 0? misses must be inf")
     hits = np.isfinite(t)
     for name, value in (("u", u), ("v", v)):
         require_finite(np.where(hits, value, 0.0), f"{name} of a ray that hits", ray)
@@ -86,8 +88,10 @@ def _expect_hits(module, triangle, uv, t, dirs, what: str) -> int:
         if np.allclose(got, want, rtol=1e-5, atol=1e-6):
             continue
         if not np.isfinite(t_got[i]):
-            raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} should hit, yours "
-                              f"misses (t = {t_got[i]}){_miss_hint(triangle, dirs, t_want[i])}")
+            raise CheckFailed(
+                f"{what}: the ray at (t, u, v) = {_fmt(want)} should hit, yours "
+                f"misses (t = {t_got[i]}){_miss_hint(triangle, dirs, t_want[i])}"
+            )
         hint = ""
         if np.allclose((u_got[i], v_got[i]), (v_want, u_want), rtol=1e-5, atol=1e-6):
             hint = " (u and v swapped: u goes with e1 = v1 - v0)"
@@ -95,8 +99,7 @@ def _expect_hits(module, triangle, uv, t, dirs, what: str) -> int:
             hint = " (u, v should weigh v1 and v2; 1 - u - v weighs v0)"
         elif np.isclose(t_got[i], -t_want[i], rtol=1e-5):
             hint = " (t has the wrong sign)"
-        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} gets (t, u, v) = "
-                          f"{_fmt(got)}{hint}")
+        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} gets (t, u, v) = {_fmt(got)}{hint}")
     return len(uv)
 
 
@@ -116,76 +119,117 @@ def _fmt(values) -> str:
 
 
 def check_known_hits(module) -> str:
-    n = _expect_hits(module, UNIT, [(0.25, 0.5), (0.1, 0.1), (0.6, 0.3)], 1.0, UNIT_FRONT,
-                     "the unit triangle, rays along -z")
-    n += _expect_hits(module, SLANTED, [(0.2, 0.3), (0.7, 0.1), (0.05, 0.9)], [2.5, 0.5, 7.0],
-                      SLANTED_FRONT, "a slanted triangle")
+    n = _expect_hits(
+        module,
+        UNIT,
+        [(0.25, 0.5), (0.1, 0.1), (0.6, 0.3)],
+        1.0,
+        UNIT_FRONT,
+        "the unit triangle, rays along -z",
+    )
+    n += _expect_hits(
+        module,
+        SLANTED,
+        [(0.2, 0.3), (0.7, 0.1), (0.05, 0.9)],
+        [2.5, 0.5, 7.0],
+        SLANTED_FRONT,
+        "a slanted triangle",
+    )
     t, _, _ = _call(module, *_aimed(UNIT, [(0.25, 0.5)], 0.5, (0, 0, -2)))
     if not np.isclose(t[0], 0.5, rtol=1e-5):
-        raise CheckFailed(f"with the direction (0, 0, -2), twice as long, the hit 1 unit away "
-                          f"is at t = 0.5, yours says t = {t[0]:.4g} (t is in units of |d|: "
-                          f"do not normalise d)")
+        raise CheckFailed(
+            f"with the direction (0, 0, -2), twice as long, the hit 1 unit away "
+            f"is at t = 0.5, yours says t = {t[0]:.4g} (t is in units of |d|: "
+            f"do not normalise d)"
+        )
     return f"{n + 1} rays hit at the expected t, u and v"
 
 
 def check_edges(module) -> str:
     eps = 0.01
     # (u, v) just outside and just inside each edge, and two far away.
-    outside = {"the edge v0-v2 (u < 0)": (-eps, 0.5), "the edge v0-v1 (v < 0)": (0.5, -eps),
-               "the edge v1-v2 (u + v > 1)": (0.5, 0.5 + eps), "v1's corner": (1.2, -0.1),
-               "the far side of v1-v2": (1.5, 1.5)}
+    outside = {
+        "the edge v0-v2 (u < 0)": (-eps, 0.5),
+        "the edge v0-v1 (v < 0)": (0.5, -eps),
+        "the edge v1-v2 (u + v > 1)": (0.5, 0.5 + eps),
+        "v1's corner": (1.2, -0.1),
+        "the far side of v1-v2": (1.5, 1.5),
+    }
     inside = [(eps, 0.5), (0.5, eps), (0.5, 0.5 - eps), (0.3, 0.3)]
     for triangle, dirs in ((UNIT, UNIT_FRONT), (SLANTED, SLANTED_FRONT)):
         t, _, _ = _call(module, *_aimed(triangle, list(outside.values()), 2.0, dirs))
         for (edge, uv), t_i in zip(outside.items(), t, strict=True):
             if np.isfinite(t_i):
                 test = "u + v <= 1" if "u + v" in edge else "u >= 0 and v >= 0"
-                raise CheckFailed(f"the ray through (u, v) = {uv}, outside {edge}, should miss "
-                                  f"(t = inf); yours hits at t = {t_i:.4g} (is {test} tested?)")
+                raise CheckFailed(
+                    f"the ray through (u, v) = {uv}, outside {edge}, should miss "
+                    f"(t = inf); yours hits at t = {t_i:.4g} (is {test} tested?)"
+                )
         n_inside = _expect_hits(module, triangle, inside, 2.0, dirs, "just inside an edge")
-    return (f"rays 0.01 outside each edge miss, {n_inside} just inside hit, for two "
-            f"triangles")
+    return f"rays 0.01 outside each edge miss, {n_inside} just inside hit, for two triangles"
 
 
 def check_parallel(module) -> str:
-    cases = {"above the triangle's plane": ((0.25, 0.5, 1.0), (1.0, 0.0, 0.0)),
-             "in the triangle's plane": ((0.25, 0.5, 0.0), (1.0, 1.0, 0.0)),
-             "in the plane, crossing the triangle": ((-1.0, 0.2, 0.0), (1.0, 0.0, 0.0))}
+    cases = {
+        "above the triangle's plane": ((0.25, 0.5, 1.0), (1.0, 0.0, 0.0)),
+        "in the triangle's plane": ((0.25, 0.5, 0.0), (1.0, 1.0, 0.0)),
+        "in the plane, crossing the triangle": ((-1.0, 0.2, 0.0), (1.0, 0.0, 0.0)),
+    }
     origins, dirs = (np.array(a, dtype=np.float64) for a in zip(*cases.values(), strict=True))
     t, _, _ = _call(module, origins, dirs, *_edges(UNIT, len(cases)))
     for what, t_i in zip(cases, t, strict=True):
         if t_i != np.inf:
-            raise CheckFailed(f"a ray {what} has det = 0 and must miss with t = inf; yours "
-                              f"gives t = {t_i:.4g} (guard the division by det)")
+            raise CheckFailed(
+                f"a ray {what} has det = 0 and must miss with t = inf; yours "
+                f"gives t = {t_i:.4g} (guard the division by det)"
+            )
     return "rays parallel to the triangle, in its plane included, miss with t = inf"
 
 
 def check_behind(module) -> str:
     t, u, v = _call(module, *_aimed(UNIT, [(0.25, 0.5), (0.6, 0.2)], -1.0, UNIT_FRONT))
     if not np.all(np.isfinite(t)):
-        raise CheckFailed("a triangle behind the ray's origin must still come back as a hit "
-                          "with negative t (here t = -1); yours returns inf. Keeping only "
-                          "tmin < t < tmax is the BVH's job: it needs tmin to skip the "
-                          "surface a ray starts on")
+        raise CheckFailed(
+            "a triangle behind the ray's origin must still come back as a hit "
+            "with negative t (here t = -1); yours returns inf. Keeping only "
+            "tmin < t < tmax is the BVH's job: it needs tmin to skip the "
+            "surface a ray starts on"
+        )
     if not np.allclose(t, -1.0, rtol=1e-5):
-        raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours "
-                          f"gives {_fmt(t)}")
+        raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours gives {_fmt(t)}")
     want = np.array([[0.25, 0.5], [0.6, 0.2]])
     got = np.stack([u, v], axis=1)
     if not np.allclose(got, want, atol=1e-6):
-        hint = " (u and v swapped: u goes with e1 = v1 - v0)" if np.allclose(
-            got, want[:, ::-1], atol=1e-6) else ""
-        raise CheckFailed(f"behind the origin, (u, v) are still the hit points' barycentrics, "
-                          f"{_fmt(want[0])} and {_fmt(want[1])} for the two rays; yours are "
-                          f"{_fmt(got[0])} and {_fmt(got[1])}{hint}")
+        hint = (
+            " (u and v swapped: u goes with e1 = v1 - v0)"
+            if np.allclose(got, want[:, ::-1], atol=1e-6)
+            else ""
+        )
+        raise CheckFailed(
+            f"behind the origin, (u, v) are still the hit points' barycentrics, "
+            f"{_fmt(want[0])} and {_fmt(want[1])} for the two rays; yours are "
+            f"{_fmt(got[0])} and {_fmt(got[1])}{hint}"
+        )
     return "triangles behind the origin come back with t = -1"
 
 
 def check_both_faces(module) -> str:
-    n = _expect_hits(module, UNIT, [(0.25, 0.5), (0.6, 0.2)], 1.0, np.negative(UNIT_FRONT),
-                     "the unit triangle from below (its back face: det < 0)")
-    n += _expect_hits(module, SLANTED, [(0.2, 0.3)], 2.0, np.negative(SLANTED_FRONT),
-                      "the slanted triangle from its back (det < 0)")
+    n = _expect_hits(
+        module,
+        UNIT,
+        [(0.25, 0.5), (0.6, 0.2)],
+        1.0,
+        np.negative(UNIT_FRONT),
+        "the unit triangle from below (its back face: det < 0)",
+    )
+    n += _expect_hits(
+        module,
+        SLANTED,
+        [(0.2, 0.3)],
+        2.0,
+        np.negative(SLANTED_FRONT),
+        "the slanted triangle from its back (det < 0)",
+    )
     return f"{n} rays hit the back faces (no culling: det < 0 is a hit too)"
 
 
@@ -204,14 +248,18 @@ def check_many(module) -> str:
         hint = ""
         if inside[i]:
             hint = _miss_hint((v0[i], v0[i] + e1[i], v0[i] + e2[i]), d[i], tuv[i, 0])
-        raise CheckFailed(f"{wrong.sum()} of {n} random rays {'miss' if inside[i] else 'hit'} "
-                          f"where they should not, e.g. ray {i}, whose (t, u, v) is "
-                          f"{_fmt(tuv[i])}{hint}")
+        raise CheckFailed(
+            f"{wrong.sum()} of {n} random rays {'miss' if inside[i] else 'hit'} "
+            f"where they should not, e.g. ray {i}, whose (t, u, v) is "
+            f"{_fmt(tuv[i])}{hint}"
+        )
     for name, got, want in zip("tuv", (t, u, v), tuv.T, strict=True):
         error = np.abs(got[inside] - want[inside]) / np.maximum(1, np.abs(want[inside]))
         if error.max() > 1e-6:
-            raise CheckFailed(f"{name} of random rays is off by up to {error.max():.2g}"
-                              f"{_error_hint(name, error.max(), (t, u, v), tuv, inside)}")
+            raise CheckFailed(
+                f"{name} of random rays is off by up to {error.max():.2g}"
+                f"{_error_hint(name, error.max(), (t, u, v), tuv, inside)}"
+            )
     return f"{n} random rays and triangles agree with a direct linear solve"
 
 
@@ -223,18 +271,23 @@ SMALL_ERROR = 1e-4
 def _error_hint(name: str, error: float, got, tuv: np.ndarray, inside: np.ndarray) -> str:
     """Why the student's ``name`` (t, u or v) of random hits is off by ``error``."""
     if error <= SMALL_ERROR:
-        return (" (a small error, more than rounding: an epsilon added to det or t, or a "
-                "computation in lower precision? Keep the dtype you are given, float64 here, "
-                "and divide by det itself)")
+        return (
+            " (a small error, more than rounding: an epsilon added to det or t, or a "
+            "computation in lower precision? Keep the dtype you are given, float64 here, "
+            "and divide by det itself)"
+        )
     t, u, v = (g[inside] for g in got)
     t_want, u_want, v_want = tuv[inside].T
     if np.allclose(u, v_want, atol=1e-6) and np.allclose(v, u_want, atol=1e-6):
-        return (": u and v are swapped (u weighs v1 and goes with e1 = v1 - v0, the lecture's "
-                "b1 = s1 . s / det)")
+        return (
+            ": u and v are swapped (u weighs v1 and goes with e1 = v1 - v0, the lecture's b1 = s1 . s / det)"
+        )
     if name == "t":
         return ": not rounding but a wrong formula: t = (s2 . e2) / det"
-    return (": not rounding but wrong barycentrics: u = (s1 . s) / det weighs v1, "
-            "v = (s2 . d) / det weighs v2, and 1 - u - v weighs v0")
+    return (
+        ": not rounding but wrong barycentrics: u = (s1 . s) / det weighs v1, "
+        "v = (s2 . d) / det weighs v2, and 1 - u - v weighs v0"
+    )
 
 
 def check_render(module) -> str:
@@ -250,19 +303,26 @@ def check_render(module) -> str:
             raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
         t, u, v = (np.array(a, dtype=np.float32) for a in result)
         if t.shape != (len(origins),) or u.shape != t.shape or v.shape != t.shape:
-            raise CheckFailed(f"given {len(origins)} rays as float32 (N, 3) arrays, your t, u, "
-                              f"v have shapes {t.shape}, {u.shape}, {v.shape}")
+            raise CheckFailed(
+                f"given {len(origins)} rays as float32 (N, 3) arrays, your t, u, "
+                f"v have shapes {t.shape}, {u.shape}, {v.shape}"
+            )
         _require_finite_hits(t, u, v, "traced through the BVH")
         return t, u, v
 
-    return check_render_through("your intersections", ptlab.accel.numpy_bvh,
-                                dict(ray_triangle=student_ray_triangle),
-                                passes=dict(RENDER, seed=RENDER_SEED),
-                                hint="wrong hit points from u, v, or missing triangles?")
+    return check_render_through(
+        "your intersections",
+        ptlab.accel.numpy_bvh,
+        dict(ray_triangle=student_ray_triangle),
+        passes=dict(RENDER, seed=RENDER_SEED),
+        hint="wrong hit points from u, v, or missing triangles?",
+    )
 
 
 CHAPTER = Chapter(
-    number=2, slug="ray_triangle", title="Ray-triangle intersection (Möller–Trumbore)",
+    number=2,
+    slug="ray_triangle",
+    title="Ray-triangle intersection (Möller–Trumbore)",
     functions=("ray_triangle",),
     answers=("ptlab.accel.triangle.ray_triangle",),
     checks=(

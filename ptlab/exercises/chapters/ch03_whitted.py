@@ -41,9 +41,9 @@ def _unit(v: np.ndarray) -> np.ndarray:
 def _directions(theta: np.ndarray, n=(0.0, 0.0, 1.0), phi: float = 0.3) -> np.ndarray:
     """(N, 3) unit vectors at angles ``theta`` from the unit normal ``n``, azimuth ``phi``."""
     from ptlab.sampling import to_world
+
     theta = np.asarray(theta, dtype=np.float64)
-    local = np.stack([np.sin(theta) * math.cos(phi), np.sin(theta) * math.sin(phi),
-                      np.cos(theta)], axis=1)
+    local = np.stack([np.sin(theta) * math.cos(phi), np.sin(theta) * math.sin(phi), np.cos(theta)], axis=1)
     return np.asarray(to_world(local, np.broadcast_to(np.asarray(n, dtype=np.float64), local.shape)))
 
 
@@ -51,8 +51,12 @@ def _call(function, name: str, *args, shape) -> np.ndarray:
     """``function(*args)`` as float64, checked for its shape and for NaN (the row of the
     first is named). The function gets copies of the arguments: what the check computes
     from them is the grader's own."""
-    return finite_array(function(*copy.deepcopy(args)), name, shape,
-                        nan_hint="a square root of a negative number? clamp with np.maximum(0, ...)")
+    return finite_array(
+        function(*copy.deepcopy(args)),
+        name,
+        shape,
+        nan_hint="a square root of a negative number? clamp with np.maximum(0, ...)",
+    )
 
 
 def _random_cases(seed: int, count: int = 500):
@@ -60,6 +64,7 @@ def _random_cases(seed: int, count: int = 500):
     rng = np.random.default_rng(seed)
     n = _unit(rng.normal(size=(count, 3)))
     from ptlab.sampling import to_world
+
     theta = np.radians(rng.uniform(0, 89, count))
     phi = rng.uniform(0, 2 * math.pi, count)
     local = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
@@ -68,37 +73,48 @@ def _random_cases(seed: int, count: int = 500):
 
 # -- reflect ----------------------------------------------------------------------------------
 
+
 def check_reflect(module) -> str:
     (reflect,) = require(module, "reflect")
     n = np.array([[0.0, 1.0, 0.0]])
     straight = _call(reflect, "reflect", n.copy(), n.copy(), shape=(1, 3))
     if np.allclose(straight, -n, atol=1e-6):
-        raise CheckFailed("reflect(n, n) gave -n: the result must point away from the surface, "
-                          "like wo (GAMES101's reflect(I, N) takes the incoming ray I, which "
-                          "points toward the surface; here wo = -I)")
+        raise CheckFailed(
+            "reflect(n, n) gave -n: the result must point away from the surface, "
+            "like wo (GAMES101's reflect(I, N) takes the incoming ray I, which "
+            "points toward the surface; here wo = -I)"
+        )
     if not np.allclose(straight, n, atol=1e-6):
-        raise CheckFailed(f"at normal incidence the mirror sends the ray straight back: "
-                          f"reflect(n, n) must be n = {n[0]}, not {np.round(straight[0], 4)}")
+        raise CheckFailed(
+            f"at normal incidence the mirror sends the ray straight back: "
+            f"reflect(n, n) must be n = {n[0]}, not {np.round(straight[0], 4)}"
+        )
     wo, n = _random_cases(31)
     expected = 2 * np.sum(wo * n, axis=1, keepdims=True) * n - wo
     wi = _call(reflect, "reflect", wo, n, shape=wo.shape)
     if np.allclose(wi, -expected, atol=1e-5):
-        raise CheckFailed("your reflected directions point into the surface: wo and the result "
-                          "both point away from it (2 (wo . n) n - wo), where GAMES101's "
-                          "reflect(I, N) = I - 2 (I . N) N works with the incoming direction I")
+        raise CheckFailed(
+            "your reflected directions point into the surface: wo and the result "
+            "both point away from it (2 (wo . n) n - wo), where GAMES101's "
+            "reflect(I, N) = I - 2 (I . N) N works with the incoming direction I"
+        )
     if not np.allclose(wi, expected, atol=1e-5):
         cos_in, cos_out = np.sum(wo * n, axis=1), np.sum(wi * n, axis=1)
         if not np.allclose(np.linalg.norm(wi, axis=1), 1, atol=1e-5):
             raise CheckFailed("the reflected directions must be unit vectors")
         if not np.allclose(cos_in, cos_out, atol=1e-5):
-            raise CheckFailed("the reflected direction must make the same angle with n as wo "
-                              "(wi . n = wo . n)")
-        raise CheckFailed("the reflected direction must lie in the plane of wo and n, on the "
-                          "other side of n: wi = 2 (wo . n) n - wo")
+            raise CheckFailed(
+                "the reflected direction must make the same angle with n as wo (wi . n = wo . n)"
+            )
+        raise CheckFailed(
+            "the reflected direction must lie in the plane of wo and n, on the "
+            "other side of n: wi = 2 (wo . n) n - wo"
+        )
     return "normal incidence and 500 random directions reflect as 2 (wo . n) n - wo"
 
 
 # -- refract ----------------------------------------------------------------------------------
+
 
 def snell(wo: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
     """The refracted direction from Snell's law, built from its two components (float64).
@@ -108,7 +124,7 @@ def snell(wo: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
     """
     cos_theta_i = np.sum(wo * n, axis=1, keepdims=True)
     tangent = wo - cos_theta_i * n
-    sin2_theta_t = np.sum(tangent * tangent, axis=1, keepdims=True) / eta ** 2
+    sin2_theta_t = np.sum(tangent * tangent, axis=1, keepdims=True) / eta**2
     return -tangent / eta - np.sqrt(np.maximum(0, 1 - sin2_theta_t)) * n
 
 
@@ -118,46 +134,62 @@ def check_refract(module) -> str:
     for eta in (GLASS, 1 / GLASS):
         straight = _call(refract, "refract", n.copy(), n.copy(), eta, shape=(1, 3))
         if not np.allclose(straight, -n, atol=1e-6):
-            raise CheckFailed(f"at normal incidence light goes straight through: refract(n, n, "
-                              f"{eta:.3f}) must be -n = {-n[0]}, not {np.round(straight[0], 4)} "
-                              f"(the refracted ray leaves on the *other* side of the surface)")
+            raise CheckFailed(
+                f"at normal incidence light goes straight through: refract(n, n, "
+                f"{eta:.3f}) must be -n = {-n[0]}, not {np.round(straight[0], 4)} "
+                f"(the refracted ray leaves on the *other* side of the surface)"
+            )
     # Leaving glass first: with eta taken the wrong way up, it bends the wrong way there
     # (entering, it would be totally reflected, which says less).
     for eta, degrees in [(1 / GLASS, 30.0), (GLASS, 45.0), (DIAMOND, 70.0)]:
         wo = _directions(np.radians([degrees]), n[0])
         wt = _call(refract, "refract", wo, n.copy(), eta, shape=(1, 3))
         if not np.isclose(np.linalg.norm(wt), 1, atol=1e-5):
-            raise CheckFailed(f"the refracted direction must be a unit vector; at {degrees:g} "
-                              f"degrees with eta {eta:.3f} its length is {np.linalg.norm(wt):.4f}")
+            raise CheckFailed(
+                f"the refracted direction must be a unit vector; at {degrees:g} "
+                f"degrees with eta {eta:.3f} its length is {np.linalg.norm(wt):.4f}"
+            )
         sin_i = math.sin(math.radians(degrees))
         sin_t = math.sqrt(max(0.0, 1 - (wt[0] @ n[0]) ** 2))
         if not math.isclose(sin_t, sin_i / eta, abs_tol=1e-5):
-            hint = (" (you used eta the wrong way up: here eta is the index beyond the surface "
-                    "over the index on wo's side, eta_t / eta_i, where the homework's refract "
-                    "works with etai / etat)" if math.isclose(sin_t, min(1.0, sin_i * eta), abs_tol=1e-4)
-                    else "")
-            raise CheckFailed(f"Snell's law: at {degrees:g} degrees with eta = {eta:.3f}, "
-                              f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
-                              f"{sin_t:.4f}{hint}")
+            hint = (
+                " (you used eta the wrong way up: here eta is the index beyond the surface "
+                "over the index on wo's side, eta_t / eta_i, where the homework's refract "
+                "works with etai / etat)"
+                if math.isclose(sin_t, min(1.0, sin_i * eta), abs_tol=1e-4)
+                else ""
+            )
+            raise CheckFailed(
+                f"Snell's law: at {degrees:g} degrees with eta = {eta:.3f}, "
+                f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
+                f"{sin_t:.4f}{hint}"
+            )
         if not wt[0] @ n[0] < 0:
-            raise CheckFailed("the refracted direction must go through the surface (wt . n < 0): "
-                              "it points away from the surface on the other side")
+            raise CheckFailed(
+                "the refracted direction must go through the surface (wt . n < 0): "
+                "it points away from the surface on the other side"
+            )
     wo, n = _random_cases(32)
     for eta in (GLASS, 1 / GLASS, np.where(np.arange(len(wo)) % 2, GLASS, 1 / GLASS)):
         column = eta[:, None] if np.ndim(eta) else eta
-        refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column ** 2)   # not totally reflected
+        refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column**2)  # not totally reflected
         expected = snell(wo, n, column)
         wt = _call(refract, "refract", wo, n, eta, shape=wo.shape)
         ok = np.all(np.abs(wt - expected) < 1e-5, axis=1) | ~refracts
         if not ok.all():
             per_row = " (eta given as an (N,) array, one per row: use eta[:, None])" if np.ndim(eta) else ""
-            raise CheckFailed(f"{(~ok).sum()} of {ok.size} random directions refract differently "
-                              f"from Snell's law{per_row}: wt = -wo / eta + (cos_i / eta - cos_t) n")
-    return ("normal incidence, Snell's law entering and leaving glass and diamond, and 1500 "
-            "random directions (eta a float or one per row)")
+            raise CheckFailed(
+                f"{(~ok).sum()} of {ok.size} random directions refract differently "
+                f"from Snell's law{per_row}: wt = -wo / eta + (cos_i / eta - cos_t) n"
+            )
+    return (
+        "normal incidence, Snell's law entering and leaving glass and diamond, and 1500 "
+        "random directions (eta a float or one per row)"
+    )
 
 
 # -- Fresnel ---------------------------------------------------------------------------------
+
 
 def fresnel_reference(cos_theta_i: np.ndarray, eta) -> np.ndarray:
     """The Fresnel reflectance of unpolarised light from the Fresnel equations (float64).
@@ -167,12 +199,12 @@ def fresnel_reference(cos_theta_i: np.ndarray, eta) -> np.ndarray:
     sin(theta_t) = sin(theta_i) / eta exceeds 1 (Hecht, Optics, 4.6; pbrt-v4 eq. 9.7).
     """
     cos_i = np.asarray(cos_theta_i, dtype=np.float64)
-    sin2_t = (1 - cos_i ** 2) / np.asarray(eta, dtype=np.float64) ** 2
+    sin2_t = (1 - cos_i**2) / np.asarray(eta, dtype=np.float64) ** 2
     cos_t = np.sqrt(np.maximum(0, 1 - sin2_t))
     with np.errstate(invalid="ignore", divide="ignore"):
         r_perpendicular = (cos_i - eta * cos_t) / (cos_i + eta * cos_t)
         r_parallel = (eta * cos_i - cos_t) / (eta * cos_i + cos_t)
-    return np.where(sin2_t >= 1, 1.0, (r_perpendicular ** 2 + r_parallel ** 2) / 2)
+    return np.where(sin2_t >= 1, 1.0, (r_perpendicular**2 + r_parallel**2) / 2)
 
 
 def check_fresnel(module) -> str:
@@ -181,12 +213,16 @@ def check_fresnel(module) -> str:
         normal = _call(fresnel, "fresnel", np.array([1.0]), eta, shape=(1,))[0]
         expected = ((eta - 1) / (eta + 1)) ** 2
         if not math.isclose(normal, expected, abs_tol=1e-6):
-            raise CheckFailed(f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
-                              f"for eta = {eta:.3f}; yours is {normal:.5f}")
+            raise CheckFailed(
+                f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
+                f"for eta = {eta:.3f}; yours is {normal:.5f}"
+            )
     grazing = _call(fresnel, "fresnel", np.array([1e-4]), GLASS, shape=(1,))[0]
     if not grazing >= 0.99:
-        raise CheckFailed(f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
-                          f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4")
+        raise CheckFailed(
+            f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
+            f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4"
+        )
     cos_i = np.linspace(0.02, 1, 200)
     for eta in (GLASS, 1 / GLASS, DIAMOND, np.linspace(1.1, 2.0, 200)):
         expected = fresnel_reference(cos_i, eta)
@@ -197,17 +233,23 @@ def check_fresnel(module) -> str:
             schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
             hint = ""
             if np.abs(F - schlick).max() < 1e-4:
-                hint = (" (that is Schlick's approximation; write the Fresnel equations "
-                        "themselves, as the homework's fresnel does)")
+                hint = (
+                    " (that is Schlick's approximation; write the Fresnel equations "
+                    "themselves, as the homework's fresnel does)"
+                )
             elif np.abs(F - fresnel_reference(cos_i, 1 / np.asarray(eta))).max() < 1e-5:
-                hint = (" (you used eta the wrong way up: eta here is eta_t / eta_i, the "
-                        "index beyond the surface over the index on the light's side)")
+                hint = (
+                    " (you used eta the wrong way up: eta here is eta_t / eta_i, the "
+                    "index beyond the surface over the index on the light's side)"
+                )
             elif np.ndim(eta):
                 hint = " (eta given as an (N,) array, one per row)"
             angle = math.degrees(math.acos(cos_i[worst]))
             eta_here = eta[worst] if np.ndim(eta) else eta
-            raise CheckFailed(f"F at {angle:.1f} degrees with eta = {eta_here:.3f} must be "
-                              f"{expected[worst]:.5f}, yours is {F[worst]:.5f}{hint}")
+            raise CheckFailed(
+                f"F at {angle:.1f} degrees with eta = {eta_here:.3f} must be "
+                f"{expected[worst]:.5f}, yours is {F[worst]:.5f}{hint}"
+            )
     return "F(0) = ((eta - 1) / (eta + 1))^2, F -> 1 at grazing, the Fresnel equations at 200 angles"
 
 
@@ -219,19 +261,24 @@ def check_total_internal_reflection(module) -> str:
     F = _call(fresnel, "fresnel", np.cos(np.radians(degrees)), eta, shape=degrees.shape)  # noqa: N806
     if not np.abs(F - 1).max() <= 1e-6:
         bad = int(np.argmax(np.abs(F - 1)))
-        raise CheckFailed(f"leaving glass (eta = 1 / {GLASS}) beyond the critical angle "
-                          f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
-                          f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
-                          f"eta > 1 has no solution: return 1 there)")
-    n = _unit(np.random.default_rng(34).normal(size=(len(degrees), 3)))   # (no row repeats n)
-    wo = np.concatenate([_directions(np.radians(d)[None], normal)
-                         for d, normal in zip(degrees, n, strict=True)])
+        raise CheckFailed(
+            f"leaving glass (eta = 1 / {GLASS}) beyond the critical angle "
+            f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
+            f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
+            f"eta > 1 has no solution: return 1 there)"
+        )
+    n = _unit(np.random.default_rng(34).normal(size=(len(degrees), 3)))  # (no row repeats n)
+    wo = np.concatenate(
+        [_directions(np.radians(d)[None], normal) for d, normal in zip(degrees, n, strict=True)]
+    )
     _call(refract, "refract", wo, n, eta, shape=wo.shape)
-    return (f"beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract "
-            f"returns no NaN")
+    return (
+        f"beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract returns no NaN"
+    )
 
 
 # -- the render ------------------------------------------------------------------------------
+
 
 def icosphere(subdivisions: int = 2) -> np.ndarray:
     """(20 * 4^subdivisions, 3, 3) triangles of a unit sphere, wound to face outward.
@@ -240,18 +287,53 @@ def icosphere(subdivisions: int = 2) -> np.ndarray:
     the sphere, ``subdivisions`` times (NumPy only: no trimesh needed).
     """
     g = (1 + math.sqrt(5)) / 2
-    vertices = np.array([[-1, g, 0], [1, g, 0], [-1, -g, 0], [1, -g, 0], [0, -1, g], [0, 1, g],
-                         [0, -1, -g], [0, 1, -g], [g, 0, -1], [g, 0, 1], [-g, 0, -1], [-g, 0, 1]])
-    faces = [[0, 11, 5], [0, 5, 1], [0, 1, 7], [0, 7, 10], [0, 10, 11], [1, 5, 9], [5, 11, 4],
-             [11, 10, 2], [10, 7, 6], [7, 1, 8], [3, 9, 4], [3, 4, 2], [3, 2, 6], [3, 6, 8],
-             [3, 8, 9], [4, 9, 5], [2, 4, 11], [6, 2, 10], [8, 6, 7], [9, 8, 1]]
+    vertices = np.array(
+        [
+            [-1, g, 0],
+            [1, g, 0],
+            [-1, -g, 0],
+            [1, -g, 0],
+            [0, -1, g],
+            [0, 1, g],
+            [0, -1, -g],
+            [0, 1, -g],
+            [g, 0, -1],
+            [g, 0, 1],
+            [-g, 0, -1],
+            [-g, 0, 1],
+        ]
+    )
+    faces = [
+        [0, 11, 5],
+        [0, 5, 1],
+        [0, 1, 7],
+        [0, 7, 10],
+        [0, 10, 11],
+        [1, 5, 9],
+        [5, 11, 4],
+        [11, 10, 2],
+        [10, 7, 6],
+        [7, 1, 8],
+        [3, 9, 4],
+        [3, 4, 2],
+        [3, 2, 6],
+        [3, 6, 8],
+        [3, 8, 9],
+        [4, 9, 5],
+        [2, 4, 11],
+        [6, 2, 10],
+        [8, 6, 7],
+        [9, 8, 1],
+    ]
     triangles = vertices[np.array(faces)] / np.linalg.norm(vertices[0])
     for _ in range(subdivisions):
         a, b, c = triangles[:, 0], triangles[:, 1], triangles[:, 2]
-        ab, bc, ca = ((p + q) / np.linalg.norm(p + q, axis=1, keepdims=True)
-                      for p, q in ((a, b), (b, c), (c, a)))
-        triangles = np.concatenate([np.stack(t, axis=1) for t in
-                                    ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+        ab, bc, ca = (
+            (p + q) / np.linalg.norm(p + q, axis=1, keepdims=True) for p, q in ((a, b), (b, c), (c, a))
+        )
+        triangles = np.concatenate(
+            [np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+        )
     normals = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
     inward = np.sum(normals * triangles.mean(axis=1), axis=1) < 0
     triangles[inward] = triangles[inward][:, ::-1]
@@ -268,13 +350,16 @@ def spheres_scene() -> Scene:
 
     cornell = ptlab.load_scene("cornell-box")
     meshes = builtin_scenes_dir() / "cornell-box" / "meshes"
-    parts = [(read_mesh_triangles(meshes / f"{name}.obj"), cornell.material_names.index(material))
-             for name, material in (("floor", "white"), ("left", "red"), ("right", "green"),
-                                    ("light", "light"))]
+    parts = [
+        (read_mesh_triangles(meshes / f"{name}.obj"), cornell.material_names.index(material))
+        for name, material in (("floor", "white"), ("left", "red"), ("right", "green"), ("light", "light"))
+    ]
     materials = list(cornell.materials) + [Mirror(), Dielectric(eta=GLASS)]
     sphere = icosphere(3)
-    parts += [(sphere * 100 + [380, 100, 370], len(materials) - 2),
-              (sphere * 90 + [180, 90, 170], len(materials) - 1)]
+    parts += [
+        (sphere * 100 + [380, 100, 370], len(materials) - 2),
+        (sphere * 90 + [180, 90, 170], len(materials) - 1),
+    ]
     triangles = np.concatenate([t for t, _ in parts])
     ids = np.concatenate([np.full(len(t), k) for t, k in parts])
     names = list(cornell.material_names) + ["mirror", "glass"]
@@ -289,8 +374,11 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
     import ptlab.materials.mirror as mirror
     from ptlab.exercises.plug import plugged
 
-    in_whitted = {name: f for name, f in (("reflect", reflect), ("refract", refract),
-                                          ("fresnel_dielectric", fresnel)) if f is not None}
+    in_whitted = {
+        name: f
+        for name, f in (("reflect", reflect), ("refract", refract), ("fresnel_dielectric", fresnel))
+        if f is not None
+    }
     in_mirror = {"reflect": reflect} if reflect is not None else {}
     options = dict(dict(spp=2, res=48, seed=3, workers=1), **options)
     with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
@@ -308,17 +396,20 @@ def check_render(module) -> str:
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
     if close.mean() < 0.98:
         ratio = image.mean() / expected.mean()
-        raise CheckFailed(f"the Whitted render of the Cornell box with a mirror and a glass sphere "
-                          f"differs from the library's in {(~close).sum()} of {close.size} pixels "
-                          f"(yours is {ratio:.3f}x as bright)")
+        raise CheckFailed(
+            f"the Whitted render of the Cornell box with a mirror and a glass sphere "
+            f"differs from the library's in {(~close).sum()} of {close.size} pixels "
+            f"(yours is {ratio:.3f}x as bright)"
+        )
     return f"the Whitted render with a mirror and a glass sphere matches ({close.mean():.1%} of pixels)"
 
 
 CHAPTER = Chapter(
-    number=3, slug="whitted", title="Whitted ray tracing: reflection, refraction, Fresnel",
+    number=3,
+    slug="whitted",
+    title="Whitted ray tracing: reflection, refraction, Fresnel",
     functions=("reflect", "refract", "fresnel"),
-    answers=("ptlab.scattering.reflect", "ptlab.scattering.refract",
-             "ptlab.scattering.fresnel_dielectric"),
+    answers=("ptlab.scattering.reflect", "ptlab.scattering.refract", "ptlab.scattering.fresnel_dielectric"),
     checks=(
         ChapterCheck("reflect", 2, check_reflect, timeout=20),
         ChapterCheck("refract", 2, check_refract, timeout=20),

@@ -15,7 +15,7 @@ import numpy as np
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
-FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))          # the square z = 1, 0 <= x, y <= 1
+FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))  # the square z = 1, 0 <= x, y <= 1
 
 
 def _slab(module, origins, dirs, box_min, box_max, tmin=0.0, tmax=np.inf):
@@ -29,7 +29,7 @@ def _slab(module, origins, dirs, box_min, box_max, tmin=0.0, tmax=np.inf):
         inv_dirs = (1 / dirs).astype(np.float32)
     box_min = np.broadcast_to(np.asarray(box_min, dtype=np.float32), (n, 3)).copy()
     box_max = np.broadcast_to(np.asarray(box_max, dtype=np.float32), (n, 3)).copy()
-    with np.errstate(all="ignore"):       # NaN and inf are judged below, not warned about
+    with np.errstate(all="ignore"):  # NaN and inf are judged below, not warned about
         result = slab_test(origins, inv_dirs, box_min, box_max, np.copy(tmin), np.copy(tmax))
     return _checked(result, n)
 
@@ -40,16 +40,21 @@ def _checked(result, n: int) -> tuple[np.ndarray, np.ndarray]:
         raise CheckFailed("slab_test must return two arrays: (hit, t_enter)")
     hit, t_enter = np.asarray(result[0]), np.asarray(result[1])
     if hit.shape != (n,) or t_enter.shape != (n,):
-        raise CheckFailed(f"expected hit and t_enter of shape ({n},), got {hit.shape} and "
-                          f"{t_enter.shape} (one answer per ray)")
+        raise CheckFailed(
+            f"expected hit and t_enter of shape ({n},), got {hit.shape} and "
+            f"{t_enter.shape} (one answer per ray)"
+        )
     if hit.dtype != bool:
-        raise CheckFailed(f"hit must be a bool array, not {hit.dtype} (a comparison such as "
-                          f"t_enter <= t_exit gives one)")
+        raise CheckFailed(
+            f"hit must be a bool array, not {hit.dtype} (a comparison such as t_enter <= t_exit gives one)"
+        )
     nan = np.flatnonzero(hit & np.isnan(t_enter))
     if len(nan):
-        raise CheckFailed(f"t_enter is NaN for {len(nan)} rays that hit, the first in row "
-                          f"{nan[0]} of {n}: 0 * inf somewhere (a ray parallel to a slab, "
-                          f"starting on its plane)?")
+        raise CheckFailed(
+            f"t_enter is NaN for {len(nan)} rays that hit, the first in row "
+            f"{nan[0]} of {n}: 0 * inf somewhere (a ray parallel to a slab, "
+            f"starting on its plane)?"
+        )
     return hit, t_enter
 
 
@@ -60,95 +65,145 @@ def _expect(module, cases, what: str, box=UNIT_BOX, **limits) -> int:
     for i, (o, d) in enumerate(zip(origins, dirs, strict=True)):
         if hit[i] != want_hit[i]:
             verdict = "hits" if want_hit[i] else "misses"
-            raise CheckFailed(f"{what}: the ray from {list(o)} along {list(d)} {verdict} the "
-                              f"box {[list(c) for c in box]}, yours says it "
-                              f"{'misses' if want_hit[i] else 'hits'}")
-        if want_hit[i] and want_t[i] is not None and not np.isclose(t_enter[i], want_t[i],
-                                                                  rtol=1e-5, atol=1e-6):
-            raise CheckFailed(f"{what}: the ray from {list(o)} along {list(d)} enters the box "
-                              f"at t = {want_t[i]}, yours says t_enter = {t_enter[i]:.6g}")
+            raise CheckFailed(
+                f"{what}: the ray from {list(o)} along {list(d)} {verdict} the "
+                f"box {[list(c) for c in box]}, yours says it "
+                f"{'misses' if want_hit[i] else 'hits'}"
+            )
+        if (
+            want_hit[i]
+            and want_t[i] is not None
+            and not np.isclose(t_enter[i], want_t[i], rtol=1e-5, atol=1e-6)
+        ):
+            raise CheckFailed(
+                f"{what}: the ray from {list(o)} along {list(d)} enters the box "
+                f"at t = {want_t[i]}, yours says t_enter = {t_enter[i]:.6g}"
+            )
     return len(cases)
 
 
 def check_entering(module) -> str:
-    n = _expect(module, [
-        ((-1, 0.5, 0.5), (2, 0, 0), True, 0.5),                # through the x = 0 face
-        ((0.5, -2, 0.5), (0, 1, 0), True, 2.0),                # the y = 0 face
-        ((0.5, 0.5, -4), (0, 0, 2), True, 2.0),                # the z = 0 face, t in |d|s
-        ((-1, -1, 0.5), (1, 1.5, 0), True, 1.0),               # slanted: x enters last
-        ((-0.5, 0.25, -1), (1, 0.25, 2), True, 0.5),           # slanted: x and z tie
-    ], "a ray entering the box")
+    n = _expect(
+        module,
+        [
+            ((-1, 0.5, 0.5), (2, 0, 0), True, 0.5),  # through the x = 0 face
+            ((0.5, -2, 0.5), (0, 1, 0), True, 2.0),  # the y = 0 face
+            ((0.5, 0.5, -4), (0, 0, 2), True, 2.0),  # the z = 0 face, t in |d|s
+            ((-1, -1, 0.5), (1, 1.5, 0), True, 1.0),  # slanted: x enters last
+            ((-0.5, 0.25, -1), (1, 0.25, 2), True, 0.5),  # slanted: x and z tie
+        ],
+        "a ray entering the box",
+    )
     return f"{n} rays enter the unit box where they should"
 
 
 def check_backwards(module) -> str:
-    n = _expect(module, [
-        ((2, 0.5, 0.5), (-1, 0, 0), True, 1.0),                # through x = 1, going -x
-        ((0.5, 3, 0.5), (0, -2, 0), True, 1.0),
-        ((0.5, 0.5, 1.5), (0, 0, -1), True, 0.5),
-        ((2, 2, 2), (-1, -1, -1), True, 1.0),                  # into the far corner
-        ((1.5, -0.5, 0.5), (-1, 1, 0), True, 0.5),
-    ], "a ray going down an axis")
-    return (f"{n} rays with negative direction components enter where they should (the "
-            f"near plane is box_max there)")
+    n = _expect(
+        module,
+        [
+            ((2, 0.5, 0.5), (-1, 0, 0), True, 1.0),  # through x = 1, going -x
+            ((0.5, 3, 0.5), (0, -2, 0), True, 1.0),
+            ((0.5, 0.5, 1.5), (0, 0, -1), True, 0.5),
+            ((2, 2, 2), (-1, -1, -1), True, 1.0),  # into the far corner
+            ((1.5, -0.5, 0.5), (-1, 1, 0), True, 0.5),
+        ],
+        "a ray going down an axis",
+    )
+    return (
+        f"{n} rays with negative direction components enter where they should (the "
+        f"near plane is box_max there)"
+    )
 
 
 def check_misses(module) -> str:
-    n = _expect(module, [
-        ((-1, 0.5, 0.5), (1, 1, 0), False, None),              # passes by the corner
-        ((-1, 2, 0.5), (1, 0.1, 0), False, None),              # above the box
-        ((-1, 0.5, 0.5), (-1, 0, 0), False, None),             # the box is behind
-        ((3, 0.5, 0.5), (1, 0, 0), False, None),               # behind, on the other side
-    ], "a ray missing the box")
-    n += _expect(module, [((-1, 0.5, 0.5), (1, 0, 0), False, None),   # enters at 1 > tmax
-                          ((-1, 0.5, 0.5), (1, 0, 0), True, 1.0)],
-                 "with tmax = [0.9, 1.5]", tmax=np.array([0.9, 1.5], np.float32))
-    n += _expect(module, [((-1, 0.5, 0.5), (1, 0, 0), False, None)],    # leaves at 2 < tmin
-                 "with tmin = 2.5", tmin=2.5)
+    n = _expect(
+        module,
+        [
+            ((-1, 0.5, 0.5), (1, 1, 0), False, None),  # passes by the corner
+            ((-1, 2, 0.5), (1, 0.1, 0), False, None),  # above the box
+            ((-1, 0.5, 0.5), (-1, 0, 0), False, None),  # the box is behind
+            ((3, 0.5, 0.5), (1, 0, 0), False, None),  # behind, on the other side
+        ],
+        "a ray missing the box",
+    )
+    n += _expect(
+        module,
+        [
+            ((-1, 0.5, 0.5), (1, 0, 0), False, None),  # enters at 1 > tmax
+            ((-1, 0.5, 0.5), (1, 0, 0), True, 1.0),
+        ],
+        "with tmax = [0.9, 1.5]",
+        tmax=np.array([0.9, 1.5], np.float32),
+    )
+    n += _expect(
+        module,
+        [((-1, 0.5, 0.5), (1, 0, 0), False, None)],  # leaves at 2 < tmin
+        "with tmin = 2.5",
+        tmin=2.5,
+    )
     return f"{n} rays miss or hit as [tmin, tmax] says, boxes behind the origin included"
 
 
 def check_inside(module) -> str:
-    n = _expect(module, [
-        ((0.5, 0.5, 0.5), (1, 1, 1), True, 0.0),
-        ((0.5, 0.5, 0.5), (0, 0, -1), True, 0.0),
-        ((0.1, 0.9, 0.2), (-1, 0, 0), True, 0.0),
-    ], "a ray starting inside the box (tmin = 0)")
-    n += _expect(module, [((-1, 0.5, 0.5), (1, 0, 0), True, 1.5),
-                          ((0.5, 0.5, 0.5), (0, 1, 0), True, 0.25)],
-                 "with tmin = [1.5, 0.25]", tmin=np.array([1.5, 0.25], np.float32))
+    n = _expect(
+        module,
+        [
+            ((0.5, 0.5, 0.5), (1, 1, 1), True, 0.0),
+            ((0.5, 0.5, 0.5), (0, 0, -1), True, 0.0),
+            ((0.1, 0.9, 0.2), (-1, 0, 0), True, 0.0),
+        ],
+        "a ray starting inside the box (tmin = 0)",
+    )
+    n += _expect(
+        module,
+        [((-1, 0.5, 0.5), (1, 0, 0), True, 1.5), ((0.5, 0.5, 0.5), (0, 1, 0), True, 0.25)],
+        "with tmin = [1.5, 0.25]",
+        tmin=np.array([1.5, 0.25], np.float32),
+    )
     return f"{n} rays that start inside (or whose tmin lies inside) enter at tmin"
 
 
 def check_parallel(module) -> str:
-    n = _expect(module, [
-        ((-1, 0.5, 0.5), (1, 0, 0), True, 1.0),                # inside the y and z slabs
-        ((-1, 2, 0.5), (1, 0, 0), False, None),                # outside the y slab
-        ((0.5, 0.5, -1), (0, 0, 1), True, 1.0),
-        ((0.5, -0.5, -1), (0, 0, 1), False, None),
-        ((0.5, 1.5, 0.5), (0, -1, 0), True, 0.5),
-    ], "a ray parallel to two slabs (inv_dirs = ±inf)")
-    n += _expect(module, [
-        ((-1, 1, 0.5), (1, 0, 0), True, 1.0),                  # on the y = 1 plane
-        ((-1, 0, 0), (1, 0, 0), True, 1.0),                    # along an edge
-        ((0.5, 0, 3), (0, 0, -1), True, 2.0),
-        ((-1, 0, 0.5), (1, -0.0, 0), True, 1.0),               # -0.0: inv_dirs = -inf
-    ], "a ray along a face of the box (its origin on a slab's plane: 0 * inf = NaN)")
+    n = _expect(
+        module,
+        [
+            ((-1, 0.5, 0.5), (1, 0, 0), True, 1.0),  # inside the y and z slabs
+            ((-1, 2, 0.5), (1, 0, 0), False, None),  # outside the y slab
+            ((0.5, 0.5, -1), (0, 0, 1), True, 1.0),
+            ((0.5, -0.5, -1), (0, 0, 1), False, None),
+            ((0.5, 1.5, 0.5), (0, -1, 0), True, 0.5),
+        ],
+        "a ray parallel to two slabs (inv_dirs = ±inf)",
+    )
+    n += _expect(
+        module,
+        [
+            ((-1, 1, 0.5), (1, 0, 0), True, 1.0),  # on the y = 1 plane
+            ((-1, 0, 0), (1, 0, 0), True, 1.0),  # along an edge
+            ((0.5, 0, 3), (0, 0, -1), True, 2.0),
+            ((-1, 0, 0.5), (1, -0.0, 0), True, 1.0),  # -0.0: inv_dirs = -inf
+        ],
+        "a ray along a face of the box (its origin on a slab's plane: 0 * inf = NaN)",
+    )
     return f"{n} rays parallel to slabs, on their planes included, are right"
 
 
 def check_flat(module) -> str:
-    n = _expect(module, [
-        ((0.5, 0.5, 0), (0, 0, 1), True, 1.0),                 # perpendicular
-        ((0.5, 0.5, 3), (0, 0, -2), True, 1.0),                # from the other side
-        ((0, 0, 0), (1, 1, 1), True, 1.0),                     # through a corner
-        ((0.2, -0.6, 0), (0.1, 1, 1), True, 1.0),              # slanted
-        ((2, 0.5, 0), (0, 0, 1), False, None),                 # beside it
-        ((0.5, 0.5, 2), (0, 0, 1), False, None),               # behind
-        ((-1, 0.5, 1), (1, 0, 0), True, 1.0),                  # in its plane
-    ], "a flat box (the square z = 1, 0 <= x, y <= 1)", box=FLAT_BOX)
-    return (f"{n} rays meet a box of zero thickness right: there t_enter == t_exit, and "
-            f"that is a hit")
+    n = _expect(
+        module,
+        [
+            ((0.5, 0.5, 0), (0, 0, 1), True, 1.0),  # perpendicular
+            ((0.5, 0.5, 3), (0, 0, -2), True, 1.0),  # from the other side
+            ((0, 0, 0), (1, 1, 1), True, 1.0),  # through a corner
+            ((0.2, -0.6, 0), (0.1, 1, 1), True, 1.0),  # slanted
+            ((2, 0.5, 0), (0, 0, 1), False, None),  # beside it
+            ((0.5, 0.5, 2), (0, 0, 1), False, None),  # behind
+            ((-1, 0.5, 1), (1, 0, 0), True, 1.0),  # in its plane
+        ],
+        "a flat box (the square z = 1, 0 <= x, y <= 1)",
+        box=FLAT_BOX,
+    )
+    return f"{n} rays meet a box of zero thickness right: there t_enter == t_exit, and that is a hit"
 
 
 def check_render(module) -> str:
@@ -163,12 +218,18 @@ def check_render(module) -> str:
         return _checked(result, len(origins))
 
     return check_render_through(
-        "your slab test", ptlab.accel.numpy_bvh, dict(slab_test=student_slab_test),
-        hint="boxes missed?", missing_hint="flat boxes around the axis-aligned walls missed?")
+        "your slab test",
+        ptlab.accel.numpy_bvh,
+        dict(slab_test=student_slab_test),
+        hint="boxes missed?",
+        missing_hint="flat boxes around the axis-aligned walls missed?",
+    )
 
 
 CHAPTER = Chapter(
-    number=4, slug="bounding_boxes", title="Bounding boxes: the slab test",
+    number=4,
+    slug="bounding_boxes",
+    title="Bounding boxes: the slab test",
     functions=("slab_test",),
     answers=("ptlab.accel.numpy_bvh.slab_test",),
     checks=(

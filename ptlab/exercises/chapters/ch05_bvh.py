@@ -31,6 +31,7 @@ PIECES = ("split_costs", "best_split", "child_order")
 
 # -- meshes and rays ------------------------------------------------------------------------
 
+
 def _quad(corner, edge1, edge2) -> np.ndarray:
     """(2, 3, 3) triangles of the parallelogram corner + a edge1 + b edge2."""
     c, e1, e2 = (np.asarray(a, dtype=np.float64) for a in (corner, edge1, edge2))
@@ -42,8 +43,16 @@ def _block(lo, hi) -> np.ndarray:
     lo, hi = np.asarray(lo, dtype=np.float64), np.asarray(hi, dtype=np.float64)
     size = hi - lo
     x, y, z = np.diag(size)
-    return np.concatenate([_quad(lo, y, x), _quad(lo, x, z), _quad(lo, z, y),
-                           _quad(hi, -x, -y), _quad(hi, -z, -x), _quad(hi, -y, -z)])
+    return np.concatenate(
+        [
+            _quad(lo, y, x),
+            _quad(lo, x, z),
+            _quad(lo, z, y),
+            _quad(hi, -x, -y),
+            _quad(hi, -z, -x),
+            _quad(hi, -y, -z),
+        ]
+    )
 
 
 def _ball(centre, radius: float, rings: int = 8, segments: int = 12) -> np.ndarray:
@@ -54,8 +63,9 @@ def _ball(centre, radius: float, rings: int = 8, segments: int = 12) -> np.ndarr
     p = np.stack([np.sin(theta) * np.cos(phi), np.cos(theta), np.sin(theta) * np.sin(phi)], -1)
     p = np.asarray(centre, dtype=np.float64) + radius * p
     a, b, c, d = p[:-1, :-1], p[:-1, 1:], p[1:, 1:], p[1:, :-1]
-    return np.concatenate([np.stack([a, b, c], -2).reshape(-1, 3, 3),
-                           np.stack([a, c, d], -2).reshape(-1, 3, 3)])
+    return np.concatenate(
+        [np.stack([a, b, c], -2).reshape(-1, 3, 3), np.stack([a, c, d], -2).reshape(-1, 3, 3)]
+    )
 
 
 def uneven_mesh() -> np.ndarray:
@@ -64,9 +74,15 @@ def uneven_mesh() -> np.ndarray:
     areas matter."""
     rng = np.random.default_rng(8)
     cloud = rng.uniform(380, 520, (400, 1, 3)) + rng.normal(scale=6, size=(400, 3, 3))
-    return np.concatenate([_block([0, 0, 0], [556, 556, 556]), _block([130, 0, 65], [295, 165, 230]),
-                           _block([265, 0, 295], [430, 330, 460]),
-                           _ball([110, 90, 440], 80, rings=10, segments=16), cloud])
+    return np.concatenate(
+        [
+            _block([0, 0, 0], [556, 556, 556]),
+            _block([130, 0, 65], [295, 165, 230]),
+            _block([265, 0, 295], [430, 330, 460]),
+            _ball([110, 90, 440], 80, rings=10, segments=16),
+            cloud,
+        ]
+    )
 
 
 def row_of_balls() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -84,8 +100,7 @@ def row_of_balls() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _random_rays(n: int) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3) float32 origins (most in the room, some outside) and random directions."""
     rng = np.random.default_rng(10)
-    origins = np.where(rng.random((n, 1)) < 0.8, rng.uniform(1, 555, (n, 3)),
-                       rng.uniform(-300, 856, (n, 3)))
+    origins = np.where(rng.random((n, 1)) < 0.8, rng.uniform(1, 555, (n, 3)), rng.uniform(-300, 856, (n, 3)))
     return origins.astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32)
 
 
@@ -117,12 +132,16 @@ def sah_cost(bvh, traversal_cost: float = 1.0) -> float:
 
 # -- the student's pieces, checked as the library calls them ---------------------------------
 
+
 def _pieces(module, *names: str) -> dict:
     """The student's functions ``names``, wrapped to fail clearly (and never hang the build)
     when they return something the BVH cannot use."""
     functions = dict(zip(names, require(module, *names), strict=True))
-    wrappers = {"split_costs": _checked_split_costs, "best_split": _checked_best_split,
-                "child_order": _checked_child_order}
+    wrappers = {
+        "split_costs": _checked_split_costs,
+        "best_split": _checked_best_split,
+        "child_order": _checked_child_order,
+    }
     return {name: wrappers[name](function) for name, function in functions.items()}
 
 
@@ -132,17 +151,23 @@ def _checked_split_costs(split_costs):
         left = np.cumsum(bin_count, axis=0)[:-1]
         empty = (left == 0) | (left == bin_count.sum(axis=0))
         with np.errstate(all="ignore"):
-            cost = np.asarray(split_costs(*copy.deepcopy((bin_count, bin_lo, bin_hi, node_lo,
-                                                          node_hi)), traversal_cost),
-                              dtype=np.float64)
+            cost = np.asarray(
+                split_costs(*copy.deepcopy((bin_count, bin_lo, bin_hi, node_lo, node_hi)), traversal_cost),
+                dtype=np.float64,
+            )
         if cost.shape != (b - 1, k, 3):
-            raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {(b - 1, k, 3)} costs "
-                              f"(one per split plane, node and axis), not {cost.shape}")
+            raise CheckFailed(
+                f"split_costs must return (B - 1, K, 3) = {(b - 1, k, 3)} costs "
+                f"(one per split plane, node and axis), not {cost.shape}"
+            )
         _require_no_nan(cost)
         if not np.isinf(cost[empty]).all():
-            raise CheckFailed("a split with no triangle on one side must cost inf: it does not "
-                              "divide the node (and the build could pick it forever)")
+            raise CheckFailed(
+                "a split with no triangle on one side must cost inf: it does not "
+                "divide the node (and the build could pick it forever)"
+            )
         return cost
+
     return checked
 
 
@@ -151,9 +176,11 @@ def _require_no_nan(cost: np.ndarray) -> None:
     nan = np.argwhere(np.isnan(cost))
     if len(nan):
         plane, node, axis = nan[0]
-        raise CheckFailed(f"split_costs returned NaN for {len(nan)} splits, the first plane "
-                          f"{plane} along {'xyz'[axis]} of node {node}: 0 * inf from the box of "
-                          f"an empty side (its bounds are inf, -inf)? Such splits must cost inf")
+        raise CheckFailed(
+            f"split_costs returned NaN for {len(nan)} splits, the first plane "
+            f"{plane} along {'xyz'[axis]} of node {node}: 0 * inf from the box of "
+            f"an empty side (its bounds are inf, -inf)? Such splits must cost inf"
+        )
 
 
 def _checked_best_split(best_split):
@@ -162,48 +189,61 @@ def _checked_best_split(best_split):
         must_split, single = size > max_leaf_size, size < 2
         result = best_split(cost.copy(), size.copy(), max_leaf_size)
         if not (isinstance(result, tuple) and len(result) == 3):
-            raise CheckFailed("best_split must return three arrays: (split_bin, split_axis, "
-                              "make_leaf)")
+            raise CheckFailed("best_split must return three arrays: (split_bin, split_axis, make_leaf)")
         split_bin, split_axis, make_leaf = (np.asarray(a) for a in result)
         if not split_bin.shape == split_axis.shape == make_leaf.shape == (k,):
-            raise CheckFailed(f"best_split must return three ({k},) arrays, one entry per node, "
-                              f"not {split_bin.shape}, {split_axis.shape}, {make_leaf.shape}")
+            raise CheckFailed(
+                f"best_split must return three ({k},) arrays, one entry per node, "
+                f"not {split_bin.shape}, {split_axis.shape}, {make_leaf.shape}"
+            )
         if split_bin.dtype.kind not in "iu" or split_axis.dtype.kind not in "iu":
             raise CheckFailed("split_bin and split_axis must be integer arrays")
         if make_leaf.dtype != bool:
             raise CheckFailed("make_leaf must be a bool array")
-        if not (np.all((split_bin >= 0) & (split_bin < planes))
-                and np.all((split_axis >= 0) & (split_axis < 3))):
+        if not (
+            np.all((split_bin >= 0) & (split_bin < planes)) and np.all((split_axis >= 0) & (split_axis < 3))
+        ):
             raise CheckFailed(f"split_bin must lie in 0..{planes - 1} and split_axis in 0..2")
         if np.any(make_leaf & must_split):
-            raise CheckFailed(f"a node of more than max_leaf_size = {max_leaf_size} triangles "
-                              f"was made a leaf: such nodes must be split")
+            raise CheckFailed(
+                f"a node of more than max_leaf_size = {max_leaf_size} triangles "
+                f"was made a leaf: such nodes must be split"
+            )
         if np.any(~make_leaf & single):
             raise CheckFailed("a node of one triangle must be a leaf: it cannot be split")
         return split_bin.astype(np.intp), split_axis.astype(np.intp), make_leaf
+
     return checked
 
 
 def _checked_child_order(child_order):
     def checked(first_child, axis, dirs):
-        first_child = first_child.copy()      # the grader's own, for the test below
+        first_child = first_child.copy()  # the grader's own, for the test below
         result = child_order(first_child.copy(), axis.copy(), dirs.copy())
         if not (isinstance(result, tuple) and len(result) == 2):
             raise CheckFailed("child_order must return two arrays: (near, far)")
         near, far = (np.asarray(a) for a in result)
         if near.shape != first_child.shape or far.shape != first_child.shape:
-            raise CheckFailed(f"child_order must return near and far of shape "
-                              f"{first_child.shape}, not {near.shape} and {far.shape}")
-        if not np.all(((near == first_child) & (far == first_child + 1))
-                      | ((near == first_child + 1) & (far == first_child))):
-            raise CheckFailed("near and far must be the node's two children, first_child and "
-                              "first_child + 1, one each: a child left out is a part of the "
-                              "scene no ray can hit")
+            raise CheckFailed(
+                f"child_order must return near and far of shape "
+                f"{first_child.shape}, not {near.shape} and {far.shape}"
+            )
+        if not np.all(
+            ((near == first_child) & (far == first_child + 1))
+            | ((near == first_child + 1) & (far == first_child))
+        ):
+            raise CheckFailed(
+                "near and far must be the node's two children, first_child and "
+                "first_child + 1, one each: a child left out is a part of the "
+                "scene no ray can hit"
+            )
         return near.astype(np.intp), far.astype(np.intp)
+
     return checked
 
 
 # -- unit checks --------------------------------------------------------------------------
+
 
 def _binned_example(seed: int, flat_node: bool = False):
     """Two nodes (9 and 12 triangles, given as boxes) binned into 5 bins per axis as
@@ -242,9 +282,9 @@ def _binned_example(seed: int, flat_node: bool = False):
     return count, bin_lo, bin_hi, node_lo, node_hi
 
 
-def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi,
-                    traversal_cost: float) -> np.ndarray:
+def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost: float) -> np.ndarray:
     """The SAH cost of every split, plane by plane with plain loops (pbrt-v4 7.3.2)."""
+
     def area(lo, hi):
         e = np.maximum(hi - lo, 0)
         return 2 * (e[0] * e[1] + e[1] * e[2] + e[2] * e[0])
@@ -266,8 +306,9 @@ def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi,
                 n_left, s_left = side(range(plane + 1), node, axis)
                 n_right, s_right = side(range(plane + 1, b), node, axis)
                 if n_left and n_right:
-                    cost[plane, node, axis] = traversal_cost + (
-                        n_left * s_left + n_right * s_right) / area(node_lo[node], node_hi[node])
+                    cost[plane, node, axis] = traversal_cost + (n_left * s_left + n_right * s_right) / area(
+                        node_lo[node], node_hi[node]
+                    )
     return cost
 
 
@@ -283,9 +324,11 @@ def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
             hint = " (traversal_cost left out?)"
         elif abs(ratio - 1) < 0.6:
             hint = " (are the sides' areas those of the union of their bins' boxes?)"
-        raise CheckFailed(f"{what}: plane {plane} along axis {'xyz'[axis]} of node {node} should "
-                          f"cost {want[plane, node, axis]:.4f}, yours {got[plane, node, axis]:.4f}"
-                          f"{hint}")
+        raise CheckFailed(
+            f"{what}: plane {plane} along axis {'xyz'[axis]} of node {node} should "
+            f"cost {want[plane, node, axis]:.4f}, yours {got[plane, node, axis]:.4f}"
+            f"{hint}"
+        )
 
 
 def check_split_costs(module) -> str:
@@ -302,51 +345,55 @@ def check_empty_sides(module) -> str:
     example = _binned_example(seed=2, flat_node=True)
     want = _expected_costs(*example, traversal_cost=1.0)
     with np.errstate(all="ignore"):
-        got = np.asarray(split_costs(*copy.deepcopy(example), traversal_cost=1.0),
-                         dtype=np.float64)
+        got = np.asarray(split_costs(*copy.deepcopy(example), traversal_cost=1.0), dtype=np.float64)
     if got.shape != want.shape:
-        raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {want.shape} costs, not "
-                          f"{got.shape}")
+        raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {want.shape} costs, not {got.shape}")
     for plane, node, axis in np.argwhere(np.isinf(want)):
         value = got[plane, node, axis]
         if value != np.inf:
-            raise CheckFailed(f"plane {plane} along {'xyz'[axis]} of node {node} has no triangle "
-                              f"on one side and must cost inf (it does not divide the node); "
-                              f"yours gives {value}"
-                              + (" (0 * inf: the empty side's box has bounds inf, -inf)"
-                                 if np.isnan(value) else ""))
+            raise CheckFailed(
+                f"plane {plane} along {'xyz'[axis]} of node {node} has no triangle "
+                f"on one side and must cost inf (it does not divide the node); "
+                f"yours gives {value}"
+                + (" (0 * inf: the empty side's box has bounds inf, -inf)" if np.isnan(value) else "")
+            )
     _compare_costs(got, want, "the splits that do divide the nodes")
-    return ("a flat node's splits along its flat axis, with an empty side, cost inf; the "
-            "others are right")
+    return "a flat node's splits along its flat axis, with an empty side, cost inf; the others are right"
 
 
 def check_best_split(module) -> str:
     best_split = _pieces(module, "best_split")["best_split"]
     cost = np.full((3, 5, 3), 50.0)
-    cost[2, 0, 1] = 7.5      # node 0: 10 triangles, must split, cheapest at plane 2 along y
+    cost[2, 0, 1] = 7.5  # node 0: 10 triangles, must split, cheapest at plane 2 along y
     cost[0, 0, 2] = 7.6
-    cost[1, 1, 0] = 3.5      # node 1: 3 triangles, cheapest split costs more than 3: a leaf
-    cost[0, 2, 2] = 2.0      # node 2: 3 triangles, splitting is cheaper: split
+    cost[1, 1, 0] = 3.5  # node 1: 3 triangles, cheapest split costs more than 3: a leaf
+    cost[0, 2, 2] = 2.0  # node 2: 3 triangles, splitting is cheaper: split
     cost[1, 2, 0] = 2.5
-    cost[:, 3] = np.inf      # node 3: 8 triangles, only one split divides it
+    cost[:, 3] = np.inf  # node 3: 8 triangles, only one split divides it
     cost[0, 3, 2] = 9.0
-    cost[:, 4] = np.inf      # node 4: 1 triangle, nothing divides it: a leaf
+    cost[:, 4] = np.inf  # node 4: 1 triangle, nothing divides it: a leaf
     size = np.array([10, 3, 3, 8, 1])
     split_bin, split_axis, make_leaf = best_split(cost, size, 4)
     want_leaf = [False, True, False, False, True]
     if list(make_leaf) != want_leaf:
         node = int(np.flatnonzero(make_leaf != want_leaf)[0])
-        rule = ("a node of at most max_leaf_size triangles becomes a leaf when its cheapest "
-                "split costs at least N, the cost of testing all N")
-        raise CheckFailed(f"node {node} ({size[node]} triangles, cheapest split "
-                          f"{cost[:, node].min()}) should {'' if want_leaf[node] else 'not '}be "
-                          f"a leaf: {rule}")
+        rule = (
+            "a node of at most max_leaf_size triangles becomes a leaf when its cheapest "
+            "split costs at least N, the cost of testing all N"
+        )
+        raise CheckFailed(
+            f"node {node} ({size[node]} triangles, cheapest split "
+            f"{cost[:, node].min()}) should {'' if want_leaf[node] else 'not '}be "
+            f"a leaf: {rule}"
+        )
     for node, want in [(0, (2, 1)), (2, (0, 2)), (3, (0, 2))]:
         if (split_bin[node], split_axis[node]) != want:
-            raise CheckFailed(f"node {node}: the cheapest split is plane {want[0]} along "
-                              f"{'xyz'[want[1]]}, yours is plane {split_bin[node]} along "
-                              f"{'xyz'[split_axis[node]] if 0 <= split_axis[node] < 3 else '?'} "
-                              f"(the minimum over planes and axes both)")
+            raise CheckFailed(
+                f"node {node}: the cheapest split is plane {want[0]} along "
+                f"{'xyz'[want[1]]}, yours is plane {split_bin[node]} along "
+                f"{'xyz'[split_axis[node]] if 0 <= split_axis[node] < 3 else '?'} "
+                f"(the minimum over planes and axes both)"
+            )
     return "the cheapest split over planes and axes, and leaves where splitting does not pay"
 
 
@@ -354,22 +401,36 @@ def check_child_order(module) -> str:
     child_order = _pieces(module, "child_order")["child_order"]
     first_child = np.array([1, 1, 3, 3, 5, 5, 7, 7])
     axis = np.array([0, 0, 1, 1, 2, 2, 0, 1])
-    dirs = np.array([[1, -1, -1], [-1, 1, 1], [-1, 2, -1], [1, -2, 1], [-1, -1, 0.5],
-                     [1, 1, -0.5], [0.2, -1, -1], [1, -0.3, 1]], dtype=np.float32)
+    dirs = np.array(
+        [
+            [1, -1, -1],
+            [-1, 1, 1],
+            [-1, 2, -1],
+            [1, -2, 1],
+            [-1, -1, 0.5],
+            [1, 1, -0.5],
+            [0.2, -1, -1],
+            [1, -0.3, 1],
+        ],
+        dtype=np.float32,
+    )
     want = first_child + (dirs[np.arange(8), axis] < 0)
     near, far = child_order(first_child, axis, dirs)
     wrong = np.flatnonzero(near != want)
     if wrong.size:
         i = wrong[0]
         going = "up" if dirs[i, axis[i]] > 0 else "down"
-        raise CheckFailed(f"a ray with direction {dirs[i].tolist()} goes {going} the split axis "
-                          f"{'xyz'[axis[i]]}, so it meets the {'low' if going == 'up' else 'high'} "
-                          f"child {want[i]} first; yours says {near[i]} (the sign of the "
-                          f"direction along the node's split axis decides)")
+        raise CheckFailed(
+            f"a ray with direction {dirs[i].tolist()} goes {going} the split axis "
+            f"{'xyz'[axis[i]]}, so it meets the {'low' if going == 'up' else 'high'} "
+            f"child {want[i]} first; yours says {near[i]} (the sign of the "
+            f"direction along the node's split axis decides)"
+        )
     return "the near child is the one on the side the ray comes from"
 
 
 # -- the pieces inside the BVH ------------------------------------------------------------
+
 
 def check_closest_hits(module) -> str:
     import ptlab.accel.numpy_bvh as numpy_bvh
@@ -390,21 +451,28 @@ def check_closest_hits(module) -> str:
         wrong = ~(np.abs(hits.t - t_want) <= 1e-5 * t_want) & (hits.t != t_want)
     if wrong.any():
         i = np.flatnonzero(wrong)[0]
-        what = ("misses" if not hits.hit[i] else
-                f"finds a farther hit, at t = {hits.t[i]:.4g}" if hits.t[i] > t_want[i] else
-                f"reports t = {hits.t[i]:.4g}")
-        raise CheckFailed(f"{wrong.sum()} of {len(dirs)} rays get another closest hit than brute "
-                          f"force: e.g. a ray that should hit at t = {t_want[i]:.4g} {what} "
-                          f"(is every child visited?)")
+        what = (
+            "misses"
+            if not hits.hit[i]
+            else f"finds a farther hit, at t = {hits.t[i]:.4g}"
+            if hits.t[i] > t_want[i]
+            else f"reports t = {hits.t[i]:.4g}"
+        )
+        raise CheckFailed(
+            f"{wrong.sum()} of {len(dirs)} rays get another closest hit than brute "
+            f"force: e.g. a ray that should hit at t = {t_want[i]:.4g} {what} "
+            f"(is every child visited?)"
+        )
     hit_t = t_all[np.arange(len(dirs)), np.where(hits.hit, hits.prim, 0)]
     if not np.array_equal(hit_t[hits.hit], hits.t[hits.hit]):
         raise CheckFailed("some rays report a triangle that their t does not belong to")
     want_occluded = (t_all < tmax[:, None]).any(axis=1)
     if not np.array_equal(occluded, want_occluded):
-        raise CheckFailed(f"{np.count_nonzero(occluded != want_occluded)} of {len(dirs)} shadow "
-                          f"rays get another answer than brute force")
-    return (f"{len(dirs)} rays get brute force's closest hit and shadow-ray answer "
-            f"({hits.hit.mean():.0%} hit)")
+        raise CheckFailed(
+            f"{np.count_nonzero(occluded != want_occluded)} of {len(dirs)} shadow "
+            f"rays get another answer than brute force"
+        )
+    return f"{len(dirs)} rays get brute force's closest hit and shadow-ray answer ({hits.hit.mean():.0%} hit)"
 
 
 def check_tree_quality(module) -> str:
@@ -420,18 +488,24 @@ def check_tree_quality(module) -> str:
         choice_bad = with_choice > library * (1 + SAH_TOLERANCE)
         causes = []
         if choice_bad or not costs_bad:
-            causes.append(f"With the library's split_costs, your best_split builds a tree of "
-                          f"{with_choice:.2f}: a node of at most max_leaf_size triangles becomes "
-                          f"a leaf only when its cheapest split costs at least N, and the "
-                          f"cheapest split is the minimum over planes and axes (see 'best "
-                          f"split')")
+            causes.append(
+                f"With the library's split_costs, your best_split builds a tree of "
+                f"{with_choice:.2f}: a node of at most max_leaf_size triangles becomes "
+                f"a leaf only when its cheapest split costs at least N, and the "
+                f"cheapest split is the minimum over planes and axes (see 'best "
+                f"split')"
+            )
         if costs_bad:
-            causes.append(f"With the library's best_split, your split_costs builds a tree of "
-                          f"{with_costs:.2f}: do the costs weigh each side's count by its "
-                          f"surface area? (a median split ignores the areas)")
-        raise CheckFailed(f"your tree's SAH cost is {student:.2f} expected triangle tests per "
-                          f"ray, the library's {library:.2f} ({student / library - 1:.0%} more): "
-                          f"it finds the right hits, more slowly. {'. '.join(causes)}")
+            causes.append(
+                f"With the library's best_split, your split_costs builds a tree of "
+                f"{with_costs:.2f}: do the costs weigh each side's count by its "
+                f"surface area? (a median split ignores the areas)"
+            )
+        raise CheckFailed(
+            f"your tree's SAH cost is {student:.2f} expected triangle tests per "
+            f"ray, the library's {library:.2f} ({student / library - 1:.0%} more): "
+            f"it finds the right hits, more slowly. {'. '.join(causes)}"
+        )
     return f"your tree's SAH cost is {student:.2f}, the library's {library:.2f}"
 
 
@@ -465,12 +539,16 @@ def check_traversal_order(module) -> str:
             bvh.intersect(origins, dirs)
     student = entered[0]
     if not student <= library * (1 + VISIT_TOLERANCE):
-        raise CheckFailed(f"rays along a row of eight balls enter {student / len(dirs):.0f} boxes "
-                          f"each with your child order, {library / len(dirs):.0f} with the "
-                          f"library's: visit the near child first, so its hit culls the far "
-                          f"child's boxes")
-    return (f"rays along a row of balls enter {student / len(dirs):.0f} boxes each (library: "
-            f"{library / len(dirs):.0f})")
+        raise CheckFailed(
+            f"rays along a row of eight balls enter {student / len(dirs):.0f} boxes "
+            f"each with your child order, {library / len(dirs):.0f} with the "
+            f"library's: visit the near child first, so its hit culls the far "
+            f"child's boxes"
+        )
+    return (
+        f"rays along a row of balls enter {student / len(dirs):.0f} boxes each (library: "
+        f"{library / len(dirs):.0f})"
+    )
 
 
 def check_render(module) -> str:
@@ -481,10 +559,15 @@ def check_render(module) -> str:
 
 
 CHAPTER = Chapter(
-    number=5, slug="bvh", title="The BVH: building with the SAH, and traversal",
+    number=5,
+    slug="bvh",
+    title="The BVH: building with the SAH, and traversal",
     functions=PIECES,
-    answers=("ptlab.accel.numpy_bvh.split_costs", "ptlab.accel.numpy_bvh.best_split",
-             "ptlab.accel.numpy_bvh.child_order"),
+    answers=(
+        "ptlab.accel.numpy_bvh.split_costs",
+        "ptlab.accel.numpy_bvh.best_split",
+        "ptlab.accel.numpy_bvh.child_order",
+    ),
     checks=(
         ChapterCheck("SAH costs", 2, check_split_costs, timeout=30),
         ChapterCheck("empty sides", 1, check_empty_sides, timeout=30),

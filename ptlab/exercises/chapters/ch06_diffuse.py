@@ -30,6 +30,7 @@ HARNESS_SAMPLES = 200_000
 
 # -- chapter 6 ------------------------------------------------------------------------------
 
+
 def _material(module, albedo=ALBEDO):
     (Lambertian,) = require(module, "Lambertian")  # noqa: N806 (a class)
     return Lambertian(albedo)
@@ -39,11 +40,12 @@ def probe(material) -> None:
     """Call ``eval``, ``pdf`` and ``sample`` once on a few directions, so that a method not
     written yet, one that raises, or one that returns the wrong shape, is reported as itself
     (once, with the shapes) before a long check starts."""
-    rows = 5                    # not 3: a (3, 3) result would hide rows and colours swapped
-    material = Turned(material, np.random.default_rng(60))     # (no row repeats n: see below)
+    rows = 5  # not 3: a (3, 3) result would hide rows and colours swapped
+    material = Turned(material, np.random.default_rng(60))  # (no row repeats n: see below)
     n = np.tile([0.0, 0.0, 1.0], (rows, 1))
-    wo = _unit(np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96], [-0.3, 0.4, 0.5], [0.1, 0.1, 1.0],
-                         [0.9, -0.2, 0.3]]))
+    wo = _unit(
+        np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96], [-0.3, 0.4, 0.5], [0.1, 0.1, 1.0], [0.9, -0.2, 0.3]])
+    )
     wi = wo[::-1]
     _call(material, "eval", wo, wi, n)
     _call(material, "pdf", wo, wi, n, width=None)
@@ -54,8 +56,9 @@ def _call(material, method: str, *arrays, width: int | None = 3) -> np.ndarray:
     """``material.<method>(*arrays)`` as float64, checked for shape and finiteness (the row
     of the first NaN is named). The method gets copies: the check's arrays stay its own."""
     rows = len(arrays[0])
-    return finite_array(getattr(material, method)(*(a.copy() for a in arrays)), method,
-                        (rows, width) if width else (rows,))
+    return finite_array(
+        getattr(material, method)(*(a.copy() for a in arrays)), method, (rows, width) if width else (rows,)
+    )
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -65,6 +68,7 @@ def _unit(v: np.ndarray) -> np.ndarray:
 def _frame(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
     """(N, 3) unit directions at angle theta from the unit normal(s) n ((3,) or (N, 3)), azimuth phi."""
     from ptlab.sampling import to_world
+
     local = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
     return np.asarray(to_world(local, np.broadcast_to(n, local.shape)))
 
@@ -87,23 +91,33 @@ def check_eval(module) -> str:
     ratio = f / expected
     if not np.allclose(f, expected, rtol=1e-4, atol=0):
         if np.allclose(ratio, math.pi, rtol=1e-3):
-            raise CheckFailed("eval returns the albedo; a Lambertian f_r is albedo / pi (else the "
-                              "surface reflects pi times more light than it receives)")
+            raise CheckFailed(
+                "eval returns the albedo; a Lambertian f_r is albedo / pi (else the "
+                "surface reflects pi times more light than it receives)"
+            )
         if np.allclose(ratio, cos_theta_i[:, None], rtol=1e-3):
-            raise CheckFailed("eval includes cos(theta_i); f_r is albedo / pi alone: the "
-                              "renderer multiplies by the cosine itself")
+            raise CheckFailed(
+                "eval includes cos(theta_i); f_r is albedo / pi alone: the "
+                "renderer multiplies by the cosine itself"
+            )
         if np.allclose(ratio, ratio[:1], rtol=1e-4):
-            raise CheckFailed(f"eval is a constant, but not albedo / pi: yours is "
-                              f"{np.round(f[0], 4)} for albedo {ALBEDO}, expected "
-                              f"{np.round(expected, 4)}")
-        raise CheckFailed(f"a Lambertian f_r is albedo / pi = {np.round(expected, 4)} for every "
-                          f"pair of directions above the surface; yours varies "
-                          f"(from {np.round(f.min(axis=0), 4)} to {np.round(f.max(axis=0), 4)})")
+            raise CheckFailed(
+                f"eval is a constant, but not albedo / pi: yours is "
+                f"{np.round(f[0], 4)} for albedo {ALBEDO}, expected "
+                f"{np.round(expected, 4)}"
+            )
+        raise CheckFailed(
+            f"a Lambertian f_r is albedo / pi = {np.round(expected, 4)} for every "
+            f"pair of directions above the surface; yours varies "
+            f"(from {np.round(f.min(axis=0), 4)} to {np.round(f.max(axis=0), 4)})"
+        )
     below_i = _call(material, "eval", wo, -wi, n)
     below_o = _call(material, "eval", -wo, wi, n)
     if np.abs(below_i).max() > 0:
-        raise CheckFailed("eval must be 0 when wi is below the surface (wi . n < 0): a "
-                          "reflective surface sends no light through itself")
+        raise CheckFailed(
+            "eval must be 0 when wi is below the surface (wi . n < 0): a "
+            "reflective surface sends no light through itself"
+        )
     if np.abs(below_o).max() > 0:
         raise CheckFailed("eval must be 0 when wo is below the surface (wo . n < 0)")
     return "f_r = albedo / pi above the surface, 0 below"
@@ -125,17 +139,23 @@ def check_sample(module) -> str:
         wi = _call(material, "sample", wo, n, u)
         length = np.linalg.norm(wi, axis=1)
         if np.abs(length - 1).max() > 1e-4:
-            raise CheckFailed(f"sample must return unit vectors; one has length "
-                              f"{length[np.argmax(np.abs(length - 1))]:.4f} (normalise it)")
+            raise CheckFailed(
+                f"sample must return unit vectors; one has length "
+                f"{length[np.argmax(np.abs(length - 1))]:.4f} (normalise it)"
+            )
         cos_theta = wi @ normal
         if (cos_theta < -1e-6).any():
             share = np.mean(cos_theta < 0)
-            raise CheckFailed(f"{share:.0%} of the directions sampled around n = "
-                              f"{np.round(normal, 3)} are below the surface (wi . n < 0): build "
-                              f"the local frame around n (ptlab.sampling.to_world), not around +z")
+            raise CheckFailed(
+                f"{share:.0%} of the directions sampled around n = "
+                f"{np.round(normal, 3)} are below the surface (wi . n < 0): build "
+                f"the local frame around n (ptlab.sampling.to_world), not around +z"
+            )
         if np.ptp(cos_theta) < 0.1 or np.ptp(wi, axis=0).max() < 0.1:
-            raise CheckFailed("sample returns (almost) the same direction for every u: it must "
-                              "turn the uniform numbers u into directions")
+            raise CheckFailed(
+                "sample returns (almost) the same direction for every u: it must "
+                "turn the uniform numbers u into directions"
+            )
     return f"unit directions in the normal's hemisphere, for {len(normals)} normals"
 
 
@@ -150,7 +170,7 @@ def _sphere_integral(function, n: np.ndarray, rows: int = 400, cols: int = 64) -
 
 
 def check_pdf_normalisation(module) -> str:
-    material = Turned(_material(module), np.random.default_rng(63))   # (see check_sample)
+    material = Turned(_material(module), np.random.default_rng(63))  # (see check_sample)
     n = _unit(np.array([0.3, -0.5, 0.8]))
     wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
     rows = 400 * 64
@@ -162,14 +182,18 @@ def check_pdf_normalisation(module) -> str:
     if abs(total - 1) > 2e-3:
         hint = ""
         if abs(total - 0.5) < 0.01:
-            hint = (" (off by 2: 1/(4 pi) is the uniform density of the whole sphere, the "
-                    "hemisphere's is 1/(2 pi); cos/(2 pi) is half the cosine density cos/pi)")
+            hint = (
+                " (off by 2: 1/(4 pi) is the uniform density of the whole sphere, the "
+                "hemisphere's is 1/(2 pi); cos/(2 pi) is half the cosine density cos/pi)"
+            )
         elif abs(total - 2) < 0.02:
             hint = " (2x too big: the hemisphere's uniform density is 1/(2 pi), not 1/pi)"
         elif abs(total - 1 / math.pi) < 0.01 or abs(total - math.pi) < 0.03:
             hint = " (a factor pi: the cosine density is cos(theta) / pi)"
-        raise CheckFailed(f"your pdf integrates to {total:.4f} over the sphere; a probability "
-                          f"density must integrate to 1{hint}")
+        raise CheckFailed(
+            f"your pdf integrates to {total:.4f} over the sphere; a probability "
+            f"density must integrate to 1{hint}"
+        )
     return f"the pdf integrates to {total:.4f} over the sphere, 0 below the surface"
 
 
@@ -182,20 +206,22 @@ def run_harness(material, seed: int, what: str, grade_command: str) -> str:
     probe(material)
     report = check_material(material, seed=seed, samples=HARNESS_SAMPLES)
     if report.passed:
-        return (f"every check of ptlab.grading.check_material passes{what} "
-                f"({HARNESS_SAMPLES:,} samples per wo)")
+        return (
+            f"every check of ptlab.grading.check_material passes{what} ({HARNESS_SAMPLES:,} samples per wo)"
+        )
     by_hint: dict[str, list[str]] = {}
     for c in report.checks:
         if not c.passed:
             by_hint.setdefault(c.hint or c.statistic, []).append(c.name)
     failures = "; ".join(f"{', '.join(names)}: {hint}" for hint, names in by_hint.items())
-    raise CheckFailed(f"the material harness failed {', '.join(report.failed)}{what}. {failures} "
-                      f"(see the whole table with: {grade_command})")
+    raise CheckFailed(
+        f"the material harness failed {', '.join(report.failed)}{what}. {failures} "
+        f"(see the whole table with: {grade_command})"
+    )
 
 
 def check_harness(module) -> str:
-    return run_harness(_material(module), 6, "",
-                       f"ptlab grade {student_file(module)}:Lambertian")
+    return run_harness(_material(module), 6, "", f"ptlab grade {student_file(module)}:Lambertian")
 
 
 #: The seed of the render check (scripts/render_false_alarm.py renders with others).
@@ -220,8 +246,7 @@ def render_passes(material_for: Callable | None = None, seed: int = RENDER_SEED)
 
     scene = ptlab.load_scene("cornell-box")
     if material_for is not None:
-        scene = replace_materials(
-            scene, lambda m: material_for(m.albedo) if isinstance(m, Diffuse) else None)
+        scene = replace_materials(scene, lambda m: material_for(m.albedo) if isinstance(m, Diffuse) else None)
     return pass_images(scene, **render_options(seed))
 
 
@@ -229,13 +254,19 @@ def check_render(module) -> str:
     probe(_material(module))
     library = render_passes()
     student = render_passes(lambda albedo: _material(module, albedo))
-    return compare_renders(student, library, "the Cornell box with your material",
-                           hint="brighter: each bounce carries too much light, from a pdf too "
-                                "small or an f_r too big; darker: too little")
+    return compare_renders(
+        student,
+        library,
+        "the Cornell box with your material",
+        hint="brighter: each bounce carries too much light, from a pdf too "
+        "small or an f_r too big; darker: too little",
+    )
 
 
 CHAPTER = Chapter(
-    number=6, slug="diffuse", title="Monte Carlo and the diffuse material",
+    number=6,
+    slug="diffuse",
+    title="Monte Carlo and the diffuse material",
     functions=("Lambertian.eval", "Lambertian.pdf", "Lambertian.sample"),
     answers=("ptlab.materials.Diffuse",),
     checks=(

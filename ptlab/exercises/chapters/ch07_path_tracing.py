@@ -44,6 +44,7 @@ ALBEDO, LE = 0.5, 0.3
 
 # -- scenes and hits --------------------------------------------------------------------------
 
+
 def furnace_scene(albedo: float = ALBEDO, emission: float = LE, half_turned_out: bool = False) -> Scene:
     """A closed sphere whose inner wall emits ``emission`` and reflects ``albedo`` everywhere.
 
@@ -74,14 +75,19 @@ def furnace_scene(albedo: float = ALBEDO, emission: float = LE, half_turned_out:
     from ptlab.materials import Diffuse
     from ptlab.scene import Scene
 
-    triangles = icosphere(4)[:, ::-1]     # wound inward: the front (emitting) faces look in
+    triangles = icosphere(4)[:, ::-1]  # wound inward: the front (emitting) faces look in
     if half_turned_out:
         out = triangles.mean(axis=1)[:, 0] > 0
         triangles[out] = triangles[out, ::-1]
     material = Diffuse(albedo=[albedo] * 3, emission=[emission] * 3)
     camera = Camera.look_at((0.1, -0.2, -0.3), (0.4, 0.1, 1.0), fov_y=100.0)
-    return Scene(triangles=triangles, material_ids=np.zeros(len(triangles), dtype=np.intp),
-                 materials=[material], camera=camera, name="furnace")
+    return Scene(
+        triangles=triangles,
+        material_ids=np.zeros(len(triangles), dtype=np.intp),
+        materials=[material],
+        camera=camera,
+        name="furnace",
+    )
 
 
 def first_hits(scene: Scene, count: int = 20_000, seed: int = 70) -> tuple[Accelerator, SurfaceHit]:
@@ -97,12 +103,22 @@ def first_hits(scene: Scene, count: int = 20_000, seed: int = 70) -> tuple[Accel
     accel = make_accelerator(scene.triangles)
     rng = np.random.default_rng(seed)
     size = 64
-    origins, dirs = generate_rays(scene.camera, size, size, rng.integers(0, size, count),
-                                  rng.integers(0, size, count),
-                                  rng.random((count, 2), dtype=np.float32))
-    paths = Paths(origins=origins, dirs=dirs, throughput=np.ones((count, 3), np.float32, order="F"),
-                  pixel=np.arange(count), sees_emission=np.ones(count, dtype=bool),
-                  sample=np.arange(count, dtype=np.uint64))
+    origins, dirs = generate_rays(
+        scene.camera,
+        size,
+        size,
+        rng.integers(0, size, count),
+        rng.integers(0, size, count),
+        rng.random((count, 2), dtype=np.float32),
+    )
+    paths = Paths(
+        origins=origins,
+        dirs=dirs,
+        throughput=np.ones((count, 3), np.float32, order="F"),
+        pixel=np.arange(count),
+        sees_emission=np.ones(count, dtype=bool),
+        sample=np.arange(count, dtype=np.uint64),
+    )
     hit = surface_hit(scene, paths, accel.intersect(origins, dirs))
     hit.pixel = np.arange(len(hit.prim))
     return accel, hit
@@ -110,13 +126,14 @@ def first_hits(scene: Scene, count: int = 20_000, seed: int = 70) -> tuple[Accel
 
 # -- the pieces -----------------------------------------------------------------------------
 
+
 def check_direct_light(module) -> str:
     import ptlab
     from ptlab.integrators.path import PathSettings
     from ptlab.integrators.path import direct_light as library_direct_light
 
     (direct_light,) = require(module, "direct_light")
-    scene = ptlab.load_scene("cornell-box")     # walls, boxes that cast shadows, a small light
+    scene = ptlab.load_scene("cornell-box")  # walls, boxes that cast shadows, a small light
     accel, hit = first_hits(scene)
     count = len(hit.prim)
     u = np.random.default_rng(71).random((count, 2), dtype=np.float32)
@@ -125,31 +142,41 @@ def check_direct_light(module) -> str:
     film = np.zeros((count, 3))
     rays = direct_light(film, scene, accel, hit, u.copy())
     if not isinstance(rays, int | np.integer) or not 0 <= rays <= count:
-        raise CheckFailed(f"direct_light must return the number of shadow rays it traced (an int "
-                          f"from 0 to {count}), not {rays!r}")
-    require_finite(film, "the light direct_light added", _at_path,
-                   hint="a division by a distance or pdf of 0? add_to_film drops such rows, "
-                        "but they should not arise")
+        raise CheckFailed(
+            f"direct_light must return the number of shadow rays it traced (an int "
+            f"from 0 to {count}), not {rays!r}"
+        )
+    require_finite(
+        film,
+        "the light direct_light added",
+        _at_path,
+        hint="a division by a distance or pdf of 0? add_to_film drops such rows, but they should not arise",
+    )
     if (film < 0).any():
-        raise CheckFailed("direct_light added negative light: clamp both cosines at 0 (a light "
-                          "behind the surface, or a surface behind the light, gives nothing)")
+        raise CheckFailed(
+            "direct_light added negative light: clamp both cosines at 0 (a light "
+            "behind the surface, or a surface behind the light, gives nothing)"
+        )
     lit = expected.max(axis=1) > 0
     dark = lit & (film.max(axis=1) == 0)
     if not dark.mean() <= 0.5 * lit.mean():
-        raise CheckFailed(f"{dark.sum()} of {lit.sum()} shading points that see the light got no "
-                          f"direct light: the shadow rays are blocked, most likely by the surface "
-                          f"they start on (shadow acne) or by the light itself; start them at "
-                          f"hit.p + hit.offset * hit.n, aim at light.points + light.offset * "
-                          f"light.normals, and stop at tmax = 1 - SHADOW_EPSILON")
+        raise CheckFailed(
+            f"{dark.sum()} of {lit.sum()} shading points that see the light got no "
+            f"direct light: the shadow rays are blocked, most likely by the surface "
+            f"they start on (shadow acne) or by the light itself; start them at "
+            f"hit.p + hit.offset * hit.n, aim at light.points + light.offset * "
+            f"light.normals, and stop at tmax = 1 - SHADOW_EPSILON"
+        )
     close = np.isclose(film, expected, rtol=2e-3, atol=1e-6).all(axis=1)
     if close.mean() < 0.99:
         ratio = film[lit].sum(axis=0) / expected[lit].sum(axis=0)
         hint = _ratio_hint(float(np.mean(ratio)))
-        raise CheckFailed(f"{(~close).sum()} of {len(close)} paths got other direct light than "
-                          f"the library's from the same light samples (yours is {np.mean(ratio):.3f}x "
-                          f"the library's in total{hint})")
-    return (f"{close.sum()} of {len(close)} paths get the library's direct light from the same "
-            f"light samples")
+        raise CheckFailed(
+            f"{(~close).sum()} of {len(close)} paths got other direct light than "
+            f"the library's from the same light samples (yours is {np.mean(ratio):.3f}x "
+            f"the library's in total{hint})"
+        )
+    return f"{close.sum()} of {len(close)} paths get the library's direct light from the same light samples"
 
 
 def _at_path(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
@@ -159,9 +186,12 @@ def _at_path(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
 
 def _ratio_hint(ratio: float) -> str:
     """A likely cause of a constant factor between the student's light and the library's."""
-    for factor, cause in [(math.pi, "f_r is albedo / pi: use the material's eval, not its albedo"),
-                          (1 / math.pi, "a stray 1 / pi"),
-                          (2.0, "a factor 2: the pdf?"), (0.5, "a factor 1/2: the pdf?")]:
+    for factor, cause in [
+        (math.pi, "f_r is albedo / pi: use the material's eval, not its albedo"),
+        (1 / math.pi, "a stray 1 / pi"),
+        (2.0, "a factor 2: the pdf?"),
+        (0.5, "a factor 1/2: the pdf?"),
+    ]:
         if abs(ratio / factor - 1) < 0.02:
             return f": {cause}"
     if ratio > 1.5:
@@ -177,9 +207,11 @@ def check_russian_roulette(module) -> str:
     (russian_roulette,) = require(module, "russian_roulette")
     _check_roulette_rule(russian_roulette)
     mean, error = _furnace_with_roulette(russian_roulette)
-    return (f"paths survive with probability p_rr, survivors' throughput / p_rr; with p_rr = 0.8 "
-            f"the furnace averages {mean:.4f} +- {error:.4f}, the radiance is "
-            f"{furnace_radiance()[1]}: unbiased")
+    return (
+        f"paths survive with probability p_rr, survivors' throughput / p_rr; with p_rr = 0.8 "
+        f"the furnace averages {mean:.4f} +- {error:.4f}, the radiance is "
+        f"{furnace_radiance()[1]}: unbiased"
+    )
 
 
 def _check_roulette_rule(russian_roulette) -> None:
@@ -193,29 +225,36 @@ def _check_roulette_rule(russian_roulette) -> None:
             raise CheckFailed("russian_roulette must return two arrays: (survive, throughput)")
         survive, new = np.asarray(result[0]), np.asarray(result[1], dtype=np.float64)
         if survive.shape != (count,) or survive.dtype != bool:
-            raise CheckFailed(f"survive must be an ({count},) bool array, not {survive.dtype} of "
-                              f"shape {survive.shape}")
+            raise CheckFailed(
+                f"survive must be an ({count},) bool array, not {survive.dtype} of shape {survive.shape}"
+            )
         if new.shape != (count, 3):
             raise CheckFailed(f"the throughput must keep its shape ({count}, 3), not {new.shape}")
         again = np.asarray(russian_roulette(throughput.copy(order="F"), p_rr, u.copy())[0])
         if not np.array_equal(again, survive):
-            raise CheckFailed("the same u gave other survivors: decide with the u you are given "
-                              "(survive = u < p_rr), not with random numbers of your own (the "
-                              "image must be the same for the same seed)")
+            raise CheckFailed(
+                "the same u gave other survivors: decide with the u you are given "
+                "(survive = u < p_rr), not with random numbers of your own (the "
+                "image must be the same for the same seed)"
+            )
         # Binomial: 6 standard deviations, a false alarm of 2e-9.
         spread = 6 * math.sqrt(p_rr * (1 - p_rr) / count)
         if not abs(survive.mean() - p_rr) <= spread:
-            raise CheckFailed(f"with p_rr = {p_rr}, {survive.mean():.1%} of the paths survived; "
-                              f"each path must go on with probability p_rr (u < p_rr)")
+            raise CheckFailed(
+                f"with p_rr = {p_rr}, {survive.mean():.1%} of the paths survived; "
+                f"each path must go on with probability p_rr (u < p_rr)"
+            )
         kept = new[survive]
         expected = throughput[survive].astype(np.float64) / p_rr
         if not np.allclose(kept, expected, rtol=1e-5):
             factor = float(np.median(kept / throughput[survive]))
-            hint = (" (you left it unchanged: the survivors must carry the light of the paths "
-                    "that stopped, or the image comes out too dark)" if abs(factor - 1) < 1e-4
-                    else f" (yours is multiplied by {factor:.3f})")
-            raise CheckFailed(f"a surviving path's throughput must be divided by p_rr = {p_rr}"
-                              f"{hint}")
+            hint = (
+                " (you left it unchanged: the survivors must carry the light of the paths "
+                "that stopped, or the image comes out too dark)"
+                if abs(factor - 1) < 1e-4
+                else f" (yours is multiplied by {factor:.3f})"
+            )
+            raise CheckFailed(f"a surviving path's throughput must be divided by p_rr = {p_rr}{hint}")
 
 
 def check_scatter(module) -> str:
@@ -224,7 +263,7 @@ def check_scatter(module) -> str:
     (scatter,) = require(module, "scatter")
     scene = furnace_scene(albedo=0.7)
     accel, hit = first_hits(scene, seed=73)
-    library_hit = first_hits(scene, seed=73)[1]      # the same hits, untouched by the student's code
+    library_hit = first_hits(scene, seed=73)[1]  # the same hits, untouched by the student's code
     rng = np.random.default_rng(74)
     u = rng.random((len(hit.prim), 2), dtype=np.float32)
     survive = rng.random(len(hit.prim)) < 0.8
@@ -234,37 +273,51 @@ def check_scatter(module) -> str:
     paths = _check_paths(scatter(scene, hit, u.copy(), survive.copy()), len(hit.prim))
     missing = np.setdiff1d(expected.pixel, paths.pixel)
     if len(missing):
-        raise CheckFailed(f"{len(missing)} surviving paths are missing from the next bounce; keep "
-                          f"every path that survived the roulette")
+        raise CheckFailed(
+            f"{len(missing)} surviving paths are missing from the next bounce; keep "
+            f"every path that survived the roulette"
+        )
     extra = np.setdiff1d(paths.pixel, expected.pixel)
     if len(extra) and (paths.throughput[np.isin(paths.pixel, extra)] > 0).any():
-        raise CheckFailed(f"{len(extra)} paths that lost the roulette (survive False) still go "
-                          f"on: drop them (keep the rows np.flatnonzero(survive))")
+        raise CheckFailed(
+            f"{len(extra)} paths that lost the roulette (survive False) still go "
+            f"on: drop them (keep the rows np.flatnonzero(survive))"
+        )
     order = np.argsort(paths.pixel)
     rows = order[np.isin(paths.pixel[order], expected.pixel)]
     dirs, throughput = paths.dirs[rows], paths.throughput[rows]
     origins = paths.origins[rows]
     if not np.allclose(dirs, expected.dirs, atol=1e-4):
-        raise CheckFailed("the new directions are not the material's samples: wi = "
-                          "shade(hit, 'sample', hit.wo, hit.n, u), with the u you are given")
+        raise CheckFailed(
+            "the new directions are not the material's samples: wi = "
+            "shade(hit, 'sample', hit.wo, hit.n, u), with the u you are given"
+        )
     if not np.allclose(throughput, expected.throughput, rtol=2e-3, atol=1e-6):
         ratio = float(np.median(throughput / expected.throughput))
         hint = _ratio_hint(ratio) if abs(ratio - 1) > 0.02 else ""
-        raise CheckFailed(f"the new throughput is not throughput * f_r * cos(theta_i) / pdf "
-                          f"(yours is {ratio:.3f}x the library's, median over paths{hint})")
+        raise CheckFailed(
+            f"the new throughput is not throughput * f_r * cos(theta_i) / pdf "
+            f"(yours is {ratio:.3f}x the library's, median over paths{hint})"
+        )
     if paths.sees_emission[rows].any():
-        raise CheckFailed("after a diffuse bounce sees_emission must be False (hit.delta): the "
-                          "light the next ray finds was already counted by direct_light, and "
-                          "counting its emission again is double counting (too bright)")
+        raise CheckFailed(
+            "after a diffuse bounce sees_emission must be False (hit.delta): the "
+            "light the next ray finds was already counted by direct_light, and "
+            "counting its emission again is double counting (too bright)"
+        )
     again = accel.intersect(origins, dirs).prim
     acne = np.mean(again == own)
     if not acne <= 1e-3:
-        raise CheckFailed(f"{acne:.1%} of the new rays hit the triangle they start on (self-"
-                          f"intersection, 'acne'): start them hit.offset off the surface, on the "
-                          f"side wi goes to (hit.p + side * hit.offset * hit.n)")
+        raise CheckFailed(
+            f"{acne:.1%} of the new rays hit the triangle they start on (self-"
+            f"intersection, 'acne'): start them hit.offset off the surface, on the "
+            f"side wi goes to (hit.p + side * hit.offset * hit.n)"
+        )
     _check_pdf_near_zero(scatter)
-    return (f"{len(rows)} surviving paths bounce like the library's (same wi, f_r cos / pdf, "
-            f"no self-intersection); a direction with pdf 0 ends its path, never NaN")
+    return (
+        f"{len(rows)} surviving paths bounce like the library's (same wi, f_r cos / pdf, "
+        f"no self-intersection); a direction with pdf 0 ends its path, never NaN"
+    )
 
 
 def _check_paths(paths, count: int):
@@ -272,8 +325,9 @@ def _check_paths(paths, count: int):
     fields = ("origins", "dirs", "throughput", "pixel", "sees_emission")
     missing = [name for name in fields if not hasattr(paths, name)]
     if missing:
-        raise CheckFailed(f"scatter must return a ptlab.integrators.path.Paths (missing "
-                          f"{', '.join(missing)})")
+        raise CheckFailed(
+            f"scatter must return a ptlab.integrators.path.Paths (missing {', '.join(missing)})"
+        )
     rows = len(paths.pixel)
     if rows > count:
         raise CheckFailed(f"scatter returned {rows} paths for {count} hits")
@@ -295,21 +349,25 @@ class _FlakyDiffuse:
 
     def eval(self, wo, wi, n):
         from ptlab.vectors import dot
+
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
         return np.outer(above * (0.7 / math.pi), np.ones(3)).astype(wi.dtype)
 
     def pdf(self, wo, wi, n):
         from ptlab.vectors import dot
+
         cos_theta = dot(wi, n)
         return np.where((dot(wo, n) > 0) & (cos_theta > 0), cos_theta / math.pi, 0).astype(wi.dtype)
 
     def sample(self, wo, n, u):
         from ptlab.sampling import cosine_hemisphere_around
+
         wi = cosine_hemisphere_around(n, u.astype(n.dtype))
         return np.where((u[:, 0] >= 0.75)[:, None], -n, wi)
 
     def sample_weight(self, wo, n, u, front=None):
         from ptlab.materials.base import Material
+
         return Material.sample_weight(self, wo, n, u)
 
 
@@ -318,24 +376,34 @@ def _check_pdf_near_zero(scatter) -> None:
 
     rng = np.random.default_rng(75)
     count = 4000
-    n = rng.normal(size=(count, 3))         # a normal of its own on every row, like hits
+    n = rng.normal(size=(count, 3))  # a normal of its own on every row, like hits
     n /= np.linalg.norm(n, axis=1, keepdims=True)
     wo = rng.normal(size=(count, 3))
-    wo *= np.sign(np.sum(wo * n, axis=1))[:, None]       # on n's side, not grazing:
+    wo *= np.sign(np.sum(wo * n, axis=1))[:, None]  # on n's side, not grazing:
     wo += 0.05 * n
-    n, wo = (np.asfortranarray((a / np.linalg.norm(a, axis=1, keepdims=True)).astype(np.float32))
-             for a in (n, wo))
+    n, wo = (
+        np.asfortranarray((a / np.linalg.norm(a, axis=1, keepdims=True)).astype(np.float32)) for a in (n, wo)
+    )
     p = np.asfortranarray(rng.random((count, 3), dtype=np.float32))
-    hit = SurfaceHit(prim=np.zeros(count, dtype=np.intp), p=p, n=n, wo=wo,
-                     front=np.ones(count, dtype=bool), offset=np.full(count, 1e-4, np.float32),
-                     throughput=np.ones((count, 3), np.float32, order="F"),
-                     pixel=np.arange(count), sees_emission=np.zeros(count, dtype=bool),
-                     sample=np.arange(count, dtype=np.uint64),
-                     materials=[(None, _FlakyDiffuse())], delta=np.zeros(count, dtype=bool),
-                     t=np.ones(count, np.float32), pdf=None)
+    hit = SurfaceHit(
+        prim=np.zeros(count, dtype=np.intp),
+        p=p,
+        n=n,
+        wo=wo,
+        front=np.ones(count, dtype=bool),
+        offset=np.full(count, 1e-4, np.float32),
+        throughput=np.ones((count, 3), np.float32, order="F"),
+        pixel=np.arange(count),
+        sees_emission=np.zeros(count, dtype=bool),
+        sample=np.arange(count, dtype=np.uint64),
+        materials=[(None, _FlakyDiffuse())],
+        delta=np.zeros(count, dtype=bool),
+        t=np.ones(count, np.float32),
+        pdf=None,
+    )
     u = rng.random((count, 2), dtype=np.float32)
     failed = u[:, 0] >= 0.75
-    with np.errstate(all="ignore"):     # the student's 0 / 0 is judged below, not warned about
+    with np.errstate(all="ignore"):  # the student's 0 / 0 is judged below, not warned about
         paths = scatter(furnace_scene(), hit, u.copy(), np.ones(count, dtype=bool))
     fields = ("origins", "dirs", "throughput", "pixel")
     if any(not hasattr(paths, name) for name in fields):
@@ -343,18 +411,20 @@ def _check_pdf_near_zero(scatter) -> None:
     throughput = np.asarray(paths.throughput, dtype=np.float64)
     bad = ~np.isfinite(throughput).all(axis=1)
     if bad.any():
-        raise CheckFailed(f"{bad.sum()} paths whose sampled direction has pdf 0 got a NaN or "
-                          f"infinite throughput (0 / 0): where the pdf is 0 (or tiny), the weight "
-                          f"f_r cos / pdf must be 0 and the path should end")
+        raise CheckFailed(
+            f"{bad.sum()} paths whose sampled direction has pdf 0 got a NaN or "
+            f"infinite throughput (0 / 0): where the pdf is 0 (or tiny), the weight "
+            f"f_r cos / pdf must be 0 and the path should end"
+        )
     going_on = np.isin(np.asarray(paths.pixel), np.flatnonzero(failed))
     if (throughput[going_on] > 0).any():
-        raise CheckFailed("paths whose sampled direction has pdf 0 go on with light: their "
-                          "weight must be 0")
+        raise CheckFailed("paths whose sampled direction has pdf 0 go on with light: their weight must be 0")
     if not (throughput[~going_on] > 0).all():
         raise CheckFailed("paths whose sampled direction has a proper pdf lost their light")
 
 
 # -- whole renders ------------------------------------------------------------------------
+
 
 def _student_loop(module):
     (trace_paths,) = require(module, "trace_paths")
@@ -367,8 +437,7 @@ def _loop(trace_paths=None) -> AbstractContextManager:
     import ptlab.rendering.jobs
     from ptlab.exercises.plug import plugged
 
-    return nullcontext() if trace_paths is None else plugged(ptlab.rendering.jobs,
-                                                            trace_paths=trace_paths)
+    return nullcontext() if trace_paths is None else plugged(ptlab.rendering.jobs, trace_paths=trace_paths)
 
 
 def _render(scene, trace_paths=None, **options) -> np.ndarray:
@@ -381,9 +450,11 @@ def _render(scene, trace_paths=None, **options) -> np.ndarray:
 
 
 #: What a black light misses, in the messages of ``check_light_not_black``.
-ADD_THE_EMISSION = ("A camera ray that hits a light adds its emission (the homework's castRay "
-                    "forgets it; in ptlab, add scene.emission of the hit triangle where "
-                    "hit.sees_emission, facing the ray: hit.front)")
+ADD_THE_EMISSION = (
+    "A camera ray that hits a light adds its emission (the homework's castRay "
+    "forgets it; in ptlab, add scene.emission of the hit triangle where "
+    "hit.sees_emission, facing the ray: hit.front)"
+)
 
 
 def check_light_not_black(module) -> str:
@@ -394,39 +465,51 @@ def check_light_not_black(module) -> str:
     furnace = _render(furnace_scene(), trace_paths, spp=1, res=8, max_depth=0, rr=0.8)
     require_finite(furnace, "with max_depth 0, your furnace image", at_pixel)
     if np.abs(furnace).max() == 0:
-        raise CheckFailed(f"the light is black: in the furnace every camera ray hits a wall "
-                          f"that glows Le = {LE}, yet with max_depth 0 (emission only) your image "
-                          f"is black. {ADD_THE_EMISSION}")
+        raise CheckFailed(
+            f"the light is black: in the furnace every camera ray hits a wall "
+            f"that glows Le = {LE}, yet with max_depth 0 (emission only) your image "
+            f"is black. {ADD_THE_EMISSION}"
+        )
     if not np.allclose(furnace, LE, rtol=1e-5):
-        raise CheckFailed(f"with max_depth 0 a path adds only the emission its camera ray sees: "
-                          f"the furnace must be Le = {LE} in every pixel, yours ranges from "
-                          f"{furnace.min():.4f} to {furnace.max():.4f} (stop at depth == max_depth "
-                          f"before direct light)")
+        raise CheckFailed(
+            f"with max_depth 0 a path adds only the emission its camera ray sees: "
+            f"the furnace must be Le = {LE} in every pixel, yours ranges from "
+            f"{furnace.min():.4f} to {furnace.max():.4f} (stop at depth == max_depth "
+            f"before direct light)"
+        )
     scene = ptlab.load_scene("cornell-box")
     light = scene.materials[scene.material_names.index("light")].emission
     options = dict(spp=4, res=64, seed=7, rr=0.8)
     expected = _render(scene, max_depth=0, **options)
     image = _render(scene, trace_paths, max_depth=0, **options)
     require_finite(image, "with max_depth 0, your Cornell box", at_pixel)
-    on_light = np.all(np.abs(expected - light) <= 1e-5 * light, axis=2)   # every sample saw Le
+    on_light = np.all(np.abs(expected - light) <= 1e-5 * light, axis=2)  # every sample saw Le
     sees = expected.max(axis=2) > 0
     seen = image[on_light]
     if np.abs(seen).max() == 0:
-        raise CheckFailed(f"the light is black: pixels that see only the light must show its Le "
-                          f"= {np.round(light, 2)}. {ADD_THE_EMISSION}")
+        raise CheckFailed(
+            f"the light is black: pixels that see only the light must show its Le "
+            f"= {np.round(light, 2)}. {ADD_THE_EMISSION}"
+        )
     if not np.allclose(image[sees], expected[sees], rtol=1e-4, atol=1e-4):
         ratio = float(np.median(seen / light, axis=0).mean())
-        raise CheckFailed(f"with max_depth 0 (emission only), pixels that see the light should "
-                          f"show Le = {np.round(light, 2)} (times the share of their samples "
-                          f"that hit it); yours are {ratio:.3f}x that")
+        raise CheckFailed(
+            f"with max_depth 0 (emission only), pixels that see the light should "
+            f"show Le = {np.round(light, 2)} (times the share of their samples "
+            f"that hit it); yours are {ratio:.3f}x that"
+        )
     full = _render(scene, trace_paths, **options)
     require_finite(full, "with all bounces, your Cornell box", at_pixel)
     if not (full[on_light] >= light * (1 - 1e-4)).all():
-        raise CheckFailed(f"with all bounces the pixels on the light fall below its Le = "
-                          f"{np.round(light, 2)}: the emission must be added once, whatever "
-                          f"max_depth is")
-    return (f"emission only, the furnace is Le everywhere and the {on_light.sum()} Cornell pixels "
-            f"that see only the light show its Le; with all bounces, no less")
+        raise CheckFailed(
+            f"with all bounces the pixels on the light fall below its Le = "
+            f"{np.round(light, 2)}: the emission must be added once, whatever "
+            f"max_depth is"
+        )
+    return (
+        f"emission only, the furnace is Le everywhere and the {on_light.sum()} Cornell pixels "
+        f"that see only the light show its Le; with all bounces, no less"
+    )
 
 
 def check_one_sided_lights(module) -> str:
@@ -438,21 +521,27 @@ def check_one_sided_lights(module) -> str:
     expected = _render(scene, **options)
     image = _render(scene, trace_paths, **options)
     require_finite(image, "with max_depth 0, your furnace image", at_pixel)
-    behind = expected.max(axis=2) == 0       # every sample of the pixel saw a back face
+    behind = expected.max(axis=2) == 0  # every sample of the pixel saw a back face
     in_front = np.all(expected == LE, axis=2)
     if np.abs(image[behind]).max(initial=0) > 0:
-        raise CheckFailed(f"{np.count_nonzero(image[behind].max(axis=1) > 0)} of {behind.sum()} "
-                          f"pixels that see emitting triangles from behind glow (up to "
-                          f"{image[behind].max():.3g}; they must be black): lights emit from "
-                          f"their front face only, so add the emission a camera ray sees only "
-                          f"where it hits the front face (hit.sees_emission & hit.front)")
+        raise CheckFailed(
+            f"{np.count_nonzero(image[behind].max(axis=1) > 0)} of {behind.sum()} "
+            f"pixels that see emitting triangles from behind glow (up to "
+            f"{image[behind].max():.3g}; they must be black): lights emit from "
+            f"their front face only, so add the emission a camera ray sees only "
+            f"where it hits the front face (hit.sees_emission & hit.front)"
+        )
     if not np.allclose(image, expected, rtol=1e-5, atol=1e-7):
         seen = float(image[in_front].mean()) if in_front.any() else 0.0
-        raise CheckFailed(f"with max_depth 0, pixels that see emitting triangles from the front "
-                          f"must show Le = {LE}, yours average {seen:.4g}"
-                          + (" (no emission at all: see 'light not black')" if seen == 0 else ""))
-    return (f"emission only, the {behind.sum()} pixels that see lights from behind are black and "
-            f"the {in_front.sum()} that see them from the front show Le")
+        raise CheckFailed(
+            f"with max_depth 0, pixels that see emitting triangles from the front "
+            f"must show Le = {LE}, yours average {seen:.4g}"
+            + (" (no emission at all: see 'light not black')" if seen == 0 else "")
+        )
+    return (
+        f"emission only, the {behind.sum()} pixels that see lights from behind are black and "
+        f"the {in_front.sum()} that see them from the front show Le"
+    )
 
 
 #: The furnace renders (``furnace_images``): 16 x 16, 8 independent passes of 8 samples
@@ -477,8 +566,10 @@ def furnace_radiance(max_depth: int | None = None) -> tuple[float, str]:
         value = LE / (1 - ALBEDO)
         return value, f"Le / (1 - a) = {value:.4f}"
     value = LE * (1 - ALBEDO ** (max_depth + 1)) / (1 - ALBEDO)
-    return value, (f"Le (1 + a + ... + a^{max_depth}) = {value:.4f} for paths of at most "
-                   f"{max_depth} bounces (Le / (1 - a) = {LE / (1 - ALBEDO):.4f} with no limit)")
+    return value, (
+        f"Le (1 + a + ... + a^{max_depth}) = {value:.4f} for paths of at most "
+        f"{max_depth} bounces (Le / (1 - a) = {LE / (1 - ALBEDO):.4f} with no limit)"
+    )
 
 
 #: The furnace test passes within FURNACE_T standard errors of the library's passes' mean,
@@ -490,8 +581,9 @@ FURNACE_T = 6.0
 FURNACE_FLOOR = 0.01
 
 
-def furnace_verdict(student: np.ndarray, library: np.ndarray, expected: tuple[float, str],
-                    what: str, trace_paths=None) -> tuple[float, float]:
+def furnace_verdict(
+    student: np.ndarray, library: np.ndarray, expected: tuple[float, str], what: str, trace_paths=None
+) -> tuple[float, float]:
     """(mean, standard error) of the student's furnace passes (``furnace_images``, red)
     if they agree with ``expected``, a ``furnace_radiance``, else a ``CheckFailed`` that
     says how they differ. The tolerance comes from the ``library``'s passes at the same
@@ -506,26 +598,35 @@ def furnace_verdict(student: np.ndarray, library: np.ndarray, expected: tuple[fl
     passes = len(means)
     mean = float(means.mean())
     standard_error = float(means.std(ddof=1) / math.sqrt(passes))
-    allowed = (FURNACE_T * math.sqrt(NOISE_RATIO) * float(library_means.std(ddof=1))
-               / math.sqrt(passes) + FURNACE_FLOOR * expected)
-    averages = (f"your furnace image averages {mean:.4f} +- {standard_error:.4f} (mean and "
-                f"standard error of {passes} independent passes), where the radiance "
-                f"everywhere is {formula}")
+    allowed = (
+        FURNACE_T * math.sqrt(NOISE_RATIO) * float(library_means.std(ddof=1)) / math.sqrt(passes)
+        + FURNACE_FLOOR * expected
+    )
+    averages = (
+        f"your furnace image averages {mean:.4f} +- {standard_error:.4f} (mean and "
+        f"standard error of {passes} independent passes), where the radiance "
+        f"everywhere is {formula}"
+    )
     noise = noise_verdict(regions_of(student)[..., 0], regions_of(library)[..., 0])
     if noise is not None:
         raise CheckFailed(f"{what}: {noise}; {averages}")
     if abs(mean - expected) <= allowed:
         return mean, standard_error
     if mean > expected:
-        hint = ("too bright: is emission added on every hit *and* by direct_light (double "
-                "counting)? After a diffuse bounce, only direct_light counts the light")
-    elif trace_paths is not None and np.abs(furnace_images(trace_paths, passes=2,
-                                                           max_depth=0)).max() == 0:
-        hint = ("too dark: with max_depth 0 your furnace is black, so the emission that camera "
-                "rays see is missing (the black light)")
+        hint = (
+            "too bright: is emission added on every hit *and* by direct_light (double "
+            "counting)? After a diffuse bounce, only direct_light counts the light"
+        )
+    elif trace_paths is not None and np.abs(furnace_images(trace_paths, passes=2, max_depth=0)).max() == 0:
+        hint = (
+            "too dark: with max_depth 0 your furnace is black, so the emission that camera "
+            "rays see is missing (the black light)"
+        )
     else:
-        hint = ("too dark: light is lost at some bounce (shadow rays blocked by the surface "
-                "they start on? the throughput?)")
+        hint = (
+            "too dark: light is lost at some bounce (shadow rays blocked by the surface "
+            "they start on? the throughput?)"
+        )
     raise CheckFailed(f"{what}: {averages}: {hint}")
 
 
@@ -540,8 +641,9 @@ def check_furnace(module) -> str:
     settings = dict(rr=1.0, max_depth=FURNACE_DEPTH)
     library = furnace_images(**settings)
     student = furnace_images(trace_paths, **settings)
-    mean, error = furnace_verdict(student, library, expected, f"without Russian roulette, at "
-                                  f"most {FURNACE_DEPTH} bounces", trace_paths)
+    mean, error = furnace_verdict(
+        student, library, expected, f"without Russian roulette, at most {FURNACE_DEPTH} bounces", trace_paths
+    )
     return f"your furnace averages {mean:.4f} +- {error:.4f}; the radiance is {expected[1]}"
 
 
@@ -552,7 +654,7 @@ def roulette_furnace_images(russian_roulette=None, seed: int = FURNACE_SEED) -> 
     import ptlab.integrators.path as path
     from ptlab.exercises.plug import plugged
 
-    def roulette(hit, depth, settings, u):     # the library's signature, the student's rule
+    def roulette(hit, depth, settings, u):  # the library's signature, the student's rule
         survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u)
         return np.asarray(survive, dtype=bool)
 
@@ -592,10 +694,14 @@ def check_cornell(module) -> str:
 
 
 CHAPTER = Chapter(
-    number=7, slug="path_tracing", title="Path tracing: the homework's castRay",
+    number=7,
+    slug="path_tracing",
+    title="Path tracing: the homework's castRay",
     functions=("direct_light", "russian_roulette", "scatter", "trace_paths"),
-    answers=tuple(f"ptlab.integrators.path.{name}" for name in (
-        "direct_light", "direct_light_all_kinds", "russian_roulette", "scatter", "trace_paths")),
+    answers=tuple(
+        f"ptlab.integrators.path.{name}"
+        for name in ("direct_light", "direct_light_all_kinds", "russian_roulette", "scatter", "trace_paths")
+    ),
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},
     checks=(

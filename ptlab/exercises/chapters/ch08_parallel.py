@@ -43,6 +43,7 @@ DOUBLED_SHARE = 0.005
 
 def _scene() -> Scene:
     from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
+
     return furnace_scene()
 
 
@@ -50,11 +51,19 @@ def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
     from ptlab.accel import resolve_backend
     from ptlab.integrators.path import PathSettings
     from ptlab.rendering.jobs import RenderSetup
-    return RenderSetup(scene=scene, backend=resolve_backend("auto"), width=RES[0],
-                       height=RES[1], seed=seed, settings=PathSettings())
+
+    return RenderSetup(
+        scene=scene,
+        backend=resolve_backend("auto"),
+        width=RES[0],
+        height=RES[1],
+        seed=seed,
+        settings=PathSettings(),
+    )
 
 
 # -- tiles -------------------------------------------------------------------------------------
+
 
 def check_tiles(module) -> str:
     (make_tiles,) = require(module, "make_tiles")
@@ -69,29 +78,38 @@ def check_tiles(module) -> str:
             if not all(hasattr(tile, name) for name in ("index", "x0", "y0", "x1", "y1")):
                 raise CheckFailed(f"{where}: tiles must be ptlab.rendering.jobs.Tile(index, x0, y0, x1, y1)")
             if tile.index != position:
-                raise CheckFailed(f"{where}: tile {position} of the list has index {tile.index}; "
-                                  f"number the tiles 0, 1, 2, ... in list order (a tile's index "
-                                  f"is its place in the list)")
+                raise CheckFailed(
+                    f"{where}: tile {position} of the list has index {tile.index}; "
+                    f"number the tiles 0, 1, 2, ... in list order (a tile's index "
+                    f"is its place in the list)"
+                )
             if not (0 <= tile.x0 < tile.x1 <= width and 0 <= tile.y0 < tile.y1 <= height):
-                raise CheckFailed(f"{where}: tile {tile.index} spans columns {tile.x0}..{tile.x1 - 1} "
-                                  f"and rows {tile.y0}..{tile.y1 - 1}, outside the {width} x "
-                                  f"{height} image or empty (x1 and y1 are one past the last "
-                                  f"pixel: clip them with min(x0 + size, width))")
+                raise CheckFailed(
+                    f"{where}: tile {tile.index} spans columns {tile.x0}..{tile.x1 - 1} "
+                    f"and rows {tile.y0}..{tile.y1 - 1}, outside the {width} x "
+                    f"{height} image or empty (x1 and y1 are one past the last "
+                    f"pixel: clip them with min(x0 + size, width))"
+                )
             if tile.x1 - tile.x0 > size or tile.y1 - tile.y0 > size:
                 raise CheckFailed(f"{where}: tile {tile.index} is larger than {size} x {size}")
-            covered[tile.y0:tile.y1, tile.x0:tile.x1] += 1
+            covered[tile.y0 : tile.y1, tile.x0 : tile.x1] += 1
         if (covered == 0).any():
             y, x = np.argwhere(covered == 0)[0]
-            raise CheckFailed(f"{where}: pixel (x={x}, y={y}) is in no tile (the last, smaller "
-                              f"tiles at the right and bottom edges?)")
+            raise CheckFailed(
+                f"{where}: pixel (x={x}, y={y}) is in no tile (the last, smaller "
+                f"tiles at the right and bottom edges?)"
+            )
         if (covered > 1).any():
             y, x = np.argwhere(covered > 1)[0]
-            raise CheckFailed(f"{where}: pixel (x={x}, y={y}) is in {covered[y, x]} tiles: it "
-                              f"would be rendered, and added to the image, more than once")
+            raise CheckFailed(
+                f"{where}: pixel (x={x}, y={y}) is in {covered[y, x]} tiles: it "
+                f"would be rendered, and added to the image, more than once"
+            )
     return f"every pixel in exactly one tile, for {len(cases)} image and tile sizes"
 
 
 # -- one tile's job ---------------------------------------------------------------------------
+
 
 def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
     result = render_tile(setup, tile, spp)
@@ -100,16 +118,20 @@ def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
     sums, pid = np.asarray(result[0]), result[1]
     height, width = tile.y1 - tile.y0, tile.x1 - tile.x0
     if sums.shape != (height, width, 3):
-        raise CheckFailed(f"render_tile must return the tile's sums as a ({height}, {width}, 3) "
-                          f"array (rows, columns, colour), not {sums.shape}")
+        raise CheckFailed(
+            f"render_tile must return the tile's sums as a ({height}, {width}, 3) "
+            f"array (rows, columns, colour), not {sums.shape}"
+        )
     return sums, pid
 
 
 def at_pixel_of(tile):
     """``finite.at_pixel`` for the sums of ``tile``: the pixel named in the whole image."""
+
     def where(index, shape) -> str:
         y, x, channel = index
         return at_pixel((tile.y0 + y, tile.x0 + x, channel), shape)
+
     return where
 
 
@@ -119,38 +141,48 @@ def check_tile_job(module) -> str:
 
     (render_tile,) = require(module, "render_tile")
     first, second = Tile(5, 16, 16, 32, 32), Tile(8, 32, 32, 48, 40)
-    library = _setup(_scene())        # the grader's own: the student's setup is another
-    expected = run_job(library, Job(first, 0, 4),
-                       make_accelerator(library.scene.triangles, library.backend)).sums
+    library = _setup(_scene())  # the grader's own: the student's setup is another
+    expected = run_job(
+        library, Job(first, 0, 4), make_accelerator(library.scene.triangles, library.backend)
+    ).sums
     setup = _setup(_scene())
     sums, pid = _tile_result(render_tile, setup, first, 4)
     require_finite(sums, "the tile's sums", at_pixel_of(first))
     here = submission_of(module).pid
     if pid != here:
-        raise CheckFailed(f"render_tile must return the pid of the process that ran it "
-                          f"(os.getpid()); it returned {pid!r}, this process is {here}")
+        raise CheckFailed(
+            f"render_tile must return the pid of the process that ran it "
+            f"(os.getpid()); it returned {pid!r}, this process is {here}"
+        )
     _tile_result(render_tile, setup, second, 4)
     again, _ = _tile_result(render_tile, setup, first, 4)
     if not np.array_equal(again, sums):
-        raise CheckFailed("the same tile rendered again, after another tile in the same "
-                          "process, gives other sums: its random numbers depend on what the "
-                          "process did before (one generator per process, or a global one?). "
-                          "Take every random number from setup.sampler, by the paths' keys "
-                          "sampler.keys(pixel ids, sample indices)")
+        raise CheckFailed(
+            "the same tile rendered again, after another tile in the same "
+            "process, gives other sums: its random numbers depend on what the "
+            "process did before (one generator per process, or a global one?). "
+            "Take every random number from setup.sampler, by the paths' keys "
+            "sampler.keys(pixel ids, sample indices)"
+        )
     if not np.array_equal(sums, expected):
         if np.abs(sums).max() == 0:
-            raise CheckFailed("the tile's sums are empty: return the film the tile's paths "
-                              "were traced into, reshaped to (h, w, 3)")
-        raise CheckFailed("the tile's sums are not the library's: a tile's job takes every "
-                          "random number from setup.sampler: keys = sampler.keys(pixel_y * "
-                          "setup.width + pixel_x, sample index) for paths in sample-major order, "
-                          "the camera jitter sampler.get(keys, BounceUniforms.PIXEL, 2), then "
-                          "trace_paths with the same sampler (as ptlab.rendering.jobs.run_job "
-                          "does)")
+            raise CheckFailed(
+                "the tile's sums are empty: return the film the tile's paths "
+                "were traced into, reshaped to (h, w, 3)"
+            )
+        raise CheckFailed(
+            "the tile's sums are not the library's: a tile's job takes every "
+            "random number from setup.sampler: keys = sampler.keys(pixel_y * "
+            "setup.width + pixel_x, sample index) for paths in sample-major order, "
+            "the camera jitter sampler.get(keys, BounceUniforms.PIXEL, 2), then "
+            "trace_paths with the same sampler (as ptlab.rendering.jobs.run_job "
+            "does)"
+        )
     return "a tile's sums are the library's, and the same whatever the process rendered before"
 
 
 # -- the pool -----------------------------------------------------------------------------------
+
 
 def importable(module: ModuleType) -> ModuleType:
     """The student's module again, imported under its file's name from its folder.
@@ -162,8 +194,10 @@ def importable(module: ModuleType) -> ModuleType:
     imported = submission_of(module).import_by_file_name()
     if isinstance(imported, str):
         name = submission_of(module).path.stem
-        raise CheckFailed(f"another module is called {name!r} too ({imported}): rename your "
-                          f"file, e.g. to 08_parallel.py, so that worker processes import yours")
+        raise CheckFailed(
+            f"another module is called {name!r} too ({imported}): rename your "
+            f"file, e.g. to 08_parallel.py, so that worker processes import yours"
+        )
     return imported
 
 
@@ -172,19 +206,22 @@ def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
     try:
         result = render_parallel(_scene(), spp, RES, seed=SEED, workers=workers, tile_size=TILE)
     finally:
-        submission_of(module).end_started_processes()     # workers left behind
+        submission_of(module).end_started_processes()  # workers left behind
     if not (isinstance(result, tuple) and len(result) == 2):
         raise CheckFailed("render_parallel must return two things: (image, pids)")
     image, pids = np.asarray(result[0]), set(result[1])
     if image.shape != (RES[1], RES[0], 3):
-        raise CheckFailed(f"the image must have shape (height, width, 3) = ({RES[1]}, {RES[0]}, "
-                          f"3), not {image.shape}")
+        raise CheckFailed(
+            f"the image must have shape (height, width, 3) = ({RES[1]}, {RES[0]}, 3), not {image.shape}"
+        )
     require_finite(image, "the image", at_pixel)
     if np.abs(image).max() == 0:
-        raise CheckFailed("the image is black: the tiles' sums never reached it. Each worker "
-                          "has its own copy of anything you pass it, so writing into an "
-                          "image there changes nothing here: return each tile's sums and add "
-                          "them into the image in the main process")
+        raise CheckFailed(
+            "the image is black: the tiles' sums never reached it. Each worker "
+            "has its own copy of anything you pass it, so writing into an "
+            "image there changes nothing here: return each tile's sums and add "
+            "them into the image in the main process"
+        )
     return image, pids
 
 
@@ -203,12 +240,17 @@ def check_parallel(module) -> str:
         if len(workers) >= 2:
             break
     if len(workers) < 2:
-        where = ("in this process only (threads, or no pool at all? threads share one "
-                 "process, where Python runs one of them at a time)" if not workers
-                 else f"in one process only (pid {min(workers)})")
-        raise CheckFailed(f"with workers=2 every tile was rendered {where}: submit each tile's "
-                          f"job to a pool of 2 processes (concurrent.futures.ProcessPoolExecutor "
-                          f"or multiprocessing.Pool) and collect what each job returns")
+        where = (
+            "in this process only (threads, or no pool at all? threads share one "
+            "process, where Python runs one of them at a time)"
+            if not workers
+            else f"in one process only (pid {min(workers)})"
+        )
+        raise CheckFailed(
+            f"with workers=2 every tile was rendered {where}: submit each tile's "
+            f"job to a pool of 2 processes (concurrent.futures.ProcessPoolExecutor "
+            f"or multiprocessing.Pool) and collect what each job returns"
+        )
     return f"the tiles were rendered by {len(workers)} worker processes"
 
 
@@ -218,26 +260,31 @@ def check_worker_count(module) -> str:
     one, _ = _render(module, workers=1)
     if not np.array_equal(one, two):
         differ = np.any(one != two, axis=2)
-        raise CheckFailed(f"the image with 2 workers differs from the one with 1 worker in "
-                          f"{differ.sum()} of {differ.size} pixels: the random numbers depend on "
-                          f"which process renders which tile, or in which order. Take them from "
-                          f"setup.sampler, by pixel and sample: never a generator (or sampler) "
-                          f"made per worker, and none shared between jobs")
+        raise CheckFailed(
+            f"the image with 2 workers differs from the one with 1 worker in "
+            f"{differ.sum()} of {differ.size} pixels: the random numbers depend on "
+            f"which process renders which tile, or in which order. Take them from "
+            f"setup.sampler, by pixel and sample: never a generator (or sampler) "
+            f"made per worker, and none shared between jobs"
+        )
     return "the image is the same, bit for bit, with 1 and 2 workers"
 
 
 def check_library(module) -> str:
     from ptlab.rendering import render_result
 
-    expected = render_result(_scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE,
-                             spp_per_pass=SPP).image
+    expected = render_result(
+        _scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE, spp_per_pass=SPP
+    ).image
     image, _ = _render(importable(module), workers=2)
     empty = image.max(axis=2) == 0
     if empty.any():
         y, x = np.argwhere(empty)[0]
-        raise CheckFailed(f"{empty.sum()} pixels are black, e.g. (x={x}, y={y}): some tiles "
-                          f"were never rendered or added (the last, smaller tiles at the right "
-                          f"and bottom edges?)")
+        raise CheckFailed(
+            f"{empty.sum()} pixels are black, e.g. (x={x}, y={y}): some tiles "
+            f"were never rendered or added (the last, smaller tiles at the right "
+            f"and bottom edges?)"
+        )
     if not np.array_equal(image, expected):
         ratio = float(image.mean() / expected.mean())
         differ = np.any(image != expected, axis=2)
@@ -248,29 +295,41 @@ def check_library(module) -> str:
         share = float(doubled.mean())
         if share > DOUBLED_SHARE and 0.5 * share < ratio - 1 < 1.5 * share:
             y, x = np.argwhere(doubled)[0]
-            hint = (f"{doubled.sum()} pixels, e.g. (x={x}, y={y}), are about twice as bright as "
-                    f"the library's: they were rendered and added twice, by tiles that overlap "
-                    f"(x1 and y1 are one past a tile's last pixel; see 'tiles')")
+            hint = (
+                f"{doubled.sum()} pixels, e.g. (x={x}, y={y}), are about twice as bright as "
+                f"the library's: they were rendered and added twice, by tiles that overlap "
+                f"(x1 and y1 are one past a tile's last pixel; see 'tiles')"
+            )
         elif abs(ratio - 1) > 0.05:
             hint = "divide the sums by spp once, at the end"
         else:
-            hint = ("the same seed must give the library's random numbers: setup.sampler's, "
-                    "keyed by each path's pixel in the whole image and its sample index, and "
-                    "float64 sums divided by spp, then float32")
-        raise CheckFailed(f"your image differs from the library's (same seed, tile size {TILE}, "
-                          f"one pass) in {differ.sum()} of {differ.size} pixels and is "
-                          f"{ratio:.3f}x as bright: {hint}")
+            hint = (
+                "the same seed must give the library's random numbers: setup.sampler's, "
+                "keyed by each path's pixel in the whole image and its sample index, and "
+                "float64 sums divided by spp, then float32"
+            )
+        raise CheckFailed(
+            f"your image differs from the library's (same seed, tile size {TILE}, "
+            f"one pass) in {differ.sum()} of {differ.size} pixels and is "
+            f"{ratio:.3f}x as bright: {hint}"
+        )
     return f"the image is the library's, bit for bit (seed {SEED}, {TILE} x {TILE} tiles)"
 
 
 CHAPTER = Chapter(
-    number=8, slug="parallel", title="Parallel rendering over tiles",
+    number=8,
+    slug="parallel",
+    title="Parallel rendering over tiles",
     functions=("make_tiles", "render_tile", "render_parallel"),
     # The workers may be new interpreters (forkserver, as ptlab's own are), so this chapter's
     # code may start programs (docs/grading-security.md says what that leaves open).
-    answers=("ptlab.rendering.jobs.make_tiles", "ptlab.rendering.jobs.run_job",
-             "ptlab.rendering.jobs.run_job_in_worker", "ptlab.rendering.api.render",
-             "ptlab.rendering.api.render_result"),
+    answers=(
+        "ptlab.rendering.jobs.make_tiles",
+        "ptlab.rendering.jobs.run_job",
+        "ptlab.rendering.jobs.run_job_in_worker",
+        "ptlab.rendering.api.render",
+        "ptlab.rendering.api.render_result",
+    ),
     programs=True,
     checks=(
         ChapterCheck("tiles", 2, check_tiles, timeout=20),

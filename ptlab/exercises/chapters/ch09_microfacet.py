@@ -49,13 +49,17 @@ def check_d(module) -> str:
                 hint = " (alpha where alpha^2 belongs?)"
             elif math.isclose(at_normal, 1 / (alpha * alpha), rel_tol=1e-3):
                 hint = " (the pi in the denominator is missing)"
-            raise CheckFailed(f"D(cos_theta_h = 1, alpha = {alpha}) should be 1 / (pi alpha^2) "
-                              f"= {expected:.5g}, yours is {at_normal:.5g}{hint}")
+            raise CheckFailed(
+                f"D(cos_theta_h = 1, alpha = {alpha}) should be 1 / (pi alpha^2) "
+                f"= {expected:.5g}, yours is {at_normal:.5g}{hint}"
+            )
         total = float(np.trapezoid(_values(D, mu, alpha, shape=mu.shape) * mu * 2 * math.pi, x))
         if abs(total - 1) > 1e-3:
-            raise CheckFailed(f"with alpha = {alpha} the integral of D(h) cos(theta_h) over the "
-                              f"hemisphere is {total:.4f}, not 1: D is not normalised (compare "
-                              f"your formula with alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2))")
+            raise CheckFailed(
+                f"with alpha = {alpha} the integral of D(h) cos(theta_h) over the "
+                f"hemisphere is {total:.4f}, not 1: D is not normalised (compare "
+                f"your formula with alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2))"
+            )
     return f"D is normalised and D(n) = 1 / (pi alpha^2) for alpha = {', '.join(map(str, ALPHAS))}"
 
 
@@ -68,17 +72,23 @@ def check_g(module) -> str:
         expected = library.G1(cos_theta, alpha)
         g1 = _values(G1, cos_theta, alpha, shape=cos_theta.shape)
         if not math.isclose(g1[0], 1.0, rel_tol=1e-6):
-            raise CheckFailed(f"G1 at normal incidence (cos_theta = 1) must be 1 (no facet is "
-                              f"hidden), yours is {g1[0]:.5g} for alpha = {alpha}")
+            raise CheckFailed(
+                f"G1 at normal incidence (cos_theta = 1) must be 1 (no facet is "
+                f"hidden), yours is {g1[0]:.5g} for alpha = {alpha}"
+            )
         if (g1 < 0).any() or (g1 > 1 + 1e-9).any():
-            raise CheckFailed(f"G1 is a fraction of the microfacets, in [0, 1]; yours reaches "
-                              f"{g1.max():.4g} / {g1.min():.4g} for alpha = {alpha}")
+            raise CheckFailed(
+                f"G1 is a fraction of the microfacets, in [0, 1]; yours reaches "
+                f"{g1.max():.4g} / {g1.min():.4g} for alpha = {alpha}"
+            )
         worst = np.argmax(np.abs(g1 - expected) / expected)
         if not abs(g1[worst] - expected[worst]) <= 1e-4 * expected[worst]:
-            raise CheckFailed(f"G1(cos_theta = {cos_theta[worst]:.3g}, alpha = {alpha}) is "
-                              f"{g1[worst]:.5g}, Smith's masking for GGX gives "
-                              f"{expected[worst]:.5g}: 1 / (1 + Lambda) with Lambda = "
-                              f"(sqrt(1 + alpha^2 tan^2(theta)) - 1) / 2")
+            raise CheckFailed(
+                f"G1(cos_theta = {cos_theta[worst]:.3g}, alpha = {alpha}) is "
+                f"{g1[worst]:.5g}, Smith's masking for GGX gives "
+                f"{expected[worst]:.5g}: 1 / (1 + Lambda) with Lambda = "
+                f"(sqrt(1 + alpha^2 tan^2(theta)) - 1) / 2"
+            )
     rng = np.random.default_rng(91)
     cos_o, cos_i = rng.uniform(0.02, 1, 200), rng.uniform(0.02, 1, 200)
     expected = library.G2(cos_o, cos_i, 0.4)
@@ -86,13 +96,17 @@ def check_g(module) -> str:
     if not np.allclose(g2, expected, rtol=1e-4):
         separable = library.G1(cos_o, 0.4) * library.G1(cos_i, 0.4)
         if np.allclose(g2, separable, rtol=1e-4):
-            raise CheckFailed("your G2 is G1(wo) G1(wi), the separable form; this chapter uses "
-                              "the height-correlated 1 / (1 + Lambda(wo) + Lambda(wi)) (Heitz 2014, "
-                              "eq. 99), which the render is compared with")
+            raise CheckFailed(
+                "your G2 is G1(wo) G1(wi), the separable form; this chapter uses "
+                "the height-correlated 1 / (1 + Lambda(wo) + Lambda(wi)) (Heitz 2014, "
+                "eq. 99), which the render is compared with"
+            )
         worst = np.argmax(np.abs(g2 - expected))
-        raise CheckFailed(f"G2(cos_o = {cos_o[worst]:.3f}, cos_i = {cos_i[worst]:.3f}, alpha = 0.4) "
-                          f"is {g2[worst]:.5g}, the height-correlated Smith G2 gives "
-                          f"{expected[worst]:.5g}")
+        raise CheckFailed(
+            f"G2(cos_o = {cos_o[worst]:.3f}, cos_i = {cos_i[worst]:.3f}, alpha = 0.4) "
+            f"is {g2[worst]:.5g}, the height-correlated Smith G2 gives "
+            f"{expected[worst]:.5g}"
+        )
     return "G1 is Smith's masking (1 at the normal, in [0, 1]); G2 is height-correlated"
 
 
@@ -103,14 +117,19 @@ def check_fresnel(module) -> str:
     expected = f0 + (1 - f0) * (1 - cos_theta[2:, None]) ** 5
     F = _values(fresnel_schlick, cos_theta, f0, shape=(4, 3))  # noqa: N806
     if not np.allclose(F[0], f0, rtol=1e-6):
-        raise CheckFailed(f"at normal incidence (cos_theta = 1) F must be F0 = {GOLD}, yours is "
-                          f"{np.round(F[0], 4)}")
+        raise CheckFailed(
+            f"at normal incidence (cos_theta = 1) F must be F0 = {GOLD}, yours is {np.round(F[0], 4)}"
+        )
     if not np.allclose(F[1], 1.0, rtol=1e-6):
-        raise CheckFailed(f"at grazing incidence (cos_theta = 0) F must be 1 (every material is "
-                          f"a mirror there), yours is {np.round(F[1], 4)}")
+        raise CheckFailed(
+            f"at grazing incidence (cos_theta = 0) F must be 1 (every material is "
+            f"a mirror there), yours is {np.round(F[1], 4)}"
+        )
     if not np.allclose(F[2:], expected, rtol=1e-6):
-        raise CheckFailed(f"F(cos_theta = 0.5) should be F0 + (1 - F0)(1 - 0.5)^5 = "
-                          f"{np.round(expected[0], 5)}, yours is {np.round(F[2], 5)}")
+        raise CheckFailed(
+            f"F(cos_theta = 0.5) should be F0 + (1 - F0)(1 - 0.5)^5 = "
+            f"{np.round(expected[0], 5)}, yours is {np.round(F[2], 5)}"
+        )
     return "F(0 degrees) = F0, F(90 degrees) = 1, F0 + (1 - F0)(1 - cos)^5 between"
 
 
@@ -128,12 +147,13 @@ def check_eval(module) -> str:
     expected = Microfacet(GOLD, alpha=0.3).eval(wo, wi, n)
     f = _values(material.eval, wo, wi, n, shape=wo.shape)
     if not np.allclose(f, expected, rtol=1e-4, atol=1e-9):
-        raise CheckFailed(f"eval differs from the GGX BRDF for gold (alpha 0.3) by up to "
-                          f"{np.abs(f - expected).max():.3g}: {_eval_hint(f, wo, wi, n, 0.3)}")
+        raise CheckFailed(
+            f"eval differs from the GGX BRDF for gold (alpha 0.3) by up to "
+            f"{np.abs(f - expected).max():.3g}: {_eval_hint(f, wo, wi, n, 0.3)}"
+        )
     below = _values(material.eval, wo, -wi, n, shape=wo.shape)
     if np.abs(below).max() > 0:
-        raise CheckFailed("eval must be 0 when wi is below the surface: a metal does not let "
-                          "light through")
+        raise CheckFailed("eval must be 0 when wi is below the surface: a metal does not let light through")
     return "f_r = D G2 F / (4 cos_theta_o cos_theta_i) for 2000 pairs of directions, 0 below"
 
 
@@ -157,18 +177,28 @@ def _eval_hint(f: np.ndarray, wo, wi, n, alpha: float) -> str:
         (library.F_schlick(cos_i, f0) * rest, f"F is evaluated at n . wi; {at}"),
         (library.F_schlick(cos_o, f0) * rest, f"F is evaluated at n . wo; {at}"),
         (library.F_schlick(cos_h, f0) * rest, f"F is evaluated at n . h; {at}"),
-        (np.broadcast_to(f0, F.shape) * rest, "F is F0 at every angle: Schlick's F rises to 1 "
-                                              "at grazing angles, F0 + (1 - F0)(1 - wi . h)^5"),
+        (
+            np.broadcast_to(f0, F.shape) * rest,
+            "F is F0 at every angle: Schlick's F rises to 1 at grazing angles, F0 + (1 - F0)(1 - wi . h)^5",
+        ),
         (rest * np.ones(3), "F is missing (the metal's colour F0 never enters)"),
-        (F * rest * (library.G1(cos_o, alpha) * library.G1(cos_i, alpha) / G2)[:, None],
-         "G is G1(wo) G1(wi), the separable form; use the height-correlated G2"),
-        (F * rest * (library.G1(cos_o, alpha) / G2)[:, None],
-         "G is G1(wo) alone: the shadowing of wi is missing; use G2(wo, wi)"),
+        (
+            F * rest * (library.G1(cos_o, alpha) * library.G1(cos_i, alpha) / G2)[:, None],
+            "G is G1(wo) G1(wi), the separable form; use the height-correlated G2",
+        ),
+        (
+            F * rest * (library.G1(cos_o, alpha) / G2)[:, None],
+            "G is G1(wo) alone: the shadowing of wi is missing; use G2(wo, wi)",
+        ),
         (F * rest / G2[:, None], "G is missing: multiply by G2(wo, wi)"),
-        (F * rest * (library.D(cos_h, alpha * alpha) / D)[:, None],
-         "D has alpha^4 where alpha^2 belongs (alpha squared twice?)"),
-        (F * rest * (library.D(cos_h, math.sqrt(alpha)) / D)[:, None],
-         "D has alpha where alpha^2 belongs: alpha^2 / (pi ((n . h)^2 (alpha^2 - 1) + 1)^2)"),
+        (
+            F * rest * (library.D(cos_h, alpha * alpha) / D)[:, None],
+            "D has alpha^4 where alpha^2 belongs (alpha squared twice?)",
+        ),
+        (
+            F * rest * (library.D(cos_h, math.sqrt(alpha)) / D)[:, None],
+            "D has alpha where alpha^2 belongs: alpha^2 / (pi ((n . h)^2 (alpha^2 - 1) + 1)^2)",
+        ),
     ]
     for value, hint in mistakes:
         if np.allclose(f, value, rtol=1e-3, atol=1e-9):
@@ -178,11 +208,13 @@ def _eval_hint(f: np.ndarray, wo, wi, n, alpha: float) -> str:
 
 def _harness(module, sampling: str, alpha: float) -> str:
     material = _metal(module, (1.0, 1.0, 1.0), alpha, sampling)
-    arguments = shlex.quote(json.dumps({"f0": [1.0, 1.0, 1.0], "alpha": alpha,
-                                        "sampling": sampling}))
-    return run_harness(material, 9, f" for a white metal (F0 = 1) with alpha {alpha} and "
-                       f"sampling {sampling!r}",
-                       f"ptlab grade {student_file(module)}:GGXMetal --args {arguments}")
+    arguments = shlex.quote(json.dumps({"f0": [1.0, 1.0, 1.0], "alpha": alpha, "sampling": sampling}))
+    return run_harness(
+        material,
+        9,
+        f" for a white metal (F0 = 1) with alpha {alpha} and sampling {sampling!r}",
+        f"ptlab grade {student_file(module)}:GGXMetal --args {arguments}",
+    )
 
 
 def check_harness_hemisphere(module) -> str:
@@ -215,8 +247,7 @@ def metals_scene():
     return scene
 
 
-def render_passes(sampling: str, metal_for: Callable | None = None,
-                  seed: int = RENDER_SEED) -> np.ndarray:
+def render_passes(sampling: str, metal_for: Callable | None = None, seed: int = RENDER_SEED) -> np.ndarray:
     """The ``pass_images`` of ``metals_scene`` with ``metal_for(f0, alpha)`` in place of its
     metals, or with the library's own sampling in the way of ``sampling`` if None."""
     from ptlab.materials import Microfacet
@@ -236,11 +267,12 @@ def _render(module, sampling: str) -> str:
     library = render_passes(sampling)
     student = render_passes(sampling, lambda f0, alpha: _metal(module, f0, alpha, sampling))
     what = "hemisphere sampling" if sampling == "hemisphere" else "your importance sampling"
-    hint = ("is eval right at every angle?" if sampling == "hemisphere" else
-            "is pdf the density of the directions sample returns, the Jacobian "
-            "1 / (4 |wo . h|) included?")
-    return compare_renders(student, library,
-                           f"the rough metals of cornell-box-microfacet with {what}", hint)
+    hint = (
+        "is eval right at every angle?"
+        if sampling == "hemisphere"
+        else "is pdf the density of the directions sample returns, the Jacobian 1 / (4 |wo . h|) included?"
+    )
+    return compare_renders(student, library, f"the rough metals of cornell-box-microfacet with {what}", hint)
 
 
 def check_render_hemisphere(module) -> str:
@@ -252,12 +284,12 @@ def check_render_importance(module) -> str:
 
 
 CHAPTER = Chapter(
-    number=9, slug="microfacet", title="Microfacet materials",
-    functions=("D", "G1", "G2", "fresnel_schlick", "GGXMetal.eval", "GGXMetal.sample",
-               "GGXMetal.pdf"),
-    answers=tuple(f"ptlab.materials.microfacet.{name}" for name in (
-        "D", "G1", "G2", "Lambda", "Microfacet")) + ("ptlab.scattering.F_schlick",
-                                                      "ptlab.sampling.ggx_visible_normals"),
+    number=9,
+    slug="microfacet",
+    title="Microfacet materials",
+    functions=("D", "G1", "G2", "fresnel_schlick", "GGXMetal.eval", "GGXMetal.sample", "GGXMetal.pdf"),
+    answers=tuple(f"ptlab.materials.microfacet.{name}" for name in ("D", "G1", "G2", "Lambda", "Microfacet"))
+    + ("ptlab.scattering.F_schlick", "ptlab.sampling.ggx_visible_normals"),
     checks=(
         ChapterCheck("D normalisation", 2, check_d, timeout=30),
         ChapterCheck("Smith G", 1, check_g, timeout=30),

@@ -25,18 +25,23 @@ def _weights(function, pdf, other, *heuristic) -> np.ndarray:
         weight = np.asarray(function(pdf.copy(), other.copy(), *heuristic), dtype=np.float64)
     name = function.__name__ + (f"(..., {heuristic[0]!r})" if heuristic else "")
     if weight.shape != pdf.shape:
-        raise CheckFailed(f"{name} must return one weight per sample, shape {pdf.shape}; yours "
-                          f"has shape {weight.shape}")
+        raise CheckFailed(
+            f"{name} must return one weight per sample, shape {pdf.shape}; yours has shape {weight.shape}"
+        )
     if np.isnan(weight).any():
         bad = np.flatnonzero(np.isnan(weight))[0]
-        hint = (" (0 / 0: where both pdfs are 0 the sample cannot happen; give it weight 0)"
-                if pdf[bad] == 0 and other[bad] == 0 else "")
-        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g}"
-                          f"{hint}")
+        hint = (
+            " (0 / 0: where both pdfs are 0 the sample cannot happen; give it weight 0)"
+            if pdf[bad] == 0 and other[bad] == 0
+            else ""
+        )
+        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g}{hint}")
     if np.isinf(weight).any():
         bad = np.flatnonzero(np.isinf(weight))[0]
-        raise CheckFailed(f"{name} returned {weight[bad]:g} for pdf = {pdf[bad]:g}, other = "
-                          f"{other[bad]:g}: a weight lies between 0 and 1")
+        raise CheckFailed(
+            f"{name} returned {weight[bad]:g} for pdf = {pdf[bad]:g}, other = "
+            f"{other[bad]:g}: a weight lies between 0 and 1"
+        )
     return weight
 
 
@@ -46,22 +51,37 @@ def _known_values(function, cases, formula: str) -> str:
     wrong = np.flatnonzero(~(np.abs(weight - expected) <= 1e-5))
     if len(wrong):
         k = wrong[0]
-        raise CheckFailed(f"{function.__name__}(pdf = {pdf[k]:g}, other = {other[k]:g}) should be "
-                          f"{formula} = {expected[k]:.4g}, yours is {weight[k]:.4g}")
+        raise CheckFailed(
+            f"{function.__name__}(pdf = {pdf[k]:g}, other = {other[k]:g}) should be "
+            f"{formula} = {expected[k]:.4g}, yours is {weight[k]:.4g}"
+        )
     return f"{len(cases)} known values, {formula}"
 
 
 def check_balance(module) -> str:
     (balance_heuristic,) = require(module, "balance_heuristic")
-    cases = [(1, 1, 0.5), (3, 1, 0.75), (1, 3, 0.25), (0.2, 0.6, 0.25), (2, 0, 1.0),
-             (1e4, 1, 1e4 / (1e4 + 1))]
+    cases = [
+        (1, 1, 0.5),
+        (3, 1, 0.75),
+        (1, 3, 0.25),
+        (0.2, 0.6, 0.25),
+        (2, 0, 1.0),
+        (1e4, 1, 1e4 / (1e4 + 1)),
+    ]
     return _known_values(balance_heuristic, cases, "pdf / (pdf + other)")
 
 
 def check_power(module) -> str:
     (power_heuristic,) = require(module, "power_heuristic")
-    cases = [(1, 1, 0.5), (3, 1, 0.9), (1, 3, 0.1), (2, 1, 0.8), (0.5, 1.5, 0.1), (2, 0, 1.0),
-             (100, 1, 1e4 / (1e4 + 1))]
+    cases = [
+        (1, 1, 0.5),
+        (3, 1, 0.9),
+        (1, 3, 0.1),
+        (2, 1, 0.8),
+        (0.5, 1.5, 0.1),
+        (2, 0, 1.0),
+        (100, 1, 1e4 / (1e4 + 1)),
+    ]
     return _known_values(power_heuristic, cases, "pdf^2 / (pdf^2 + other^2)")
 
 
@@ -78,29 +98,32 @@ def check_sum_to_one(module) -> str:
         if not abs(total[worst] - 1) <= 1e-5:
             hint = ""
             if np.allclose(total, 2, atol=1e-5):
-                hint = (": both strategies weighted 1, so every light path found by both is "
-                        "counted twice (double counting)")
+                hint = (
+                    ": both strategies weighted 1, so every light path found by both is "
+                    "counted twice (double counting)"
+                )
             elif np.allclose(total, 0, atol=1e-5):
                 hint = ": both weighted 0, so light found by either is lost"
-            raise CheckFailed(f"with heuristic={heuristic!r}, the weights of the two strategies "
-                              f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
-                              f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}")
+            raise CheckFailed(
+                f"with heuristic={heuristic!r}, the weights of the two strategies "
+                f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
+                f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}"
+            )
         if not np.allclose(light, expected, rtol=1e-4, atol=1e-6):
             other_heuristic = "balance" if heuristic == "power" else "power"
             if np.allclose(light, _heuristic(heuristic, pdf_bsdf, pdf_light), rtol=1e-4, atol=1e-6):
-                hint = (f"yours is the {heuristic} heuristic of (other, pdf): the densities are "
-                        f"passed on in the wrong order, so each strategy gets the other's weight. "
-                        f"mis_weight(pdf, other) is the weight of the strategy that drew the "
-                        f"sample with density pdf, and grows with it (the chapter's pitfall "
-                        f"\"The argument order\")")
-            elif np.allclose(light, _heuristic(other_heuristic, pdf_light, pdf_bsdf), rtol=1e-4,
-                             atol=1e-6):
-                hint = (f"yours is the {other_heuristic} heuristic: is the heuristic argument "
-                        f"passed on?")
+                hint = (
+                    f"yours is the {heuristic} heuristic of (other, pdf): the densities are "
+                    f"passed on in the wrong order, so each strategy gets the other's weight. "
+                    f"mis_weight(pdf, other) is the weight of the strategy that drew the "
+                    f"sample with density pdf, and grows with it (the chapter's pitfall "
+                    f'"The argument order")'
+                )
+            elif np.allclose(light, _heuristic(other_heuristic, pdf_light, pdf_bsdf), rtol=1e-4, atol=1e-6):
+                hint = f"yours is the {other_heuristic} heuristic: is the heuristic argument passed on?"
             else:
                 hint = "yours sums to 1 but gives other values"
-            raise CheckFailed(f"mis_weight(..., {heuristic!r}) should be the {heuristic} "
-                              f"heuristic; {hint}")
+            raise CheckFailed(f"mis_weight(..., {heuristic!r}) should be the {heuristic} heuristic; {hint}")
     return "the two strategies' weights add up to 1 for 1000 random pairs, both heuristics"
 
 
@@ -121,15 +144,23 @@ def check_zero_pdfs(module) -> str:
         wrong = np.flatnonzero(~(np.abs(weight - expected) <= 1e-6))
         if len(wrong):
             k = wrong[0]
-            why = ("the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for "
-                   "a light sample), so this one must count it fully" if other[k] == 0 and pdf[k] > 0
-                   else "this strategy cannot draw the sample, so its weight is 0" if pdf[k] == 0 and
-                   other[k] > 0 else "a sample neither strategy can draw gets weight 0")
+            why = (
+                "the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for "
+                "a light sample), so this one must count it fully"
+                if other[k] == 0 and pdf[k] > 0
+                else "this strategy cannot draw the sample, so its weight is 0"
+                if pdf[k] == 0 and other[k] > 0
+                else "a sample neither strategy can draw gets weight 0"
+            )
             if np.array_equal(weight[:2], expected[1::-1]):
-                why += (" (yours gives these weights to the other strategy: are pdf and other "
-                        "passed on in the wrong order?)")
-            raise CheckFailed(f"mis_weight(pdf = {pdf[k]:g}, other = {other[k]:g}, {heuristic!r}) "
-                              f"should be {expected[k]:g}, yours is {weight[k]:g}: {why}")
+                why += (
+                    " (yours gives these weights to the other strategy: are pdf and other "
+                    "passed on in the wrong order?)"
+                )
+            raise CheckFailed(
+                f"mis_weight(pdf = {pdf[k]:g}, other = {other[k]:g}, {heuristic!r}) "
+                f"should be {expected[k]:g}, yours is {weight[k]:g}: {why}"
+            )
     return "weight 1 when the other pdf is 0, 0 when this one is, 0 (not NaN) when both are"
 
 
@@ -142,6 +173,7 @@ def render_options() -> dict:
 def veach_scene():
     """``veach-mis``, the scene MIS was made for (Veach 1997, figure 9.2)."""
     import ptlab
+
     return ptlab.load_scene("veach-mis")
 
 
@@ -179,17 +211,23 @@ def check_render(module) -> str:
     if not (difference <= allowed).all():
         worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
         ratio = student[worst] / max(library[worst], 1e-12)
-        raise CheckFailed(f"veach-mis with your MIS weights differs from the library's render "
-                          f"along the very same paths: {describe_region(*worst)} is "
-                          f"{ratio:.3f}x the library's, the whole image {overall:.3f}x "
-                          f"(brighter: light counted by both strategies; darker: by neither; "
-                          f"else each strategy's weight is off, see 'weights sum to 1')")
-    return (f"veach-mis with your MIS weights matches the library's render along the same "
-            f"paths (whole image {overall:.6f}x)")
+        raise CheckFailed(
+            f"veach-mis with your MIS weights differs from the library's render "
+            f"along the very same paths: {describe_region(*worst)} is "
+            f"{ratio:.3f}x the library's, the whole image {overall:.3f}x "
+            f"(brighter: light counted by both strategies; darker: by neither; "
+            f"else each strategy's weight is off, see 'weights sum to 1')"
+        )
+    return (
+        f"veach-mis with your MIS weights matches the library's render along the same "
+        f"paths (whole image {overall:.6f}x)"
+    )
 
 
 CHAPTER = Chapter(
-    number=10, slug="mis", title="Multiple importance sampling",
+    number=10,
+    slug="mis",
+    title="Multiple importance sampling",
     functions=("balance_heuristic", "power_heuristic", "mis_weight"),
     answers=("ptlab.integrators.path.mis_weight",),
     checks=(

@@ -29,21 +29,29 @@ def render_tile(setup: RenderSetup, tile, spp: int) -> tuple[np.ndarray, int]:
     return result.sums, os.getpid()
 
 
-def render_parallel(scene, spp: int, res, seed: int = 0, workers: int = 2,
-                    tile_size: int = 32) -> tuple[np.ndarray, set[int]]:
+def render_parallel(
+    scene, spp: int, res, seed: int = 0, workers: int = 2, tile_size: int = 32
+) -> tuple[np.ndarray, set[int]]:
     """The image ((H, W, 3) float32) and the pids of the processes that rendered its tiles."""
     width, height = parse_resolution(res)
-    setup = RenderSetup(scene=scene, backend=resolve_backend("auto"), width=width,
-                        height=height, seed=seed, settings=PathSettings())
+    setup = RenderSetup(
+        scene=scene,
+        backend=resolve_backend("auto"),
+        width=width,
+        height=height,
+        seed=seed,
+        settings=PathSettings(),
+    )
     sums = np.zeros((height, width, 3))
     pids = set()
     context = multiprocessing.get_context("forkserver")
     with ProcessPoolExecutor(workers, mp_context=context) as pool:
-        jobs = {pool.submit(render_tile, setup, tile, spp): tile
-                for tile in make_tiles(width, height, tile_size)}
+        jobs = {
+            pool.submit(render_tile, setup, tile, spp): tile for tile in make_tiles(width, height, tile_size)
+        }
         for done in as_completed(jobs):
             tile = jobs[done]
             tile_sums, pid = done.result()
-            sums[tile.y0:tile.y1, tile.x0:tile.x1] += tile_sums
+            sums[tile.y0 : tile.y1, tile.x0 : tile.x1] += tile_sums
             pids.add(pid)
     return (sums / spp).astype(np.float32), pids
