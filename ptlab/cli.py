@@ -496,11 +496,11 @@ def _bench(args) -> int:
         )
         return 0
     # One worker always runs too: the speed-up is measured against it, in the same run.
-    workers = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
+    worker_counts = sorted({1} | {check_workers(w) for w in args.workers or [default_workers()]})
     run_bench(
         args.backend or ["embree", "numpy"],
         args.estimator or ["homework", "default"],
-        workers,
+        worker_counts,
         res=res,
         spp=spp,
         samplers=tuple(args.sampler or [RenderOptions.sampler]),

@@ -5,9 +5,10 @@ anything else that goes wrong is a bug in ptlab and keeps its traceback.
 """
 
 from numbers import Integral
+from typing import TypeGuard
 
 
-def is_integer(value: object) -> bool:
+def is_integer(value: object) -> TypeGuard[int]:
     """True for an ``int`` or a NumPy integer (both are ``numbers.Integral``), not for a bool:
     ``spp=True`` is a mistake, not one sample. (No NumPy import: ``ptlab.cli`` imports this
     module before NumPy.)"""

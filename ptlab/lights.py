@@ -462,7 +462,7 @@ def build_lights(
     offset: np.ndarray,
     point_lights: PointLights | None = None,
     sky: Sky | None = None,
-    sky_distance: float | None = None,
+    sky_distance: float = 1.0,
 ) -> LightSampler | None:
     """The lights of a scene as light sampling picks them, each kind with its share of the
     samples (``light_shares``); None for a scene without light.

@@ -377,9 +377,9 @@ def _fields(stream: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     (n,); where its lines end, (L,); and (L,) how many fields each line has. Fields are
     separated by spaces, tabs and any other control byte (which ``_made_of`` finds)."""
     separator = stream <= _SPACE
-    start = ~separator
-    start[1:] &= separator[:-1]
-    start = np.flatnonzero(start)
+    is_start = ~separator
+    is_start[1:] &= separator[:-1]
+    start = np.flatnonzero(is_start)
     ends = np.flatnonzero(stream == _NEWLINE)
     return start, ends, np.diff(np.searchsorted(start, ends), prepend=0)
 
@@ -393,7 +393,7 @@ def _read_numbers(stream: np.ndarray, count: int, dtype: type) -> np.ndarray | N
         # A field that is not (wholly) a number ends the reading with a warning.
         warnings.simplefilter("error", DeprecationWarning)
         try:
-            values = np.fromstring(stream.tobytes(), dtype=dtype, sep=" ")
+            values: np.ndarray = np.fromstring(stream.tobytes(), dtype=dtype, sep=" ")
         except (ValueError, DeprecationWarning):
             return None
     return values if len(values) == count else None

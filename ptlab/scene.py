@@ -100,9 +100,7 @@ class Scene:
         self.emits = self.emission.max(axis=1) > 0
         emitting = np.flatnonzero(self.emits)
         # Shadow rays toward the sky go twice the scene's diagonal: out of it from anywhere.
-        sky_distance = (
-            2 * float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0))) if self.sky is not None else None
-        )
+        sky_distance = 2 * float(np.linalg.norm(np.ptp(tri.reshape(-1, 3), axis=0)))
         self.light_sampler = build_lights(
             tri[emitting],
             self.emission[emitting],

@@ -143,7 +143,7 @@ def _shown(value: object) -> str:
     return short.repr(value)
 
 
-def _as_float(value: object) -> float | None:
+def _as_float(value: int | float) -> float | None:
     """A TOML number as a finite float; None for inf, NaN or an integer too large for a float."""
     try:
         number = float(value)
@@ -209,14 +209,14 @@ class _SceneReader:
             material_ids.append(np.full(len(tri), material, dtype=np.intp))
             keys.append(key)
         self.check_extent(triangles, keys)
-        material_ids = np.concatenate(material_ids)
+        material_of_triangle = np.concatenate(material_ids)
         point_lights = self.point_lights(data.get("point_light", []))
         sky = self.sky(data["sky"]) if "sky" in data else None
-        self.check_light_power(triangles, material_ids, materials, point_lights)
+        self.check_light_power(triangles, material_of_triangle, materials, point_lights)
         textured = any(m.textured for m in materials)
         scene = Scene(
             triangles=np.concatenate(triangles),
-            material_ids=material_ids,
+            material_ids=material_of_triangle,
             materials=materials,
             camera=camera,
             name=self.path.parent.name if self.path.name == SCENE_FILE_NAME else self.path.stem,

@@ -38,6 +38,7 @@ style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import overload
 
 import numpy as np
 
@@ -182,6 +183,10 @@ def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> No
     film += sums
 
 
+@overload
+def kept(a: np.ndarray, rows: np.ndarray, every_row: bool) -> np.ndarray: ...
+@overload
+def kept(a: None, rows: np.ndarray, every_row: bool) -> None: ...
 def kept(a: np.ndarray | None, rows: np.ndarray, every_row: bool) -> np.ndarray | None:
     """Rows ``rows`` of ``a`` (None stays None); ``a`` itself, not a copy, when ``rows`` are
     all of its rows, as after the first bounces in a closed room, where no path ends."""
@@ -258,7 +263,7 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     add_to_film(film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted)
 
 
-def mis_weight(pdf: np.ndarray, other: np.ndarray, heuristic: str = "power") -> np.ndarray:
+def mis_weight(pdf: np.ndarray, other: np.ndarray | np.floating, heuristic: str = "power") -> np.ndarray:
     """The MIS weight of a sample drawn with density ``pdf`` when the other strategy would
     have drawn it with density ``other`` (Veach 1997, section 9.2): the power heuristic
     (beta = 2) p^2 / (p^2 + q^2), or the balance heuristic p / (p + q)."""
@@ -402,7 +407,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     )
 
 
-def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray) -> np.ndarray:
+def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray | None) -> np.ndarray:
     """(N,) bool: which paths go on. Their throughput is divided by the survival odds.
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
@@ -496,11 +501,11 @@ def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
     """
     if hit.materials[0][0] is None:
         return getattr(hit.materials[0][1], method)(*arrays)
-    outputs = None
+    outputs: tuple[np.ndarray, ...] = ()
     for rows, material in hit.materials:
         result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
         parts = result if isinstance(result, tuple) else (result,)
-        if outputs is None:
+        if not outputs:
             outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
         for out, part in zip(outputs, parts, strict=True):
             out[rows] = part

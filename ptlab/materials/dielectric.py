@@ -92,7 +92,7 @@ class Dielectric(DeltaMaterial):
         facing = np.where(cos_theta_o >= 0, 1, -1).astype(n.dtype)
         n = n * facing[:, None]
         cos_theta_o = np.abs(cos_theta_o)
-        eta = self.eta if np.ndim(self.eta) == 0 else self.eta.astype(n.dtype, copy=False)
+        eta = self.eta if np.ndim(self.eta) == 0 else np.asarray(self.eta, dtype=n.dtype)
         eta_rel = np.where(outside, eta, 1.0 / eta).astype(n.dtype, copy=False)
         R = fresnel_dielectric(cos_theta_o, eta_rel)  # noqa: N806 (pbrt's name)
         reflected = u[:, 0] < R

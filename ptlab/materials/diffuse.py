@@ -53,7 +53,7 @@ class Diffuse(Material):
     def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
         # Multiplying by the 0/1 mask is several times faster than np.where here.
-        albedo = self.albedo.astype(wi.dtype, copy=False)  # (a batch's is float32 already)
+        albedo = np.asarray(self.albedo, dtype=wi.dtype)  # (a batch's is float32 already: no copy)
         return (above * wi.dtype.type(1.0 / math.pi))[:, None] * albedo
 
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
@@ -85,7 +85,7 @@ class Diffuse(Material):
         # Both assume wo above the surface, which the renderer guarantees by facing n
         # toward wo; below it the weight is 0 as the contract asks.
         wi = self.sample(wo, n, u)
-        albedo = self.albedo.astype(n.dtype, copy=False)
+        albedo = np.asarray(self.albedo, dtype=n.dtype)
         scale = (dot(wo, n) > 0).astype(n.dtype)
         if self.sampling == "uniform":
             scale *= 2.0 * dot(wi, n)

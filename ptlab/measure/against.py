@@ -213,8 +213,8 @@ def run_against(
         raise PtlabError(f"--cpp-args {cpp_args!r}: {error}") from None
     env = dict(os.environ, OMP_NUM_THREADS=str(workers))
     echo(f"C++:   {shlex.join([str(program), *args])}  (in a scratch folder, OMP_NUM_THREADS={workers})")
-    with tempfile.TemporaryDirectory(prefix="ptlab-against-") as scratch:
-        scratch = Path(scratch)
+    with tempfile.TemporaryDirectory(prefix="ptlab-against-") as scratch_name:
+        scratch = Path(scratch_name)
         cpp_folder = scratch_folders(scratch, program)
         cpp, resolution = run_cpp(program, args, cpp_folder, env)
         ptlab = ptlab_args(resolution, spp, workers, scratch / "ptlab.png")

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import statistics
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -31,7 +32,7 @@ from ptlab.scene_file import load_scene
 #: The render options (BSDF sampling and Russian roulette) of each estimator that ``ptlab
 #: bench --estimator`` names; not ``ptlab.measure.converge.Estimator``s, which name an
 #: integrator, a strategy and a sampler.
-ESTIMATOR_OPTIONS = {
+ESTIMATOR_OPTIONS: dict[str, dict[str, Any]] = {
     "homework": dict(sampling="uniform", rr=0.8),
     "default": dict(sampling=RenderOptions.sampling, rr=RenderOptions.rr),
 }

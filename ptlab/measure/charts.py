@@ -93,12 +93,13 @@ def equal_time_strip(ladders: list, reference: np.ndarray, path: Path) -> float:
     axes[0, 0].imshow(encode_srgb8(reference))
     axes[0, 0].set_title("reference", fontsize=8)
     axes[1, 0].axis("off")
-    norm = LogNorm(vmin=1e-4, vmax=1.0)
+    smallest_error = 1e-4
+    norm = LogNorm(vmin=smallest_error, vmax=1.0)
     heat = None
     for column, rung in enumerate(shown, start=1):
         axes[0, column].imshow(encode_srgb8(rung.image))
         axes[0, column].set_title(f"{rung.estimator}\n{rung.spp} spp, {rung.seconds:.1f} s", fontsize=8)
-        error = np.maximum(relative_squared_error(rung.image, reference), norm.vmin)
+        error = np.maximum(relative_squared_error(rung.image, reference), smallest_error)
         heat = axes[1, column].imshow(error, cmap="inferno", norm=norm)
         axes[1, column].set_title(f"relMSE {rung.relmse:.3g}", fontsize=8)
     for axis in axes.flat:

@@ -110,7 +110,7 @@ def render_result(
     settings = options.path_settings()
     keep_freed_memory()
 
-    width, height = options.res
+    width, height = options.size
     tiles = make_tiles(width, height, options.tile_size)
     passes = pass_schedule(options.spp, options.spp_per_pass)
     film = Film(width, height, tiles, passes)

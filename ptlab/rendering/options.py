@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import inspect
 import textwrap
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
@@ -68,7 +68,7 @@ def option(default: Any, help: str, check: Callable[[str, Any], Any], **about) -
     return field(default=default, metadata={"about": About(help, check, **about)})
 
 
-def choice(default: str, choices: tuple[str, ...] | list[str], help: str) -> Any:
+def choice(default: str, choices: Iterable[str], help: str) -> Any:
     """An option that is one of the names ``choices``."""
     choices = tuple(choices)
     return option(default, help, lambda label, value: check_choice(label, value, choices), choices=choices)
@@ -234,8 +234,14 @@ class RenderOptions:
             spp_per_pass=min(self.spp, self.spp_per_pass or SPP_PER_PASS),
         )
 
+    @property
+    def size(self) -> tuple[int, int]:
+        """(width, height): ``res`` checked (of options ``for_scene``, which decided it)."""
+        return parse_resolution(self.res)
+
     def path_settings(self) -> PathSettings:
         """How the integrators trace paths (of options ``for_scene``)."""
+        assert self.max_depth is not None, "path_settings() is for options decided by for_scene()"
         return PathSettings(
             rr=self.rr,
             max_depth=self.max_depth,
@@ -286,12 +292,15 @@ def takes_options(function: Callable) -> Callable:
         for f in fields(RenderOptions)
     ]
     keyword_only = [p for p in rest if p.kind is inspect.Parameter.KEYWORD_ONLY]
-    function.__signature__ = signature.replace(parameters=[scene, *options, *keyword_only])
+    new_signature = signature.replace(parameters=[scene, *options, *keyword_only])
+    function.__signature__ = new_signature  # type: ignore[attr-defined]
     lines = [
         textwrap.fill(
             f"{name}: {RenderOptions.describe(name)}.", 92, initial_indent=" " * 8, subsequent_indent=" " * 12
         )
         for name in _FIELDS
     ]
-    function.__doc__ += "\n    Options (``RenderOptions``):\n" + "\n".join(lines) + "\n"
+    function.__doc__ = (
+        (function.__doc__ or "") + "\n    Options (``RenderOptions``):\n" + "\n".join(lines) + "\n"
+    )
     return function

@@ -47,7 +47,8 @@ def run_jobs(
 def _run_on_executor(
     jobs: list[Job], submit: Callable[[Job], Future], window: int, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
-    pending, in_flight = deque(jobs), {}
+    pending = deque(jobs)
+    in_flight: dict[Future, Job] = {}
     try:
         while pending or in_flight:
             if stop():
@@ -64,6 +65,15 @@ def _run_on_executor(
             future.cancel()
 
 
+def _submitter(pool: Executor, token: str) -> Callable[[Job], Future]:
+    """A function that submits a job to ``pool`` (made per pool, so it never sees a later one)."""
+
+    def submit(job: Job) -> Future:
+        return pool.submit(run_job_in_worker, token, job)
+
+    return submit
+
+
 def _run_on_process_pool(
     jobs: list[Job], setup: RenderSetup, workers: int, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
@@ -74,7 +84,7 @@ def _run_on_process_pool(
         try:
             for result in _run_on_executor(
                 remaining,
-                lambda job, pool=pool: pool.submit(run_job_in_worker, setup.token, job),
+                _submitter(pool, setup.token),
                 window=2 * workers,
                 stop=stop,
             ):

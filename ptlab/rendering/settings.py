@@ -19,19 +19,20 @@ MAX_WORKERS = 1024
 MIN_SURVIVAL = 2.0**-24
 
 
-def parse_resolution(res: int | tuple[int, int] | str) -> tuple[int, int]:
+def parse_resolution(res: object) -> tuple[int, int]:
     """``512``, ``(640, 480)`` or ``"640x480"`` -> (width, height), checked."""
-    if isinstance(res, str):
+    given = res
+    if isinstance(given, str):
         try:
-            numbers = [int(p) for p in res.lower().split("x")]
+            numbers = [int(p) for p in given.lower().split("x")]
         except ValueError:
-            raise PtlabError(f"resolution {res!r}: expected N or WxH, e.g. 512 or 640x480") from None
-        res = numbers[0] if len(numbers) == 1 else tuple(numbers)
-    if is_integer(res):
-        res = (int(res), int(res))
-    if not (isinstance(res, tuple | list) and len(res) == 2 and all(map(is_integer, res))):
-        raise PtlabError(f"resolution {res!r}: expected N or (width, height)")
-    width, height = int(res[0]), int(res[1])
+            raise PtlabError(f"resolution {given!r}: expected N or WxH, e.g. 512 or 640x480") from None
+        given = numbers[0] if len(numbers) == 1 else tuple(numbers)
+    if is_integer(given):
+        given = (given, given)
+    if not (isinstance(given, tuple | list) and len(given) == 2 and all(map(is_integer, given))):
+        raise PtlabError(f"resolution {given!r}: expected N or (width, height)")
+    width, height = int(given[0]), int(given[1])
     if width <= 0 or height <= 0:
         raise PtlabError(f"resolution {width}x{height}: width and height must be positive")
     if width * height > MAX_PIXELS:
@@ -65,7 +66,7 @@ def check_roulette(rr: object) -> float | str:
     if rr == "throughput":
         return rr
     try:
-        probability = float(rr)
+        probability = float(rr)  # type: ignore[arg-type]  # (anything else: the error below)
     except (TypeError, ValueError):
         raise PtlabError(f"russian roulette {rr!r}: give 'throughput' or a probability") from None
     if not MIN_SURVIVAL <= probability <= 1:
