@@ -46,12 +46,9 @@ from ptlab.accel.base import Hits
 from ptlab.accel.triangle import ray_triangle
 from ptlab.vectors import cross, dot
 
-#: The most triangles for which testing all of them surely beats walking the tree
-#: (measured, 262k random rays in the Cornell box, intersect + occluded: 7.4x faster with
-#: its 32 triangles, 4.7x with 52, 1.3x with 112-152, none with 232; smaller batches of rays
-#: gain less, since each triangle costs some 25 NumPy calls whatever their size). Read
-#: when a ``NumpyBVH`` is built, so the exercises can set it to 0 to render through a
-#: student's tree.
+#: The most triangles for which testing all of them surely beats walking the tree (7.4x
+#: faster on the Cornell box: docs/performance.md). Read when a ``NumpyBVH`` is built, so
+#: the exercises can set it to 0 to render through a student's tree.
 SMALL_SCENE = 64
 
 # pbrt-v4's gamma(3) for float32: the relative rounding error of t computed by the slab test.
@@ -384,13 +381,9 @@ class NumpyBVH:
 
     Rays may be float32 or float64; the traversal runs in float32, like Embree.
 
-    Speed on the 2-core test machine, batches of 262k random rays in the Cornell box
-    (32 triangles): about 0.4 us per ray for ``intersect`` and 0.25 us for ``occluded``
-    testing every triangle (the default there), 2 us walking the tree (Embree: 0.16 and
-    0.10); 4-5 us per ray on meshes of 100k-300k triangles, which walk the tree. The
-    defaults were measured best on the Cornell box's tree: wider leaves mean fewer steps
-    but more triangle tests, and were slower, from 10% (up to 8 per leaf) to 2x (all 38 in
-    one leaf), because a triangle test costs more here than a node visit.
+    Its speed per ray, and why its defaults are what they are, are in docs/performance.md
+    ("The NumPy BVH on small scenes"): a triangle test costs more here than a node visit,
+    so narrow leaves were fastest.
 
     Args:
         triangles: (T, 3, 3) array, vertex k of triangle i at ``triangles[i, k]``.
