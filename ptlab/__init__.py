@@ -25,7 +25,7 @@ if TYPE_CHECKING:
 
 __version__ = "0.1.0"
 
-__all__ = ["Scene", "RenderOptions", "RenderResult", "load_scene", "render", "render_result", "__version__"]
+__all__ = ["RenderOptions", "RenderResult", "Scene", "__version__", "load_scene", "render", "render_result"]
 
 #: Where each lazily imported name lives.
 _HOMES = {

@@ -547,7 +547,7 @@ def _start_workers_early(argv: list[str]) -> None:
         return
     size = [int(n) for n in (options.res or "").lower().split("x") if n.isdigit()]
     one_tile = bool(size) and max(size) <= TILE_SIZE
-    if options.help or options.scheduler is not None or one_tile and options.spp <= SPP_PER_PASS:
+    if options.help or options.scheduler is not None or (one_tile and options.spp <= SPP_PER_PASS):
         return
     from ptlab.rendering.executors import default_workers, start_worker_server
 

@@ -85,9 +85,7 @@ def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = Non
     for key, value in (metadata or {}).items():
         keep = typed and (
             isinstance(value, float)
-            or isinstance(value, int)
-            and not isinstance(value, bool)
-            and -(2**31) <= value < 2**31
+            or (isinstance(value, int) and not isinstance(value, bool) and -(2**31) <= value < 2**31)
         )
         spec.attribute(f"ptlab:{key}", value if keep else str(value))
 

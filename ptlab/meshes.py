@@ -94,31 +94,7 @@ def read_mesh(
         mesh = _read_with_trimesh(path, where, fmt)
         vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
         faces = np.asarray(getattr(mesh, "faces", ()))
-    if len(faces) == 0:
-        raise SceneError(where, f"mesh {path.name} has no triangles")
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise SceneError(
-            where,
-            f"mesh {path.name}: vertices must have 3 coordinates, "
-            f"got {vertices.shape[-1] if vertices.ndim == 2 else 0}",
-        )
-    if faces.ndim != 2 or faces.shape[1] != 3 or not np.issubdtype(faces.dtype, np.integer):
-        raise SceneError(where, f"mesh {path.name}: trimesh returned faces of shape {faces.shape}")
-    outside = faces[(faces < 0) | (faces >= len(vertices))]
-    if len(outside):
-        raise SceneError(
-            where,
-            f"mesh {path.name}: a face refers to vertex {int(outside[0])}, "
-            f"but there are {len(vertices)} vertices (0 to "
-            f"{len(vertices) - 1})",
-        )
-    bad = ~np.isfinite(vertices).all(axis=1)
-    if bad.any():
-        raise SceneError(
-            where,
-            f"mesh {path.name} has {int(bad.sum())} vertices that are NaN "
-            f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})",
-        )
+    _check_faces(vertices, faces, where, path.name)
     triangles = vertices[faces]
     beyond = np.abs(triangles).max(axis=2) > limit
     if beyond.any():
@@ -138,6 +114,35 @@ def read_mesh(
     if not kept.any():
         raise SceneError(where, f"mesh {path.name} has only zero-area triangles")
     return triangles[kept], None if uv is None else uv[kept]
+
+
+def _check_faces(vertices: np.ndarray, faces: np.ndarray, where: str, name: str) -> None:
+    """Raise ``SceneError`` unless ``faces`` (T, 3) index ``vertices`` (V, 3), all finite."""
+    if len(faces) == 0:
+        raise SceneError(where, f"mesh {name} has no triangles")
+    if vertices.ndim != 2 or vertices.shape[1] != 3:
+        raise SceneError(
+            where,
+            f"mesh {name}: vertices must have 3 coordinates, "
+            f"got {vertices.shape[-1] if vertices.ndim == 2 else 0}",
+        )
+    if faces.ndim != 2 or faces.shape[1] != 3 or not np.issubdtype(faces.dtype, np.integer):
+        raise SceneError(where, f"mesh {name}: trimesh returned faces of shape {faces.shape}")
+    outside = faces[(faces < 0) | (faces >= len(vertices))]
+    if len(outside):
+        raise SceneError(
+            where,
+            f"mesh {name}: a face refers to vertex {int(outside[0])}, "
+            f"but there are {len(vertices)} vertices (0 to "
+            f"{len(vertices) - 1})",
+        )
+    bad = ~np.isfinite(vertices).all(axis=1)
+    if bad.any():
+        raise SceneError(
+            where,
+            f"mesh {name} has {int(bad.sum())} vertices that are NaN "
+            f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})",
+        )
 
 
 def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.ndarray | None:
@@ -544,7 +549,7 @@ def _obj_records(text: str):
             number += 1
             line = line[:-1] + lines[number]
         number += 1
-        if not line or line[0] not in "vf" and not line[0].isspace():  # (a quick skip)
+        if not line or (line[0] not in "vf" and not line[0].isspace()):  # (a quick skip)
             continue
         words = line.split(None, 1)
         if not words or words[0] not in ("v", "vt", "vn", "f"):

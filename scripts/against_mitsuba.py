@@ -784,7 +784,7 @@ def compare(args: argparse.Namespace, folder: Path, echo: Callable[[str], None])
         mi,
         dr,
         write_mitsuba_scene(scene, folder, width, height),
-        configurations + [("independent", MITSUBA_RR_DEPTH)],
+        [*configurations, ("independent", MITSUBA_RR_DEPTH)],
     )
     echo(f"{scene.summary()}; {width}x{height}, {args.spp} spp, {args.repeat} rounds")
     echo(

@@ -44,7 +44,7 @@ def main(argv: list[str] | None = None) -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    side = int(round(np.sqrt(args.spp)))
+    side = round(np.sqrt(args.spp))
     figure, axes = plt.subplots(1, len(SAMPLERS), figsize=(3.2 * len(SAMPLERS), 3.4), dpi=100)
     for axis, name in zip(axes, SAMPLERS, strict=True):
         u = points(name, args.spp)

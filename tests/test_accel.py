@@ -36,7 +36,8 @@ def test_random_rays_from_inside_a_closed_mesh_all_hit(backend, mesh):
     dirs = rng.normal(size=(count, 3)).astype(np.float32)
     hits = make_accelerator(mesh.vertices[mesh.faces], backend).intersect(origins, dirs)
     assert hits.hit.all(), f"{np.count_nonzero(~hits.hit)} of {count} rays escaped"
-    assert np.isfinite(hits.t).all() and (hits.t > 0).all()
+    assert np.isfinite(hits.t).all()
+    assert (hits.t > 0).all()
 
 
 @pytest.mark.parametrize("mesh", closed_meshes(), ids=["sphere", "box", "big sphere"])

@@ -51,7 +51,8 @@ def test_against_times_both_programs_and_prints_their_ratio(tmp_path, capsys):
     ) in out
     rows = {line.split()[0]: line.split() for line in out.splitlines() if line.split()}
     cpp, ptlab, ratio = map(float, rows["1"][1:])
-    assert cpp >= 0.1 and ptlab > 0  # (the stand-in sleeps 0.1 s)
+    assert cpp >= 0.1
+    assert ptlab > 0
     # (each printed to 2 decimals)
     assert ratio == pytest.approx(cpp / ptlab, abs=0.005 + 0.01 * ratio / min(cpp, ptlab))
     assert [float(x) for x in rows["median"][1:]] == [cpp, ptlab]
@@ -59,8 +60,11 @@ def test_against_times_both_programs_and_prints_their_ratio(tmp_path, capsys):
     # The program got the spp, one OpenMP thread per worker, a scratch folder of its own
     # with the homework's models beside it; the scratch folder is gone afterwards.
     [call] = calls(project)
-    assert call["args"] == ["1"] and call["omp"] == "1" and call["models"]
-    assert not Path(call["cwd"]).exists() and not (project / "build" / "binary.ppm").exists()
+    assert call["args"] == ["1"]
+    assert call["omp"] == "1"
+    assert call["models"]
+    assert not Path(call["cwd"]).exists()
+    assert not (project / "build" / "binary.ppm").exists()
 
 
 def test_the_summary_gives_the_median_ratio_and_its_range_over_the_pairs():
@@ -75,7 +79,7 @@ def test_the_summary_gives_the_median_ratio_and_its_range_over_the_pairs():
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize(
-    "body, options, message",
+    ("body", "options", "message"),
     [
         ("", ["--cpp-args", "--spp {spp} --fast"], "wrote no binary.ppm into the folder it ran in"),
         (f"open('binary.ppm', 'wb').write({PPM[:40]!r})", [], "wrote an unreadable binary.ppm"),
@@ -94,15 +98,17 @@ def test_a_program_that_fails_or_writes_no_image_is_a_one_line_error(
     program = stand_in(project, body)
     code = main(["bench", "--against", str(program), "--spp", "4", *options])
     captured = capsys.readouterr()
-    assert code == 2 and captured.err.count("\n") == 1, captured.err
-    assert captured.err.startswith(f"ptlab: error: --against {program}") and message in captured.err
+    assert code == 2, captured.err
+    assert captured.err.count("\n") == 1, captured.err
+    assert captured.err.startswith(f"ptlab: error: --against {program}")
+    assert message in captured.err
     assert "C++ / ptlab" not in captured.out  # no table pretending to be complete
     expected_args = ["--spp", "4", "--fast"] if options else ["4"]
     assert [c["args"] for c in calls(project)] == [expected_args]
 
 
 @pytest.mark.parametrize(
-    "make, options, message",
+    ("make", "options", "message"),
     [
         (None, [], "no such file"),
         ("folder", [], "is a folder"),
@@ -126,7 +132,9 @@ def test_bad_programs_and_options_are_one_line_errors_before_anything_runs(
             program.chmod(0o755)
     code = main(["bench", "--against", str(program), *options])
     captured = capsys.readouterr()
-    assert code == 2 and captured.err.count("\n") == 1 and message in captured.err, captured.err
+    assert code == 2, captured.err
+    assert captured.err.count("\n") == 1, captured.err
+    assert message in captured.err, captured.err
     assert not (tmp_path / "ran").exists()
 
 
@@ -134,4 +142,6 @@ def test_the_help_names_the_homework_program(capsys):
     with pytest.raises(SystemExit):
         main(["bench", "--help"])
     out = capsys.readouterr().out
-    assert "--against PATH" in out and "RayTracing" in out and "--cpp-args ARGS" in out
+    assert "--against PATH" in out
+    assert "RayTracing" in out
+    assert "--cpp-args ARGS" in out

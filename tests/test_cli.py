@@ -21,7 +21,9 @@ def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkey
     out = capsys.readouterr().out
     assert (tmp_path / "cornell-box.png").is_file()
     assert str(tmp_path / "cornell-box.png") in out
-    assert "16x16" in out and "1 spp" in out and "samples/s" in out
+    assert "16x16" in out
+    assert "1 spp" in out
+    assert "samples/s" in out
 
 
 def test_render_exr_is_linear_float_with_metadata(tmp_path):
@@ -47,12 +49,15 @@ def test_render_exr_is_linear_float_with_metadata(tmp_path):
     image, metadata = read_image(out)
     assert image.shape == (16, 24, 3)
     assert image.max() > 1.0  # linear: the light is far above 1
-    assert metadata["spp"] == 2 and metadata["seed"] == 7
-    assert metadata["scene"] == "cornell-box" and "seconds" in metadata and "version" in metadata
+    assert metadata["spp"] == 2
+    assert metadata["seed"] == 7
+    assert metadata["scene"] == "cornell-box"
+    assert "seconds" in metadata
+    assert "version" in metadata
 
 
 @pytest.mark.parametrize(
-    "args, problem",
+    ("args", "problem"),
     [
         (["render", "cornell-box", "--spp", "0"], "spp"),
         (["render", "cornell-box", "--res", "-5"], "resolution"),
@@ -69,7 +74,9 @@ def test_bad_input_is_one_line_exit_2_and_no_output(tmp_path, monkeypatch, capsy
     code = exit_code(args)
     err = capsys.readouterr().err
     assert code == 2
-    assert err.count("\n") == 1 and problem in err and "Traceback" not in err, err
+    assert err.count("\n") == 1, err
+    assert problem in err, err
+    assert "Traceback" not in err, err
     assert list(tmp_path.iterdir()) == []
 
 
@@ -94,7 +101,8 @@ def test_installed_command_reports_scene_errors_without_traceback(tmp_path):
         cwd=tmp_path,
     )
     assert result.returncode == 2
-    assert "malformed TOML" in result.stderr and "Traceback" not in result.stderr
+    assert "malformed TOML" in result.stderr
+    assert "Traceback" not in result.stderr
     assert not (tmp_path / "x.png").exists()
 
 
@@ -154,7 +162,7 @@ def test_the_command_imports_no_numpy_before_it_can_start_the_workers_server():
 
 
 @pytest.mark.parametrize(
-    "args, starts",
+    ("args", "starts"),
     [
         (["render", "cornell-box", "--workers", "2"], True),
         (["render", "cornell-box", "--res", "784", "--workers", "2"], True),
@@ -251,7 +259,7 @@ def test_render_takes_the_scene_files_resolution_unless_told(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "change, problem",
+    ("change", "problem"),
     [
         (dict(intensity="[1, -1, 1]"), "point_light[0].intensity: must not be negative"),
         (dict(sky='"blue"'), "sky.radiance: must be a colour"),
@@ -264,7 +272,9 @@ def test_bad_lights_and_uvs_are_one_line_exit_2_and_no_output(tmp_path, monkeypa
     monkeypatch.chdir(tmp_path)
     assert exit_code(["render", scene]) == 2
     err = capsys.readouterr().err
-    assert err.count("\n") == 1 and problem in err and "Traceback" not in err, err
+    assert err.count("\n") == 1, err
+    assert problem in err, err
+    assert "Traceback" not in err, err
     assert [p.name for p in tmp_path.iterdir()] == ["lit.toml"]
 
 
@@ -286,7 +296,7 @@ def test_png_is_srgb_encoded(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "content, message",
+    ("content", "message"),
     [
         (b"P6\n4 4\n255\n" + bytes(10), "cannot read image: Premature end of file"),
         (b"P5\n2 2\n255\n" + bytes(4), "has 1 channel(s), not the 3 of an RGB image"),
@@ -331,10 +341,13 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     for row in rows:
         # seconds, Msamples/s (a 16 x 16 render may print 0.000); the shares of time in ray
         # queries and in the sampler
-        assert float(row[4]) > 0 and float(row[5]) >= 0
-        assert row[8].endswith("%") and row[9].endswith("%")
+        assert float(row[4]) > 0
+        assert float(row[5]) >= 0
+        assert row[8].endswith("%")
+        assert row[9].endswith("%")
         assert 0 < float(row[9].rstrip("%")) < 100
-    assert "numpy / embree time" in out and "speed-up of 2 workers over 1" in out
+    assert "numpy / embree time" in out
+    assert "speed-up of 2 workers over 1" in out
 
 
 @pytest.mark.subprocess
@@ -370,7 +383,9 @@ def test_bench_accuracy_compares_samplers_against_a_reference(capsys, tmp_path, 
     assert set(rows) == {"independent", "sobol"}
     for row in rows.values():
         # relMSE (its range), ..., the share in the sampler (its range)
-        assert float(row[1]) > 0 and row[-2].endswith("%") and row[-1].endswith("%)")
+        assert float(row[1]) > 0
+        assert row[-2].endswith("%")
+        assert row[-1].endswith("%)")
     assert len(list(tmp_path.glob("*.exr"))) == 1  # the cached reference
 
 
@@ -385,7 +400,7 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
             half.write("half an ima")
         raise OSError("disk full")
 
-    with pytest.raises(OSError):
+    with pytest.raises(OSError, match="disk full"):
         write_atomically(target, crash)
     assert target.read_text() == "the previous image"
     assert [p.name for p in tmp_path.iterdir()] == ["image.exr"]
@@ -412,5 +427,6 @@ def test_depth_png_is_scaled_to_fit_and_says_by_how_much(tmp_path):
         == 0
     )
     image, metadata = read_image(out)
-    assert 1000 < float(metadata["depth_scale"]) < 2000 and image.max() == 1.0
+    assert 1000 < float(metadata["depth_scale"]) < 2000
+    assert image.max() == 1.0
     assert metadata["spp"] == "1"  # PNG keeps metadata as text

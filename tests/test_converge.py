@@ -28,8 +28,10 @@ def test_error_measures_match_their_definitions():
     expected = (0.25 / 1.01**2 + 3 * 0.01 / 0.01**2) / 12
     assert relmse(image, reference) == pytest.approx(expected)
     per_pixel = relative_squared_error(image, reference)
-    assert per_pixel.shape == (2, 2) and per_pixel[0, 1] == 0
-    assert relmse(reference, reference) == 0 and rmse(reference, reference) == 0
+    assert per_pixel.shape == (2, 2)
+    assert per_pixel[0, 1] == 0
+    assert relmse(reference, reference) == 0
+    assert rmse(reference, reference) == 0
 
 
 def test_estimators_are_parsed_and_bad_ones_named():
@@ -53,9 +55,11 @@ def test_time_to_reach_interpolates_log_log_and_extrapolates_with_slope_minus_on
     # error = 1 / seconds exactly: the target 0.05 is reached at 20 s.
     ladder = _ladder((1, 1.0), (10, 0.1), (40, 0.025))
     seconds, extrapolated = time_to_reach(ladder, 0.05)
-    assert seconds == pytest.approx(20.0) and not extrapolated
+    assert seconds == pytest.approx(20.0)
+    assert not extrapolated
     seconds, extrapolated = time_to_reach(ladder, 0.01)  # past the last rung: 0.025 * 40 / 0.01
-    assert seconds == pytest.approx(100.0) and extrapolated
+    assert seconds == pytest.approx(100.0)
+    assert extrapolated
     assert time_to_reach(ladder, 2.0) is None  # below the target from the start
     assert time_to_reach(_ladder((1, 1.0), (2, 1.2)), 0.1) is None  # error not falling
 
@@ -121,7 +125,8 @@ def test_converge_writes_the_table_chart_and_strip(tmp_path, reference_file, cap
     assert at_four["path:nee"] < at_four["path:bsdf"] / 3
     for name in ("convergence.png", "equal-time.png"):
         pixels, _ = read_image(out / name)
-        assert pixels.shape[0] > 200 and pixels.std() > 0.05  # a real picture, not blank
+        assert pixels.shape[0] > 200
+        assert pixels.std() > 0.05
     reference, _ = read_image(out / "reference.exr")
     np.testing.assert_array_equal(reference, read_image(reference_file)[0])
 
@@ -142,9 +147,9 @@ def test_the_rendered_reference_is_cached(tmp_path, monkeypatch, capsys):
         "--workers",
         "1",
     ]
-    assert main(arguments + ["--out", str(tmp_path / "a")]) == 0
+    assert main([*arguments, "--out", str(tmp_path / "a")]) == 0
     assert "cached" not in capsys.readouterr().out
-    assert main(arguments + ["--out", str(tmp_path / "b")]) == 0
+    assert main([*arguments, "--out", str(tmp_path / "b")]) == 0
     assert "(cached)" in capsys.readouterr().out
     first, _ = read_image(tmp_path / "a" / "reference.exr")
     second, _ = read_image(tmp_path / "b" / "reference.exr")
@@ -155,7 +160,7 @@ def test_the_rendered_reference_is_cached(tmp_path, monkeypatch, capsys):
 
 
 @pytest.mark.parametrize(
-    "arguments, message",
+    ("arguments", "message"),
     [
         (["--res", "32"], "the reference is 24x24"),
         (["--integrators", "path:nope"], "strategy"),
@@ -177,10 +182,11 @@ def test_bad_converge_options_are_one_line_errors(tmp_path, reference_file, caps
             str(out),
             "--workers",
             "1",
+            *arguments,
         ]
-        + arguments
     )
     assert code == 2
     error = capsys.readouterr().err
-    assert message in error and error.count("\n") == 1
+    assert message in error
+    assert error.count("\n") == 1
     assert not out.exists()

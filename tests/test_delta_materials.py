@@ -39,7 +39,8 @@ def test_mirror_reflects_exactly_with_its_reflectance(fresnel):
         cos_theta = math.cos(math.radians(degrees))
         expected = material.reflectance + (1 - material.reflectance) * (1 - cos_theta) ** 5 * fresnel
         np.testing.assert_allclose(weight, np.broadcast_to(expected, weight.shape), atol=1e-12)
-        assert (material.eval(wo, wi, n) == 0).all() and (material.pdf(wo, wi, n) == 0).all()
+        assert (material.eval(wo, wi, n) == 0).all()
+        assert (material.pdf(wo, wi, n) == 0).all()
     wo, n, u = setup(30, side=-1)
     assert (material.sample_weight(wo, n, u)[1] == 0).all(), "nothing is reflected from below"
 
@@ -70,7 +71,8 @@ def test_glass_reflects_a_fresnel_fraction_and_refracts_by_snell(side, degrees):
             weight[refracted], np.broadcast_to(material.transmittance / eta_rel**2, weight[refracted].shape)
         )
     else:
-        assert side < 0 and math.sin(math.radians(degrees)) * eta >= 1, "only total internal reflection"
+        assert side < 0, "only total internal reflection"
+        assert math.sin(math.radians(degrees)) * eta >= 1, "only total internal reflection"
 
 
 def test_front_flag_with_the_renderers_normal_gives_the_same_as_the_outward_normal():
@@ -103,7 +105,8 @@ def test_float32_and_stacking():
     n = batch(N_AXIS, 2).astype(np.float32)
     u = np.full((2, 2), 0.99, dtype=np.float32)
     wi, weight = rows.sample_weight(wo, n, u, np.array([True, True]))
-    assert wi.dtype == np.float32 and weight.dtype == np.float32
+    assert wi.dtype == np.float32
+    assert weight.dtype == np.float32
     np.testing.assert_allclose(weight[0], 0.5 / 2.4**2, rtol=1e-6)
     np.testing.assert_allclose(weight[1], 1 / 1.5**2, rtol=1e-6)
     mirrors = Mirror.stack([Mirror((1, 0, 0)), Mirror((0, 1, 0))]).take(np.array([1, 1, 0]))
@@ -129,8 +132,12 @@ def test_grader_passes_the_delta_materials(material):
 
 
 def test_bad_parameters_are_refused():
-    for make in (lambda: Mirror((1.2, 0, 0)), lambda: Dielectric(0.0), lambda: Dielectric(1.5, (2, 0, 0))):
-        with pytest.raises(ValueError):
+    for make, problem in (
+        (lambda: Mirror((1.2, 0, 0)), "reflectance must be three numbers in"),
+        (lambda: Dielectric(0.0), "eta must be an index of refraction"),
+        (lambda: Dielectric(1.5, (2, 0, 0)), "transmittance must be three numbers in"),
+    ):
+        with pytest.raises(ValueError, match=problem):
             make()
 
 

@@ -72,8 +72,11 @@ def run_cli(args: list[str], capsys) -> tuple[int, str]:
 
 def assert_one_line_error(code: int, err: str, starts: str = "ptlab") -> None:
     assert code == 2, (code, err)
-    assert err.count("\n") == 1 and err.endswith("\n"), err
-    assert "Traceback" not in err and ": error: " in err and err.startswith(starts), err
+    assert err.count("\n") == 1, err
+    assert err.endswith("\n"), err
+    assert "Traceback" not in err, err
+    assert ": error: " in err, err
+    assert err.startswith(starts), err
 
 
 def render_or_fail_cleanly(scene: Path, capsys) -> str:
@@ -86,7 +89,8 @@ def render_or_fail_cleanly(scene: Path, capsys) -> str:
     if code == 0:
         assert err == "", err
         image, _ = read_image(out)
-        assert image.shape == (4, 4, 3) and np.isfinite(image).all()
+        assert image.shape == (4, 4, 3)
+        assert np.isfinite(image).all()
         out.unlink()
     else:
         assert_one_line_error(code, err, starts=f"ptlab: error: {scene}: ")
@@ -278,8 +282,7 @@ def test_cornell_box_with_a_value_changed_renders_or_names_the_key(path, value, 
         not err
         or section_of(path) in err
         or any(p in err for p in SCENE_LEVEL)
-        or path[0] == "mesh"
-        and "nearer the origin" in err
+        or (path[0] == "mesh" and "nearer the origin" in err)
     ), (path, value, err)
 
 
@@ -558,17 +561,8 @@ colours = st.one_of(st.floats(0, 1), st.lists(st.floats(0, 1), min_size=3, max_s
 bad_colours = st.sampled_from([-0.1, 1.5, [1, 2], math.nan, "red", [0.5, 0.5, 1e39]])
 
 
-@st.composite
-def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
-    """A scene's data and its OBJ files: a camera, materials of every type, spheres, quads
-    and meshes, point lights, a sky, render defaults; valid, but for (often) one value drawn
-    from the absurd instead."""
-    spots = iter(range(1000))
-    broken = draw(st.one_of(st.just(-1), st.integers(0, 40)))  # which value is absurd
-
-    def pick(valid, absurd):
-        return draw(absurd if next(spots) == broken else valid)
-
+def made_up_camera(draw, pick) -> dict:
+    """A scene's camera for ``made_up_scenes``; ``pick(valid, absurd)`` draws each value."""
     camera = {
         "position": pick(near((0, 0, 10)), far_points),
         "fov": pick(
@@ -583,6 +577,11 @@ def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
         camera["direction"] = pick(
             near((0, 0, -1)), st.sampled_from([[0, 0, 0], [1e300, 1e300, 0], [1e-300, 0, 0], [0, 1]])
         )
+    return camera
+
+
+def made_up_materials(draw, pick) -> dict:
+    """A scene's materials for ``made_up_scenes``: one to three of any type, a lamp, a board."""
     kinds = {
         "diffuse": lambda: {"albedo": pick(colours, bad_colours)},
         "mirror": lambda: {
@@ -623,6 +622,22 @@ def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
             "scale": pick(st.floats(0.1, 10), st.sampled_from([0, -1, math.inf, "5"])),
         },
     }
+    return materials
+
+
+@st.composite
+def made_up_scenes(draw) -> tuple[dict, dict[str, str]]:
+    """A scene's data and its OBJ files: a camera, materials of every type, spheres, quads
+    and meshes, point lights, a sky, render defaults; valid, but for (often) one value drawn
+    from the absurd instead."""
+    spots = iter(range(1000))
+    broken = draw(st.one_of(st.just(-1), st.integers(0, 40)))  # which value is absurd
+
+    def pick(valid, absurd):
+        return draw(absurd if next(spots) == broken else valid)
+
+    camera = made_up_camera(draw, pick)
+    materials = made_up_materials(draw, pick)
     names = sorted(materials)
     meshes, files = [], {}
     for k in range(draw(st.integers(1, 3))):
@@ -815,7 +830,8 @@ def test_render_options_render_or_fail_cleanly(options, out, tmp_path, monkeypat
     code, err = run_cli(args, capsys)
     written = sorted(p.name for p in folder.iterdir()) != ["folder.png"]
     if code == 0:
-        assert err == "" and written
+        assert err == ""
+        assert written
     else:
         assert_one_line_error(code, err)
         assert not written, sorted(folder.iterdir())
@@ -880,11 +896,8 @@ def test_bad_converge_and_bench_options_fail_at_once(bad, tmp_path, monkeypatch,
             "1",
         ],
     }[command]
-    if (
-        (command, option) == ("bench", "--backend")
-        and value in ("embree", "numpy")
-        or (command, option) == ("bench", "--estimator")
-        and value in ("homework", "default")
+    if ((command, option) == ("bench", "--backend") and value in ("embree", "numpy")) or (
+        (command, option) == ("bench", "--estimator") and value in ("homework", "default")
     ):
         value = "x"
     code, err = run_cli([*cheap, f"{option}={value}"], capsys)
@@ -1134,7 +1147,8 @@ def test_regression_is_one_line_exit_2_and_no_image(case, tmp_path, capsys):
     toml, meshes, fragments = REGRESSIONS[case]
     scene = cornell_with(tmp_path, toml, meshes)
     err = render_or_fail_cleanly(scene, capsys)
-    assert err and all(fragment in err for fragment in fragments), err
+    assert err, err
+    assert all(fragment in err for fragment in fragments), err
 
 
 def test_nested_toml_is_malformed_not_a_recursion_error(tmp_path, capsys):
@@ -1250,7 +1264,7 @@ def test_a_seed_beyond_32_bits_is_kept_in_the_exr(tmp_path, capsys):
 
 
 @pytest.mark.parametrize(
-    "args, environment, fragments",
+    ("args", "environment", "fragments"),
     [
         (["--budget", "inf"], {}, ["budget inf", "finite"]),
         (["--out", "/proc/ptlab"], {}, ["/proc/ptlab: cannot write in /proc"]),
@@ -1311,5 +1325,7 @@ def test_processes_report_bad_meshes_without_traceback(command, tmp_path):
         cwd=tmp_path,
     )
     assert result.returncode == 2, result.stderr
-    assert result.stderr.count("\n") == 1 and "Traceback" not in result.stderr, result.stderr
-    assert "within +-1e+10" in result.stderr and not out.exists()
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert "Traceback" not in result.stderr, result.stderr
+    assert "within +-1e+10" in result.stderr
+    assert not out.exists()

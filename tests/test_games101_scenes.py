@@ -44,7 +44,8 @@ def test_homework_5_scene_has_the_homeworks_geometry_lights_and_colours():
     np.testing.assert_allclose(scene.camera.position, [0, 0, 0])
     np.testing.assert_allclose(scene.camera.forward, [0, 0, -1])
     assert scene.camera.fov_y == 90
-    assert resolution(scene) == (1280, 960) and scene.defaults.max_depth == 5
+    assert resolution(scene) == (1280, 960)
+    assert scene.defaults.max_depth == 5
     np.testing.assert_allclose(scene.point_lights.positions, [[-20, 70, 20], [30, 50, -12]])
     np.testing.assert_allclose(scene.sky.radiance, srgb_to_linear(BACKGROUND), atol=1e-4)
     np.testing.assert_allclose(bounds(scene, "checkerboard"), [[-5, -3, -16], [5, -3, -6]])
@@ -72,7 +73,8 @@ def test_homework_6_scene_is_the_bunny_scaled_by_60():
     np.testing.assert_allclose(scene.triangles, 60 * bunny)
     np.testing.assert_allclose(scene.camera.position, [-1, 5, 10])
     np.testing.assert_allclose(scene.camera.forward, [0, 0, -1])
-    assert scene.camera.fov_y == 90 and resolution(scene) == (1280, 960)
+    assert scene.camera.fov_y == 90
+    assert resolution(scene) == (1280, 960)
     np.testing.assert_allclose(scene.point_lights.positions, [[-20, 70, 20], [20, 70, 20]])
     np.testing.assert_allclose(scene.sky.radiance, srgb_to_linear(BACKGROUND), atol=1e-4)
 
@@ -124,7 +126,8 @@ def test_every_integrator_renders_the_scene_without_nan(name, backend, bad_contr
         images = {}
         for integrator, strategy in RUNS:
             image = render_job(viewed, accel, backend, integrator, strategy, width, height)
-            assert np.isfinite(image).all() and (image >= 0).all(), (view, integrator, strategy)
+            assert np.isfinite(image).all(), (view, integrator, strategy)
+            assert (image >= 0).all(), (view, integrator, strategy)
             assert not bad_contributions, (view, integrator, strategy, sum(bad_contributions))
             images[integrator, strategy] = image
         if view == "scene camera":
@@ -132,4 +135,5 @@ def test_every_integrator_renders_the_scene_without_nan(name, backend, bad_contr
             sky = np.broadcast_to(scene.sky.radiance, (width, 3))
             for key in RUNS[:4]:
                 np.testing.assert_allclose(images[key][0], sky, rtol=1e-5)
-            assert (images["depth", "nee"] > 0).any() and (images["normals", "nee"] > 0).any()
+            assert (images["depth", "nee"] > 0).any()
+            assert (images["normals", "nee"] > 0).any()

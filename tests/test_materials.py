@@ -84,7 +84,9 @@ def test_sample_never_returns_nan_and_its_weight_is_finite_and_not_negative(mate
     wi = material.sample(wo, n, u)
     assert np.isfinite(wi).all()
     wi, weight = material.sample_weight(wo, n, u)
-    assert np.isfinite(wi).all() and np.isfinite(weight).all() and (weight >= 0).all()
+    assert np.isfinite(wi).all()
+    assert np.isfinite(weight).all()
+    assert (weight >= 0).all()
     # A direction wherever it can sample: a unit vector.
     can = (weight > 0).any(axis=1)
     np.testing.assert_allclose(np.linalg.norm(wi[can], axis=1), 1, atol=1e-6)
@@ -94,9 +96,12 @@ def test_sample_never_returns_nan_and_its_weight_is_finite_and_not_negative(mate
 def test_eval_and_pdf_are_finite_and_not_negative_everywhere(material):
     n, wo, wi, _ = directions_everywhere(ROWS, 1)
     f, pdf = material.eval(wo, wi, n), material.pdf(wo, wi, n)
-    assert f.shape == (ROWS, 3) and pdf.shape == (ROWS,)
-    assert np.isfinite(f).all() and (f >= 0).all()
-    assert np.isfinite(pdf).all() and (pdf >= 0).all()
+    assert f.shape == (ROWS, 3)
+    assert pdf.shape == (ROWS,)
+    assert np.isfinite(f).all()
+    assert (f >= 0).all()
+    assert np.isfinite(pdf).all()
+    assert (pdf >= 0).all()
 
 
 @pytest.mark.parametrize("material", REFLECTIVE, ids=repr)
@@ -171,8 +176,10 @@ def test_eval_pdf_and_sample_follow_the_contract(sampling):
     assert (material.pdf(wo, wi, n) > 0).all()
     np.testing.assert_allclose(material.eval(wo, wi, n), np.broadcast_to(ALBEDO / math.pi, wi.shape))
     # Reflective only: nothing below the surface, for wi or for wo.
-    assert (material.eval(wo, -wi, n) == 0).all() and (material.pdf(wo, -wi, n) == 0).all()
-    assert (material.eval(-wo, wi, n) == 0).all() and (material.pdf(-wo, wi, n) == 0).all()
+    assert (material.eval(wo, -wi, n) == 0).all()
+    assert (material.pdf(wo, -wi, n) == 0).all()
+    assert (material.eval(-wo, wi, n) == 0).all()
+    assert (material.pdf(-wo, wi, n) == 0).all()
     # Reciprocity.
     np.testing.assert_array_equal(material.eval(wo, wi, n), material.eval(wi, wo, n))
 
@@ -223,7 +230,8 @@ def test_with_sampling_returns_the_material_itself_when_nothing_changes():
     material = Diffuse(ALBEDO, sampling="cosine")
     assert material.with_sampling("cosine") is material
     uniform = material.with_sampling("uniform")
-    assert uniform is not material and type(uniform) is Diffuse
+    assert uniform is not material
+    assert type(uniform) is Diffuse
     assert (uniform.sampling, material.sampling) == ("uniform", "cosine")
     with pytest.raises(ValueError, match="sampling"):
         material.with_sampling("importance")

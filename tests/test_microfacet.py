@@ -116,10 +116,11 @@ def test_sample_weight_is_f_cos_over_pdf_and_vndf_weight_is_f_g2_over_g1(samplin
         alpha = material.alpha
         expected = fresnel * (G2(wo[:, 2], np.maximum(wi[:, 2], 1e-7), alpha) / G1(wo[:, 2], alpha))[:, None]
         np.testing.assert_allclose(weight[ok], expected[ok], rtol=1e-9)
-        assert (weight[~ok] == 0).all() and (weight <= 1).all()
+        assert (weight[~ok] == 0).all()
+        assert (weight <= 1).all()
 
 
-@pytest.mark.parametrize("alpha, low, high", [(0.05, 0.99, 1.0), (1.0, 0.3, 0.9)])
+@pytest.mark.parametrize(("alpha", "low", "high"), [(0.05, 0.99, 1.0), (1.0, 0.3, 0.9)])
 def test_white_furnace_smooth_metal_reflects_nearly_everything_rough_metal_less(alpha, low, high):
     # With F0 = 1 the only loss is masking: tiny for alpha = 0.05 at normal incidence.
     material = Microfacet((1, 1, 1), alpha=alpha)
@@ -140,7 +141,8 @@ def test_float32_column_major_in_float32_out():
     u = rng.random((rows, 2), dtype=np.float32)
     wi, weight = material.sample_weight(wo, n, u)
     for array in (wi, weight, material.eval(wo, wi, n), material.pdf(wo, wi, n)):
-        assert array.dtype == np.float32 and np.isfinite(array).all()
+        assert array.dtype == np.float32
+        assert np.isfinite(array).all()
     assert material.eval(wo, wi, n).flags.f_contiguous
 
 
@@ -175,15 +177,15 @@ def test_parameters():
     assert Microfacet(roughness=0.5).alpha == 0.25  # alpha = roughness^2
     assert Microfacet(alpha=0.3).alpha == 0.3
     np.testing.assert_array_equal(Microfacet("copper").f0, METALS["copper"])
-    for bad in (
-        dict(roughness=0.5, alpha=0.2),
-        dict(alpha=0.0),
-        dict(alpha=1.5),
-        dict(f0="unobtainium"),
-        dict(f0=(1.2, 0.5, 0.5)),
-        dict(kd=(0.6, 0.6, 0.6), ks=0.6),
-        dict(sampling="uniform"),
+    for bad, problem in (
+        (dict(roughness=0.5, alpha=0.2), "give roughness or alpha, not both"),
+        (dict(alpha=0.0), "alpha must be in"),
+        (dict(alpha=1.5), "alpha must be in"),
+        (dict(f0="unobtainium"), "unknown metal 'unobtainium'"),
+        (dict(f0=(1.2, 0.5, 0.5)), "f0 must be three numbers in"),
+        (dict(kd=(0.6, 0.6, 0.6), ks=0.6), "kd . ks must be at most 1"),
+        (dict(sampling="uniform"), "unknown sampling 'uniform'"),
     ):
-        with pytest.raises(ValueError):
+        with pytest.raises(ValueError, match=problem):
             Microfacet(**bad)
     assert "alpha=0.25" in repr(Microfacet(roughness=0.5))

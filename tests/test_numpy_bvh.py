@@ -89,9 +89,12 @@ def random_rays(
 def assert_hits_match(ref: Hits, hits: Hits, origins: np.ndarray, dirs: np.ndarray, tris: np.ndarray):
     """The agreement with Embree described in the module docstring."""
     np.testing.assert_array_equal(hits.hit, ref.hit)
-    assert hits.t.dtype == np.float32 and hits.prim.dtype == np.intp
-    assert hits.u.dtype == np.float32 and hits.v.dtype == np.float32
-    assert np.all(hits.prim[~hits.hit] == -1) and np.all(np.isinf(hits.t[~hits.hit]))
+    assert hits.t.dtype == np.float32
+    assert hits.prim.dtype == np.intp
+    assert hits.u.dtype == np.float32
+    assert hits.v.dtype == np.float32
+    assert np.all(hits.prim[~hits.hit] == -1)
+    assert np.all(np.isinf(hits.t[~hits.hit]))
     hit = ref.hit
     t, t_ref = hits.t[hit].astype(float), ref.t[hit].astype(float)
     # A float32 hit point is known to a few ulps of the coordinates' size; along a ray
@@ -351,7 +354,7 @@ def test_float64_rays_give_the_same_hits(every_triangle):
         np.testing.assert_array_equal(getattr(h64, name), getattr(h32, name))
 
 
-@pytest.mark.parametrize("max_leaf_size, every_triangle", [(1, False), (4, False), (4, True)])
+@pytest.mark.parametrize(("max_leaf_size", "every_triangle"), [(1, False), (4, False), (4, True)])
 def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
     """A flat tree: the quad z = 1, 0 <= x, y <= 1 (with max_leaf_size 1, a flat root
     over two flat leaves), hit by rays along z and rays with zero components."""
@@ -364,12 +367,14 @@ def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
     origins = np.column_stack([xy, np.zeros(n)])
     for dirs, t in [((0, 0, 1), 1.0), ((0, 0, 4), 0.25)]:
         hits = bvh.intersect(origins, np.tile(dirs, (n, 1)))
-        assert hits.hit.all() and np.all(hits.t == t)
+        assert hits.hit.all()
+        assert np.all(hits.t == t)
         np.testing.assert_allclose(
             origins + hits.t[:, None] * np.array(dirs), np.column_stack([xy, np.ones(n)]), atol=1e-6
         )
-    from_above = bvh.intersect(origins + [0, 0, 2], np.tile([0, 0, -1], (n, 1)))
-    assert from_above.hit.all() and np.all(from_above.t == 1.0)
+    from_above = bvh.intersect([*origins, 0, 0, 2], np.tile([0, 0, -1], (n, 1)))
+    assert from_above.hit.all()
+    assert np.all(from_above.t == 1.0)
     # One zero component, and rays in the quad's plane (a miss, as for Embree).
     slanted = bvh.intersect([[0.5, -0.5, 0], [-0.5, 0.5, 0]], [[0, 1, 1], [1, 0, 1]])
     np.testing.assert_allclose(slanted.t, [1, 1])

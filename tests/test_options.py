@@ -42,7 +42,8 @@ def test_defaults_come_from_the_modules_that_own_them():
         PathSettings.rr_min_depth,
     )
     assert options.sampler == DEFAULT_SAMPLER
-    assert options.max_depth is None and INTEGRATORS["whitted"].max_depth == 5
+    assert options.max_depth is None
+    assert INTEGRATORS["whitted"].max_depth == 5
     assert INTEGRATORS["path"].max_depth == PathSettings.max_depth
 
 
@@ -50,15 +51,18 @@ def test_options_given_by_name_in_order_or_as_one_object_render_alike(cornell):
     by_name = ptlab.render(cornell, spp=2, res=12, seed=3, workers=1)
     in_order = ptlab.render(cornell, 2, 12, 3, 1)
     as_object = ptlab.render(cornell, options=RenderOptions(spp=2, res=12, seed=5), seed=3, workers=1)
-    assert np.array_equal(by_name, in_order) and np.array_equal(by_name, as_object)
+    assert np.array_equal(by_name, in_order)
+    assert np.array_equal(by_name, as_object)
     with pytest.raises(TypeError):
         ptlab.render(cornell, spp=2, checkpoint="x.npz")  # render_result's, not an option
 
 
 def test_options_left_open_are_decided_for_the_scene(cornell):
     options = RenderOptions(integrator="whitted").for_scene(cornell)
-    assert options.res == (512, 512) and options.max_depth == 5
-    assert options.backend in ("embree", "numpy") and options.spp_per_pass == 16
+    assert options.res == (512, 512)
+    assert options.max_depth == 5
+    assert options.backend in ("embree", "numpy")
+    assert options.spp_per_pass == 16
     assert RenderOptions(spp=4).for_scene(cornell).spp_per_pass == 4
     hw5 = ptlab.load_scene("games101-hw5")
     assert RenderOptions().for_scene(hw5).res == hw5.defaults.res
@@ -103,7 +107,7 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize("options, message", BAD, ids=[str(o) for o, _ in BAD])
+@pytest.mark.parametrize(("options", "message"), BAD, ids=[str(o) for o, _ in BAD])
 def test_each_bad_value_is_its_one_line_error(options, message):
     with pytest.raises(PtlabError, match=f"^{re.escape(message)}$"):
         RenderOptions(**options)
@@ -120,8 +124,10 @@ def test_is_integer_takes_ints_and_numpy_integers_not_bools():
 
 def test_checked_values_are_plain():
     options = RenderOptions(spp=np.int64(4), res="20x10", seed=np.uint32(2), rr="0.5")
-    assert options.spp == 4 and type(options.spp) is int
-    assert options.res == (20, 10) and options.rr == 0.5
+    assert options.spp == 4
+    assert type(options.spp) is int
+    assert options.res == (20, 10)
+    assert options.rr == 0.5
     assert type(options.seed) is int
 
 
@@ -167,6 +173,8 @@ def test_the_header_records_every_option(cornell):
     result = render_result(cornell, spp=2, res=(12, 8), seed=4, workers=1, rr=0.8)
     settings = result.settings
     assert (settings["width"], settings["height"], settings["seed"]) == (12, 8, 4)
-    assert settings["rr"] == "0.8" and settings["rr_depth"] == 0  # where roulette started
-    assert settings["max_depth"] == 100 and settings["integrator"] == "path"
+    assert settings["rr"] == "0.8"
+    assert settings["rr_depth"] == 0
+    assert settings["max_depth"] == 100
+    assert settings["integrator"] == "path"
     assert set(OPTIONS) - {"res"} <= set(settings)

@@ -35,7 +35,8 @@ def reference(cornell):
 @pytest.mark.parametrize("workers", [2, 3])
 def test_process_pool_gives_the_same_image(cornell, reference, workers):
     result = render_result(cornell, workers=workers, **SMALL)
-    assert result.complete and result.spp == 6
+    assert result.complete
+    assert result.spp == 6
     assert np.array_equal(result.image, reference.image)
     assert result.rays == reference.rays
 
@@ -50,11 +51,13 @@ def test_any_executor_gives_the_same_image(cornell, reference):
 @pytest.mark.subprocess
 def test_dask_cluster_gives_the_same_image(cornell, reference):
     distributed = pytest.importorskip("dask.distributed")
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster:
-        with distributed.Client(cluster) as client:
-            result = render_result(cornell, executor=client.get_executor(), **SMALL)
+    with (
+        distributed.LocalCluster(
+            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        ) as cluster,
+        distributed.Client(cluster) as client,
+    ):
+        result = render_result(cornell, executor=client.get_executor(), **SMALL)
     assert np.array_equal(result.image, reference.image)
 
 
@@ -80,10 +83,13 @@ def test_stop_keeps_whole_passes_per_tile_and_resume_finishes_identically(
     partial = render_result(
         cornell, workers=workers, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL
     )
-    assert not partial.complete and checkpoint.is_file()
-    assert 0 < partial.spp < partial.spp_max <= 6 and partial.spp % 2 == 0
+    assert not partial.complete
+    assert checkpoint.is_file()
+    assert 0 < partial.spp < partial.spp_max <= 6
+    assert partial.spp % 2 == 0
     resumed = render_result(cornell, workers=workers, resume=checkpoint, **SMALL)
-    assert resumed.complete and resumed.spp == 6
+    assert resumed.complete
+    assert resumed.spp == 6
     assert np.array_equal(resumed.image, reference.image)
     assert resumed.samples < reference.samples  # only the missing passes ran
 
@@ -106,7 +112,8 @@ def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
     with pytest.raises(ptlab.errors.PtlabError, match="started with, 6"):
         render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=2))
     longer = render_result(cornell, workers=1, resume=checkpoint, **dict(SMALL, spp=8))
-    assert longer.complete and longer.spp == 8
+    assert longer.complete
+    assert longer.spp == 8
     straight = render_result(cornell, workers=1, **dict(SMALL, spp=8))
     assert np.array_equal(longer.image, straight.image)
 
@@ -124,7 +131,8 @@ def test_a_checkpoint_from_before_render_options_still_resumes(cornell, referenc
     identity.update(rr="throughput", rr_depth="None")
     np.savez(checkpoint, **dict(arrays, identity=json.dumps(identity)))
     resumed = render_result(cornell, workers=1, resume=checkpoint, **SMALL)
-    assert resumed.complete and np.array_equal(resumed.image, reference.image)
+    assert resumed.complete
+    assert np.array_equal(resumed.image, reference.image)
     with pytest.raises(ptlab.errors.PtlabError, match="rr_depth = 'None', this render has 1"):
         render_result(cornell, workers=1, resume=checkpoint, rr_depth=1, **SMALL)
 
@@ -220,16 +228,20 @@ def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(tmp_p
     process = run_cli([*options, "--out", "partial.exr", "--checkpoint", "state.npz"], tmp_path, signum)
     _, err = process.communicate(timeout=600)
     assert process.returncode == 130, err
-    assert "interrupted" in err and "Traceback" not in err
+    assert "interrupted" in err
+    assert "Traceback" not in err
     partial, metadata = read_image(tmp_path / "partial.exr")
-    assert metadata["complete"] == 0 and 16 <= metadata["spp"] <= 64
-    assert np.isfinite(partial).all() and partial.mean() > 0.1
+    assert metadata["complete"] == 0
+    assert 16 <= metadata["spp"] <= 64
+    assert np.isfinite(partial).all()
+    assert partial.mean() > 0.1
 
     resumed = run_cli([*options, "--out", "final.exr", "--resume", "state.npz"], tmp_path)
-    out, err = resumed.communicate(timeout=600)
+    _out, err = resumed.communicate(timeout=600)
     assert resumed.returncode == 0, err
     final, metadata = read_image(tmp_path / "final.exr")
-    assert metadata["spp"] == 128 and metadata["complete"] == 1
+    assert metadata["spp"] == 128
+    assert metadata["complete"] == 1
     expected = ptlab.render("cornell-box", spp=128, res=64, seed=5, workers=1)
     assert np.array_equal(final, expected)
 

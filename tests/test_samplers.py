@@ -45,7 +45,7 @@ def test_dimensions_after_the_second_bounce_are_independent(name):
     # (PATTERNED_DIMENSIONS); from there on every sampler draws independent numbers.
     from ptlab.samplers import PATTERNED_DIMENSIONS, independent_one, independent_pair
 
-    assert PATTERNED_DIMENSIONS == BounceUniforms(make_sampler("sobol"), None, 2).first
+    assert BounceUniforms(make_sampler("sobol"), None, 2).first == PATTERNED_DIMENSIONS
     sampler = make_sampler(name, 3, 16)
     keys = sampler.keys(np.full(16, 9), np.arange(16))
     assert np.array_equal(
@@ -102,8 +102,10 @@ def test_values_are_uniform_floats_in_the_unit_interval(name):
     keys = sampler.keys(pixel, np.tile(np.arange(16), 4096))
     for dim, count in ((0, 2), (3, 1), (17, 2)):
         u = sampler.get(keys, dim, count)
-        assert u.dtype == np.float32 and u.shape == (len(keys), count)
-        assert (u >= 0).all() and (u < 1).all()
+        assert u.dtype == np.float32
+        assert u.shape == (len(keys), count)
+        assert (u >= 0).all()
+        assert (u < 1).all()
         # 65536 values: the mean of U(0, 1) has standard error 0.0011; 5 SE is a false
         # alarm once in 1.7 million.
         assert abs(u.mean() - 0.5) < 5 * np.sqrt(1 / 12 / u.size)
@@ -205,7 +207,8 @@ def test_resume_gives_the_straight_image(name, tmp_path):
     straight = render_result(
         "cornell-box", spp=48, res=(40, 24), seed=2, workers=1, sampler=name, tile_size=16, spp_per_pass=8
     )
-    assert resumed.complete and np.array_equal(resumed.image, straight.image)
+    assert resumed.complete
+    assert np.array_equal(resumed.image, straight.image)
 
 
 def test_a_sobol_render_resumes_to_more_samples(tmp_path):

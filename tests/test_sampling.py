@@ -48,7 +48,9 @@ def test_to_world_maps_z_to_the_normal_and_keeps_lengths_and_angles():
 
 def test_uniform_triangle_is_uniform(u):
     b1, b2 = uniform_triangle(u)
-    assert (b1 >= 0).all() and (b2 >= 0).all() and (b1 + b2 <= 1).all()
+    assert (b1 >= 0).all()
+    assert (b2 >= 0).all()
+    assert (b1 + b2 <= 1).all()
     # Uniform on the triangle: each barycentric has mean 1/3; the sub-triangle
     # b1 + b2 < 1/2 (the corner at v0 cut at half height) holds 1/4 of the area.
     for b in (b1, b2, 1 - b1 - b2):

@@ -96,7 +96,7 @@ def test_fresnel_is_the_same_from_both_sides():
     inside = fresnel_dielectric(dot(wt, -n), 1 / GLASS)
     # (Near grazing the inside angle nears the critical one, where F is steep: rounding grows.)
     np.testing.assert_allclose(outside, inside, rtol=1e-10)
-    assert ((0 <= outside) & (outside <= 1)).all()
+    assert ((outside >= 0) & (outside <= 1)).all()
 
 
 def test_fresnel_keeps_float32():

@@ -104,14 +104,16 @@ def write_scene(folder: Path, text: str) -> Path:
 
 def test_minimal_scene_loads(scene_dir):
     scene = ptlab.load_scene(write_scene(scene_dir, GOOD))
-    assert scene.triangle_count == 3 and len(scene.area_lights) == 1
+    assert scene.triangle_count == 3
+    assert len(scene.area_lights) == 1
 
 
 def test_students_files_written_with_the_old_names_still_run(cornell):
     # Chapter 7 first told students to call scene.lights.sample(u), which gave a LightSample.
     from ptlab.lights import LightSample, ShapeSample
 
-    assert cornell.lights is cornell.area_lights and LightSample is ShapeSample
+    assert cornell.lights is cornell.area_lights
+    assert LightSample is ShapeSample
     with pytest.raises(AttributeError):
         cornell.lights = None
     assert cornell.area_lights is not None
@@ -160,7 +162,9 @@ def test_broken_scene_names_file_key_and_problem(scene_dir, case):
         ptlab.load_scene(write_scene(scene_dir, text))
     message = str(error.value)
     assert "\n" not in message
-    assert "scene.toml" in message and key in message and problem in message, message
+    assert "scene.toml" in message, message
+    assert key in message, message
+    assert problem in message, message
 
 
 def test_nan_vertices_are_reported_with_the_mesh(scene_dir):
@@ -231,14 +235,15 @@ material = "glass"
         "glass": "Dielectric",
     }
     tinted = scene.materials[scene.material_names.index("tinted")]
-    assert tinted.alpha == 0.1 and tinted.sampling == "hemisphere"
+    assert tinted.alpha == 0.1
+    assert tinted.sampling == "hemisphere"
     assert scene.materials[scene.material_names.index("gold")].alpha == pytest.approx(0.09)
     assert scene.triangle_count == 3 + 320  # icosphere, 2 subdivisions
     assert np.isfinite(ptlab.render(scene, spp=1, res=8, workers=1)).all()
 
 
 @pytest.mark.parametrize(
-    "good, bad, key, problem",
+    ("good", "bad", "key", "problem"),
     [
         ("roughness = 0.3", "roughness = 0", "materials.gold", "alpha"),
         ('f0 = "gold"', 'f0 = "unobtainium"', "materials.gold", "unknown metal"),
@@ -249,7 +254,8 @@ material = "glass"
 def test_bad_material_values_name_the_material(scene_dir, good, bad, key, problem):
     with pytest.raises(SceneError) as error:
         ptlab.load_scene(write_scene(scene_dir, GOOD + MATERIALS.replace(good, bad)))
-    assert key in str(error.value) and problem in str(error.value), str(error.value)
+    assert key in str(error.value), str(error.value)
+    assert problem in str(error.value), str(error.value)
 
 
 def test_a_mesh_needs_a_file_a_sphere_or_a_quad(scene_dir):
@@ -357,7 +363,9 @@ def test_broken_lights_and_meshes_name_file_key_and_problem(scene_dir, case):
         ptlab.load_scene(write_scene(scene_dir, GOOD + extra))
     message = str(error.value)
     assert "\n" not in message
-    assert "scene.toml" in message and key in message and problem in message, message
+    assert "scene.toml" in message, message
+    assert key in message, message
+    assert problem in message, message
 
 
 def test_a_scene_without_any_light_names_every_kind(scene_dir):
@@ -377,9 +385,11 @@ def test_render_table_gives_the_resolution_and_depth_unless_the_render_does(scen
     scene = ptlab.load_scene(write_scene(scene_dir, GOOD + "\n[render]\nres = [12, 8]\nmax_depth = 3\n"))
     assert (scene.defaults.res, scene.defaults.max_depth) == ((12, 8), 3)
     result = ptlab.render_result(scene, spp=1, workers=1)
-    assert result.image.shape == (8, 12, 3) and result.settings["max_depth"] == 3
+    assert result.image.shape == (8, 12, 3)
+    assert result.settings["max_depth"] == 3
     result = ptlab.render_result(scene, spp=1, res=4, max_depth=1, workers=1)
-    assert result.image.shape == (4, 4, 3) and result.settings["max_depth"] == 1
+    assert result.image.shape == (4, 4, 3)
+    assert result.settings["max_depth"] == 1
     assert ptlab.load_scene(write_scene(scene_dir, GOOD + "\n[render]\nres = 16\n")).defaults.res == (16, 16)
 
 

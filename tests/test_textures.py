@@ -31,7 +31,8 @@ def test_checkerboard_colours_at_known_uvs():
     # pattern = (frac(5u) > 0.5) xor (frac(5v) > 0.5): B where it is 1.
     expected = [A, B, B, A, B, A, B, A, B]
     colours = board(uv)
-    assert colours.shape == (len(uv), 3) and colours.dtype == np.float32
+    assert colours.shape == (len(uv), 3)
+    assert colours.dtype == np.float32
     np.testing.assert_array_equal(colours, np.array(expected, dtype=np.float32))
 
 

@@ -24,7 +24,9 @@ def test_every_tutorial_takes_res_spp_and_out_and_makes_the_folder(tmp_path, mon
     out = tmp_path / "pictures" / "chapter 7"
     monkeypatch.setattr(sys, "argv", ["07_path_tracing.py", "--res", "32", "--out", str(out)])
     args, folder = tutorial_options("Chapter 7's pictures.\n\nMore.", res=256, spp=64)
-    assert (args.res, args.spp) == (32, 64) and folder == out and out.is_dir()
+    assert (args.res, args.spp) == (32, 64)
+    assert folder == out
+    assert out.is_dir()
 
 
 @pytest.mark.slow

@@ -24,7 +24,8 @@ def test_cross_and_dot_take_any_shape_of_3_vectors():
 def test_cross_keeps_the_column_major_layout():
     a, b = np.random.default_rng(1).normal(size=(2, 100, 3))
     c = cross(a, b)
-    assert c.flags.f_contiguous and c.shape == (100, 3)
+    assert c.flags.f_contiguous
+    assert c.shape == (100, 3)
 
 
 def test_normalize_gives_unit_vectors_and_leaves_zero_alone():

@@ -15,7 +15,7 @@ from ptlab.accel.base import Accelerator, Hits
 
 BACKENDS = ("auto", "embree", "numpy")
 
-__all__ = ["Accelerator", "Hits", "BACKENDS", "make_accelerator", "resolve_backend"]
+__all__ = ["BACKENDS", "Accelerator", "Hits", "make_accelerator", "resolve_backend"]
 
 
 def resolve_backend(backend: str) -> str:

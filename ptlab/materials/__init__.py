@@ -7,4 +7,4 @@ from ptlab.materials.diffuse import Diffuse
 from ptlab.materials.microfacet import METALS, Microfacet
 from ptlab.materials.mirror import Mirror
 
-__all__ = ["Material", "Diffuse", "Microfacet", "Mirror", "Dielectric", "METALS"]
+__all__ = ["METALS", "Dielectric", "Diffuse", "Material", "Microfacet", "Mirror"]

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import hashlib
+import itertools
 import math
 import os
 from collections.abc import Callable
@@ -143,7 +144,7 @@ def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool
     """
     if not ladder or ladder[0].relmse <= target:
         return None
-    for before, after in zip(ladder, ladder[1:], strict=False):
+    for before, after in itertools.pairwise(ladder):
         if after.relmse <= target < before.relmse:
             slope = math.log(after.seconds / before.seconds) / math.log(after.relmse / before.relmse)
             return before.seconds * (target / before.relmse) ** slope, False
