@@ -247,14 +247,11 @@ def _sorted_operands(operands: list[ast.AST]) -> list[str]:
 
 
 def _statements(body: list) -> list:
-    """``body`` without docstrings, strings standing alone and ``pass``."""
+    """``body`` without docstrings, constants standing alone (``...``) and ``pass``."""
     return [
         s
         for s in body
-        if not (
-            isinstance(s, ast.Pass)
-            or (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant) and isinstance(s.value.value, str))
-        )
+        if not (isinstance(s, ast.Pass) or (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant)))
     ]
 
 
@@ -379,7 +376,8 @@ def copies_in(tree: ast.AST, answers: Answers, only: Iterable[FunctionNode] | No
     if not possible:
         return []
     found = similarities(tree, Answers(tuple(possible), answers.given), only, reach)
-    return sorted((c for c in found.values() if c.similarity >= THRESHOLD), key=lambda c: (c.line, c.answer.origin))
+    copied = [copy for copy in found.values() if copy.similarity >= THRESHOLD]
+    return sorted(copied, key=lambda copy: (copy.line, copy.answer.origin))
 
 
 def similarities(
@@ -429,7 +427,8 @@ class _Reach:
 
     def _named(self, node: FunctionNode) -> list[FunctionNode]:
         if id(node) not in self.named:
-            names = {n.id if isinstance(n, ast.Name) else n.attr for n in ast.walk(node) if isinstance(n, ast.Name | ast.Attribute)}
+            names = {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+            names |= {n.attr for n in ast.walk(node) if isinstance(n, ast.Attribute)}
             self.named[id(node)] = [f for name in names & self.by_name.keys() for f in self.by_name[name]]
         return self.named[id(node)]
 
@@ -459,7 +458,8 @@ def describe_copies(found: list[Copy], file: str) -> str:
     """ "a copy of ptlab's own answer, with the names changed (trace_paths is 93% ptlab.x.f,
     at 07.py:12; ...)"."""
     places = "; ".join(
-        f"{copy.name} is {copy.similarity:.0%} {copy.answer.origin}, at {file}:{copy.line}" for copy in found[:3]
+        f"{copy.name} is {copy.similarity:.0%} {copy.answer.origin}, at {file}:{copy.line}"
+        for copy in found[:3]
     )
     more = f" and {len(found) - 3} more" if len(found) > 3 else ""
     return f"a copy of ptlab's own answer, with the names changed ({places}{more})"

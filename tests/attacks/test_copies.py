@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import ast
 import inspect
+import json
+import re
 import textwrap
 import tomllib
 from pathlib import Path
@@ -185,8 +187,7 @@ CHAPTERS = {
         ),
         functions={name: f"ptlab.materials.microfacet.{name}" for name in ("D", "G1", "G2", "Lambda")},
         cls=("GGXMetal", "ptlab.materials.microfacet.Microfacet", ("eval", "pdf", "sample")),
-        init="    def __init__(self, f0=(1.0, 0.782, 0.344), alpha=0.25, sampling='ggx'):\n"
-        "        pass\n",
+        init="    def __init__(self, f0=(1.0, 0.782, 0.344), alpha=0.25, sampling='ggx'):\n        pass\n",
     ),
 }
 
@@ -252,7 +253,7 @@ def _number(name: str) -> int:
 def best_similarities(text: str, answers: Answers) -> dict[str, float]:
     """{library answer: the similarity of the file's function most like it}."""
     found = similarities(ast.parse(text), answers)
-    return {answer.origin: found[answer.origin].similarity if answer.origin in found else 0.0 for answer in answers.answers}
+    return {a.origin: found[a.origin].similarity if a.origin in found else 0.0 for a in answers.answers}
 
 
 # -- the tests --------------------------------------------------------------------------------
@@ -271,8 +272,10 @@ def test_a_near_copy_of_the_librarys_answers_is_found_and_named(number, edit):
         expected |= {f"{CHAPTERS[number]['cls'][1]}.{m}" for m in CHAPTERS[number]["cls"][2]}
     assert expected <= copied | _not_in_rules(number), (expected - copied, found)
     assert all(copy.similarity >= THRESHOLD + MARGIN for copy in found), found
+    first = found[0]
     message = describe_copies(found, f"{number:02d}.py")
-    assert f"{found[0].name} is {found[0].similarity:.0%} {found[0].answer.origin}, at {number:02d}.py:" in message
+    said = f"{first.name} is {first.similarity:.0%} {first.answer.origin}, at {number:02d}.py:{first.line}"
+    assert said in message, message
 
 
 def _not_in_rules(number: int) -> set[str]:
@@ -283,3 +286,106 @@ def _not_in_rules(number: int) -> set[str]:
     if "cls" in spec:
         held |= {f"{spec['cls'][1]}.{m}" for m in spec["cls"][2]}
     return held - origins
+
+
+@pytest.mark.parametrize("name", list(honest_files()))
+def test_no_honest_answer_is_taken_for_a_copy(name):
+    text = honest_files()[name]
+    number = _number(name)
+    answers = chapter(number).rules.fingerprints
+    assert not is_a_copy(copies_in(ast.parse(text), answers)), name
+    # Clear of the threshold: lowered by MARGIN it still finds no copy.
+    sims = best_similarities(text, answers)
+    near = [a for a in answers.answers if sims[a.origin] >= THRESHOLD - MARGIN]
+    assert sum(a.size for a in near) < MIN_COPIED_TOKENS, [(a.origin, sims[a.origin]) for a in near]
+    if number in (6, 9):  # (and ``ptlab grade``'s reading of the class)
+        cls = {6: "Lambertian", 9: "GGXMetal"}[number]
+        assert copied_class(ast.parse(text), cls, MATERIALS.fingerprints) == []
+
+
+def test_the_threshold_lies_between_honest_answers_and_near_copies_with_its_margin():
+    """The figures in ptlab/untrusted/copies.py's docstring: the most similar honest
+    function to an answer that weighs enough to count alone, and the least similar
+    near-copy of a copied answer."""
+    honest = max(
+        (sim, name, origin)
+        for name, text in honest_files().items()
+        for origin, sim in best_similarities(text, chapter(_number(name)).rules.fingerprints).items()
+        if _size(_number(name), origin) >= MIN_COPIED_TOKENS / 2
+    )
+    copies = min(
+        (copy.similarity, number, edit, copy.answer.origin)
+        for number in CHAPTERS
+        for edit in EDITS
+        for copy in copies_in(ast.parse(near_copy(number, edit)), chapter(number).rules.fingerprints)
+    )
+    print(f"most similar honest answer: {honest}; least similar near-copy: {copies}")
+    assert honest[0] + MARGIN <= THRESHOLD <= copies[0] - MARGIN, (honest, copies)
+
+
+def _size(number: int, origin: str) -> int:
+    return next(a.size for a in chapter(number).rules.fingerprints.answers if a.origin == origin)
+
+
+def test_the_code_the_exercise_files_give_is_no_evidence_of_copying():
+    from ptlab.untrusted.copies import template_grams
+
+    given = template_grams()
+    # The given helper of chapter 8 (``accelerator_for``) is in the library's answer too,
+    # and a hint's code (``RenderSetup(...)``) in its docstring: neither counts.
+    template = (TEMPLATES / "08_parallel.py").read_text()
+    helper = next(f for f in functions_in(ast.parse(template)) if f.name == "accelerator_for")
+    from ptlab.untrusted.copies import grams
+
+    assert grams(helper) and grams(helper) <= given
+    hint = grams(ast.parse('RenderSetup(scene=scene, backend=resolve_backend("auto"), width=width)'))
+    assert hint <= given
+    for number in range(1, 11):
+        answers = chapter(number).rules.fingerprints
+        assert all(not (answer.grams & given) for answer in answers.answers)
+        # The exercise file as handed out (given code, hints, stubs) shares nothing with them.
+        template = Path(chapter(number).template).read_text()
+        assert set(best_similarities(template, answers).values()) == {0.0}, number
+
+
+def test_a_class_is_a_copy_when_each_graded_method_it_writes_is_one():
+    text = near_copy(6, "all at once")  # (with a method of the student's own added)
+    tree = ast.parse(text)
+    found = copied_class(tree, "Lambertian", MATERIALS.fingerprints)
+    assert {copy.name for copy in found} == {"eval", "pdf", "sample"} and is_a_copy(found)
+    # One graded method of the student's own makes the class the student's, as overriding
+    # one of an inherited class does (``ptlab grade`` lets a material inherit the others).
+    own = ast.parse((EXERCISES / "06_right_uniform.py").read_text())
+    own_eval = next(f for f in functions_in(own) if f.name == "eval")
+    lambertian = next(c for c in tree.body if isinstance(c, ast.ClassDef) and c.name == "Lambertian")
+    lambertian.body = [f for f in lambertian.body if getattr(f, "name", "") != "eval"] + [own_eval]
+    assert copied_class(tree, "Lambertian", MATERIALS.fingerprints) == []
+
+
+def test_a_near_copy_of_the_librarys_diffuse_is_a_working_material():
+    # (so that the 0 of the grading run below is the copy's verdict, not a broken file)
+    import numpy as np
+
+    from ptlab.materials import Diffuse
+
+    namespace: dict = {}
+    exec(compile(near_copy(6, "all at once"), "06_diffuse.py", "exec"), namespace)
+    copy, library = namespace["Lambertian"]((0.5, 0.6, 0.7)), Diffuse((0.5, 0.6, 0.7), sampling="cosine")
+    rng = np.random.default_rng(0)
+    wo, wi, n = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in rng.normal(size=(3, 64, 3)))
+    u = rng.random((64, 2))
+    for method, arguments in (("eval", (wo, wi, n)), ("pdf", (wo, wi, n)), ("sample", (wo, n, u))):
+        assert np.allclose(getattr(copy, method)(*arguments), getattr(library, method)(*arguments)), method
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_a_near_copy_of_chapter_6_scores_nothing_in_a_grading_run(tmp_path, capsys):
+    path = tmp_path / "06_diffuse.py"
+    path.write_text(near_copy(6, "all at once"))
+    assert main(["exercise", "check", "6", str(path), "--json", str(tmp_path / "r.json")]) == 1
+    result = json.loads((tmp_path / "r.json").read_text())
+    assert result["score"] == 0, result
+    out = capsys.readouterr().out
+    assert "a copy of ptlab's own answer, with the names changed" in out
+    assert re.search(r"(eval|pdf|sample) is \d+% ptlab\.materials\.Diffuse\.(eval|pdf|sample)", out), out
