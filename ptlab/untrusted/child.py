@@ -50,7 +50,7 @@ from ptlab.errors import PtlabError
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
 from ptlab.untrusted.confinement import Refused, confine
-from ptlab.untrusted.copies import Answer
+from ptlab.untrusted.copies import Answers
 from ptlab.untrusted.no_exec import forbid_programs
 from ptlab.untrusted.ownership import MATERIAL_METHODS
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
@@ -118,7 +118,7 @@ class Confinement:
     folder: str
     user: StudentUser | None
     traps: tuple[str, ...]
-    answers: dict[str, Answer]
+    answers: Answers
     programs: bool
     limits: Limits
 

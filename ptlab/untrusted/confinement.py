@@ -36,7 +36,7 @@ import sys
 import threading
 from pathlib import Path
 
-from ptlab.untrusted.copies import Answer, copies_in, describe_copies, is_a_copy
+from ptlab.untrusted.copies import Answers, copies_in, describe_copies, is_a_copy
 
 #: The ptlab package: the code the student's process may not read.
 PTLAB = Path(__file__).resolve().parent.parent
@@ -93,7 +93,7 @@ class Refused(PermissionError):  # noqa: N818 (a rule, not an error of the code)
     """What the student's code tried is not allowed while it is graded."""
 
 
-def confine(folder: Path, answers: dict[str, Answer], programs: bool) -> None:
+def confine(folder: Path, answers: Answers, programs: bool) -> None:
     """Add the hook: from now on this process keeps the rules above. ``folder`` is its
     private folder, ``answers`` the fingerprints of the answers it may not compile (the
     chapter's), ``programs`` whether it may start programs."""
@@ -118,7 +118,7 @@ def _no_programs(*args, **kwargs):
 class _Rules:
     """The audit hook (called for every event, so it returns at once for the others)."""
 
-    def __init__(self, folder: Path, answers: dict[str, Answer], programs: bool):
+    def __init__(self, folder: Path, answers: Answers, programs: bool):
         self.folder = Path(os.path.realpath(folder))
         self.answers, self.programs = answers, programs
         self.checking = threading.local()  # (compiling inside the hook raises events)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
 
-from ptlab.untrusted.copies import Answer, answers_of
+from ptlab.untrusted.copies import Answers, answers_of
 
 
 @dataclass(frozen=True)
@@ -64,10 +64,10 @@ class Rules:
     library: bool = False
 
     @cached_property
-    def fingerprints(self) -> dict[str, Answer]:
-        """{digest: Answer} of every answer (``ptlab.untrusted.copies``); none for ptlab's own file."""
+    def fingerprints(self) -> Answers:
+        """The grams of every answer (``ptlab.untrusted.copies``); none for ptlab's own file."""
         if self.library:
-            return {}
+            return Answers()
         return answers_of(self.answers, self.solution)
 
     @property

@@ -119,7 +119,7 @@ def test_the_librarys_diffuse_copied_with_the_names_changed_earns_nothing(tmp_pa
     assert "class Lambertian(Material)" in path.read_text()
     result = grade(chapter(6), path, timeout_scale=0.5)
     assert_honest_failure(result, "a copy of ptlab's own answer, with the names changed")
-    assert "ptlab.materials.Diffuse.eval at 06_diffuse.py:" in result.results[0].message
+    assert "eval is 100% ptlab.materials.Diffuse.eval, at 06_diffuse.py:" in result.results[0].message
     assert main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 1
     assert "a copy of ptlab's own answer" in capsys.readouterr().out
 
