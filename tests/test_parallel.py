@@ -258,3 +258,64 @@ def test_preview_rewrites_the_output_after_a_pass(cornell, tmp_path):
 
     render_result(cornell, workers=1, on_pass=on_pass, **SMALL)
     assert previews == [2, 4, 6]
+
+
+# -- a plain script, as the README shows it ------------------------------------------------
+
+SCRIPT = """
+import numpy as np
+import ptlab
+{before}
+scene = ptlab.load_scene("cornell-box")
+image = ptlab.render(scene, spp=6, res=(48, 40), seed=11, tile_size=16, spp_per_pass=2, workers=2)
+np.save({out!r}, image)
+print("rendered")
+"""
+
+
+def run_script(tmp_path: Path, before: str = "") -> subprocess.CompletedProcess:
+    script = tmp_path / "render_box.py"
+    script.write_text(SCRIPT.format(before=before, out=str(tmp_path / "image.npy")))
+    return subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path
+    )
+
+
+@pytest.mark.subprocess
+def test_a_script_without_a_main_guard_renders_with_workers(tmp_path, reference):
+    """Workers started by the fork server would run such a script again, and render again in
+    each; ptlab forks them from the script's process instead, which runs it once."""
+    result = run_script(tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("rendered") == 1
+    assert "Traceback" not in result.stderr
+    assert np.array_equal(np.load(tmp_path / "image.npy"), reference.image)
+
+
+@pytest.mark.subprocess
+def test_a_script_without_a_main_guard_that_cannot_fork_is_told_what_to_add(tmp_path):
+    # Embree's threads already run in this process (a render in it), so forking is unsafe.
+    result = run_script(
+        tmp_path, before="ptlab.render('cornell-box', spp=1, res=8, workers=1, backend='embree')"
+    )
+    assert result.returncode != 0
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.endswith(
+        'render_box.py: put the script\'s own work under `if __name__ == "__main__":` to render '
+        "with several workers (or pass workers=1)"
+    ), result.stderr
+    assert "worker processes died" not in result.stderr
+    assert not (tmp_path / "image.npy").exists()
+
+
+@pytest.mark.subprocess
+def test_a_guarded_script_still_uses_the_fork_server(tmp_path):
+    script = tmp_path / "guarded.py"
+    script.write_text(
+        "import ptlab.rendering.executors as e\n"
+        "if __name__ == '__main__':\n"
+        "    print(e.pool_context().get_start_method())\n"
+        "print(e.pool_context().get_start_method())\n"
+    )
+    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
+    assert result.stdout.split() == ["forkserver", "fork"], result.stderr
