@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 from ptlab.errors import PtlabError
 
@@ -302,7 +303,8 @@ def _render(args) -> int:
         progress=progress,
         on_pass=_Preview(out, args.preview_every),
     )
-    with _StopOnSignal() as stop:
+    with _StopOnSignal() as signals:
+        stop = signals.requested.is_set
         try:
             if args.scheduler:
                 with dask_executor(args.scheduler) as executor:
@@ -312,7 +314,7 @@ def _render(args) -> int:
         finally:
             progress.close()
     if not result.complete:
-        return _interrupted(result, out, checkpoint, quiet=args.quiet)
+        return _interrupted(result, out, checkpoint, signals.exit_code)
     _write(out, result)
     if not args.quiet:
         print(
@@ -344,11 +346,12 @@ def _write(out: Path, result) -> None:
     write_image(out, image, metadata)
 
 
-def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
-    """Keep what an interrupted render has; exit code 130 (as for Ctrl-C)."""
+def _interrupted(result, out: Path, checkpoint, exit_code: int) -> int:
+    """Keep what an interrupted render has; ``exit_code`` is the signal's (130 for Ctrl-C,
+    143 for SIGTERM), as a shell reports a command that the signal ended."""
     if result.spp_max == 0:
         print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
-        return 130
+        return exit_code
     _write(out, result)
     spread = (
         f"{result.spp} spp"
@@ -358,27 +361,29 @@ def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
     print(f"ptlab: interrupted: wrote {out.resolve()} with {spread}", file=sys.stderr)
     if checkpoint is not None:
         print(f"ptlab: resume with --resume {checkpoint}", file=sys.stderr)
-    return 130
+    return exit_code
 
 
 class _StopOnSignal:
     """Turns the first Ctrl-C (SIGINT) or SIGTERM into a polite stop request.
 
-    The render then finishes the jobs in flight and keeps its image; a second Ctrl-C
-    interrupts at once.
+    The render then ends the jobs in flight and keeps the passes done; a second Ctrl-C
+    interrupts at once. ``exit_code`` is then 128 + the first signal's number.
     """
 
-    def __enter__(self):
+    def __enter__(self) -> _StopOnSignal:
         self.requested = threading.Event()
-        self.previous = {}
+        self.exit_code = 128 + signal.SIGINT
+        self.previous: dict[int, Any] = {}
         if threading.current_thread() is threading.main_thread():
             for signum in (signal.SIGINT, signal.SIGTERM):
                 self.previous[signum] = signal.signal(signum, self._handle)
-        return self.requested.is_set
+        return self
 
     def _handle(self, signum, frame) -> None:
         if self.requested.is_set():
             raise KeyboardInterrupt
+        self.exit_code = 128 + signum
         self.requested.set()
 
     def __exit__(self, *exc) -> None:

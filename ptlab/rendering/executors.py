@@ -23,10 +23,13 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 from collections.abc import Iterator
 from concurrent.futures import Executor, ProcessPoolExecutor
 from contextlib import contextmanager
+from multiprocessing.connection import wait
 from multiprocessing.context import BaseContext
+from types import FrameType
 from typing import TYPE_CHECKING
 
 from ptlab.errors import PtlabError
@@ -57,7 +60,7 @@ def script_without_main_guard() -> str | None:
     path = getattr(main, "__file__", None)
     if main is None or path is None:
         return None
-    frame = sys._getframe()
+    frame: FrameType | None = sys._getframe()
     while frame is not None and not (frame.f_globals is vars(main) and frame.f_code.co_name == "<module>"):
         frame = frame.f_back
     if frame is None:  # the script's top level is not on the stack: it has finished
@@ -122,9 +125,29 @@ def start_worker_server() -> None:
 def _init_worker(setup: RenderSetup) -> None:
     from ptlab.rendering.jobs import install_setup
 
-    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the main process handles Ctrl-C
+    # The main process handles Ctrl-C and SIGTERM, which reach a worker too when they are sent
+    # to the whole process group (a terminal's Ctrl-C, `kill -- -PGID`): it stops or kills
+    # the workers itself, and a worker ends when the main process does, however it ended.
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, signal.SIG_IGN)
+    _end_with_the_main_process()
     keep_freed_memory()
     install_setup(setup)
+
+
+def _end_with_the_main_process() -> None:
+    """A thread that ends this worker as soon as the process that started the pool has ended
+    (even by SIGKILL), so that no worker outlives its render. A worker's parent, for
+    ``multiprocessing``, is that process, also when the fork server forked it."""
+    parent = multiprocessing.parent_process()
+    if parent is None:
+        return
+
+    def watch() -> None:
+        wait([parent.sentinel])
+        os._exit(1)
+
+    threading.Thread(target=watch, name="ptlab: end with the main process", daemon=True).start()
 
 
 def process_pool(workers: int, setup: RenderSetup) -> ProcessPoolExecutor:
