@@ -118,6 +118,52 @@ def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
     assert np.array_equal(longer.image, straight.image)
 
 
+def test_resume_alone_continues_the_same_render_to_the_same_output(cornell, tmp_path, monkeypatch, capsys):
+    """`ptlab render --resume FILE`: the checkpoint knows its scene, options and output."""
+    from ptlab.cli import main
+
+    out, checkpoint = tmp_path / "box.exr", tmp_path / "render.npz"
+    options = dict(SMALL, sampler="independent", rr=0.8, max_depth=5)
+    stopper = StopAfter(jobs=4)
+    command = dict(scene="cornell-box", out=str(out))
+    first = render_result(
+        "cornell-box",
+        workers=1,
+        checkpoint=checkpoint,
+        progress=stopper.progress,
+        stop=stopper,
+        command=command,
+        **options,
+    )
+    assert not first.complete
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    assert main(["render", "--resume", str(checkpoint), "--workers", "1", "--quiet"]) == 0, (
+        capsys.readouterr().err
+    )
+    image, metadata = read_image(out)
+    assert metadata["spp"] == 6
+    assert metadata["sampler"] == "independent"
+    assert list(elsewhere.iterdir()) == []  # (the output went where the render first wrote)
+    assert np.array_equal(image, render_result(cornell, workers=1, **options).image)
+    # An option that contradicts the checkpoint is refused, in one line.
+    assert main(["render", "--resume", str(checkpoint), "--seed", "12"]) == 2
+    assert "the checkpoint was made with seed = 11, this render has 12" in capsys.readouterr().err
+
+
+def test_resume_of_a_checkpoint_that_does_not_record_its_scene_asks_for_it(cornell, tmp_path, capsys):
+    from ptlab.cli import main
+
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=3)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
+    assert main(["render", "--resume", str(checkpoint)]) == 2
+    assert capsys.readouterr().err == (
+        f"ptlab: error: {checkpoint}: this checkpoint does not record its scene: give the scene too\n"
+    )
+
+
 def test_a_checkpoint_from_before_render_options_still_resumes(cornell, reference, tmp_path):
     # Checkpoints written before RenderOptions kept the roulette and its depth as text
     # ('throughput', 'None'); the identity they record is otherwise the same.
