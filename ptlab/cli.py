@@ -18,6 +18,7 @@ import sys
 import threading
 import time
 from pathlib import Path
+from typing import Any
 
 from ptlab.errors import PtlabError
 
@@ -44,10 +45,9 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    shared = _shared_arguments()
-    _add_render(commands, shared)
+    _add_render(commands, _shared_arguments())
     _add_bench(commands)
-    _add_converge(commands, shared)
+    _add_converge(commands, _shared_arguments())
     grade = commands.add_parser(
         "grade",
         help="check a material's sample / eval / pdf statistically",
@@ -94,9 +94,9 @@ def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = N
 
 
 def _shared_arguments() -> argparse.ArgumentParser:
-    """The arguments ``render`` and ``converge`` share (a parent of their parsers)."""
+    """The options ``render`` and ``converge`` share (a parent of their parsers; one each, as
+    ``render`` changes their defaults)."""
     shared = argparse.ArgumentParser(add_help=False)
-    shared.add_argument("scene", help="built-in scene name or path to a scene .toml")
     for name in ("seed", "backend", "workers"):
         _add_option(shared, name)
     shared.add_argument("--quiet", action="store_true", help="print nothing but errors")
@@ -111,18 +111,12 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         description="Render a scene (a built-in name such as cornell-box, or a scene file) "
         "and write .png (8-bit sRGB) or .exr (linear float).",
     )
-    for name in (
-        "spp",
-        "res",
-        "integrator",
-        "strategy",
-        "heuristic",
-        "sampler",
-        "sampling",
-        "rr",
-        "rr_depth",
-        "max_depth",
-    ):
+    render.add_argument(
+        "scene",
+        nargs="?",
+        help="built-in scene name or path to a scene .toml (with --resume: the checkpoint's)",
+    )
+    for name in _RENDER_OPTIONS[3:]:  # (the first three come from the shared parent)
         _add_option(render, name)
     render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
     render.add_argument(
@@ -134,7 +128,10 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         "--checkpoint", metavar="FILE", help="save the render's state to FILE after every pass"
     )
     render.add_argument(
-        "--resume", metavar="FILE", help="continue the render saved in checkpoint FILE (same options)"
+        "--resume",
+        metavar="FILE",
+        help="continue the render saved in checkpoint FILE, with its scene, options and output "
+        "(options given must agree with it; --spp may raise its samples)",
     )
     render.add_argument(
         "--preview-every",
@@ -142,6 +139,27 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         metavar="SECONDS",
         help="after a pass, rewrite the output image if SECONDS have passed",
     )
+    # An option left out is None here (its --help still names the default), so that a
+    # resumed render can tell it from one given: it takes the checkpoint's (``_resumed``).
+    render.set_defaults(**dict.fromkeys(_RENDER_OPTIONS), layout={})
+
+
+#: The render options (fields of ``RenderOptions``) that ``ptlab render`` takes.
+_RENDER_OPTIONS = (
+    "seed",
+    "backend",
+    "workers",
+    "spp",
+    "res",
+    "integrator",
+    "strategy",
+    "heuristic",
+    "sampler",
+    "sampling",
+    "rr",
+    "rr_depth",
+    "max_depth",
+)
 
 
 def _add_bench(commands) -> None:
@@ -237,6 +255,7 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
         "convergence.png, an equal-time strip equal-time.png with error heat maps, "
         "and the reference.exr. Prints the time each needs to reach --target.",
     )
+    converge.add_argument("scene", help="built-in scene name or path to a scene .toml")
     converge.add_argument(
         "--integrators",
         default="path:bsdf,path:nee,path:mis",
@@ -272,8 +291,6 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
 
 
 def _render(args) -> int:
-    from dataclasses import fields
-
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
     from ptlab.rendering import RenderOptions, pass_schedule, render_result, resolution
@@ -282,9 +299,12 @@ def _render(args) -> int:
     from ptlab.rendering.settings import check_workers
     from ptlab.scene_file import load_scene
 
-    options = RenderOptions(
-        **{f.name: getattr(args, f.name) for f in fields(RenderOptions) if hasattr(args, f.name)}
-    )
+    if args.resume is not None:
+        args = _resumed(args)
+    if args.scene is None:
+        raise PtlabError("give the scene: a built-in name (ptlab scenes) or a scene file, or --resume FILE")
+    given = {name: getattr(args, name) for name in _RENDER_OPTIONS if getattr(args, name) is not None}
+    options = RenderOptions(**given, **args.layout)
     scene = load_scene(args.scene)
     width, height = resolution(scene, options.res)
     out = check_output_path(args.out or f"{scene.name}.png")
@@ -301,8 +321,10 @@ def _render(args) -> int:
         resume=args.resume,
         progress=progress,
         on_pass=_Preview(out, args.preview_every),
+        command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
     )
-    with _StopOnSignal() as stop:
+    with _StopOnSignal() as signals:
+        stop = signals.requested.is_set
         try:
             if args.scheduler:
                 with dask_executor(args.scheduler) as executor:
@@ -312,7 +334,7 @@ def _render(args) -> int:
         finally:
             progress.close()
     if not result.complete:
-        return _interrupted(result, out, checkpoint, quiet=args.quiet)
+        return _interrupted(result, out, checkpoint, signals.exit_code)
     _write(out, result)
     if not args.quiet:
         print(
@@ -324,6 +346,38 @@ def _render(args) -> int:
         )
         print(f"wrote {out.resolve()}")
     return 0
+
+
+def _resumed(args):
+    """``args`` completed from the checkpoint ``args.resume``: its scene, output and each
+    option not given. Options given are kept: the checkpoint refuses those that contradict
+    it, but for a larger ``--spp`` (``ptlab.rendering.checkpoint``)."""
+    from ptlab.rendering import RenderOptions
+    from ptlab.rendering.checkpoint import read_checkpoint
+
+    saved, command, _ = read_checkpoint(args.resume)
+    if "width" in saved and "height" in saved:
+        saved = dict(saved, res=f"{saved['width']}x{saved['height']}")
+    for name in _RENDER_OPTIONS:
+        value = saved.get(name)
+        if getattr(args, name) is None and value is not None and name != "workers":  # (the machine's)
+            parse = RenderOptions.about(name).parse
+            setattr(args, name, parse(value) if isinstance(value, str) and parse is not None else value)
+    if args.scene is None:
+        args.scene = command.get("scene")
+        if args.scene is None:
+            raise PtlabError(f"{args.resume}: this checkpoint does not record its scene: give the scene too")
+    if args.out is None:
+        args.out = command.get("out")
+    # How the image is cut into jobs, which the command line does not set (the API does).
+    args.layout = {name: saved[name] for name in ("tile_size", "spp_per_pass") if name in saved}
+    return args
+
+
+def _scene_argument(scene: str) -> str:
+    """A scene as a checkpoint records it: a file as an absolute path (the render may be
+    resumed from another folder), a built-in scene by its name."""
+    return str(Path(scene).resolve()) if Path(scene).is_file() else scene
 
 
 def _write(out: Path, result) -> None:
@@ -344,11 +398,12 @@ def _write(out: Path, result) -> None:
     write_image(out, image, metadata)
 
 
-def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
-    """Keep what an interrupted render has; exit code 130 (as for Ctrl-C)."""
+def _interrupted(result, out: Path, checkpoint, exit_code: int) -> int:
+    """Keep what an interrupted render has; ``exit_code`` is the signal's (130 for Ctrl-C,
+    143 for SIGTERM), as a shell reports a command that the signal ended."""
     if result.spp_max == 0:
         print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
-        return 130
+        return exit_code
     _write(out, result)
     spread = (
         f"{result.spp} spp"
@@ -358,27 +413,29 @@ def _interrupted(result, out: Path, checkpoint, quiet: bool) -> int:
     print(f"ptlab: interrupted: wrote {out.resolve()} with {spread}", file=sys.stderr)
     if checkpoint is not None:
         print(f"ptlab: resume with --resume {checkpoint}", file=sys.stderr)
-    return 130
+    return exit_code
 
 
 class _StopOnSignal:
     """Turns the first Ctrl-C (SIGINT) or SIGTERM into a polite stop request.
 
-    The render then finishes the jobs in flight and keeps its image; a second Ctrl-C
-    interrupts at once.
+    The render then ends the jobs in flight and keeps the passes done; a second Ctrl-C
+    interrupts at once. ``exit_code`` is then 128 + the first signal's number.
     """
 
-    def __enter__(self):
+    def __enter__(self) -> _StopOnSignal:
         self.requested = threading.Event()
-        self.previous = {}
+        self.exit_code = 128 + signal.SIGINT
+        self.previous: dict[int, Any] = {}
         if threading.current_thread() is threading.main_thread():
             for signum in (signal.SIGINT, signal.SIGTERM):
                 self.previous[signum] = signal.signal(signum, self._handle)
-        return self.requested.is_set
+        return self
 
     def _handle(self, signum, frame) -> None:
         if self.requested.is_set():
             raise KeyboardInterrupt
+        self.exit_code = 128 + signum
         self.requested.set()
 
     def __exit__(self, *exc) -> None:

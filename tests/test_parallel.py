@@ -118,6 +118,52 @@ def test_resume_may_add_passes_but_not_drop_them(cornell, tmp_path):
     assert np.array_equal(longer.image, straight.image)
 
 
+def test_resume_alone_continues_the_same_render_to_the_same_output(cornell, tmp_path, monkeypatch, capsys):
+    """`ptlab render --resume FILE`: the checkpoint knows its scene, options and output."""
+    from ptlab.cli import main
+
+    out, checkpoint = tmp_path / "box.exr", tmp_path / "render.npz"
+    options = dict(SMALL, sampler="independent", rr=0.8, max_depth=5)
+    stopper = StopAfter(jobs=4)
+    command = dict(scene="cornell-box", out=str(out))
+    first = render_result(
+        "cornell-box",
+        workers=1,
+        checkpoint=checkpoint,
+        progress=stopper.progress,
+        stop=stopper,
+        command=command,
+        **options,
+    )
+    assert not first.complete
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    assert main(["render", "--resume", str(checkpoint), "--workers", "1", "--quiet"]) == 0, (
+        capsys.readouterr().err
+    )
+    image, metadata = read_image(out)
+    assert metadata["spp"] == 6
+    assert metadata["sampler"] == "independent"
+    assert list(elsewhere.iterdir()) == []  # (the output went where the render first wrote)
+    assert np.array_equal(image, render_result(cornell, workers=1, **options).image)
+    # An option that contradicts the checkpoint is refused, in one line.
+    assert main(["render", "--resume", str(checkpoint), "--seed", "12"]) == 2
+    assert "the checkpoint was made with seed = 11, this render has 12" in capsys.readouterr().err
+
+
+def test_resume_of_a_checkpoint_that_does_not_record_its_scene_asks_for_it(cornell, tmp_path, capsys):
+    from ptlab.cli import main
+
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=3)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
+    assert main(["render", "--resume", str(checkpoint)]) == 2
+    assert capsys.readouterr().err == (
+        f"ptlab: error: {checkpoint}: this checkpoint does not record its scene: give the scene too\n"
+    )
+
+
 def test_a_checkpoint_from_before_render_options_still_resumes(cornell, reference, tmp_path):
     # Checkpoints written before RenderOptions kept the roulette and its depth as text
     # ('throughput', 'None'); the identity they record is otherwise the same.
@@ -227,7 +273,7 @@ def test_interrupted_cli_writes_what_it_has_then_resumes_to_the_same_image(tmp_p
     options = ["cornell-box", "--res", "64", "--spp", "128", "--seed", "5", "--workers", "2"]
     process = run_cli([*options, "--out", "partial.exr", "--checkpoint", "state.npz"], tmp_path, signum)
     _, err = process.communicate(timeout=600)
-    assert process.returncode == 130, err
+    assert process.returncode == 128 + signum, err  # (the shell's code for that signal)
     assert "interrupted" in err
     assert "Traceback" not in err
     partial, metadata = read_image(tmp_path / "partial.exr")
@@ -258,3 +304,64 @@ def test_preview_rewrites_the_output_after_a_pass(cornell, tmp_path):
 
     render_result(cornell, workers=1, on_pass=on_pass, **SMALL)
     assert previews == [2, 4, 6]
+
+
+# -- a plain script, as the README shows it ------------------------------------------------
+
+SCRIPT = """
+import numpy as np
+import ptlab
+{before}
+scene = ptlab.load_scene("cornell-box")
+image = ptlab.render(scene, spp=6, res=(48, 40), seed=11, tile_size=16, spp_per_pass=2, workers=2)
+np.save({out!r}, image)
+print("rendered")
+"""
+
+
+def run_script(tmp_path: Path, before: str = "") -> subprocess.CompletedProcess:
+    script = tmp_path / "render_box.py"
+    script.write_text(SCRIPT.format(before=before, out=str(tmp_path / "image.npy")))
+    return subprocess.run(
+        [sys.executable, str(script)], capture_output=True, text=True, timeout=120, cwd=tmp_path
+    )
+
+
+@pytest.mark.subprocess
+def test_a_script_without_a_main_guard_renders_with_workers(tmp_path, reference):
+    """Workers started by the fork server would run such a script again, and render again in
+    each; ptlab forks them from the script's process instead, which runs it once."""
+    result = run_script(tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.count("rendered") == 1
+    assert "Traceback" not in result.stderr
+    assert np.array_equal(np.load(tmp_path / "image.npy"), reference.image)
+
+
+@pytest.mark.subprocess
+def test_a_script_without_a_main_guard_that_cannot_fork_is_told_what_to_add(tmp_path):
+    # Embree's threads already run in this process (a render in it), so forking is unsafe.
+    result = run_script(
+        tmp_path, before="ptlab.render('cornell-box', spp=1, res=8, workers=1, backend='embree')"
+    )
+    assert result.returncode != 0
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.endswith(
+        'render_box.py: put the script\'s own work under `if __name__ == "__main__":` to render '
+        "with several workers (or pass workers=1)"
+    ), result.stderr
+    assert "worker processes died" not in result.stderr
+    assert not (tmp_path / "image.npy").exists()
+
+
+@pytest.mark.subprocess
+def test_a_guarded_script_still_uses_the_fork_server(tmp_path):
+    script = tmp_path / "guarded.py"
+    script.write_text(
+        "import ptlab.rendering.executors as e\n"
+        "if __name__ == '__main__':\n"
+        "    print(e.pool_context().get_start_method())\n"
+        "print(e.pool_context().get_start_method())\n"
+    )
+    result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
+    assert result.stdout.split() == ["forkserver", "fork"], result.stderr

@@ -19,6 +19,10 @@ from embreex.mesh_construction import TriangleMesh
 
 from ptlab.accel.base import Hits
 
+#: Whether this process has built an Embree scene, and so started Embree's threads, after
+#: which it must not fork workers (``ptlab.rendering.executors.pool_context``).
+threads_started = False
+
 
 def _as_f32(a: np.ndarray) -> np.ndarray:
     # No copy of a float32 array in any layout; a read-only one (the camera's broadcast
@@ -44,6 +48,8 @@ class EmbreeAccelerator:
     name = "embree"
 
     def __init__(self, triangles: np.ndarray):
+        global threads_started
+        threads_started = True
         self._triangles = _as_f32(triangles)
         self._scene = rtcore_scene.EmbreeScene()
         self._mesh = TriangleMesh(self._scene, self._triangles)

@@ -88,6 +88,7 @@ def render_result(
     progress: Callable[[Film], None] | None = None,
     on_pass: Callable[[Film], None] | None = None,
     stop: Callable[[], bool] | None = None,
+    command: dict | None = None,
     **keywords: Any,
 ) -> RenderResult:
     """Render and return the image with its statistics (arguments as for ``render``).
@@ -99,6 +100,8 @@ def render_result(
         on_pass: called with the film whenever a pass over the whole image completes.
         stop: polled between jobs; when it returns True the render stops early and
             returns what it has (``complete`` is then False).
+        command: kept in the checkpoint, not compared: what ``ptlab render --resume FILE``
+            needs besides the options (``scene`` and ``out``).
     """
     options = RenderOptions.of(args, options, keywords)
     if isinstance(scene, str | Path):
@@ -151,12 +154,12 @@ def render_result(
         if film.passes_done.min() > complete_passes:
             complete_passes = int(film.passes_done.min())
             if checkpoint is not None:
-                save_checkpoint(checkpoint, film, identity)
+                save_checkpoint(checkpoint, film, identity, command)
             if on_pass is not None:
                 on_pass(film)
     complete = film.complete
     if checkpoint is not None and not complete:
-        save_checkpoint(checkpoint, film, identity)
+        save_checkpoint(checkpoint, film, identity, command)
     seconds = time.perf_counter() - start
     return RenderResult(
         image=film.image(),

@@ -46,8 +46,10 @@ def scene_digest(scene) -> str:
     return digest.hexdigest()[:16]
 
 
-def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
-    """Write the film and the render's identity to ``path``, atomically."""
+def save_checkpoint(path: str | Path, film: Film, identity: dict, command: dict | None = None) -> None:
+    """Write the film and the render's identity to ``path``, atomically; ``command`` is kept
+    beside them, not compared: what ``ptlab render --resume FILE`` needs that the options do
+    not say (the scene and the output)."""
 
     def write(temporary: str) -> None:
         with open(temporary, "wb") as out:
@@ -60,19 +62,22 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
                 query_seconds=np.float64(film.query_seconds),
                 sampler_seconds=np.float64(film.sampler_seconds),
                 identity=json.dumps(dict(identity, format=FORMAT_VERSION)),
+                command=json.dumps(command or {}),
             )
 
     write_atomically(path, write)
 
 
-def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
-    """Fill ``film`` from the checkpoint at ``path``, which must match ``identity``."""
+def read_checkpoint(path: str | Path) -> tuple[dict, dict, dict[str, np.ndarray]]:
+    """The identity, the command (``save_checkpoint``; {} in older checkpoints) and the
+    arrays of the checkpoint at ``path``."""
     path = Path(path)
     if path_kind(path) != "file":
         raise PtlabError(f"{path}: no such checkpoint file")
     try:
         with open(path, "rb") as file, np.load(file, allow_pickle=False) as data:
             saved = json.loads(str(data["identity"]))
+            command = json.loads(str(data["command"])) if "command" in data else {}
             arrays = {
                 k: data[k]
                 for k in ("sums", "passes", "passes_done", "rays", "query_seconds", "sampler_seconds")
@@ -82,6 +87,14 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
         version = saved.get("format") if isinstance(saved, dict) else None
         raise PtlabError(f"{path}: checkpoint format {version} is not {FORMAT_VERSION}")
+    if not isinstance(command, dict):
+        raise PtlabError(f"{path}: not a ptlab checkpoint (its command is not a table)")
+    return saved, command, arrays
+
+
+def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
+    """Fill ``film`` from the checkpoint at ``path``, which must match ``identity``."""
+    saved, _, arrays = read_checkpoint(path)
     for key, value in identity.items():
         # Compared as text: checkpoints written before RenderOptions kept rr_depth as text.
         if key != "spp" and (key not in saved or str(saved[key]) != str(value)):

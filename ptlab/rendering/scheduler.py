@@ -8,10 +8,12 @@ deterministic, so the image is the same as if nothing had happened.
 
 from __future__ import annotations
 
+import signal
+import threading
 import warnings
 from collections import deque
 from collections.abc import Callable, Iterator
-from concurrent.futures import FIRST_COMPLETED, Executor, Future, wait
+from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 
 from ptlab.accel import make_accelerator
@@ -81,6 +83,7 @@ def _run_on_process_pool(
     for restart in range(MAX_POOL_RESTARTS + 1):
         finished: set[Job] = set()
         pool = process_pool(workers, setup)
+        all_done = False
         try:
             for result in _run_on_executor(
                 remaining,
@@ -90,8 +93,11 @@ def _run_on_process_pool(
             ):
                 finished.add(result.job)
                 yield result
+            all_done = len(finished) == len(remaining)
             return
         except BrokenProcessPool:
+            if stop():  # (asked to stop anyway: no new workers)
+                return
             remaining = [job for job in remaining if job not in finished]
             if restart == MAX_POOL_RESTARTS:
                 raise PtlabError(
@@ -103,4 +109,33 @@ def _run_on_process_pool(
                 stacklevel=2,
             )
         finally:
-            pool.shutdown(wait=True, cancel_futures=True)
+            # Stopped, Ctrl-C, an error, or the caller stopped iterating: the jobs still
+            # running would be thrown away, so their workers are ended rather than awaited.
+            _close_pool(pool, kill=not all_done)
+
+
+def _close_pool(pool: ProcessPoolExecutor, kill: bool) -> None:
+    """Shut ``pool`` down, first ending its workers if ``kill``. A Ctrl-C meanwhile is held
+    until the pool is closed, then delivered: a pool left half shut down would make the
+    interpreter's exit wait for its thread forever."""
+    holding = threading.current_thread() is threading.main_thread()
+    held: list[int] = []
+    if holding:
+        previous = signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
+    try:
+        if kill:
+            _kill_workers(pool)
+        pool.shutdown(wait=True, cancel_futures=True)
+    finally:
+        if holding:
+            signal.signal(signal.SIGINT, previous)
+            if held:
+                signal.raise_signal(signal.SIGINT)
+
+
+def _kill_workers(pool: ProcessPoolExecutor) -> None:
+    """End the pool's workers at once, rather than after their jobs (they ignore Ctrl-C,
+    which is the main process's to handle). ``_processes`` is the pool's own record of them."""
+    processes = getattr(pool, "_processes", None) or {}
+    for process in list(processes.values()):
+        process.kill()

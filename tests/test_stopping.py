@@ -1,0 +1,125 @@
+"""However a render is stopped, nothing outlives it, and a stopped `ptlab render` is quiet.
+
+Each test starts a render with two workers in a session of its own, so that its processes
+(the main one, the fork server, the resource tracker, the workers) share one process group;
+it stops the render one way, then asserts that no process of the group is left.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+pytestmark = [pytest.mark.subprocess, pytest.mark.slow]
+
+#: Long enough that every stop comes mid-render: two workers, 128x128 at 4096 spp.
+LONG = ["cornell-box", "--res", "128", "--spp", "4096", "--workers", "2"]
+
+SCRIPT = """
+import ptlab
+
+if __name__ == "__main__":
+    ptlab.render("cornell-box", spp=4096, res=128, workers=2)
+    print("finished")
+"""
+
+
+def group_members(pgid: int) -> list[int]:
+    """The processes whose process group is ``pgid``."""
+    members = []
+    for entry in os.listdir("/proc"):
+        if entry.isdigit():
+            try:
+                stat = Path(f"/proc/{entry}/stat").read_text()
+            except OSError:
+                continue
+            fields = stat[stat.rindex(")") + 2 :].split()  # (the name may hold spaces)
+            if fields[0] != "Z" and int(fields[2]) == pgid:
+                members.append(int(entry))
+    return members
+
+
+def start(command: list[str], cwd: Path) -> subprocess.Popen:
+    """``command`` in a new session, once it has its two workers (five processes in all)."""
+    process = subprocess.Popen(
+        command, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, start_new_session=True
+    )
+    deadline = time.monotonic() + 120
+    while len(group_members(process.pid)) < 5:
+        assert process.poll() is None, process.communicate()
+        assert time.monotonic() < deadline, "the render never started its workers"
+        time.sleep(0.1)
+    time.sleep(0.5)  # (the workers have jobs)
+    return process
+
+
+def assert_nothing_left(pgid: int, within: float = 15.0) -> None:
+    deadline = time.monotonic() + within
+    while group_members(pgid):
+        if time.monotonic() > deadline:
+            left = {pid: Path(f"/proc/{pid}/cmdline").read_bytes()[:80] for pid in group_members(pgid)}
+            for pid in left:
+                os.kill(pid, signal.SIGKILL)
+            raise AssertionError(f"left running: {left}")
+        time.sleep(0.1)
+
+
+def ptlab_render(tmp_path: Path) -> list[str]:
+    return [sys.executable, "-m", "ptlab.cli", "render", *LONG, "--out", "box.png"]
+
+
+@pytest.mark.parametrize(("signum", "code"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_to_the_group_stops_ptlab_render_quietly_with_its_exit_code(tmp_path, signum, code):
+    process = start(ptlab_render(tmp_path), tmp_path)
+    os.killpg(process.pid, signum)  # as a terminal's Ctrl-C, or `kill -- -PGID`
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == code, err
+    assert "Warning" not in err
+    assert "Traceback" not in err
+    # (What it wrote, if a pass had finished, is test_parallel.py's to check.)
+    assert all(line.startswith("ptlab: interrupted") for line in err.strip().splitlines()), err
+    assert_nothing_left(process.pid)
+
+
+def test_a_second_ctrl_c_ends_ptlab_render_at_once(tmp_path):
+    process = start(ptlab_render(tmp_path), tmp_path)
+    os.killpg(process.pid, signal.SIGINT)
+    time.sleep(0.05)
+    os.killpg(process.pid, signal.SIGINT)
+    _, err = process.communicate(timeout=120)
+    assert process.returncode == 130, err
+    assert "Traceback" not in err
+    assert_nothing_left(process.pid)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_script_calling_render_stops_at_once_and_leaves_nothing(tmp_path, signum):
+    script = tmp_path / "render_box.py"
+    script.write_text(SCRIPT)
+    process = start([sys.executable, str(script)], tmp_path)
+    stopped = time.monotonic()
+    os.killpg(process.pid, signum)
+    out, err = process.communicate(timeout=120)
+    assert "finished" not in out
+    # Ctrl-C is a KeyboardInterrupt in a script, which ends the workers rather than waiting
+    # for their jobs, and then Python ends by that signal; SIGTERM ends it at once (its default).
+    assert process.returncode == -signum, err
+    assert time.monotonic() - stopped < 10
+    assert_nothing_left(process.pid)
+
+
+@pytest.mark.parametrize("command", ["ptlab render", "a script"])
+def test_workers_end_when_the_main_process_is_killed(tmp_path, command):
+    script = tmp_path / "render_box.py"
+    script.write_text(SCRIPT)
+    argv = ptlab_render(tmp_path) if command == "ptlab render" else [sys.executable, str(script)]
+    process = start(argv, tmp_path)
+    process.kill()  # SIGKILL to the main process only: it cannot clean up
+    process.communicate(timeout=60)
+    assert_nothing_left(process.pid)
