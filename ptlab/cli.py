@@ -109,7 +109,7 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         parents=[shared],
         help="render a scene to an image",
         description="Render a scene (a built-in name such as cornell-box, or a scene file) "
-        "and write .png (8-bit sRGB) or .exr (linear float).",
+        "and write .png or .jpg (8-bit sRGB), or .exr, .hdr, .pfm or .tif (linear float).",
     )
     render.add_argument(
         "scene",
@@ -118,7 +118,17 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
     )
     for name in _RENDER_OPTIONS[3:]:  # (the first three come from the shared parent)
         _add_option(render, name)
-    render.add_argument("--out", help="output image, .png or .exr (default SCENE.png here)")
+    render.add_argument(
+        "--out", help="output image: .png, .jpg, .exr, .hdr, .pfm or .tif (default SCENE.png here)"
+    )
+    render.add_argument(
+        "--exposure",
+        type=float,
+        default=0.0,
+        metavar="STOPS",
+        help="brighten (or, below 0, darken) an 8-bit image by 2^STOPS (default 0; "
+        "the float formats keep the values)",
+    )
     render.add_argument(
         "--scheduler",
         metavar="ADDRESS",
@@ -313,14 +323,14 @@ def _render(args) -> int:
         check_writable_file(checkpoint)
     if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
-    workers = check_workers(options.workers)
+    check_workers(options.workers)  # (before the scene's work: a bad --workers fails at once)
     progress = ProgressBar(width * height * options.spp, len(pass_schedule(options.spp)), quiet=args.quiet)
     run = dict(
         options=options,
         checkpoint=checkpoint,
         resume=args.resume,
         progress=progress,
-        on_pass=_Preview(out, args.preview_every),
+        on_pass=_Preview(out, args.preview_every, args.exposure),
         command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
     )
     with _StopOnSignal() as signals:
@@ -334,18 +344,31 @@ def _render(args) -> int:
         finally:
             progress.close()
     if not result.complete:
-        return _interrupted(result, out, checkpoint, signals.exit_code)
-    _write(out, result)
-    if not args.quiet:
+        return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
+    _write(out, result, args.exposure)
+    if not (result.image > 0).any() and options.integrator in ("path", "whitted"):
         print(
-            f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, "
-            f"{result.samples_per_second / 1e6:.3f} M samples/s "
-            f"({result.settings['backend']}, {options.sampler} sampler, {options.sampling} "
-            f"sampling, rr {options.rr}, "
-            f"{workers} workers{', dask' if args.scheduler else ''})"
+            "ptlab: warning: the image is black: no camera ray saw or received any light "
+            "(do the lights face the scene?)",
+            file=sys.stderr,
         )
+    if not args.quiet:
+        print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, " + _how(result, options))
         print(f"wrote {out.resolve()}")
     return 0
+
+
+def _how(result, options) -> str:
+    """The speed and the settings that made it, as the summary line after a render says them:
+    the sampling and roulette only where the integrator uses them, and the workers it had."""
+    parts = [result.settings["backend"], f"{options.sampler} sampler"]
+    if options.integrator == "path":
+        parts += [f"{options.sampling} sampling", f"rr {options.rr}"]
+    else:
+        parts.append(options.integrator)
+    workers = result.settings["workers"]
+    parts.append("dask" if workers == "executor" else f"{workers} worker{'s' if workers != 1 else ''}")
+    return f"{result.samples_per_second / 1e6:.3f} M samples/s ({', '.join(parts)})"
 
 
 def _resumed(args):
@@ -380,7 +403,7 @@ def _scene_argument(scene: str) -> str:
     return str(Path(scene).resolve()) if Path(scene).is_file() else scene
 
 
-def _write(out: Path, result) -> None:
+def _write(out: Path, result, exposure: float = 0.0) -> None:
     """Write the image with the render's settings, its spp and whether it is complete."""
     from ptlab import __version__
     from ptlab.image import write_image
@@ -395,16 +418,16 @@ def _write(out: Path, result) -> None:
         # Distances do not fit in [0, 1]: scale the farthest to white (the EXR keeps them).
         scale = float(image.max()) or 1.0
         image, metadata["depth_scale"] = image / scale, scale
-    write_image(out, image, metadata)
+    write_image(out, image, metadata, exposure=exposure)
 
 
-def _interrupted(result, out: Path, checkpoint, exit_code: int) -> int:
+def _interrupted(result, out: Path, checkpoint, exit_code: int, exposure: float = 0.0) -> int:
     """Keep what an interrupted render has; ``exit_code`` is the signal's (130 for Ctrl-C,
     143 for SIGTERM), as a shell reports a command that the signal ended."""
     if result.spp_max == 0:
         print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
         return exit_code
-    _write(out, result)
+    _write(out, result, exposure)
     spread = (
         f"{result.spp} spp"
         if result.spp == result.spp_max
@@ -446,8 +469,8 @@ class _StopOnSignal:
 class _Preview:
     """After a pass, rewrites the output image if ``every`` seconds have passed."""
 
-    def __init__(self, out: Path, every: float | None):
-        self.out, self.every = out, every
+    def __init__(self, out: Path, every: float | None, exposure: float = 0.0):
+        self.out, self.every, self.exposure = out, every, exposure
         self.last = time.monotonic()
 
     def __call__(self, film) -> None:
@@ -455,7 +478,7 @@ class _Preview:
             return
         from ptlab.image import write_image
 
-        write_image(self.out, film.image(), dict(spp=film.spp, complete=0, preview=1))
+        write_image(self.out, film.image(), dict(spp=film.spp, complete=0, preview=1), exposure=self.exposure)
         self.last = time.monotonic()
 
 
@@ -566,10 +589,12 @@ def _bench(args) -> int:
 
 
 def _scenes(args) -> int:
-    from ptlab.scene_file import builtin_scene_names
+    from ptlab.scene_file import builtin_scene_description, builtin_scene_names
 
-    for name in builtin_scene_names():
-        print(name)
+    names = builtin_scene_names()
+    width = max(map(len, names), default=0) + 2
+    for name in names:
+        print(f"{name:<{width}}{builtin_scene_description(name)}".rstrip())
     return 0
 
 

@@ -1,8 +1,10 @@
 """Images: the float64 film, and files through OpenImageIO.
 
 * ``.exr`` files hold linear float32 RGB, exactly what the renderer computed, with the
-  render's settings in the header (spp, seed, seconds, scene, ptlab version).
-* ``.png`` files hold 8-bit sRGB: linear values clipped to [0, 1] and encoded with the
+  render's settings in the header (spp, seed, seconds, scene, ptlab version); so do
+  ``.hdr`` (Radiance RGBE), ``.pfm`` and ``.tif`` / ``.tiff`` files, in their own ways.
+* ``.png`` and ``.jpg`` / ``.jpeg`` files hold 8-bit sRGB: linear values (times 2^exposure)
+  clipped to [0, 1] and encoded with the
   sRGB transfer function of IEC 61966-2-1 (``srgb_encode``; ``tests/test_image.py`` checks
   it against colour-science's ``cctf_encoding``, which gives the same numbers but costs
   a second of imports, matplotlib's among them, at every PNG). (The homework writes
@@ -21,7 +23,10 @@ import numpy as np
 from ptlab.atomic import check_writable_file, path_kind, write_atomically
 from ptlab.errors import PtlabError
 
-FORMATS = (".exr", ".png")
+#: Formats that hold the linear values as floats, and the 8-bit sRGB ones.
+LINEAR_FORMATS = (".exr", ".hdr", ".pfm", ".tif", ".tiff")
+SRGB_FORMATS = (".png", ".jpg", ".jpeg")
+FORMATS = LINEAR_FORMATS + SRGB_FORMATS
 
 
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
@@ -55,33 +60,39 @@ def check_output_path(path: str | Path) -> Path:
     """The path, if its extension is a format we write and it can be written."""
     path = Path(path)
     if path.suffix.lower() not in FORMATS:
-        raise PtlabError(f"{path}: unsupported image format {path.suffix!r} (use {' or '.join(FORMATS)})")
+        raise PtlabError(f"{path}: unsupported image format {path.suffix!r} (use {', '.join(FORMATS)})")
     return check_writable_file(path)
 
 
-def write_image(path: str | Path, image: np.ndarray, metadata: dict | None = None) -> Path:
-    """Write (H, W, 3) linear RGB to ``.exr`` (float32) or ``.png`` (sRGB 8-bit), atomically.
+def write_image(
+    path: str | Path, image: np.ndarray, metadata: dict | None = None, exposure: float = 0.0
+) -> Path:
+    """Write (H, W, 3) linear RGB, atomically: as float32 to ``.exr`` (and the other
+    ``LINEAR_FORMATS``), as 8-bit sRGB to ``.png`` (and the other ``SRGB_FORMATS``), scaled
+    by 2^``exposure`` first (stops; the linear formats keep the values as computed).
 
     ``metadata`` entries become header attributes ``ptlab:<key>`` (ints and floats stay
-    numbers in EXR; PNG stores them as text).
+    numbers in EXR; other formats store them as text, where they store them at all).
     """
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = check_output_path(path)
     image = np.asarray(image)
     height, width = image.shape[:2]
-    if path.suffix.lower() == ".exr":
+    suffix = path.suffix.lower()
+    if suffix in LINEAR_FORMATS:
         pixels = np.ascontiguousarray(image, dtype=np.float32)
         spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
-        spec.attribute("compression", "zip")
+        if suffix == ".exr":
+            spec.attribute("compression", "zip")
     else:
-        pixels = encode_srgb8(image)
+        pixels = encode_srgb8(image * np.float32(2.0**exposure) if exposure else image)
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
     # EXR headers hold typed numbers; PNG text chunks hold only strings (OpenImageIO drops
     # other types there), so a PNG gets every value as text. EXR integers are 32-bit: a
     # larger one (a big seed) goes in as text too.
-    typed = path.suffix.lower() == ".exr"
+    typed = suffix == ".exr"
     for key, value in (metadata or {}).items():
         keep = typed and (
             isinstance(value, float)
@@ -127,4 +138,9 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
     metadata = {
         a.name.removeprefix("ptlab:"): a.value for a in spec.extra_attribs if a.name.startswith("ptlab:")
     }
-    return np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, 3), metadata
+    image = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, 3)
+    if path.suffix.lower() == ".pfm":
+        # A PFM file stores its bottom row first, as OpenImageIO writes it, but OpenImageIO
+        # 3.2 reads the rows back in file order (tests/test_cli.py checks both).
+        image = image[::-1]
+    return image, metadata

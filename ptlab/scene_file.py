@@ -103,6 +103,16 @@ def builtin_scene_names() -> list[str]:
     return sorted(p.name for p in root.iterdir() if (p / SCENE_FILE_NAME).is_file())
 
 
+def builtin_scene_description(name: str) -> str:
+    """The ``description`` line of a built-in scene's file ("" if it has none)."""
+    try:
+        with open(builtin_scenes_dir() / name / SCENE_FILE_NAME, "rb") as file:
+            description = tomllib.load(file).get("description", "")
+    except (OSError, tomllib.TOMLDecodeError):
+        return ""
+    return description if isinstance(description, str) else ""
+
+
 def find_scene_file(name_or_path: str | Path) -> Path:
     """A scene file from a path (a file, or a folder holding ``scene.toml``) or a built-in name."""
     path = Path(name_or_path)
@@ -176,7 +186,11 @@ class _SceneReader:
         return SceneError(self.path, problem, key)
 
     def read(self, data: dict) -> Scene:
-        self.check_keys(data, None, {"camera", "materials", "mesh", "point_light", "sky", "render"})
+        self.check_keys(
+            data, None, {"description", "camera", "materials", "mesh", "point_light", "sky", "render"}
+        )
+        if not isinstance(data.get("description", ""), str):
+            raise self.error("description", "must be text: one line that says what the scene shows")
         if "camera" not in data:
             raise self.error(None, "no [camera] section")
         camera = self.camera(data["camera"])

@@ -12,7 +12,7 @@ import pytest
 
 from ptlab import cli
 from ptlab.cli import main
-from ptlab.image import read_image
+from ptlab.image import encode_srgb8, read_image, write_image
 
 
 def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkeypatch, capsys):
@@ -65,7 +65,7 @@ def test_render_exr_is_linear_float_with_metadata(tmp_path):
         (["render", "cornell-box", "--rr", "sometimes"], "roulette"),
         (["render", "cornell-box", "--integrator", "whitted", "--strategy", "mis"], "whitted"),
         (["render", "no-such-scene"], "no-such-scene"),
-        (["render", "cornell-box", "--out", "image.jpg"], "format"),
+        (["render", "cornell-box", "--out", "image.bmp"], "format"),
         (["render", "cornell-box", "--backend", "optix"], "backend"),
     ],
 )
@@ -430,3 +430,94 @@ def test_depth_png_is_scaled_to_fit_and_says_by_how_much(tmp_path):
     assert 1000 < float(metadata["depth_scale"]) < 2000
     assert image.max() == 1.0
     assert metadata["spp"] == "1"  # PNG keeps metadata as text
+
+
+@pytest.mark.parametrize("suffix", [".jpg", ".hdr", ".pfm", ".tif"])
+def test_render_writes_each_format_openimageio_writes(tmp_path, monkeypatch, suffix):
+    monkeypatch.chdir(tmp_path)
+    tiny = ["render", "cornell-box", "--res", "32", "--spp", "8", "--workers", "1", "--quiet", "--out"]
+    out, exr = tmp_path / f"box{suffix}", tmp_path / "box.exr"
+    assert main([*tiny, str(out)]) == 0
+    assert main([*tiny, str(exr)]) == 0
+    image, _ = read_image(out)
+    linear, _ = read_image(exr)
+    if suffix == ".jpg":  # 8-bit sRGB, lossy: near the sRGB values, far from the linear ones
+        assert np.abs(image - encode_srgb8(linear) / 255).mean() < 0.03
+        assert np.abs(image - linear).mean() > 0.1
+    elif suffix == ".hdr":  # RGBE: 8 bits of mantissa shared by a pixel's three channels
+        assert (np.abs(image - linear) <= linear.max(axis=2, keepdims=True) / 128 + 1e-6).all()
+    else:
+        assert np.array_equal(image, linear)
+    if suffix == ".pfm":  # (the file itself is right: its first row is the image's bottom one)
+        header, size, scale, data = out.read_bytes().split(b"\n", 3)
+        assert (header, size, float(scale)) == (b"PF", b"32 32", -1.0)
+        stored = np.frombuffer(data, dtype="<f4").reshape(32, 32, 3)
+        assert np.array_equal(stored[0], linear[-1])
+
+
+def test_exposure_scales_an_8_bit_image_by_two_to_its_stops(tmp_path):
+    image = np.full((2, 2, 3), 0.1, dtype=np.float32)
+    write_image(tmp_path / "a.png", image, exposure=1.0)
+    write_image(tmp_path / "b.png", image * 2)
+    write_image(tmp_path / "c.exr", image, exposure=1.0)
+    assert np.array_equal(read_image(tmp_path / "a.png")[0], read_image(tmp_path / "b.png")[0])
+    assert np.array_equal(read_image(tmp_path / "c.exr")[0], image)  # (the float formats keep the values)
+
+
+def test_scenes_lists_each_with_its_description(capsys):
+    assert main(["scenes"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert "cornell-box              the homework's Cornell box" in lines
+    assert all(len(line.split(maxsplit=1)) == 2 for line in lines), lines
+
+
+def test_the_summary_names_what_the_integrator_uses_and_the_workers_it_had(capsys, tmp_path):
+    out = str(tmp_path / "w.png")
+    assert (
+        main(["render", "cornell-box", "--res", "16", "--spp", "1", "--integrator", "whitted", "--out", out])
+        == 0
+    )
+    summary = capsys.readouterr().out.splitlines()[0]
+    assert summary.endswith("sobol sampler, whitted, 1 worker)"), summary  # (one tile: one worker)
+    assert "sampling" not in summary
+
+
+LIT_FROM_BEHIND = """
+[camera]
+position = [0, 0, 5]
+look_at = [0, 0, 0]
+
+[materials.floor]
+type = "diffuse"
+
+[[mesh]]
+quad = { corners = [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]] }
+material = "floor"
+
+[[point_light]]
+position = [0, 0, -2]
+intensity = [10, 10, 10]
+"""
+
+
+def test_a_render_that_sees_no_light_warns_in_one_line(tmp_path, capsys):
+    scene = tmp_path / "dark.toml"
+    scene.write_text(LIT_FROM_BEHIND)  # (the light is behind the only surface the camera sees)
+    code = main(
+        [
+            "render",
+            str(scene),
+            "--res",
+            "8",
+            "--spp",
+            "1",
+            "--workers",
+            "1",
+            "--out",
+            str(tmp_path / "dark.png"),
+        ]
+    )
+    err = capsys.readouterr().err
+    assert code == 0
+    assert err.startswith("ptlab: warning: the image is black"), err
+    assert err.count("\n") == 1, err

@@ -818,7 +818,7 @@ def cheap(option: str, value: str) -> str:
 @examples(60)
 @given(
     options=st.lists(st.tuples(st.sampled_from(RENDER_OPTIONS), option_values), max_size=3),
-    out=st.sampled_from(["x.png", "x.exr", "x.jpg", "x", "nodir/x.png", "folder.png", "."]),
+    out=st.sampled_from(["x.png", "x.exr", "x.jpg", "x.bmp", "x", "nodir/x.png", "folder.png", "."]),
 )
 def test_render_options_render_or_fail_cleanly(options, out, tmp_path, monkeypatch, capsys):
     folder = Path(tempfile.mkdtemp(dir=tmp_path))

@@ -37,7 +37,7 @@ LAYERS = [
     ("rendering", ["ptlab.rendering", "ptlab"]),
     ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
     ("exercises", ["ptlab.exercises"]),
-    ("command line", ["ptlab.cli"]),
+    ("command line", ["ptlab.cli", "ptlab.__main__"]),
 ]
 
 
