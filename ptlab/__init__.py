@@ -19,13 +19,23 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from ptlab.rendering.api import RenderResult, render, render_result
+    from ptlab.rendering.display import show
     from ptlab.rendering.options import RenderOptions
     from ptlab.scene import Scene
     from ptlab.scene_file import load_scene
 
 __version__ = "0.1.0"
 
-__all__ = ["RenderOptions", "RenderResult", "Scene", "__version__", "load_scene", "render", "render_result"]
+__all__ = [
+    "RenderOptions",
+    "RenderResult",
+    "Scene",
+    "__version__",
+    "load_scene",
+    "render",
+    "render_result",
+    "show",
+]
 
 #: Where each lazily imported name lives.
 _HOMES = {
@@ -35,6 +45,7 @@ _HOMES = {
     "render": "ptlab.rendering.api",
     "render_result": "ptlab.rendering.api",
     "RenderOptions": "ptlab.rendering.options",
+    "show": "ptlab.rendering.display",
 }
 
 

@@ -17,6 +17,7 @@ import signal
 import sys
 import threading
 import time
+import warnings
 from pathlib import Path
 from typing import Any
 
@@ -333,7 +334,9 @@ def _render(args) -> int:
         on_pass=_Preview(out, args.preview_every, args.exposure),
         command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
     )
-    with _StopOnSignal() as signals:
+    with _StopOnSignal() as signals, warnings.catch_warnings():
+        # (A render stopped before its first pass: _interrupted says so in its own words.)
+        warnings.filterwarnings("ignore", "the render stopped before any tile", RuntimeWarning)
         stop = signals.requested.is_set
         try:
             if args.scheduler:

@@ -69,6 +69,19 @@ class Scene:
     uvs: np.ndarray | None = None
     defaults: RenderDefaults = field(default_factory=RenderDefaults)
 
+    def __repr__(self) -> str:
+        # One line, not the arrays: what a notebook shows for a scene.
+        emitting = int(self.emits.sum()) if hasattr(self, "emits") else 0
+        lights = [f"{emitting} emitting triangles"] if emitting else []
+        if self.point_lights is not None:
+            lights.append(f"{len(self.point_lights.positions)} point lights")
+        if self.sky is not None:
+            lights.append("a sky")
+        return (
+            f"Scene({self.name!r}, {len(self.triangles)} triangles, {len(self.materials)} materials, "
+            f"{', '.join(lights) or 'no light'})"
+        )
+
     def __post_init__(self):
         tri = np.asarray(self.triangles, dtype=np.float64)
         self.triangles = tri

@@ -10,6 +10,7 @@ asked to. ``render`` is the same, returning only the image. Its jobs are of the 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
@@ -76,6 +77,20 @@ class RenderResult:
         """Camera samples (paths) per second of this call."""
         return self.samples / max(self.seconds, 1e-9)
 
+    def __repr__(self) -> str:
+        height, width = self.image.shape[:2]
+        state = "complete" if self.complete else "stopped early"
+        return (
+            f"RenderResult({self.settings.get('scene', 'scene')!r}, {width}x{height}, "
+            f"{self.spp} spp, {state}, {self.seconds:.2f} s)"
+        )
+
+    def _repr_png_(self) -> bytes:
+        """The image as an sRGB PNG: how Jupyter shows a result (as Mitsuba's ``Bitmap``)."""
+        from ptlab.rendering.display import png_bytes
+
+        return png_bytes(self.image)
+
 
 @takes_options
 def render_result(
@@ -85,7 +100,7 @@ def render_result(
     executor: Executor | None = None,
     checkpoint: str | Path | None = None,
     resume: str | Path | None = None,
-    progress: Callable[[Film], None] | None = None,
+    progress: Callable[[Film], None] | bool | None = None,
     on_pass: Callable[[Film], None] | None = None,
     stop: Callable[[], bool] | None = None,
     command: dict | None = None,
@@ -96,7 +111,8 @@ def render_result(
     Args (beyond ``render``'s):
         checkpoint: save the film here after every pass (and when stopped).
         resume: continue the render saved in this checkpoint.
-        progress: called with the film after every job.
+        progress: called with the film after every job; True shows a progress bar (in a
+            notebook too, ``ptlab.rendering.progress``).
         on_pass: called with the film whenever a pass over the whole image completes.
         stop: polled between jobs; when it returns True the render stops early and
             returns what it has (``complete`` is then False).
@@ -147,17 +163,22 @@ def render_result(
     if executor is None:
         workers = min(workers, len(jobs))  # a pool for one job would only cost its start-up
     complete_passes = int(film.passes_done.min())
+    report, bar = _progress_reports(progress, film)
     for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False)):
         film.add(result)
-        if progress is not None:
-            progress(film)
+        if report is not None:
+            report(film)
         if film.passes_done.min() > complete_passes:
             complete_passes = int(film.passes_done.min())
             if checkpoint is not None:
                 save_checkpoint(checkpoint, film, identity, command)
             if on_pass is not None:
                 on_pass(film)
+    if bar is not None:
+        bar.close()
     complete = film.complete
+    if film.spp_max == 0 and not complete:
+        warnings.warn("the render stopped before any tile had a pass: its image is black", RuntimeWarning, 2)
     if checkpoint is not None and not complete:
         save_checkpoint(checkpoint, film, identity, command)
     seconds = time.perf_counter() - start
@@ -181,6 +202,18 @@ def render_result(
     )
 
 
+def _progress_reports(progress, film: Film) -> tuple[Callable[[Film], None] | None, Any]:
+    """What to call after each job: ``progress`` itself, or for True a new progress bar
+    (``ptlab.rendering.progress``), returned again as the second value, to be closed."""
+    if progress is not True:
+        return progress or None, None
+    from ptlab.rendering.progress import ProgressBar
+
+    height, width = film.sums.shape[:2]
+    bar = ProgressBar(width * height * sum(film.passes), len(film.passes), initial=film.samples)
+    return bar, bar
+
+
 def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
     """Samples per pixel of each pass of a render (``SPP_PER_PASS`` by default)."""
     if spp_per_pass is None:
@@ -196,6 +229,7 @@ def render(
     *args,
     options: RenderOptions | None = None,
     executor: Executor | None = None,
+    progress: bool = False,
     **keywords: Any,
 ) -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
@@ -209,6 +243,7 @@ def render(
         executor: run the jobs on this ``concurrent.futures.Executor`` (a thread pool, a
             Dask client's ``get_executor()``, ...) instead of ptlab's own process pool;
             the image is the same, bit for bit.
+        progress: show a progress bar (on a terminal, or in a notebook), or a line per pass.
     """
     options = RenderOptions.of(args, options, keywords)
-    return render_result(scene, options=options, executor=executor).image
+    return render_result(scene, options=options, executor=executor, progress=progress or None).image

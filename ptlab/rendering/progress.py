@@ -1,12 +1,15 @@
-"""The progress bar of a render: samples done, samples per second, time left (tqdm).
+"""The progress of a render: samples done, samples per second, time left.
 
-It shows on the terminal only: when standard error is a file or a pipe (a CI log, a
-script) or with ``--quiet``, it stays silent.
+On a terminal, a bar (tqdm); in a Jupyter notebook, tqdm's notebook bar (``tqdm.auto``);
+where standard error is a file or a pipe (a CI log, a script's output), one line per pass
+finished; with ``--quiet``, nothing.
 """
 
 from __future__ import annotations
 
+import shutil
 import sys
+import time
 
 from tqdm import tqdm
 
@@ -23,22 +26,49 @@ class ProgressBar:
     """
 
     def __init__(self, total_samples: int, passes: int, initial: int = 0, quiet: bool = False):
-        self.passes = passes
-        self.bar = tqdm(
+        self.passes, self.total, self.initial = passes, total_samples, initial
+        self.start = time.monotonic()
+        self.passes_shown = 0
+        in_notebook = "ipykernel" in sys.modules
+        on_terminal = sys.stderr.isatty()
+        # Lines per pass where there is neither: a file or a pipe would get a bar's every
+        # redraw, carriage returns and all.
+        self.lines = not quiet and not in_notebook and not on_terminal
+        if in_notebook:
+            from tqdm.auto import tqdm as bar_class
+        else:
+            bar_class = tqdm
+        # A terminal that reports 0 columns (some ptys) would get no bar at all: 80 then.
+        columns = shutil.get_terminal_size((80, 24)).columns
+        self.bar = bar_class(
             total=total_samples,
             initial=initial,
             unit="sample",
             unit_scale=True,
-            dynamic_ncols=True,
+            dynamic_ncols=columns > 0,
+            ncols=None if columns > 0 else 80,
             leave=False,
             file=sys.stderr,
-            disable=quiet or not sys.stderr.isatty(),
+            disable=quiet or self.lines,
         )
 
     def __call__(self, film: Film) -> None:
         self.bar.update(film.samples - self.bar.n)
-        current = min(int(film.passes_done.min()) + 1, self.passes)
-        self.bar.set_description(f"pass {current}/{self.passes}")
+        done = int(film.passes_done.min())
+        self.bar.set_description(f"pass {min(done + 1, self.passes)}/{self.passes}")
+        if self.lines and done > self.passes_shown:
+            self.passes_shown = done
+            print(self.line(film.samples), file=sys.stderr, flush=True)
+
+    def line(self, samples: int) -> str:
+        """``pass 2/8: 25% of 1.05 M samples, 0.41 M samples/s, 12 s left``."""
+        seconds = max(time.monotonic() - self.start, 1e-9)
+        rate = (samples - self.initial) / seconds
+        left = (self.total - samples) / rate if rate > 0 else float("inf")
+        return (
+            f"pass {self.passes_shown}/{self.passes}: {samples / max(self.total, 1):.0%} of "
+            f"{self.total / 1e6:.2f} M samples, {rate / 1e6:.2f} M samples/s, {left:.0f} s left"
+        )
 
     def close(self) -> None:
         self.bar.close()

@@ -1,0 +1,89 @@
+"""What a notebook, a script and a log see of a render: one-line reprs, the image as a PNG,
+``ptlab.show``, and progress as lines where there is no terminal."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import warnings
+
+import numpy as np
+import pytest
+
+import ptlab
+from ptlab.image import encode_srgb8, read_image
+from ptlab.rendering import render_result
+from ptlab.rendering.display import png_bytes
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+@pytest.fixture(scope="module")
+def small():
+    return render_result("cornell-box", res=(24, 16), spp=2, workers=1)
+
+
+def test_a_result_and_a_scene_show_themselves_in_one_line(small, cornell):
+    assert repr(small) == f"RenderResult('cornell-box', 24x16, 2 spp, complete, {small.seconds:.2f} s)"
+    assert repr(cornell) == "Scene('cornell-box', 32 triangles, 4 materials, 2 emitting triangles)"
+    assert "\n" not in repr(ptlab.load_scene("games101-hw5"))
+
+
+def test_a_result_shows_in_jupyter_as_its_srgb_png(small, tmp_path):
+    data = small._repr_png_()
+    assert data.startswith(PNG_SIGNATURE)
+    (tmp_path / "shown.png").write_bytes(data)
+    shown, _ = read_image(tmp_path / "shown.png")
+    assert np.array_equal(np.round(shown * 255).astype(np.uint8), encode_srgb8(small.image))
+
+
+def test_exposure_brightens_what_is_shown(small, tmp_path):
+    (tmp_path / "bright.png").write_bytes(png_bytes(small.image, exposure=2))
+    bright, _ = read_image(tmp_path / "bright.png")
+    assert np.array_equal(np.round(bright * 255).astype(np.uint8), encode_srgb8(small.image * 4))
+
+
+def test_show_without_a_display_writes_a_png_and_says_where(small, tmp_path, capsys):
+    import matplotlib
+
+    matplotlib.use("Agg")
+    path = ptlab.show(small, out=tmp_path / "shown.png")
+    assert path == tmp_path / "shown.png"
+    assert f"wrote {path.resolve()}" in capsys.readouterr().out
+    shown, _ = read_image(path)
+    assert shown.shape == (16, 24, 3)
+
+
+def test_show_in_a_notebook_displays_the_image(small, monkeypatch, capsys):
+    # In a kernel, IPython's display shows the image; outside one (here) it prints its repr.
+    monkeypatch.setitem(sys.modules, "ipykernel", sys.modules.get("ipykernel", object()))
+    assert ptlab.show(small) is None
+    assert "IPython.core.display.Image object" in capsys.readouterr().out
+
+
+def test_a_render_stopped_before_any_pass_warns():
+    with pytest.warns(RuntimeWarning, match="stopped before any tile had a pass"):
+        result = render_result("cornell-box", res=8, spp=1, workers=1, stop=lambda: True)
+    assert result.spp == 0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        render_result("cornell-box", res=8, spp=1, workers=1)  # (a finished one does not)
+
+
+@pytest.mark.subprocess
+def test_progress_is_a_line_per_pass_where_stderr_is_not_a_terminal(tmp_path):
+    command = [sys.executable, "-m", "ptlab", "render", "cornell-box", "--res", "16", "--spp", "48"]
+    result = subprocess.run(
+        [*command, "--workers", "1", "--out", str(tmp_path / "box.png")],
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert result.returncode == 0, result.stderr
+    lines = result.stderr.splitlines()
+    assert [line.split(":")[0] for line in lines] == ["pass 1/3", "pass 2/3", "pass 3/3"], lines
+    assert lines[-1].startswith("pass 3/3: 100% of 0.01 M samples")
+    quiet = subprocess.run(
+        [*command, "--quiet", "--out", str(tmp_path / "q.png")], capture_output=True, text=True
+    )
+    assert quiet.stderr == ""
