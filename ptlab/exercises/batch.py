@@ -329,9 +329,10 @@ class _Runner:
     """Grades one student at a time per thread, each in a grader process of its own.
 
     When the students' code runs as another user (the grader is root), each student graded
-    at the same time gets a uid of their own (a slot of ``ptlab.untrusted.student_user.
-    pool_user``): the kernel counts processes per uid, so a fork bomb that fills its
-    limit leaves the other student's limit whole, and neither may read the other's folder.
+    at the same time gets a uid of their own (slots 1 to K of ``ptlab.untrusted.
+    student_user.pool_user``): the kernel counts processes per uid, so a fork bomb that
+    fills its limit leaves the other student's limit whole (and that of any other grader
+    running students as the user itself), and neither may read the other's folder.
     """
 
     def __init__(
@@ -343,7 +344,7 @@ class _Runner:
         base = student_user(user)
         if base is not None and workers > 1:
             self.slots = queue.SimpleQueue()
-            for slot in range(workers):
+            for slot in range(1, workers + 1):  # (not the user itself, whom other graders may run)
                 pool_user(base, slot)  # (a pool that cannot be made: before anything)
                 self.slots.put(slot)
         self.guard: ProcessGuard | None = None

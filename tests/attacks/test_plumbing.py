@@ -222,7 +222,12 @@ def test_a_fork_bomb_costs_a_student_graded_at_the_same_time_nothing(tmp_path):
     folder = tmp_path / "class"
     folder.mkdir()
     (folder / "a_bomb.py").write_bytes((SUBMISSIONS / "plumbing_fork_bomb.py").read_bytes())
-    (folder / "b_honest.py").write_bytes(RIGHT_01.read_bytes())
+    # An honest student whose process starts a thread a few seconds after it started (a
+    # stand-in for any slow file whose code uses threads or processes).
+    (folder / "b_honest.py").write_bytes(
+        RIGHT_01.read_bytes() + b"\nimport threading, time\ntime.sleep(6)\n"
+        b"_worker = threading.Thread(target=sum, args=([1, 2],))\n_worker.start()\n_worker.join()\n"
+    )
     grades = tmp_path / "grades.csv"
     graded = _ptlab(
         "exercise", "grade-all", "1", str(folder), "--csv", str(grades), "--workers", "2", cwd=tmp_path
