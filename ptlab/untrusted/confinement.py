@@ -16,9 +16,10 @@ It refuses:
   results, the progress record, other students' files), and opening folders outside it
   (a folder's descriptor would let ``dir_fd`` reach into it);
 * reading or listing anything outside its private folder but Python's and ptlab's
-  installed files (``readable_places``), a few device files, its own ``/proc/<pid>`` and
-  what libraries read to count processors and memory: not the grader's command line
-  (``/proc/<grader>/cmdline``), the process table, other folders' names;
+  installed files (``readable_places``), a few device files, its own ``/proc/<pid>``, any
+  process's ``/proc/<pid>/stat`` and what libraries read to count processors and memory:
+  not the grader's command line (``/proc/<grader>/cmdline``), the list of processes,
+  other folders' names;
 * signals to any process but its own and those it started;
 * sockets but Unix ones in its folder (the grader's fork server listens on one outside it);
 * starting programs (where the chapter does not need it; the kernel refuses them too, see
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 import socket
 import sys
 import threading
@@ -93,6 +95,9 @@ CTYPES_EVENTS = (
 #: may read and list (what libraries read to count processors and memory).
 READABLE_FILES = ("/dev/null", "/dev/zero", "/dev/urandom", "/dev/random", "/proc/cpuinfo", "/proc/meminfo")
 READABLE_FOLDERS = ("/sys/devices/system/cpu", "/sys/fs/cgroup")
+#: Any process's ``stat`` (its parent and state, which the hook itself reads to tell a
+#: process's descendants), but no other file of another process (its command line).
+PROCESS_STAT = re.compile(r"/proc/[0-9]+/stat")
 #: Frames whose decoding of bytecode is Python's own import system.
 IMPORT_SYSTEM = ("<frozen importlib._bootstrap_external>", "<frozen importlib._bootstrap>")
 
@@ -207,7 +212,7 @@ class _Rules:
         text = str(where)
         if text in READABLE_FILES or any(where.is_relative_to(f) for f in READABLE_FOLDERS):
             return True
-        if where.is_relative_to(f"/proc/{os.getpid()}"):
+        if where.is_relative_to(f"/proc/{os.getpid()}") or PROCESS_STAT.fullmatch(text):
             return True
         return any(where.is_relative_to(place) for place in self.readable)
 
