@@ -140,8 +140,9 @@ def grade(
         timeout_scale: multiplies every check's time limit (slow machines).
         echo: called with a line per check as it finishes.
         on_output: called with each line the student's code prints (default: dropped).
-        user: the user the student's code runs as (``--student-user``; None: ``nobody`` when
-            this process is root, else its own user).
+        user: the user the student's code runs as (``--student-user``, or a ``StudentUser``
+            such as grade-all's ``pool_user``; None: ``nobody`` when this process is root,
+            else its own user).
         with_folder: the Python files beside ``path`` are the student's too (a folder of
             their own), and are copied with it; else ``path`` alone.
         library_answer: ``path`` is the chapter's own answer file, graded as itself (the

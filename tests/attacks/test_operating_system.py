@@ -328,7 +328,8 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
         "import os\nfrom ptlab.untrusted.processes import make_undumpable\nmake_undumpable()\n"
         "parent = os.getpid()\nif os.fork() == 0:\n    try:\n"
         "        open(f'/proc/{parent}/environ', 'rb').read()\n        print('read', flush=True)\n"
-        "    except OSError as error:\n        print('refused', error.errno, flush=True)\n    os._exit(0)\nos.wait()\n"
+        "    except OSError as error:\n        print('refused', error.errno, flush=True)\n"
+        "    os._exit(0)\nos.wait()\n"
     )
     kernel = subprocess.run(
         [sys.executable, "-I", "-c", probe],
