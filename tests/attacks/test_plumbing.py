@@ -94,6 +94,7 @@ def test_a_file_name_cannot_forge_lines_of_the_table(tmp_path):
     assert f"x\\n{forged}\\n\\x1b[2K.py" in table.splitlines()[0]
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_printed_escapes_reach_the_terminal_only_as_text(tmp_path):
     path = tmp_path / "01_cameras.py"
@@ -174,6 +175,7 @@ def test_names_that_collide_each_get_a_row_that_says_so(tmp_path):
     assert by_entry["gina/"].file is not None
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_grade_all_grades_what_it_can_and_a_fifo_hangs_nothing(tmp_path):
     folder = _class(tmp_path)
@@ -241,6 +243,7 @@ def test_a_fork_bomb_costs_a_student_graded_at_the_same_time_nothing(tmp_path):
 # -- 11: a closed pipe --------------------------------------------------------------------------
 
 
+@pytest.mark.slow
 @pytest.mark.subprocess
 def test_a_closed_pipe_never_turns_a_failure_into_success(tmp_path):
     path = tmp_path / "01_cameras.py"
