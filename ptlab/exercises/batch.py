@@ -11,9 +11,16 @@ current folder; the same isolation as ``ptlab exercise check``), with a time lim
 whole, so a submission that hangs or crashes costs that student its marks and nobody else
 anything.
 
+Only regular files are read: a FIFO, a device or a socket in the folder (which would hang
+the reader) is reported in its student's row and skipped. Names that a spreadsheet or a
+file system would take for the same student (``alice.py`` and ``alice/``; ``Alice`` and
+``alice``; names that differ in Unicode normalisation or a trailing dot) are none of them
+graded: each gets a row of its own that says so, so no submission is dropped unnoticed.
+
 The CSV gets one row per student (total, the points of every check, the first failure's
-message), its cells made safe for spreadsheets (one that begins with ``=``, ``+``, ``-``,
-``@``, a tab or a carriage return is quoted with a leading ``'``). The rows come from the
+message), its cells made safe for spreadsheets (``safe_cell``: control characters and
+newlines shown as escapes, and one that begins, after any spaces, with ``=``, ``+``,
+``-`` or ``@`` is quoted with a leading ``'``). The rows come from the
 grader's own record of what it graded (its private state, ``ptlab.exercises.progress``),
 and the CSV is rewritten from it, atomically, at the start and after each student:
 interrupted, the command picks up where it stopped. A student is not graded again when the
@@ -28,10 +35,14 @@ import csv
 import hashlib
 import io
 import json
+import os
+import queue
+import stat
 import subprocess
 import sys
 import threading
 import time
+import unicodedata
 from concurrent.futures import ThreadPoolExecutor, as_completed
 from dataclasses import dataclass
 from pathlib import Path
@@ -44,58 +55,126 @@ from ptlab.exercises.chapter import Chapter
 from ptlab.exercises.grader import OVERALL_SLACK, overall_limit, table_message
 from ptlab.exercises.progress import private_state
 from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, student_user
+from ptlab.untrusted.intake import MAX_BYTES
+from ptlab.untrusted.shown import shown
+from ptlab.untrusted.student_user import pool_user
 
 #: The largest report a grader process may print (a grade's JSON is a few kilobytes).
 MAX_REPORT = 1 << 20
 #: Seconds a grader process gets beyond its own overall limit before it is ended.
 EXTRA_SECONDS = 60.0
-#: The first characters that make a spreadsheet read a cell as a formula.
-FORMULA_STARTS = ("=", "+", "-", "@", "\t", "\r")
+#: The first characters (after any spaces) that make a spreadsheet read a cell as a
+#: formula, the full-width forms included.
+FORMULA_STARTS = ("=", "+", "-", "@", "\uff1d", "\uff0b", "\uff0d", "\uff20")
 
 
 @dataclass(frozen=True)
 class Work:
     """One student's submission: ``file`` is None when none was found (``problem`` says why);
-    ``own_folder``: the folder holding ``file`` is the student's alone."""
+    ``own_folder``: the folder holding ``file`` is the student's alone.
+
+    Attributes:
+        student: the student's cell in the CSV (``safe_cell`` of the name), unique in the class.
+        entry: the folder's entry it came from, shown (``alice.py``, ``alice/``).
+    """
 
     student: str
     file: Path | None
     problem: str = ""
     own_folder: bool = False
+    entry: str = ""
 
 
 def find_work(folder: Path, chapter: Chapter) -> list[Work]:
-    """Every student's submission in ``folder``, by student name."""
+    """Every student's submission in ``folder``, one per entry, each with a student cell of
+    its own (``_unambiguous``)."""
     if not folder.is_dir():
         raise PtlabError(f"{folder}: no such folder")
     found = []
     for entry in sorted(folder.iterdir()):
         if entry.name.startswith((".", "_")):
             continue
-        if entry.is_symlink():
-            found.append(
-                Work(
-                    entry.stem if entry.suffix == ".py" else entry.name,
-                    None,
-                    f"{entry.name} is a symbolic link: hand in the files themselves",
-                )
-            )
-        elif entry.is_file() and entry.suffix == ".py":
-            found.append(Work(entry.stem, entry))
-        elif entry.is_dir():
-            found.append(_work_in_folder(entry, chapter))
-    return found
+        kind = _kind(entry)
+        student = safe_cell(entry.stem if entry.suffix == ".py" and kind != "folder" else entry.name)
+        label = shown(entry.name) + ("/" if kind == "folder" else "")
+        if kind == "link":
+            problem = f"{label} is a symbolic link: hand in the files themselves"
+            found.append(Work(student, None, problem, entry=label))
+        elif kind == "folder":
+            found.append(_work_in_folder(entry, chapter, student, label))
+        elif entry.suffix == ".py":
+            problem = "" if kind == "file" else f"{label} is not a regular file ({kind}): not read"
+            found.append(Work(student, entry if kind == "file" else None, problem, entry=label))
+    return _unambiguous(found)
 
 
-def _work_in_folder(folder: Path, chapter: Chapter) -> Work:
+def _kind(path: Path) -> str:
+    """What ``path`` is, without following a link or opening it: "file" (regular),
+    "folder", "link", or what else it is ("a FIFO", "a socket", "a device")."""
+    try:
+        mode = path.lstat().st_mode
+    except OSError:
+        return "gone"
+    if stat.S_ISLNK(mode):
+        return "link"
+    if stat.S_ISDIR(mode):
+        return "folder"
+    if stat.S_ISREG(mode):
+        return "file"
+    return "a FIFO" if stat.S_ISFIFO(mode) else "a socket" if stat.S_ISSOCK(mode) else "a device"
+
+
+def _work_in_folder(folder: Path, chapter: Chapter, student: str, label: str) -> Work:
     expected = folder / chapter.template.name
-    if expected.is_file():
-        return Work(folder.name, expected, own_folder=True)
-    files = sorted(p for p in folder.glob("*.py") if not p.name.startswith((".", "_")))
+    kind = _kind(expected)
+    if kind == "file":
+        return Work(student, expected, own_folder=True, entry=label)
+    if kind != "gone":
+        problem = f"{label}{expected.name} is not a regular file ({kind}): not read"
+        return Work(student, None, problem, entry=label)
+    files = sorted(p for p in folder.glob("*.py") if not p.name.startswith((".", "_")) and _kind(p) == "file")
     if len(files) == 1:
-        return Work(folder.name, files[0], own_folder=True)
-    listed = ", ".join(p.name for p in files[:5]) or "no Python file"
-    return Work(folder.name, None, f"no {expected.name} in the folder ({listed})")
+        return Work(student, files[0], own_folder=True, entry=label)
+    listed = ", ".join(shown(p.name) for p in files[:5]) or "no Python file"
+    return Work(student, None, f"no {expected.name} in the folder ({listed})", entry=label)
+
+
+def _identity(student: str) -> str:
+    """What a spreadsheet reader or a file system may take for the same name: case,
+    Unicode normalisation and trailing dots and spaces aside."""
+    return unicodedata.normalize("NFKC", student).casefold().rstrip(". ")
+
+
+def _unambiguous(found: list[Work]) -> list[Work]:
+    """``found`` with every student cell told apart: entries whose names are the same
+    student (``alice.py`` and ``alice/``, ``Bob`` and ``bob``) are none of them graded,
+    and each gets a row of its own, named by its entry, that says why."""
+    groups: dict[str, list[Work]] = {}
+    for work in found:
+        groups.setdefault(_identity(work.student), []).append(work)
+    named: list[Work] = []
+    for same in groups.values():
+        if len(same) == 1:
+            named += same
+            continue
+        entries = ", ".join(w.entry for w in same)
+        for work in same:
+            problem = f"ambiguous: {entries} are all student {work.student}; rename all but one"
+            named.append(Work(safe_cell(work.entry), None, problem, entry=work.entry))
+    # An entry's name may still meet another student's (a folder named "alice.py"): number it.
+    taken: set[str] = set()
+    unique = []
+    for work in named:
+        student, n = work.student, 1
+        while _identity(student) in taken:
+            n += 1
+            student = f"{work.student} ({n})"
+        taken.add(_identity(student))
+        if student != work.student:
+            problem = f"ambiguous: {work.entry} is named like another student; rename it"
+            work = Work(student, None, problem, entry=work.entry)
+        unique.append(work)
+    return unique
 
 
 def columns(chapter: Chapter) -> list[str]:
@@ -121,9 +200,12 @@ def read_rows(path: Path, chapter: Chapter) -> dict[str, dict]:
 
 
 def safe_cell(value) -> str:
-    """``value`` as a CSV cell that no spreadsheet takes for a formula."""
-    text = str(value)
-    return "'" + text if text.startswith(FORMULA_STARTS) else text
+    """``value`` as a CSV cell that no spreadsheet takes for a formula and that holds one
+    line: control characters shown as escapes (``ptlab.untrusted.shown``), and a leading
+    ``'`` where it begins, after any spaces, as a formula does. A safe cell is its own
+    ``safe_cell``."""
+    text = shown(value)
+    return "'" + text if text.lstrip().startswith(FORMULA_STARTS) else text
 
 
 def write_rows(path: Path, chapter: Chapter, rows: dict[str, dict]) -> None:
@@ -157,7 +239,7 @@ class Record:
 
     def vouched(self, in_csv: dict[str, dict], work: list[Work]) -> dict[str, dict]:
         """The rows of ``in_csv`` this record holds as they are, for submissions unchanged."""
-        files = {safe_cell(w.student): w.file for w in work}
+        files = {w.student: w.file for w in work}
         return {
             student: row
             for student, row in in_csv.items()
@@ -168,7 +250,7 @@ class Record:
 
     def keep(self, rows: dict[str, dict], work: list[Work]) -> None:
         """Record ``rows`` (and nothing else) as written."""
-        files = {safe_cell(w.student): w.file for w in work}
+        files = {w.student: w.file for w in work}
         self.rows = dict(rows)
         self.sha256 = {student: _sha256(files.get(student)) for student in rows}
         self.path.parent.mkdir(mode=0o700, exist_ok=True)
@@ -177,14 +259,25 @@ class Record:
 
 
 def _sha256(file: Path | None) -> str:
-    """The SHA-256 of a submission's file ("" for none, or a link: graded again)."""
-    if file is None or file.is_symlink():
+    """The SHA-256 of a submission's file ("" for none, a link, anything but a regular file
+    or one larger than a submission may be: graded again). Opened without blocking and
+    checked before it is read: a FIFO put there since would hang the reader."""
+    if file is None:
         return ""
     try:
-        with file.open("rb") as data:
-            return hashlib.file_digest(data, "sha256").hexdigest()
+        descriptor = os.open(file, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
     except OSError:
         return ""
+    try:
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            return ""
+        with os.fdopen(descriptor, "rb", closefd=False) as data:
+            content = data.read(MAX_BYTES + 1)
+        return hashlib.sha256(content).hexdigest() if len(content) <= MAX_BYTES else ""
+    except OSError:
+        return ""
+    finally:
+        os.close(descriptor)
 
 
 def grade_all(
@@ -207,7 +300,7 @@ def grade_all(
     rows = record.vouched(read_rows(csv_path, chapter), work)
     write_rows(csv_path, chapter, rows)  # what the grader cannot vouch for goes at once
     record.keep(rows, work)
-    todo = [w for w in work if safe_cell(w.student) not in rows]
+    todo = [w for w in work if w.student not in rows]
     limit = overall_limit(chapter, timeout_scale) + EXTRA_SECONDS
     if todo:
         print(
@@ -218,7 +311,7 @@ def grade_all(
             file=sys.stderr,
         )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
-    runner = _Runner(chapter, timeout_scale, limit, user)
+    runner = _Runner(chapter, timeout_scale, limit, user, workers)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
         runner.guard = guard
         futures = {pool.submit(runner.grade, w): w for w in todo}
@@ -233,11 +326,27 @@ def grade_all(
 
 
 class _Runner:
-    """Grades one student at a time per thread, each in a grader process of its own."""
+    """Grades one student at a time per thread, each in a grader process of its own.
 
-    def __init__(self, chapter: Chapter, timeout_scale: float, limit: float, user: str | None = None):
+    When the students' code runs as another user (the grader is root), each student graded
+    at the same time gets a uid of their own (slots 1 to K of ``ptlab.untrusted.
+    student_user.pool_user``): the kernel counts processes per uid, so a fork bomb that
+    fills its limit leaves the other student's limit whole (and that of any other grader
+    running students as the user itself), and neither may read the other's folder.
+    """
+
+    def __init__(
+        self, chapter: Chapter, timeout_scale: float, limit: float, user: str | None = None, workers: int = 1
+    ):
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
         self.user = user
+        self.slots: queue.SimpleQueue[int] | None = None
+        base = student_user(user)
+        if base is not None and workers > 1:
+            self.slots = queue.SimpleQueue()
+            for slot in range(1, workers + 1):  # (not the user itself, whom other graders may run)
+                pool_user(base, slot)  # (a pool that cannot be made: before anything)
+                self.slots.put(slot)
         self.guard: ProcessGuard | None = None
         self._lock = threading.Lock()
         self._running: set[int] = set()
@@ -254,7 +363,12 @@ class _Runner:
             row.update(first_failure=work.problem, seconds=0)
             return row
         start = time.monotonic()
-        report, problem = self._run(work)
+        slot = None if self.slots is None else self.slots.get()
+        try:
+            report, problem = self._run(work, slot)
+        finally:
+            if slot is not None:
+                self.slots.put(slot)
         row["seconds"] = f"{time.monotonic() - start:.1f}"
         if report is None:
             row["first_failure"] = problem
@@ -267,7 +381,7 @@ class _Runner:
         row["first_failure"] = f"{failed[0]['name']}: {failed[0]['message']}" if failed else ""
         return row
 
-    def _run(self, work: Work) -> tuple[dict | None, str]:
+    def _run(self, work: Work, slot: int | None = None) -> tuple[dict | None, str]:
         command = [
             sys.executable,
             "-I",
@@ -280,6 +394,8 @@ class _Runner:
         ]
         if self.user is not None:
             command += ["--student-user", self.user]
+        if slot is not None:
+            command += ["--slot", str(slot)]
         if work.own_folder:
             command.append("--own-folder")
         with self._lock:
@@ -340,15 +456,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("file")
     parser.add_argument("--timeout-scale", type=float, default=1.0)
     parser.add_argument("--student-user")
+    parser.add_argument("--slot", type=int, default=0, help="the uid of the pool's slot (see _Runner)")
     parser.add_argument(
         "--own-folder", action="store_true", help="the Python files beside FILE are the student's too"
     )
     args = parser.parse_args(argv)
+    user = student_user(args.student_user)
     result = grade(
         chapter(args.chapter),
         Path(args.file),
         timeout_scale=args.timeout_scale,
-        user=args.student_user,
+        user=args.student_user if user is None else pool_user(user, args.slot),
         with_folder=args.own_folder,
     )
     print(json.dumps(result.as_dict()))

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
+from ptlab.untrusted.shown import print_verdict, relay, shown
 from ptlab.untrusted.student_user import add_student_user_argument, student_user
 
 
@@ -180,11 +181,11 @@ def _check(args) -> int:
         path,
         timeout_scale=scale,
         echo=echo,
-        on_output=lambda line: print(f"    | {line}", file=sys.stderr),
+        on_output=relay("    | "),
         user=args.student_user,
     )
     # grade() has ended every process of the student's code: nothing can change what follows.
-    print(result.table())
+    print_verdict(result.table())  # (a reader gone away changes nothing below, nor the exit code)
     if args.json:
         text = json.dumps(result.as_dict(), indent=2) + "\n"
         write_atomically(args.json, lambda temporary: Path(temporary).write_text(text))
@@ -240,11 +241,12 @@ def _list(args) -> int:
 
 
 def _shown(path: Path) -> str:
-    """``path`` relative to here where it is below here, else as it is."""
+    """``path`` relative to here where it is below here, else as it is (shown: a student
+    names the file)."""
     try:
-        return str(path.relative_to(Path.cwd().resolve()))
+        return shown(path.relative_to(Path.cwd().resolve()))
     except ValueError:
-        return str(path)
+        return shown(path)
 
 
 def _grade_all(args) -> int:

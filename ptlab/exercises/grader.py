@@ -20,7 +20,6 @@ code started is ended before ``grade`` returns, and so before any result is writ
 from __future__ import annotations
 
 import time
-import unicodedata
 from collections.abc import Callable
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -32,6 +31,7 @@ from ptlab.untrusted import (
     ProcessGuard,
     RefusedSubmission,
     StudentError,
+    StudentUser,
     Submission,
     SubmissionFailed,
     Taken,
@@ -40,6 +40,7 @@ from ptlab.untrusted import (
     student_user,
     take_in,
 )
+from ptlab.untrusted.shown import one_line, shown
 
 #: Seconds the whole grading may take beyond the sum of its checks' limits (starting the
 #: fork server, the library's own renders).
@@ -110,11 +111,12 @@ class Grade:
     def table(self) -> str:
         """The score table, one row per check, as a course autograder prints it."""
         width = max(len(r.name) for r in self.results)
-        lines = [f"Chapter {self.chapter}: {self.title}  ({self.file})", ""]
+        lines = [f"Chapter {self.chapter}: {self.title}  ({shown(self.file)})", ""]
         lines.append(f"  {'check':{width}}  {'points':>7}  verdict  message")
         for r in self.results:
             verdict = "pass" if r.passed else "FAIL"
-            lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {r.message}")
+            message = table_message(r.message)
+            lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {message}")
         lines.append(
             f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
             f"{'full marks' if self.full_marks else ''}"
@@ -128,7 +130,7 @@ def grade(
     timeout_scale: float = 1.0,
     echo: Callable[[str], None] | None = None,
     on_output: Callable[[str], None] | None = None,
-    user: str | None = None,
+    user: str | StudentUser | None = None,
     with_folder: bool = True,
     library_answer: bool = False,
 ) -> Grade:
@@ -138,8 +140,9 @@ def grade(
         timeout_scale: multiplies every check's time limit (slow machines).
         echo: called with a line per check as it finishes.
         on_output: called with each line the student's code prints (default: dropped).
-        user: the user the student's code runs as (``--student-user``; None: ``nobody`` when
-            this process is root, else its own user).
+        user: the user the student's code runs as (``--student-user``, or a ``StudentUser``
+            such as grade-all's ``pool_user``; None: ``nobody`` when this process is root,
+            else its own user).
         with_folder: the Python files beside ``path`` are the student's too (a folder of
             their own), and are copied with it; else ``path`` alone.
         library_answer: ``path`` is the chapter's own answer file, graded as itself (the
@@ -213,7 +216,7 @@ def run_check(
     guard: ProcessGuard,
     on_output: Callable[[str], None] | None = None,
     rules=None,
-    user: str | None = None,
+    user: str | StudentUser | None = None,
 ) -> tuple[CheckResult, bool]:
     """Run one check on a fresh process of the student's submission, stopped after
     ``timeout`` s. Returns the result, and whether importing the file took too long."""
@@ -252,7 +255,7 @@ def run_check(
 
 def table_message(text: str) -> str:
     """``text`` as one printable line of at most ``MAX_MESSAGE`` characters (a message may
-    quote what the student's code said, which must not forge lines of the table)."""
-    printable = "".join(c if unicodedata.category(c)[0] != "C" else " " for c in text)
-    line = " ".join(printable.split())
-    return line if len(line) <= MAX_MESSAGE else line[: MAX_MESSAGE - 3] + "..."
+    quote what the student's code said, or a file name, which must not forge lines of the
+    table): runs of white space, newlines included, become one space; every other
+    character a terminal could act on is shown as its escape (``ptlab.untrusted.shown``)."""
+    return one_line(text, MAX_MESSAGE)

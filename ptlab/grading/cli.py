@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import sys
 from pathlib import Path
 
 from ptlab.errors import PtlabError
@@ -42,6 +41,7 @@ from ptlab.untrusted import (
     take_in,
 )
 from ptlab.untrusted.copies import copied_class, describe_copies, is_a_copy
+from ptlab.untrusted.shown import one_line, print_verdict, relay, shown
 from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
@@ -110,7 +110,8 @@ def run_grade(args: argparse.Namespace) -> int:
         raise GradeLoadError(str(refused)) from None
     copied = copied_class(taken.tree, name, MATERIALS.fingerprints)
     if is_a_copy(copied):
-        print(f"{args.target}: FAILED: {name} is {describe_copies(copied, taken.name)}, not yours")
+        copy = describe_copies(copied, shown(taken.name))
+        print_verdict(f"{shown(args.target)}: FAILED: {shown(name)} is {copy}, not yours")
         return 1
     with ProcessGuard() as guard:
         try:
@@ -119,7 +120,7 @@ def run_grade(args: argparse.Namespace) -> int:
                 guard,
                 time_limit=args.time_limit,
                 call_time_limit=CALL_TIME_LIMIT,
-                on_output=_show_output,
+                on_output=relay("  | "),
                 user=args.student_user,
             ) as submission:
                 origin = library_answer(submission.module, name)
@@ -130,14 +131,14 @@ def run_grade(args: argparse.Namespace) -> int:
                     report = check_material(material, seed=args.seed, samples=args.samples)
                     failure = None
         except ImportFailed as error:
-            raise GradeLoadError(str(error)) from None
+            raise GradeLoadError(one_line(str(error))) from None
         except (SubmissionFailed, StudentError) as error:
             failure = error.describe() if isinstance(error, StudentError) else str(error)
     # Everything the file started has ended: only now is anything written.
     if failure is not None:
-        print(f"{args.target}: FAILED: {failure}")
+        print_verdict(f"{shown(args.target)}: FAILED: {one_line(failure)}")
         return 1
-    print(report)
+    print_verdict(str(report))
     if args.plots and not report.passed:
         written = write_plots(report, args.plots)
         if written:
@@ -181,7 +182,3 @@ def load_material(submission: Submission, name: str, keywords: dict):
         return as_material(found)
     except NotAMaterialError as error:
         raise GradeLoadError(f"{name} is not a material: {error}") from None
-
-
-def _show_output(line: str) -> None:
-    print(f"  | {line}", file=sys.stderr)

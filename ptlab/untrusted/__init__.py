@@ -26,8 +26,9 @@ private folders), ``rules`` (what the grader asks of it), ``child`` (the student
 ``student_user`` (as whom it runs), ``no_exec`` (no programs), ``traps`` (ptlab's answers
 made unusable), ``confinement`` (the audit hook), ``fork_server`` (its preload),
 ``proxies`` (stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on
-pipes), ``processes`` (the subreaper), ``ownership`` (is a name the student's code or
-ptlab's?), ``copies`` (is a function a renamed copy of ptlab's?).
+pipes), ``shown`` (what the student controls, as the graders print it), ``processes`` (the
+subreaper), ``ownership`` (is a name the student's code or ptlab's?), ``copies`` (is a
+function a renamed copy of ptlab's?).
 """
 
 from __future__ import annotations

@@ -20,6 +20,8 @@ from collections.abc import Callable
 
 import numpy as np
 
+from ptlab.untrusted.shown import shown
+
 COUNT = struct.Struct("<I")
 LENGTH = struct.Struct("<Q")
 #: Parts in one message, at most (a reply's arrays, one part each).
@@ -58,7 +60,8 @@ class Channel:
         send_fd: the pipe the child reads requests from.
         receive_fd: the pipe the child writes replies to.
         output_fd: the pipe the child's stdout and stderr go to (or None).
-        on_output: called with each line the child printed, up to ``MAX_OUTPUT`` bytes.
+        on_output: called with each line the child printed, up to ``MAX_OUTPUT`` bytes,
+            shown (one line, its control characters escaped).
     """
 
     def __init__(
@@ -184,8 +187,15 @@ class Channel:
             self._output = bytearray()
 
     def _pass(self, line: bytes) -> None:
-        if self.on_output is not None:
-            self.on_output(line.decode("utf-8", "replace").rstrip("\r"))
+        """Pass on one line, shown (``ptlab.untrusted.shown``: an ANSI escape or a carriage
+        return in it cannot rewrite the grader's lines on a terminal). An ``on_output`` that
+        raises (its reader went away) gets nothing more: the grading goes on, and ends."""
+        if self.on_output is None:
+            return
+        try:
+            self.on_output(shown(line.decode("utf-8", "replace").removesuffix("\r")))
+        except Exception:  # noqa: BLE001 (whatever it was, the relay is what failed, not the check)
+            self.on_output = None
 
     def close(self) -> None:
         self.flush_output()

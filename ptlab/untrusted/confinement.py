@@ -15,6 +15,11 @@ It refuses:
 * writing, renaming or removing files outside the process's private folder (the grader's
   results, the progress record, other students' files), and opening folders outside it
   (a folder's descriptor would let ``dir_fd`` reach into it);
+* reading or listing anything outside its private folder but Python's and ptlab's
+  installed files (``readable_places``), a few device files, its own ``/proc/<pid>``, any
+  process's ``/proc/<pid>/stat`` and what libraries read to count processors and memory:
+  not the grader's command line (``/proc/<grader>/cmdline``), the list of processes,
+  other folders' names;
 * signals to any process but its own and those it started;
 * sockets but Unix ones in its folder (the grader's fork server listens on one outside it);
 * starting programs (where the chapter does not need it; the kernel refuses them too, see
@@ -31,6 +36,7 @@ from __future__ import annotations
 
 import ast
 import os
+import re
 import socket
 import sys
 import threading
@@ -85,6 +91,13 @@ CTYPES_EVENTS = (
     "ctypes.wstring_at",
     "ctypes.call_function",
 )
+#: Files outside the private folder that anyone may read, and folders whose files anyone
+#: may read and list (what libraries read to count processors and memory).
+READABLE_FILES = ("/dev/null", "/dev/zero", "/dev/urandom", "/dev/random", "/proc/cpuinfo", "/proc/meminfo")
+READABLE_FOLDERS = ("/sys/devices/system/cpu", "/sys/fs/cgroup")
+#: Any process's ``stat`` (its parent and state, which the hook itself reads to tell a
+#: process's descendants), but no other file of another process (its command line).
+PROCESS_STAT = re.compile(r"/proc/[0-9]+/stat")
 #: Frames whose decoding of bytecode is Python's own import system.
 IMPORT_SYSTEM = ("<frozen importlib._bootstrap_external>", "<frozen importlib._bootstrap>")
 
@@ -135,7 +148,10 @@ class _Rules:
             "socket.bind": self.address,
             "socket.sendto": self.address,
             "os.chdir": self.stay,
+            "os.listdir": self.listing,
+            "os.scandir": self.listing,
         }
+        self.readable = readable_places()
         self.handlers.update(dict.fromkeys(FILE_CHANGES, self.change))
         self.handlers.update(dict.fromkeys(CTYPES_EVENTS, self.ctypes))
         if not programs:
@@ -173,6 +189,38 @@ class _Rules:
             raise Refused(
                 f"your code may open folders only in its own folder while it is graded, not {where}"
             )
+        if not writes and not self._mine(where) and not self._readable(where):
+            raise Refused(self._read_refusal(where))
+
+    def listing(self, event: str, arguments: tuple) -> None:
+        """Listing a folder: its own, Python's and ptlab's (Python's import system lists
+        the folders it imports from)."""
+        path = arguments[0] if arguments and arguments[0] is not None else "."
+        if isinstance(path, int):
+            return  # an open descriptor: of a folder it was allowed to open
+        where = self._resolved(path)
+        if where is None or self._mine(where) or self._readable(where):
+            return
+        try:
+            caller = sys._getframe(2).f_code.co_filename  # (this method, the hook, its caller)
+        except ValueError:
+            caller = None
+        if caller not in IMPORT_SYSTEM:
+            raise Refused(self._read_refusal(where, "list"))
+
+    def _readable(self, where: Path) -> bool:
+        text = str(where)
+        if text in READABLE_FILES or any(where.is_relative_to(f) for f in READABLE_FOLDERS):
+            return True
+        if where.is_relative_to(f"/proc/{os.getpid()}") or PROCESS_STAT.fullmatch(text):
+            return True
+        return any(where.is_relative_to(place) for place in self.readable)
+
+    def _read_refusal(self, where: Path, verb: str = "read") -> str:
+        return (
+            f"your code may {verb} only its own folder and Python's and ptlab's installed "
+            f"files while it is graded, not {where}"
+        )
 
     def change(self, event: str, arguments: tuple) -> None:
         paths, folders = FILE_CHANGES[event]
@@ -238,6 +286,13 @@ class _Rules:
     # -- processes, sockets, C ---------------------------------------------------------------
 
     def signal(self, event: str, arguments: tuple) -> None:
+        self.checking.now = True  # (reading /proc/<target> below is the hook's, not the code's)
+        try:
+            self._signal(event, arguments)
+        finally:
+            self.checking.now = False
+
+    def _signal(self, event: str, arguments: tuple) -> None:
         target, me = arguments[0], os.getpid()
         if event == "os.killpg" or target <= 0:
             group = os.getpgid(0) if target == 0 else abs(target)
@@ -271,6 +326,16 @@ class _Rules:
 
     def ctypes(self, event: str, arguments: tuple) -> None:
         raise Refused(f"calling C through ctypes ({event}) is not allowed while your code is graded")
+
+
+def readable_places() -> tuple[Path, ...]:
+    """The folders the student's process may read and list beyond its own: Python's
+    installation and the folders it imports from (``sys.path``, which hold ptlab's
+    installed files; its code stays refused above), and the folder ptlab is installed in."""
+    places = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix, str(PTLAB.parent)}
+    places.update(entry for entry in sys.path if os.path.isabs(entry))
+    resolved = {Path(os.path.realpath(place)) for place in places}
+    return tuple(sorted(place for place in resolved if place != Path("/")))
 
 
 def _descends_from(pid: int, ancestor: int) -> bool:

@@ -32,6 +32,8 @@ from ptlab.errors import PtlabError
 #: The user students' code runs as when the grader is root and no ``--student-user`` is given.
 DEFAULT_STUDENT_USER = "nobody"
 CLONE_NEWNET = 0x40000000
+#: The lowest uid ``pool_user`` takes (below are the system's own users).
+FIRST_POOL_UID = 1000
 
 
 @dataclass(frozen=True)
@@ -47,13 +49,19 @@ def is_root() -> bool:
     return hasattr(os, "geteuid") and os.geteuid() == 0
 
 
-def student_user(name: str | None = None) -> StudentUser | None:
-    """The user students' code runs as: ``name`` (a user name or number), by default
-    ``nobody`` when this process is root and None (this process's own user) otherwise.
+def student_user(name: str | StudentUser | None = None) -> StudentUser | None:
+    """The user students' code runs as: ``name`` (a user name or number, or a
+    ``StudentUser`` made already, such as a ``pool_user``), by default ``nobody`` when this
+    process is root and None (this process's own user) otherwise.
 
     Raises ``PtlabError`` when ``name`` is no user, names another user without root, or
     cannot read the Python and the ptlab that run the grader.
     """
+    if isinstance(name, StudentUser):
+        if not is_root():
+            raise PtlabError(f"{name.name}: only root can run students' code as another user")
+        _check_can_run_ptlab(name)
+        return name
     if name is None:
         name = DEFAULT_STUDENT_USER if is_root() else None
     if name is None:
@@ -69,6 +77,39 @@ def student_user(name: str | None = None) -> StudentUser | None:
     user = StudentUser(entry.pw_name, entry.pw_uid, entry.pw_gid)
     _check_can_run_ptlab(user)
     return user
+
+
+def pool_user(user: StudentUser, slot: int) -> StudentUser:
+    """The user of ``slot`` in the pool of students graded at the same time
+    (``grade-all --workers K`` as root): slot 0 is ``user`` itself, slot k the k-th uid
+    below ``user``'s that names no user in the password database (for ``nobody``, 65534:
+    65533, 65532, ...), in ``user``'s group. Root may become a uid that names nobody; such a
+    uid owns no process and no file but those of its student, so the kernel keeps each
+    student's process limit, signals and private folder apart from the others'.
+
+    Raises ``PtlabError`` when there are not that many such uids above ``FIRST_POOL_UID``.
+    """
+    uid, found = user.uid, 0
+    while found < slot:
+        uid -= 1
+        if uid < FIRST_POOL_UID:
+            raise PtlabError(
+                f"--student-user {user.name}: no {slot} unused uids below {user.uid} for "
+                f"students graded at once; use --workers 1 or a user with a higher uid"
+            )
+        if not _names_a_user(uid):
+            found += 1
+    if slot == 0:
+        return user
+    return StudentUser(f"{user.name}+{slot} (uid {uid})", uid, user.gid)
+
+
+def _names_a_user(uid: int) -> bool:
+    try:
+        pwd.getpwuid(uid)
+    except KeyError:
+        return False
+    return True
 
 
 def add_student_user_argument(parser: argparse.ArgumentParser) -> None:

@@ -321,7 +321,27 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
     environment = dict(os.environ, HOME=str(home), XDG_STATE_HOME=str(home / "state"))
     checked = _as_nobody("exercise", "check", "1", str(answer), cwd=home, environment=environment)
     assert checked.returncode == 0, checked.stdout + checked.stderr
-    assert "| refused 13" in checked.stderr and "read the fork server" not in checked.stderr
+    # The audit hook refuses it first now (another process's /proc files); the kernel's
+    # refusal of a non-dumpable process's files to its own user is checked without the hook:
+    assert "| refused" in checked.stderr and "read the fork server" not in checked.stderr
+    probe = (
+        "import os\nfrom ptlab.untrusted.processes import make_undumpable\nmake_undumpable()\n"
+        "parent = os.getpid()\nif os.fork() == 0:\n    try:\n"
+        "        open(f'/proc/{parent}/environ', 'rb').read()\n        print('read', flush=True)\n"
+        "    except OSError as error:\n        print('refused', error.errno, flush=True)\n"
+        "    os._exit(0)\nos.wait()\n"
+    )
+    kernel = subprocess.run(
+        [sys.executable, "-I", "-c", probe],
+        capture_output=True,
+        text=True,
+        timeout=60,
+        user=NOBODY.pw_uid,
+        group=NOBODY.pw_gid,
+        extra_groups=[],
+        cwd=home,
+    )
+    assert kernel.stdout.strip() == "refused 13", kernel.stdout + kernel.stderr
     other = _as_nobody(
         "exercise", "check", "1", str(answer), "--student-user", "daemon", cwd=home, environment=environment
     )

@@ -59,7 +59,9 @@ _graders = []
 for _pid in _ancestors():
     try:
         _words = Path(f"/proc/{_pid}/cmdline").read_bytes().decode().split("\0")
-    except OSError:
+    except OSError as _error:  # refused: then every process above may be a grader
+        print(f"tried reading {_pid}'s command line: {type(_error).__name__}: {_error}", flush=True)
+        _graders.append(_pid)
         continue
     if "ptlab" in " ".join(_words):
         _graders.append(_pid)
