@@ -30,7 +30,8 @@ from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
 from ptlab.integrators import INTEGRATORS
-from ptlab.integrators.path import Paths, PathSettings, trace_paths
+from ptlab.integrators.path import PathSettings, trace_paths
+from ptlab.integrators.wavefront import Paths
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
