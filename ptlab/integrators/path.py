@@ -28,7 +28,10 @@ PathIntegrator; Veach's thesis, chapter 9):
 Point lights and a sky (``ptlab.lights``) join in: a point light is found by light sampling
 only (no ray can hit a point, so its MIS weight is 1, and even ``"bsdf"`` samples it); the
 sky is what a ray that escapes the scene sees, added like the emission of a surface it hits
-(``add_sky``), and a light that step 2 samples like the others (``direct_light_all_kinds``).
+(``add_sky``), and a light that step 2 samples like the others: every kind of light answers
+the same ``sample_li`` and ``pdf_li`` (``ptlab.lights.Light``), so ``direct_light`` serves
+them all, and the MIS weights of emission and of the sky take their densities from
+``pdf_li``, written once, in the lights.
 
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
@@ -56,7 +59,7 @@ from ptlab.integrators.wavefront import (
     shade,
     surface_hit,
 )
-from ptlab.lights import solid_angle_pdf
+from ptlab.lights import LightPoint
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 from ptlab.vectors import dot, take_rows
@@ -159,7 +162,8 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     if settings.strategy == "mis" and hit.pdf is not None:  # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
         t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
-        pdf_light = solid_angle_pdf(scene.area_lights.pdf_area(emitted), t * t, dot(n, wo))
+        found = LightPoint(radiance=emitted, dist2=t * t, cos_theta_light=dot(n, wo))
+        pdf_light = scene.light_sampler.pdf_li(scene.area_lights, found, sampled_lights(scene, settings))
         weight = np.where(
             hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
         )
@@ -184,33 +188,34 @@ def direct_light(
 ) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
-    Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
-    point's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
-    u: (N, 2) uniforms (``AreaLights.sample``). Returns the shadow rays.
+    The scene's light sampler picks a kind of light among those that ``sampled_lights``
+    names, and that kind a light and a point or direction on it (``LightSampler.sample_li``,
+    from the uniforms u: (N, 2)): the direction wi to it, the radiance Li arriving along wi,
+    and the density of the choice per solid angle, pdf. Adds throughput * f_r Li cos(theta)
+    / pdf (times the MIS weight with ``"mis"``; 1 for a point light, which BSDF sampling
+    cannot find). For a point on a light triangle, Li = Le and pdf = pdf_area |x - x'|^2 /
+    cos(theta'): the homework's Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area.
+    Returns the shadow rays.
     """
-    if scene.point_lights is not None or scene.sky is not None:
-        return direct_light_all_kinds(film, scene, accel, hit, u, settings)
-    light = scene.area_lights.sample(u)
-    to_light = light.points - hit.p
-    dist2 = dot(to_light, to_light)
-    wi = to_light / np.sqrt(dist2)[:, None]
-    cos_theta = dot(hit.n, wi)
-    cos_theta_light = -dot(light.normals, wi)
-    # Points that do not face each other exchange no light and need no shadow ray (a
-    # third of them in the Cornell box: docs/performance.md). Nor do mirrors and glass,
-    # whose f_r is 0 for any direction but the one they choose.
-    facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
-    visible = sees(accel, hit, facing, take_rows(light.target, facing))
-    f = shade(hit, "eval", hit.wo, wi, hit.n)
-    geometry = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    sampled = sampled_lights(scene, settings)
+    light, kind = scene.light_sampler.sample_li(hit.p, u, sampled)
+    cos_theta = dot(hit.n, light.wi)
+    # Points that do not face their light sample exchange no light and need no shadow ray (a
+    # third of them in the Cornell box: docs/performance.md; a light seen from behind has pdf
+    # 0). Nor do mirrors and glass, whose f_r is 0 for any direction but the one they choose.
+    usable = np.flatnonzero((cos_theta > 0) & (light.pdf > 0) & ~hit.delta)
+    visible = sees(accel, hit, usable, take_rows(light.target, usable))
+    weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
-        pdf_light = solid_angle_pdf(light.pdf_area, dist2, cos_theta_light)  # (rows not facing add 0)
-        geometry *= mis_weight(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n), settings.heuristic)
-    radiance = hit.throughput * f
+        bsdf_pdf = shade(hit, "pdf", hit.wo, light.wi, hit.n)
+        if scene.light_sampler.is_delta.any():  # no BSDF sample finds a point light: weight 1
+            bsdf_pdf = np.where(scene.light_sampler.is_delta.take(kind), 0, bsdf_pdf)
+        weight *= mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
+    radiance = hit.throughput * shade(hit, "eval", hit.wo, light.wi, hit.n)
     radiance *= light.radiance
-    radiance *= geometry[:, None]
+    radiance *= weight[:, None]
     add_to_film(film, hit.pixel, radiance)
-    return len(facing)
+    return len(usable)
 
 
 def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
@@ -230,71 +235,31 @@ def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
     )
 
 
-def direct_light_all_kinds(
-    film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit, u: np.ndarray, settings: PathSettings
-) -> int:
-    """``direct_light`` in a scene with point lights or a sky: one light sample of any kind
-    per path, and its shadow ray.
-
-    ``u[:, 0]`` picks the kind of light (``LightSampler.pick``, among the kinds that
-    ``sampled_lights`` names) and then, stretched, serves the kind's own ``sample_li``, which
-    gives the direction wi to the light, the radiance Li arriving along it and the pdf of
-    the choice. Adds throughput * f_r Li cos(theta) / pdf, times the MIS weight with
-    ``"mis"`` (1 for a point light, which BSDF sampling cannot find). Returns the shadow rays.
-    """
-    kinds = scene.light_sampler.kinds
-    kind, u, scale = scene.light_sampler.pick(u, sampled_lights(scene, settings))
-    n = len(hit.prim)
-    wi, radiance, target = (np.zeros((n, 3), np.float32, order="F") for _ in range(3))
-    pdf = np.zeros(n, np.float32)
-    delta = np.zeros(n, dtype=bool)
-    for k, light in enumerate(kinds):
-        rows = np.flatnonzero(kind == k)
-        if len(rows) == 0:
-            continue
-        sample = light.sample_li(take_rows(hit.p, rows), take_rows(u, rows))
-        wi[rows], radiance[rows], target[rows] = sample.wi, sample.radiance, sample.target
-        pdf[rows] = sample.pdf * np.float32(scale)  # (the share among the sampled kinds)
-        delta[rows] = light.is_delta
-    cos_theta = dot(hit.n, wi)
-    usable = np.flatnonzero(
-        (cos_theta > 0) & (pdf > 0) & np.isfinite(pdf) & (radiance.max(axis=1) > 0) & ~hit.delta
-    )
-    visible = sees(accel, hit, usable, take_rows(target, usable))
-    weight = np.where(visible, cos_theta / np.where(visible, pdf, 1), 0).astype(np.float32)
-    if settings.strategy == "mis":
-        bsdf_pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
-        weight *= np.where(delta, 1, mis_weight(pdf, bsdf_pdf, settings.heuristic)).astype(np.float32)
-    add_to_film(
-        film, hit.pixel, hit.throughput * shade(hit, "eval", hit.wo, wi, hit.n) * radiance * weight[:, None]
-    )
-    return len(usable)
-
-
 def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSettings) -> None:
     """Add the sky's radiance L for the paths that escaped (``hits.prim`` < 0), weighted as
     ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
     and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
     unless light sampling does not sample the sky (``sampled_lights``): then in full."""
-    sky = scene.light_sampler.sky  # (its pdf holds its share of the light samples)
-    sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
+    light_sampler = scene.light_sampler
+    sky = light_sampler.sky
+    sampled = sampled_lights(scene, settings)
+    sky_sampled = sampled[light_sampler.kinds.index(sky)]
     escaped = hits.prim < 0
-    counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission
+    counted = escaped if settings.strategy != "nee" or not sky_sampled else escaped & paths.sees_emission
     rows = np.flatnonzero(counted)
     if len(rows) == 0:
         return
-    weight = np.ones(len(rows), dtype=np.float32)
-    if settings.strategy == "mis" and sampled and paths.pdf is not None:
+    radiance = np.broadcast_to(sky.radiance.astype(np.float32), (len(rows), 3))
+    if settings.strategy == "mis" and sky_sampled and paths.pdf is not None:
+        # The density with which light sampling would have picked these directions.
+        pdf_light = light_sampler.pdf_li(sky, LightPoint(radiance, np.empty(0), np.empty(0)), sampled)
         weight = np.where(
             paths.sees_emission.take(rows),
             1.0,
-            mis_weight(paths.pdf.take(rows), np.float32(sky.pdf), settings.heuristic),
+            mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
         ).astype(np.float32)
-    add_to_film(
-        film,
-        paths.pixel.take(rows),
-        take_rows(paths.throughput, rows) * (sky.radiance.astype(np.float32) * weight[:, None]),
-    )
+        radiance = radiance * weight[:, None]
+    add_to_film(film, paths.pixel.take(rows), take_rows(paths.throughput, rows) * radiance)
 
 
 def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray | None) -> np.ndarray:

@@ -700,7 +700,7 @@ CHAPTER = Chapter(
     functions=("direct_light", "russian_roulette", "scatter", "trace_paths"),
     answers=tuple(
         f"ptlab.integrators.path.{name}"
-        for name in ("direct_light", "direct_light_all_kinds", "russian_roulette", "scatter", "trace_paths")
+        for name in ("direct_light", "russian_roulette", "scatter", "trace_paths")
     ),
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},
