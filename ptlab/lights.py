@@ -94,14 +94,14 @@ class LightPoint:
     Attributes:
         radiance: (N, 3) float32 radiance Le the light emits there (which triangle it is,
             for ``AreaLights``, is known by it).
-        dist2: (N,) float32 squared distance from the shading point (unused by the sky).
+        dist2: (N,) float32 squared distance from the shading point (None for the sky).
         cos_theta_light: (N,) float32 cosine between the light's normal and the direction
-            back to the shading point (unused by the sky).
+            back to the shading point (None for the sky).
     """
 
     radiance: np.ndarray
-    dist2: np.ndarray
-    cos_theta_light: np.ndarray
+    dist2: np.ndarray | None = None
+    cos_theta_light: np.ndarray | None = None
 
 
 class Light(Protocol):
@@ -238,6 +238,7 @@ class AreaLights:
     def pdf_li(self, found: LightPoint) -> np.ndarray:
         """(N,) the solid-angle density of ``sample_li`` at light points ``found``:
         ``pdf_area`` turned into solid angle (``solid_angle_pdf``)."""
+        assert found.dist2 is not None and found.cos_theta_light is not None  # (a point on a triangle)
         return solid_angle_pdf(self.pdf_area(found.radiance), found.dist2, found.cos_theta_light)
 
     def sample(self, u: np.ndarray) -> ShapeSample:
@@ -423,7 +424,7 @@ class Sky:
         return LightLiSample(
             wi=wi,
             radiance=radiance,
-            pdf=self.pdf_li(LightPoint(radiance, np.empty(0), np.empty(0))),
+            pdf=self.pdf_li(LightPoint(radiance)),
             target=p + np.float32(self.distance) * wi,
         )
 

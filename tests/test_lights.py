@@ -120,7 +120,7 @@ def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance
     np.testing.assert_allclose(sample.wi[~first][0], [0.6, 0.8, 0], rtol=1e-6)
     np.testing.assert_allclose(sample.pdf, np.where(first, 0.6, 0.4), rtol=1e-6)
     # No ray finds a point light: to MIS, its density is 0 (a delta light).
-    assert lights.is_delta and not lights.pdf_li(LightPoint(sample.radiance, None, None)).any()
+    assert lights.is_delta and not lights.pdf_li(LightPoint(sample.radiance)).any()
 
 
 @pytest.mark.parametrize("intensity", [[[-1.0, 1, 1]], [[0.0, 0, 0]]])
@@ -139,7 +139,7 @@ def test_the_sky_is_sampled_uniformly_on_the_sphere():
     np.testing.assert_allclose(sample.wi.mean(axis=0), 0, atol=0.01)
     np.testing.assert_allclose((sample.wi**2).mean(axis=0), 1 / 3, atol=0.01)
     np.testing.assert_allclose(sample.pdf, 1 / (4 * np.pi), rtol=1e-6)
-    np.testing.assert_array_equal(sky.pdf_li(LightPoint(sample.radiance, None, None)), sample.pdf)
+    np.testing.assert_array_equal(sky.pdf_li(LightPoint(sample.radiance)), sample.pdf)
     np.testing.assert_allclose(sample.radiance, np.broadcast_to([0.2, 0.4, 0.6], (N, 3)), rtol=1e-6)
     np.testing.assert_allclose(sample.target, p + 10 * sample.wi, rtol=1e-5)
 
@@ -211,7 +211,7 @@ def test_a_light_samples_density_is_the_kinds_probability_times_its_own():
     area = (kind == 0) & (sample.pdf > 0)
     own = kinds[0].sample_li(p, sampler.pick(u, sampled)[1]).pdf
     np.testing.assert_allclose(sample.pdf[area], 0.4 * own[area], rtol=1e-6)
-    found = LightPoint(sample.radiance[:5], None, None)
+    found = LightPoint(sample.radiance[:5])
     np.testing.assert_array_equal(sampler.pdf_li(kinds[2], found, sampled), 0)  # not sampled
     np.testing.assert_allclose(sampler.pdf_li(kinds[2], found, np.ones(3, bool)), 0.5 / (4 * np.pi))
 

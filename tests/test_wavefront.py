@@ -1,5 +1,6 @@
-"""The wavefront toolkit (``ptlab.integrators.wavefront``): the film's sums per pixel and new
-rays leaving a surface. (Its use by the integrators: ``test_path.py``, ``test_whitted.py``.)
+"""The wavefront toolkit (``ptlab.integrators.wavefront``): the film's sums per pixel (NaN and
+infinite samples left out and counted) and new rays leaving a surface. (Its use by the
+integrators: ``test_path.py``, ``test_whitted.py``.)
 """
 
 from __future__ import annotations
@@ -7,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.integrators.wavefront import add_to_film, leave_surface
+from ptlab.integrators.wavefront import add_to_film, counting_nonfinite, leave_surface
 
 # -- the film ------------------------------------------------------------------------------
 
@@ -25,10 +26,17 @@ def test_the_film_adds_every_contribution_to_its_pixel_in_float64():
 
 
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
-def test_a_nan_or_infinite_contribution_is_dropped_and_the_rest_of_its_pixel_kept():
+def test_a_nan_or_infinite_sample_is_left_out_and_counted_and_the_rest_of_its_pixel_kept():
     film = np.zeros((3, 3))
     radiance = np.array([[1, 1, 1], [np.nan, 0, 0], [2, 2, 2], [np.inf, 1, 1], [3, 3, 3]], np.float32)
-    add_to_film(film, np.array([0, 0, 1, 1, 2]), radiance)
+    with counting_nonfinite() as nonfinite:
+        add_to_film(film, np.array([0, 0, 1, 1, 2]), radiance)
+        add_to_film(film, np.array([2]), np.array([[0, -np.inf, 0]], np.float32))
+    np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
+    assert (nonfinite.count, nonfinite.first_pixel) == (3, 0)
+    # Outside a count, a warning says so: never silently.
+    with pytest.warns(RuntimeWarning, match="1 samples were NaN or infinite"):
+        add_to_film(film, np.array([1]), np.array([[np.nan, 0, 0]], np.float32))
     np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
 
 

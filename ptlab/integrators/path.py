@@ -252,7 +252,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     radiance = np.broadcast_to(sky.radiance.astype(np.float32), (len(rows), 3))
     if settings.strategy == "mis" and sky_sampled and paths.pdf is not None:
         # The density with which light sampling would have picked these directions.
-        pdf_light = light_sampler.pdf_li(sky, LightPoint(radiance, np.empty(0), np.empty(0)), sampled)
+        pdf_light = light_sampler.pdf_li(sky, LightPoint(radiance), sampled)
         weight = np.where(
             paths.sees_emission.take(rows),
             1.0,

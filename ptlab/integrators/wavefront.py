@@ -7,7 +7,8 @@ of the batch is structure-of-arrays, one row per path (``Paths``; at a surface,
 ``SurfaceHit``); dead paths are compacted away (``kept``), each hit's material is found
 (``material_groups``) and called for its rows (``shade``), new rays leave the surface
 (``leave_surface``), shadow rays test what a vertex sees (``sees``), and radiance is added
-into the film per pixel (``add_to_film``).
+into the film per pixel (``add_to_film``), where a NaN or infinite sample is left out and
+counted (``counting_nonfinite``).
 
 The integrators (``path.py``, ``whitted.py``, ``debug.py``) are written with these pieces, so
 that each reads like its pseudo-code.
@@ -15,6 +16,10 @@ that each reads like its pseudo-code.
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 from typing import overload
 
@@ -117,21 +122,72 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     )
 
 
+@dataclass
+class NonFinite:
+    """The samples whose radiance was NaN or infinite (a material's bug, a pdf of 0), which
+    ``add_to_film`` left out of the film. A sample here is one row that ``add_to_film`` was
+    given: a path adds one at each vertex where it finds light.
+
+    Attributes:
+        count: how many.
+        first_pixel: the film row of the first of them (-1 while there is none).
+    """
+
+    count: int = 0
+    first_pixel: int = -1
+
+
+#: Where ``add_to_film`` counts, inside ``counting_nonfinite`` (one per thread: each thread
+#: runs in a context of its own, so jobs on threads count apart).
+_nonfinite: ContextVar[NonFinite | None] = ContextVar("nonfinite", default=None)
+
+
+@contextmanager
+def counting_nonfinite() -> Iterator[NonFinite]:
+    """Count, in the ``NonFinite`` yielded, the samples that ``add_to_film`` leaves out
+    while the block runs (``ptlab.rendering.jobs.run_job`` counts each job's)."""
+    tally = NonFinite()
+    token = _nonfinite.set(tally)
+    try:
+        yield tally
+    finally:
+        _nonfinite.reset(token)
+
+
 def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> None:
     """film[pixel[k]] += radiance[k] for every k, in float64.
 
     ``np.bincount`` with weights sums repeated pixels correctly, and faster than
-    ``np.add.at`` (docs/performance.md). A NaN or infinite contribution (a material's bug, a pdf of 0) is
-    dropped rather than poisoning its pixel for good; it is checked on the per-pixel sums,
-    which are far fewer than the contributions, so the common case costs nothing extra.
+    ``np.add.at`` (docs/performance.md). A NaN or infinite sample is left out, so that it
+    does not poison its pixel for good, and counted (``counting_nonfinite``; outside it, a
+    ``RuntimeWarning`` says so), so that the bug that made it does not go unseen. It is looked
+    for in the per-pixel sums, which are far fewer than the samples: the common case costs
+    nothing extra.
     """
     sums = np.stack(
         [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)], axis=1
     )
     if not np.isfinite(sums).all():
-        finite = np.isfinite(radiance).all(axis=1)
-        return add_to_film(film, pixel[finite], radiance[finite])
+        bad = ~np.isfinite(radiance).all(axis=1)
+        if bad.any():  # (else finite samples whose sum overflowed: kept, as inf)
+            _count_nonfinite(pixel[bad])
+            return add_to_film(film, pixel[~bad], radiance[~bad])
     film += sums
+
+
+def _count_nonfinite(pixel: np.ndarray) -> None:
+    """Count samples left out of the film at film rows ``pixel`` (``NonFinite``)."""
+    tally = _nonfinite.get()
+    if tally is None:
+        warnings.warn(
+            f"{len(pixel)} samples were NaN or infinite and were left out of the film",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        return
+    if tally.count == 0:
+        tally.first_pixel = int(pixel[0])
+    tally.count += len(pixel)
 
 
 def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndarray) -> np.ndarray:

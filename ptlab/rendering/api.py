@@ -10,6 +10,7 @@ asked to. ``render`` is the same, returning only the image. Its jobs are of the 
 from __future__ import annotations
 
 import time
+import warnings
 from collections.abc import Callable
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
@@ -55,6 +56,9 @@ class RenderResult:
         rays: closest-hit plus shadow rays traced, over the whole render.
         query_seconds: time spent inside ray queries, summed over workers.
         sampler_seconds: time spent inside the sampler, summed over workers.
+        nonfinite: samples that were NaN or infinite and were left out of the image, over
+            the whole render (``ptlab.integrators.wavefront.add_to_film``): 0 unless a
+            material or an integrator has a bug.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
             depth at which Russian roulette started and the workers.
@@ -69,6 +73,7 @@ class RenderResult:
     rays: int
     query_seconds: float
     sampler_seconds: float
+    nonfinite: int = 0
     settings: dict = field(default_factory=dict)
 
     @property
@@ -168,6 +173,7 @@ def render_result(
         rays=film.rays,
         query_seconds=film.query_seconds,
         sampler_seconds=film.sampler_seconds,
+        nonfinite=film.nonfinite,
         settings=dict(
             record,
             scene=scene.name,
@@ -208,4 +214,11 @@ def render(
             the image is the same, bit for bit.
     """
     options = RenderOptions.of(args, options, keywords)
-    return render_result(scene, options=options, executor=executor).image
+    result = render_result(scene, options=options, executor=executor)
+    if result.nonfinite:  # (a bug in a material or an integrator; ``render_result`` counts them)
+        warnings.warn(
+            f"{result.nonfinite} samples were NaN or infinite and were left out of the image",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+    return result.image

@@ -59,6 +59,7 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
                 rays=np.int64(film.rays),
                 query_seconds=np.float64(film.query_seconds),
                 sampler_seconds=np.float64(film.sampler_seconds),
+                nonfinite=np.int64(film.nonfinite),
                 identity=json.dumps(dict(identity, format=FORMAT_VERSION)),
             )
 
@@ -77,6 +78,8 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
                 k: data[k]
                 for k in ("sums", "passes", "passes_done", "rays", "query_seconds", "sampler_seconds")
             }
+            # (checkpoints written before the count was kept have none: 0)
+            nonfinite = int(data["nonfinite"]) if "nonfinite" in data else 0
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
     if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
@@ -105,6 +108,7 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])
     film.sampler_seconds = float(arrays["sampler_seconds"])
+    film.nonfinite = nonfinite
 
 
 def _fits(arrays: dict, film: Film) -> bool:
