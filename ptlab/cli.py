@@ -346,6 +346,8 @@ def _render(args) -> int:
                 result = render_result(scene, stop=stop, **run)
         finally:
             progress.close()
+    if result.nonfinite:  # (a bug in a material or an integrator: said even with --quiet)
+        print(f"ptlab: {result.nonfinite} samples were NaN or infinite and were left out", file=sys.stderr)
     if not result.complete:
         return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
     _write(out, result, args.exposure)
@@ -412,7 +414,11 @@ def _write(out: Path, result, exposure: float = 0.0) -> None:
     from ptlab.image import write_image
 
     metadata = dict(
-        result.settings, seconds=round(result.seconds, 3), version=__version__, complete=int(result.complete)
+        result.settings,
+        seconds=round(result.seconds, 3),
+        version=__version__,
+        complete=int(result.complete),
+        nonfinite=result.nonfinite,
     )
     if result.spp_max != result.spp:
         metadata["spp_max"] = result.spp_max

@@ -18,21 +18,25 @@ Each light emits from its front face only, the side its winding's normal
 ``(v1 - v0) x (v2 - v0)`` points to.
 
 Besides triangles, a scene may have **point lights** and a **sky** (``PointLights``,
-``Sky``, below). Light sampling then first picks which kind of light a sample comes from
-(``LightSampler``), and each kind answers with ``sample_li``: the direction to the light,
-the radiance arriving from it and the density of that choice (pbrt-v4's
-``Light::SampleLi``, section 12.1).
+``Sky``, below). Every kind of light answers the same questions (``Light``, pbrt-v4's
+``Light`` interface, section 12.1): ``sample_li``, the direction to the light, the radiance
+arriving from it and the density of that choice; ``pdf_li``, the density with which
+``sample_li`` would have chosen a light point that a ray found instead (what MIS weighs
+with); and ``is_delta``, whether a ray can find it at all. Light sampling first picks which
+kind of light a sample comes from (``LightSampler``, which alone holds the probability
+``pmf`` of each kind), then that kind's ``sample_li`` picks a light and a point on it.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
 from ptlab.sampling import uniform_sphere, uniform_triangle
-from ptlab.vectors import dot
+from ptlab.vectors import dot, take_rows
 
 
 @dataclass
@@ -81,6 +85,46 @@ class LightLiSample:
     target: np.ndarray
 
 
+@dataclass
+class LightPoint:
+    """Where rays from shading points found a light that is not a delta light: the light
+    point that ``pdf_li`` gives the density of (Mitsuba 3 builds its ``DirectionSample3f``
+    from a hit for ``Emitter::pdf_direction`` the same way).
+
+    Attributes:
+        radiance: (N, 3) float32 radiance Le the light emits there (which triangle it is,
+            for ``AreaLights``, is known by it).
+        dist2: (N,) float32 squared distance from the shading point (None for the sky).
+        cos_theta_light: (N,) float32 cosine between the light's normal and the direction
+            back to the shading point (None for the sky).
+    """
+
+    radiance: np.ndarray
+    dist2: np.ndarray | None = None
+    cos_theta_light: np.ndarray | None = None
+
+
+class Light(Protocol):
+    """A kind of light, as the integrators ask it (pbrt-v4's ``Light``, section 12.1).
+
+    ``sample_li`` and ``pdf_li`` give densities *given that this kind was picked*: the
+    probability of picking it is the ``LightSampler``'s (``pmf``). Emission, where a ray can
+    see the light: ``Scene.emission`` for the triangles, ``Sky.radiance`` for the sky.
+    """
+
+    #: True for a light that sits in one point or direction, which no ray can find (its MIS
+    #: weight is 1); ``pdf_li`` is then 0.
+    is_delta: bool
+
+    def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
+        """One light sample for each shading point ``p`` (N, 3) from uniforms ``u`` (N, 2)."""
+        ...
+
+    def pdf_li(self, found: LightPoint) -> np.ndarray:
+        """(N,) float32 solid-angle density with which ``sample_li`` picks the points ``found``."""
+        ...
+
+
 def triangle_areas(triangles: np.ndarray) -> np.ndarray:
     """(T,) float64 areas of (T, 3, 3) ``triangles``: half the length of (v1 - v0) x (v2 - v0)
     (0 for a triangle whose corners lie on a line)."""
@@ -118,8 +162,6 @@ class AreaLights:
         v0, v1, v2: (L, 3) vertices of the emissive triangles.
         radiance: (L, 3) emitted radiance of each.
         offset: (L,) how far rays stay off each triangle (``Scene`` computes it).
-        share: the probability that light sampling picks one of these triangles rather than
-            a point light or the sky (``LightSampler``); 1 when they are the only lights.
     """
 
     #: A triangle is found by rays as well as by light sampling (not a delta light).
@@ -132,7 +174,6 @@ class AreaLights:
         v2: np.ndarray,
         radiance: np.ndarray,
         offset: np.ndarray,
-        share: float = 1.0,
     ):
         v0, v1, v2 = (np.asarray(a, dtype=np.float64) for a in (v0, v1, v2))
         triangles = np.stack([v0, v1, v2], axis=1)
@@ -141,7 +182,6 @@ class AreaLights:
         radiance = np.asarray(radiance, dtype=np.float64)
         power = area_times_radiance(self.areas, radiance)
         self.total_power = float(power.sum())
-        self.share = float(share)
         # float32 like the renderer's random numbers: a search with mixed types converts
         # every u to float64 first (2x slower).
         self.cdf = (np.cumsum(power) / self.total_power).astype(np.float32)
@@ -192,8 +232,14 @@ class AreaLights:
 
     def pdf_area(self, radiance: np.ndarray) -> np.ndarray:
         """(N,) float32 area density of sampling a point on a light of radiance ``radiance``
-        (N, 3): share x mean(Le) / total power (0 on surfaces that do not emit)."""
-        return (radiance.mean(axis=1) / np.float32(self.total_power / self.share)).astype(np.float32)
+        (N, 3): mean(Le) / total power (0 on surfaces that do not emit)."""
+        return (radiance.mean(axis=1) / np.float32(self.total_power)).astype(np.float32)
+
+    def pdf_li(self, found: LightPoint) -> np.ndarray:
+        """(N,) the solid-angle density of ``sample_li`` at light points ``found``:
+        ``pdf_area`` turned into solid angle (``solid_angle_pdf``)."""
+        assert found.dist2 is not None and found.cos_theta_light is not None  # (a point on a triangle)
+        return solid_angle_pdf(self.pdf_area(found.radiance), found.dist2, found.cos_theta_light)
 
     def sample(self, u: np.ndarray) -> ShapeSample:
         """Points on the lights from (N, 2) uniforms.
@@ -294,13 +340,11 @@ class PointLights:
     Args:
         positions: (K, 3) where the lights are.
         intensity: (K, 3) their intensities, W/sr, each channel >= 0.
-        share: the probability that light sampling picks a point light at all
-            (``LightSampler``).
     """
 
     is_delta = True
 
-    def __init__(self, positions, intensity, share: float = 1.0):
+    def __init__(self, positions, intensity):
         self.positions = np.asarray(positions, dtype=np.float64).reshape(-1, 3)
         self.intensity = np.asarray(intensity, dtype=np.float64).reshape(-1, 3)
         if len(self.positions) != len(self.intensity) or len(self.positions) == 0:
@@ -310,18 +354,21 @@ class PointLights:
             )
         if (self.intensity < 0).any() or not (self.intensity.mean(axis=1) > 0).all():
             raise ValueError("a point light's intensity must be >= 0 in each channel and not 0 in all three")
-        self.share = float(share)
         #: (K,) each light's power, and their sum.
         self.powers = 4 * math.pi * self.intensity.mean(axis=1)
         self.power = float(self.powers.sum())
-        #: (K,) the probability that light sampling picks each (share included).
-        self.probability = (self.share * self.powers / self.power).astype(np.float32)
+        #: (K,) the probability that ``sample_li`` picks each.
+        self.probability = (self.powers / self.power).astype(np.float32)
 
     def __len__(self) -> int:
         return len(self.positions)
 
     def __repr__(self) -> str:
         return f"PointLights(positions={self.positions.tolist()}, intensity={self.intensity.tolist()})"
+
+    def pdf_li(self, found: LightPoint) -> np.ndarray:
+        """(N,) zeros: no ray finds a point light."""
+        return np.zeros(len(found.radiance), np.float32)
 
     def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
         """One of the lights for each point ``p`` (N, 3), picked by power with ``u[:, 0]``."""
@@ -351,32 +398,33 @@ class Sky:
 
     Args:
         radiance: (3,) the sky's radiance L.
-        share: the probability that light sampling picks the sky (``LightSampler``).
         distance: how far shadow rays toward the sky go: beyond the whole scene.
     """
 
     is_delta = False
 
-    def __init__(self, radiance, share: float = 1.0, distance: float = 1.0):
+    def __init__(self, radiance, distance: float = 1.0):
         self.radiance = np.asarray(radiance, dtype=np.float64).reshape(3)
         if (self.radiance < 0).any() or not np.isfinite(self.radiance).all():
             raise ValueError(f"the sky's radiance must be finite and >= 0, got {self.radiance.tolist()}")
-        self.share = float(share)
         self.distance = float(distance)
-        #: The solid-angle density of a direction picked by light sampling (share included).
-        self.pdf = float(self.share / (4 * math.pi))
 
     def __repr__(self) -> str:
         return f"Sky(radiance={self.radiance.tolist()})"
+
+    def pdf_li(self, found: LightPoint) -> np.ndarray:
+        """(N,) 1 / (4 pi) for every direction (``uniform_sphere``'s density)."""
+        return np.full(len(found.radiance), 1 / (4 * math.pi), dtype=np.float32)
 
     def sample_li(self, p: np.ndarray, u: np.ndarray) -> LightLiSample:
         """A direction uniform on the sphere for each point ``p`` (N, 3)."""
         wi = uniform_sphere(u).astype(np.float32)
         n = len(p)
+        radiance = np.broadcast_to(self.radiance.astype(np.float32), (n, 3))
         return LightLiSample(
             wi=wi,
-            radiance=np.broadcast_to(self.radiance.astype(np.float32), (n, 3)),
-            pdf=np.full(n, self.pdf, dtype=np.float32),
+            radiance=radiance,
+            pdf=self.pdf_li(LightPoint(radiance)),
             target=p + np.float32(self.distance) * wi,
         )
 
@@ -412,7 +460,9 @@ def light_shares(area_power: float, point_power: float, sky: bool) -> tuple[floa
 
 class LightSampler:
     """Which kind of light each light sample comes from: the triangles, the point lights or
-    the sky, each with its ``share``.
+    the sky (pbrt-v4's ``LightSampler``, section 12.6), each picked with its probability
+    ``pmf`` (``light_shares``). The kinds' own densities (``sample_li``, ``pdf_li``) are
+    given that kind; a light sample's density is their product with the kind's probability.
 
     ``pick`` spends the first uniform of the sample's pair on the choice and stretches it
     back to [0, 1) for the chosen kind's own ``sample_li``, which then picks its light and a
@@ -420,11 +470,13 @@ class LightSampler:
 
     Args:
         area_lights, point_lights, sky: the scene's ``AreaLights``, ``PointLights`` and
-            ``Sky``, each with its ``share`` (None for a kind it has not); the shares add up
-            to 1 (``build_lights`` makes them so).
+            ``Sky`` (None for a kind it has not).
+        shares: the probability of each kind given, in the order above; they add up to 1
+            (``build_lights`` makes them so).
 
     Attributes:
         kinds: the kinds given, in this order.
+        pmf: (K,) float64 the probability of picking each of ``kinds``.
     """
 
     def __init__(
@@ -432,28 +484,71 @@ class LightSampler:
         area_lights: AreaLights | None = None,
         point_lights: PointLights | None = None,
         sky: Sky | None = None,
+        shares: tuple[float, ...] = (1.0,),
     ):
         self.area_lights, self.point_lights, self.sky = area_lights, point_lights, sky
-        self.kinds = [kind for kind in (area_lights, point_lights, sky) if kind is not None]
-        self.shares = np.array([kind.share for kind in self.kinds])
+        self.kinds: list[Light] = [kind for kind in (area_lights, point_lights, sky) if kind is not None]
+        self.pmf = np.array(shares, dtype=np.float64).reshape(len(self.kinds))
+        #: (K,) bool: which kinds are delta lights.
+        self.is_delta = np.array([kind.is_delta for kind in self.kinds], dtype=bool)
 
-    def pick(self, u: np.ndarray, sampled: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+    def pmf_among(self, sampled: np.ndarray) -> np.ndarray:
+        """(K,) the probability of picking each kind when only those ``sampled`` (K,) bool
+        may be picked (the others are left to BSDF sampling, or to nothing)."""
+        shares = np.where(sampled, self.pmf, 0.0)
+        return shares / shares.sum()
+
+    def pick(self, u: np.ndarray, sampled: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The kind of light of each sample, among those ``sampled`` only.
 
         Args:
             u: (N, 2) the light sample's uniforms.
-            sampled: (K,) bool, the kinds that may be picked (the others are left to BSDF
-                sampling, or to nothing).
+            sampled: (K,) bool, the kinds that may be picked (``pmf_among``).
 
         Returns:
             kind: (N,) intp index into ``kinds``;
-            u: (N, 2) the uniforms with ``u[:, 0]`` stretched back to [0, 1);
-            scale: 1 / the sum of the sampled kinds' shares, by which the kinds' pdfs (which
-            include their share of all the lights) must be multiplied.
+            u: (N, 2) the uniforms with ``u[:, 0]`` stretched back to [0, 1) (``u`` itself
+            when there is one kind to pick: nothing to spend on the choice).
         """
-        shares = np.where(sampled, self.shares, 0.0)
-        kind, stretched = pick(shares, u[:, 0])
-        return kind, np.stack([stretched, u[:, 1]]).T, 1.0 / float(shares.sum())
+        if np.count_nonzero(sampled) == 1:
+            return np.full(len(u), int(np.argmax(sampled)), dtype=np.intp), u
+        kind, stretched = pick(self.pmf_among(sampled), u[:, 0])
+        return kind, np.stack([stretched, u[:, 1]]).T
+
+    def sample_li(
+        self, p: np.ndarray, u: np.ndarray, sampled: np.ndarray
+    ) -> tuple[LightLiSample, np.ndarray]:
+        """One light sample for each shading point ``p`` (N, 3) from uniforms ``u`` (N, 2):
+        a kind picked among those ``sampled`` (``pick``), then that kind's ``sample_li``,
+        whose density is multiplied by the kind's probability.
+
+        Returns:
+            the samples, and (N,) intp the kind of each (an index into ``kinds``).
+        """
+        kind, u = self.pick(u, sampled)
+        pmf = self.pmf_among(sampled).astype(np.float32)
+        if np.count_nonzero(sampled) == 1:  # one kind: its sample as it is, no gathering
+            k = int(kind[0]) if len(kind) else 0
+            sample = self.kinds[k].sample_li(p, u)
+            sample.pdf = sample.pdf * pmf[k]
+            return sample, kind
+        n = len(p)
+        wi, radiance, target = (np.zeros((n, 3), np.float32, order="F") for _ in range(3))
+        pdf = np.zeros(n, np.float32)
+        for k, light in enumerate(self.kinds):
+            rows = np.flatnonzero(kind == k)
+            if len(rows):
+                one = light.sample_li(take_rows(p, rows), take_rows(u, rows))
+                wi[rows], radiance[rows], target[rows] = one.wi, one.radiance, one.target
+                pdf[rows] = one.pdf * pmf[k]
+        return LightLiSample(wi=wi, radiance=radiance, pdf=pdf, target=target), kind
+
+    def pdf_li(self, light: Light, found: LightPoint, sampled: np.ndarray) -> np.ndarray:
+        """(N,) the density with which ``sample_li`` (among the kinds ``sampled``) picks the
+        points ``found`` of ``light``, one of ``kinds``: its kind's probability times its
+        ``pdf_li`` (0 for a kind not sampled)."""
+        k = next(i for i, kind in enumerate(self.kinds) if kind is light)
+        return np.float32(self.pmf_among(sampled)[k]) * light.pdf_li(found)
 
 
 def build_lights(
@@ -467,8 +562,8 @@ def build_lights(
     """The lights of a scene as light sampling picks them, each kind with its share of the
     samples (``light_shares``); None for a scene without light.
 
-    The ``point_lights`` and ``sky`` given are left as they are: the lights sampled are new
-    ones made from them, which carry their share.
+    The ``sky`` given is left as it is: the sky sampled is a new one, whose shadow rays go
+    ``sky_distance`` far.
 
     Args:
         triangles: (L, 3, 3) float64, the scene's emissive triangles. Those of zero area are
@@ -488,15 +583,17 @@ def build_lights(
         sky is not None,
     )
     emitters = triangles[lit]
-    sampler = LightSampler(
-        area_lights=AreaLights(
-            emitters[:, 0], emitters[:, 1], emitters[:, 2], radiance[lit], offset[lit], share=area_share
-        )
+    area_lights = (
+        AreaLights(emitters[:, 0], emitters[:, 1], emitters[:, 2], radiance[lit], offset[lit])
         if lit.any()
-        else None,
-        point_lights=PointLights(point_lights.positions, point_lights.intensity, share=point_share)
-        if point_lights is not None
-        else None,
-        sky=Sky(sky.radiance, share=sky_share, distance=sky_distance) if sky is not None else None,
+        else None
     )
-    return sampler if sampler.kinds else None
+    sampled_sky = Sky(sky.radiance, distance=sky_distance) if sky is not None else None
+    shares = [
+        share
+        for kind, share in ((area_lights, area_share), (point_lights, point_share), (sampled_sky, sky_share))
+        if kind is not None
+    ]
+    if not shares:
+        return None
+    return LightSampler(area_lights, point_lights, sampled_sky, tuple(shares))

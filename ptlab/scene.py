@@ -54,8 +54,8 @@ class Scene:
 
     After construction, ``light_sampler`` picks among all the lights (``build_lights``; None
     for a scene without light) and ``area_lights`` holds the emissive triangles among them
-    (``AreaLights``, or None). ``point_lights`` and ``sky`` stay as given: the light sampler
-    holds the ones it samples, which carry their share of the light samples.
+    (``AreaLights``, or None). ``point_lights`` and ``sky`` stay as given; the light sampler
+    holds the probability of picking each kind (``LightSampler.pmf``).
     """
 
     triangles: np.ndarray

@@ -15,13 +15,11 @@ import tempfile
 import threading
 from pathlib import Path
 
-import numpy as np
 import pytest
 from helpers import library_modules
 from hypothesis import HealthCheck, settings
 
 import ptlab
-import ptlab.integrators.path
 from ptlab.scene import Scene
 
 # Property-based tests (tests/test_fuzz.py) run a fixed, derandomized set of examples by
@@ -203,27 +201,6 @@ def same_import_path():
 @pytest.fixture(scope="session")
 def cornell() -> Scene:
     return ptlab.load_scene("cornell-box")
-
-
-@pytest.fixture
-def bad_contributions(monkeypatch) -> list[int]:
-    """Counts of path contributions that are NaN or infinite, as the renderer makes them.
-
-    The film drops such contributions (``ptlab.integrators.path.add_to_film``) so that one
-    bad sample cannot spoil a pixel for good; that would also hide the bug that made it.
-    This records them on the way in (rendering in this process: ``workers=1``).
-    """
-    bad = []
-    add_to_film = ptlab.integrators.path.add_to_film
-
-    def recording_add_to_film(film, pixel, radiance):
-        finite = np.isfinite(radiance).all(axis=1)
-        if not finite.all():
-            bad.append(int(np.count_nonzero(~finite)))
-        add_to_film(film, pixel, radiance)
-
-    monkeypatch.setattr(ptlab.integrators.path, "add_to_film", recording_add_to_film)
-    return bad
 
 
 def _is_multiprocessing_helper(pid: int) -> bool:

@@ -13,6 +13,7 @@ import pytest
 from ptlab import cli
 from ptlab.cli import main
 from ptlab.image import encode_srgb8, read_image, write_image
+from ptlab.materials import Diffuse
 
 
 def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkeypatch, capsys):
@@ -24,6 +25,27 @@ def test_render_writes_png_in_the_current_folder_and_says_where(tmp_path, monkey
     assert "16x16" in out
     assert "1 spp" in out
     assert "samples/s" in out
+
+
+def test_render_says_how_many_samples_were_nan_and_writes_the_count(tmp_path, monkeypatch, capsys):
+    # A Lambertian whose f_r is NaN near grazing angles: those samples are left out, counted
+    # in the image's header and said after the render, even with --quiet.
+    original = Diffuse.eval
+
+    def broken(self, wo, wi, n):
+        f = np.array(original(self, wo, wi, n))
+        f[(wi * n).sum(axis=1) < 0.2] = np.nan
+        return f
+
+    monkeypatch.setattr(Diffuse, "eval", broken)
+    out = tmp_path / "box.exr"
+    args = ["render", "cornell-box", "--spp", "2", "--res", "16", "--workers", "1", "--out", str(out)]
+    assert main([*args, "--quiet"]) == 0
+    message = r"ptlab: (\d+) samples were NaN or infinite and were left out\n"
+    said = re.fullmatch(message, capsys.readouterr().err)
+    assert said
+    assert int(said[1]) > 0
+    assert read_image(out)[1]["nonfinite"] == int(said[1])
 
 
 def test_render_exr_is_linear_float_with_metadata(tmp_path):

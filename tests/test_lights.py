@@ -10,6 +10,7 @@ from scipy import stats
 from ptlab.lights import (
     SKY_SHARE,
     AreaLights,
+    LightPoint,
     LightSampler,
     PointLights,
     Sky,
@@ -105,9 +106,9 @@ def test_many_lights_are_chosen_in_proportion_to_their_power(count):
 def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance():
     positions = np.array([[0.0, 2, 0], [3, 4, 0]])
     intensity = np.array([[10.0, 20, 30], [40, 0, 0]])  # mean 20 and 13.3: power 3 : 2
-    lights = PointLights(positions, intensity, share=0.5)
+    lights = PointLights(positions, intensity)
     assert lights.power == pytest.approx(4 * np.pi * (20 + 40 / 3))
-    np.testing.assert_allclose(lights.probability, [0.5 * 0.6, 0.5 * 0.4], rtol=1e-6)
+    np.testing.assert_allclose(lights.probability, [0.6, 0.4], rtol=1e-6)
     p = np.zeros((N, 3), np.float32)
     sample = lights.sample_li(p, np.random.default_rng(1).random((N, 2)).astype(np.float32))
     first = sample.target[:, 1] == 2
@@ -117,7 +118,9 @@ def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance
     np.testing.assert_allclose(sample.radiance[first][0], np.array([10, 20, 30]) / 4, rtol=1e-6)
     np.testing.assert_allclose(sample.radiance[~first][0], np.array([40, 0, 0]) / 25, rtol=1e-6)
     np.testing.assert_allclose(sample.wi[~first][0], [0.6, 0.8, 0], rtol=1e-6)
-    np.testing.assert_allclose(sample.pdf, np.where(first, 0.3, 0.2), rtol=1e-6)
+    np.testing.assert_allclose(sample.pdf, np.where(first, 0.6, 0.4), rtol=1e-6)
+    # No ray finds a point light: to MIS, its density is 0 (a delta light).
+    assert lights.is_delta and not lights.pdf_li(LightPoint(sample.radiance)).any()
 
 
 @pytest.mark.parametrize("intensity", [[[-1.0, 1, 1]], [[0.0, 0, 0]]])
@@ -126,8 +129,8 @@ def test_a_point_light_needs_an_intensity_that_shines(intensity):
         PointLights([[0.0, 0, 0]], intensity)
 
 
-def test_the_sky_is_sampled_uniformly_on_the_sphere_with_its_share():
-    sky = Sky([0.2, 0.4, 0.6], share=0.25, distance=10.0)
+def test_the_sky_is_sampled_uniformly_on_the_sphere():
+    sky = Sky([0.2, 0.4, 0.6], distance=10.0)
     p = np.ones((N, 3), np.float32)
     sample = sky.sample_li(p, np.random.default_rng(2).random((N, 2)).astype(np.float32))
     np.testing.assert_allclose(np.linalg.norm(sample.wi, axis=1), 1, rtol=1e-5)
@@ -135,7 +138,8 @@ def test_the_sky_is_sampled_uniformly_on_the_sphere_with_its_share():
     # 0.0018 with 1e5 samples; 5 sd: false-alarm rate below 1e-5).
     np.testing.assert_allclose(sample.wi.mean(axis=0), 0, atol=0.01)
     np.testing.assert_allclose((sample.wi**2).mean(axis=0), 1 / 3, atol=0.01)
-    np.testing.assert_allclose(sample.pdf, 0.25 / (4 * np.pi), rtol=1e-6)
+    np.testing.assert_allclose(sample.pdf, 1 / (4 * np.pi), rtol=1e-6)
+    np.testing.assert_array_equal(sky.pdf_li(LightPoint(sample.radiance)), sample.pdf)
     np.testing.assert_allclose(sample.radiance, np.broadcast_to([0.2, 0.4, 0.6], (N, 3)), rtol=1e-6)
     np.testing.assert_allclose(sample.target, p + 10 * sample.wi, rtol=1e-5)
 
@@ -148,25 +152,35 @@ def test_light_shares_by_power_with_half_for_the_sky():
     assert (area, points, sky) == pytest.approx((SKY_SHARE * 0.25, SKY_SHARE * 0.75, SKY_SHARE))
 
 
-def test_area_power_is_pi_area_radiance_and_its_share_scales_the_pdf():
+def test_area_power_is_pi_area_radiance_and_pdf_li_is_sample_lis_density():
     lights = two_lights()
     assert lights.power == pytest.approx(np.pi * 3.5)
-    halved = AreaLights(
-        lights.v0, lights.v0 + lights.e1, lights.v0 + lights.e2, lights.radiance, np.zeros(2), share=0.5
+    np.testing.assert_allclose(lights.pdf_area(lights.radiance), [1 / 3.5, 2 / 3.5], rtol=1e-6)
+    # pdf_li of the points that sample_li picked, seen from where they were picked, is the
+    # density sample_li gave them (the MIS weights of emission rely on it).
+    rng = np.random.default_rng(4)
+    p = rng.uniform(-2, 8, size=(1000, 3)).astype(np.float32)
+    sample = lights.sample_li(p, rng.random((1000, 2)).astype(np.float32))
+    front = sample.pdf > 0
+    assert 0 < front.mean() < 1  # some points see a light from behind: pdf 0
+    # two_lights' offsets are 0, so the targets are the points; the first light (Le 1) faces +z,
+    # the second (Le 2) -z.
+    normal_z = np.where(sample.radiance[:, 0] == 2, -1.0, 1.0)
+    lit = sample.radiance[front]
+    to_light = (sample.target - p)[front]
+    found = LightPoint(
+        radiance=lit,
+        dist2=(to_light**2).sum(axis=1),
+        cos_theta_light=-normal_z[front] * sample.wi[front, 2],
     )
-    np.testing.assert_allclose(
-        halved.pdf_area(halved.radiance), 0.5 * lights.pdf_area(lights.radiance), rtol=1e-6
-    )
+    np.testing.assert_allclose(lights.pdf_li(found), sample.pdf[front], rtol=1e-5)
 
 
 def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified():
     kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
-    for kind, share in zip(kinds, (0.2, 0.3, 0.5), strict=True):
-        kind.share = share
-    sampler = LightSampler(*kinds)
+    sampler = LightSampler(*kinds, shares=(0.2, 0.3, 0.5))
     u = np.stack([(np.arange(1000) + 0.5) / 1000, np.full(1000, 0.25)]).T.astype(np.float32)
-    kind, stretched, scale = sampler.pick(u, np.array([True, True, True]))
-    assert scale == pytest.approx(1.0)
+    kind, stretched = sampler.pick(u, np.array([True, True, True]))
     assert np.bincount(kind).tolist() == [200, 300, 500]
     # Each kind's part of an evenly spaced u is stretched back to evenly spaced in [0, 1).
     for k, count in enumerate((200, 300, 500)):
@@ -174,9 +188,32 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
             np.sort(stretched[kind == k, 0]), (np.arange(count) + 0.5) / count, atol=1e-4
         )
     np.testing.assert_array_equal(stretched[:, 1], u[:, 1])
-    kind, stretched, scale = sampler.pick(u, np.array([True, True, False]))
-    assert scale == pytest.approx(2.0) and np.bincount(kind).tolist() == [400, 600]
+    kind, stretched = sampler.pick(u, np.array([True, True, False]))
+    assert np.bincount(kind).tolist() == [400, 600]
+    np.testing.assert_allclose(sampler.pmf_among(np.array([True, True, False])), [0.4, 0.6, 0])
     assert (stretched[:, 0] < 1).all() and (stretched[:, 0] >= 0).all()
+    # One kind to pick: u is left as it was.
+    kind, stretched = sampler.pick(u, np.array([False, True, False]))
+    assert (kind == 1).all() and stretched is u
+
+
+def test_a_light_samples_density_is_the_kinds_probability_times_its_own():
+    kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
+    sampler = LightSampler(*kinds, shares=(0.2, 0.3, 0.5))
+    rng = np.random.default_rng(5)
+    p = rng.uniform(-1, 1, size=(3000, 3)).astype(np.float32)
+    u = rng.random((3000, 2)).astype(np.float32)
+    sampled = np.array([True, True, False])  # (the sky left to BSDF sampling)
+    sample, kind = sampler.sample_li(p, u, sampled)
+    assert set(kind.tolist()) == {0, 1}
+    point = kind == 1
+    np.testing.assert_allclose(sample.pdf[point], 0.6, rtol=1e-6)  # one point light: 0.6 x 1
+    area = (kind == 0) & (sample.pdf > 0)
+    own = kinds[0].sample_li(p, sampler.pick(u, sampled)[1]).pdf
+    np.testing.assert_allclose(sample.pdf[area], 0.4 * own[area], rtol=1e-6)
+    found = LightPoint(sample.radiance[:5])
+    np.testing.assert_array_equal(sampler.pdf_li(kinds[2], found, sampled), 0)  # not sampled
+    np.testing.assert_allclose(sampler.pdf_li(kinds[2], found, np.ones(3, bool)), 0.5 / (4 * np.pi))
 
 
 def test_build_lights_shares_the_samples_and_leaves_the_given_lights_as_they_are():
@@ -191,10 +228,9 @@ def test_build_lights_shares_the_samples_and_leaves_the_given_lights_as_they_are
     assert sampler.kinds == [sampler.area_lights, sampler.point_lights, sampler.sky]
     assert len(sampler.area_lights) == 2
     shares = light_shares(np.pi * 3.5, points.power, sky=True)
-    assert [kind.share for kind in sampler.kinds] == pytest.approx(shares)
+    np.testing.assert_allclose(sampler.pmf, shares)
     assert sampler.sky.distance == 7.0
-    # The lights given keep their own share (all of the samples) and are not the ones sampled.
-    assert points.share == 1.0 and sky.share == 1.0 and sky.distance == 1.0
-    assert sampler.point_lights is not points and sampler.sky is not sky
-    np.testing.assert_array_equal(sampler.point_lights.intensity, points.intensity)
+    # The sky given is left as it is: shadow rays toward the one sampled go out of the scene.
+    assert sky.distance == 1.0 and sampler.sky is not sky
+    np.testing.assert_array_equal(sampler.sky.radiance, sky.radiance)
     assert build_lights(triangles[2:], radiance[2:], np.zeros(1)) is None  # no light at all

@@ -175,12 +175,30 @@ def test_a_checkpoint_from_before_render_options_still_resumes(cornell, referenc
     identity = json.loads(str(arrays["identity"]))
     assert identity["rr_depth"] is None
     identity.update(rr="throughput", rr_depth="None")
+    del arrays["nonfinite"]  # (nor did they count NaN samples)
     np.savez(checkpoint, **dict(arrays, identity=json.dumps(identity)))
     resumed = render_result(cornell, workers=1, resume=checkpoint, **SMALL)
     assert resumed.complete
     assert np.array_equal(resumed.image, reference.image)
     with pytest.raises(ptlab.errors.PtlabError, match="rr_depth = 'None', this render has 1"):
         render_result(cornell, workers=1, resume=checkpoint, rr_depth=1, **SMALL)
+
+
+def test_the_count_of_nan_samples_goes_on_across_a_resume(cornell, tmp_path, monkeypatch):
+    original = Diffuse.eval
+
+    def nan_near_grazing(self, wo, wi, n):
+        f = np.array(original(self, wo, wi, n))
+        f[(wi * n).sum(axis=1) < 0.2] = np.nan
+        return f
+
+    monkeypatch.setattr(Diffuse, "eval", nan_near_grazing)
+    straight = render_result(cornell, workers=1, **SMALL)
+    checkpoint = tmp_path / "render.npz"
+    stopper = StopAfter(jobs=13)
+    render_result(cornell, workers=1, checkpoint=checkpoint, progress=stopper.progress, stop=stopper, **SMALL)
+    resumed = render_result(cornell, workers=1, resume=checkpoint, **SMALL)
+    assert resumed.nonfinite == straight.nonfinite > 0
 
 
 class DieOnceDiffuse(Diffuse):

@@ -1,5 +1,5 @@
-"""The path tracer's pieces (``ptlab.integrators.path``): MIS weights, Russian roulette, the
-film, leaving a surface, next-event estimation against a closed form, and whole paths in a
+"""The path tracer's pieces (``ptlab.integrators.path``): MIS weights, Russian roulette,
+leaving a surface, next-event estimation against a closed form, and whole paths in a
 furnace. (The integrator end to end, through ``ptlab.render``: ``test_render.py`` and
 ``test_strategies.py``.)
 
@@ -19,17 +19,8 @@ from helpers import closed_sphere_scene
 
 from ptlab.accel import make_accelerator
 from ptlab.camera import Camera
-from ptlab.integrators.path import (
-    Paths,
-    PathSettings,
-    add_to_film,
-    direct_light,
-    leave_surface,
-    mis_weight,
-    russian_roulette,
-    surface_hit,
-    trace_paths,
-)
+from ptlab.integrators.path import PathSettings, direct_light, mis_weight, russian_roulette, trace_paths
+from ptlab.integrators.wavefront import Paths, leave_surface, surface_hit
 from ptlab.materials import Diffuse
 from ptlab.samplers import make_sampler
 from ptlab.scene import Scene
@@ -163,44 +154,7 @@ def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
     assert not russian_roulette(carrying(floor, dim), settings.roulette_starts, settings, u).any()
 
 
-# -- the film ------------------------------------------------------------------------------
-
-
-def test_the_film_adds_every_contribution_to_its_pixel_in_float64():
-    rng = np.random.default_rng(1)
-    pixel = rng.integers(0, 7, size=1000)
-    radiance = rng.random((1000, 3)).astype(np.float32)
-    film = np.full((7, 3), 0.5)
-    add_to_film(film, pixel, radiance)
-    expected = np.full((7, 3), 0.5)
-    np.add.at(expected, pixel, radiance.astype(np.float64))
-    assert film.dtype == np.float64
-    np.testing.assert_allclose(film, expected, rtol=1e-12)
-
-
-@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
-def test_a_nan_or_infinite_contribution_is_dropped_and_the_rest_of_its_pixel_kept():
-    film = np.zeros((3, 3))
-    radiance = np.array([[1, 1, 1], [np.nan, 0, 0], [2, 2, 2], [np.inf, 1, 1], [3, 3, 3]], np.float32)
-    add_to_film(film, np.array([0, 0, 1, 1, 2]), radiance)
-    np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
-
-
 # -- leaving a surface -----------------------------------------------------------------------
-
-
-def test_a_new_ray_starts_offset_along_the_normal_on_the_side_it_goes_to():
-    rng = np.random.default_rng(2)
-    n = rng.normal(size=(1000, 3))
-    n /= np.linalg.norm(n, axis=1, keepdims=True)
-    wi = rng.normal(size=(1000, 3))
-    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
-    wi[:10] -= (wi[:10] * n[:10]).sum(axis=1, keepdims=True) * n[:10]  # tangent: counts as above
-    p = rng.normal(size=(1000, 3))
-    offset = rng.uniform(1e-4, 1e-2, size=1000)
-    moved = leave_surface(p, n, offset, wi) - p
-    side = np.where((wi * n).sum(axis=1) >= 0, 1.0, -1.0)
-    np.testing.assert_allclose(moved, (side * offset)[:, None] * n, rtol=1e-12, atol=1e-15)
 
 
 def test_rays_leaving_a_floor_up_or_down_never_hit_it(floor):

@@ -202,9 +202,9 @@ def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
         sky=sky,
     )
     assert scene.area_lights.normals[0, 1] == -1  # the lamp shines down
-    # The scene keeps the lights it was given; the light sampler samples copies with shares.
-    assert scene.point_lights is point_lights and scene.sky is sky and sky.share == 1
-    assert scene.light_sampler.sky.share == 0.5
+    # The scene keeps the lights it was given; the light sampler picks the sky half the time.
+    assert scene.point_lights is point_lights and scene.sky is sky
+    assert scene.light_sampler.pmf[scene.light_sampler.kinds.index(scene.light_sampler.sky)] == 0.5
     images = {
         strategy: ptlab.render(
             scene, spp=64, res=RES, max_depth=1, strategy=strategy, sampler="independent", seed=3, workers=1

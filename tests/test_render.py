@@ -190,13 +190,20 @@ class BrokenDiffuse(ptlab.materials.Diffuse):
 
 
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
-def test_nan_from_a_material_never_reaches_the_image(cornell):
+def test_nan_from_a_material_never_reaches_the_image_and_is_counted(cornell):
     broken = [BrokenDiffuse(m.albedo, emission=m.emission) for m in cornell.materials]
     scene = ptlab.Scene(cornell.triangles, cornell.material_ids, broken, cornell.camera)
-    image = ptlab.render(scene, spp=4, res=24)
+    with pytest.warns(RuntimeWarning, match=r"\d+ samples were NaN or infinite and were left out"):
+        image = ptlab.render(scene, spp=4, res=24, workers=1)
     assert np.isfinite(image).all()
     # The finite contributions survive: the light and the lit walls still show.
     assert image.max() > 10 and image.mean() > 0.1
+    # Counted, not hidden; the same count whatever the tiles (each job counts its own).
+    counts = {
+        tile: render_result(scene, spp=4, res=24, workers=1, tile_size=tile).nonfinite for tile in (8, 24)
+    }
+    assert counts[8] == counts[24] > 0
+    assert render_result(cornell, spp=4, res=24, workers=1).nonfinite == 0
 
 
 @pytest.mark.subprocess

@@ -279,7 +279,7 @@ def test_point_lights_or_a_sky_light_a_scene_without_emission(scene_dir, lights)
         np.testing.assert_allclose(scene.point_lights.intensity, [[1, 2, 3]])
     if scene.sky is not None:
         np.testing.assert_allclose(scene.sky.radiance, [0.1, 0.2, 0.3])
-    assert sum(kind.share for kind in scene.light_sampler.kinds) == pytest.approx(1)
+    assert scene.light_sampler.pmf.sum() == pytest.approx(1)
     assert np.isfinite(ptlab.render(scene, spp=1, res=8, workers=1)).all()
 
 

@@ -22,7 +22,7 @@ from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
 from ptlab.exercises.plug import plugged
 from ptlab.exercises.tutorial import tutorial_options
 from ptlab.image import write_image
-from ptlab.integrators.path import SHADOW_EPSILON, add_to_film, shade
+from ptlab.integrators.wavefront import SHADOW_EPSILON, add_to_film, shade
 from ptlab.vectors import dot
 
 library_scatter = path.scatter

@@ -18,7 +18,8 @@ from collections.abc import Callable
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.integrators.path import Paths, PathSettings, SurfaceHit, add_to_film, shade, surface_hit
+from ptlab.integrators.path import PathSettings
+from ptlab.integrators.wavefront import Paths, SurfaceHit, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 

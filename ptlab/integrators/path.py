@@ -28,28 +28,41 @@ PathIntegrator; Veach's thesis, chapter 9):
 Point lights and a sky (``ptlab.lights``) join in: a point light is found by light sampling
 only (no ray can hit a point, so its MIS weight is 1, and even ``"bsdf"`` samples it); the
 sky is what a ray that escapes the scene sees, added like the emission of a surface it hits
-(``add_sky``), and a light that step 2 samples like the others (``direct_light_all_kinds``).
+(``add_sky``), and a light that step 2 samples like the others: every kind of light answers
+the same ``sample_li`` and ``pdf_li`` (``ptlab.lights.Light``), so ``direct_light`` serves
+them all, and the MIS weights of emission and of the sky take their densities from
+``pdf_li``, written once, in the lights.
 
 Here each step is a handful of whole-array operations over every live path ("wavefront"
 style): ``trace_paths`` reads like the pseudo-code above, and the vectorisation details
-(compaction, scatter-adding into the film) live in the small helpers below it.
+(the batch of paths, compaction, scatter-adding into the film) live in the toolkit that
+every integrator shares, ``ptlab.integrators.wavefront``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import overload
 
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.lights import solid_angle_pdf
+from ptlab.integrators.wavefront import (
+    # The toolkit lived in this module until it moved to wavefront.py: chapter 7's files, as
+    # students have them, import SHADOW_EPSILON, Paths, add_to_film, shade and surface_hit here.
+    SHADOW_EPSILON,  # noqa: F401
+    Paths,
+    SurfaceHit,
+    add_to_film,
+    kept,
+    leave_surface,
+    sees,
+    shade,
+    surface_hit,
+)
+from ptlab.lights import LightPoint
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 from ptlab.vectors import dot, take_rows
-
-#: A shadow ray stops this fraction short of the (offset) light point (pbrt's ShadowEpsilon).
-SHADOW_EPSILON = 1e-4
 
 
 @dataclass
@@ -87,39 +100,6 @@ class PathSettings:
 
 STRATEGIES = ("nee", "bsdf", "mis")
 HEURISTICS = ("power", "balance")
-
-
-@dataclass
-class Paths:
-    """The live paths of a batch, as structure-of-arrays (one row per path)."""
-
-    origins: np.ndarray  # (N, 3) float32
-    dirs: np.ndarray  # (N, 3) float32 unit
-    throughput: np.ndarray  # (N, 3) float32, product of f cos / pdf so far
-    pixel: np.ndarray  # (N,) intp, the film row each path adds its radiance to
-    sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
-    sample: np.ndarray  # (N,) uint64 sampler keys: whose random numbers the path uses
-    pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
-
-
-@dataclass
-class SurfaceHit:
-    """The live paths at their current vertex (one row per path)."""
-
-    prim: np.ndarray  # (N,) intp triangle ids
-    p: np.ndarray  # (N, 3) float32 hit points
-    n: np.ndarray  # (N, 3) unit shading normal, turned to the side of wo
-    wo: np.ndarray  # (N, 3) unit direction back along the ray
-    front: np.ndarray  # (N,) bool: the ray hit the triangle's front face
-    offset: np.ndarray  # (N,) float32: how far new rays start off the surface
-    throughput: np.ndarray  # (N, 3) float32
-    pixel: np.ndarray  # (N,) intp
-    sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
-    sample: np.ndarray  # (N,) uint64 sampler keys (``ptlab.samplers``)
-    materials: list  # [(rows, material)]: who shades which rows (``material_groups``)
-    delta: np.ndarray  # (N,) bool: the material here is a mirror or glass
-    t: np.ndarray  # (N,) distance from the previous vertex
-    pdf: np.ndarray | None  # (N,) pdf with which the previous vertex chose this direction
 
 
 def trace_paths(
@@ -166,79 +146,6 @@ def trace_paths(
     return rays
 
 
-def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> None:
-    """film[pixel[k]] += radiance[k] for every k, in float64.
-
-    ``np.bincount`` with weights sums repeated pixels correctly, and faster than
-    ``np.add.at`` (docs/performance.md). A NaN or infinite contribution (a material's bug, a pdf of 0) is
-    dropped rather than poisoning its pixel for good; it is checked on the per-pixel sums,
-    which are far fewer than the contributions, so the common case costs nothing extra.
-    """
-    sums = np.stack(
-        [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)], axis=1
-    )
-    if not np.isfinite(sums).all():
-        finite = np.isfinite(radiance).all(axis=1)
-        return add_to_film(film, pixel[finite], radiance[finite])
-    film += sums
-
-
-@overload
-def kept(a: np.ndarray, rows: np.ndarray, every_row: bool) -> np.ndarray: ...
-@overload
-def kept(a: None, rows: np.ndarray, every_row: bool) -> None: ...
-def kept(a: np.ndarray | None, rows: np.ndarray, every_row: bool) -> np.ndarray | None:
-    """Rows ``rows`` of ``a`` (None stays None); ``a`` itself, not a copy, when ``rows`` are
-    all of its rows, as after the first bounces in a closed room, where no path ends."""
-    if a is None or every_row:
-        return a
-    return take_rows(a, rows)
-
-
-def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
-    """The vertices of the paths that hit something; the others are dropped.
-
-    Where every path hit, the vertices share the paths' arrays (``kept``)."""
-    alive = np.flatnonzero(hits.prim >= 0)
-    every = len(alive) == len(hits.prim)
-    prim = kept(hits.prim, alive, every)
-    # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
-    data = scene.triangle_data.take(prim, axis=1)  # (13, N); .T gives (N, 3) views
-    v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
-    u, v = kept(hits.u, alive, every)[:, None], kept(hits.v, alive, every)[:, None]
-    # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5),
-    # computed in place: v0 + u e1 + v e2 with two temporaries fewer.
-    p = u * e1
-    p += v0
-    p += v * e2
-    wo = -kept(paths.dirs, alive, every)
-    front = dot(n, wo) > 0
-    # Materials are two-sided: shade on the side the ray came from.
-    n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
-    uv = scene.uv_at(prim, u[:, 0], v[:, 0]) if scene.triangle_uv is not None else None
-    materials = material_groups(scene, prim, uv)
-    delta = np.zeros(len(prim), dtype=bool)
-    for rows, material in materials:
-        if material.is_delta:
-            delta[slice(None) if rows is None else rows] = True
-    return SurfaceHit(
-        prim=prim,
-        p=p,
-        n=n,
-        wo=wo,
-        front=front,
-        offset=offset,
-        throughput=kept(paths.throughput, alive, every),
-        pixel=kept(paths.pixel, alive, every),
-        sees_emission=kept(paths.sees_emission, alive, every),
-        sample=kept(paths.sample, alive, every),
-        materials=materials,
-        delta=delta,
-        t=kept(hits.t, alive, every),
-        pdf=kept(paths.pdf, alive, every),
-    )
-
-
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
     """Add Le of the surfaces the paths see, weighted for the strategy.
 
@@ -255,7 +162,8 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     if settings.strategy == "mis" and hit.pdf is not None:  # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
         t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
-        pdf_light = solid_angle_pdf(scene.area_lights.pdf_area(emitted), t * t, dot(n, wo))
+        found = LightPoint(radiance=emitted, dist2=t * t, cos_theta_light=dot(n, wo))
+        pdf_light = scene.light_sampler.pdf_li(scene.area_lights, found, sampled_lights(scene, settings))
         weight = np.where(
             hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
         )
@@ -280,47 +188,34 @@ def direct_light(
 ) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
-    Adds throughput * Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area, with the
-    point's area pdf from ``ptlab.lights`` (times the MIS weight with ``"mis"``);
-    u: (N, 2) uniforms (``AreaLights.sample``). Returns the shadow rays.
+    The scene's light sampler picks a kind of light among those that ``sampled_lights``
+    names, and that kind a light and a point or direction on it (``LightSampler.sample_li``,
+    from the uniforms u: (N, 2)): the direction wi to it, the radiance Li arriving along wi,
+    and the density of the choice per solid angle, pdf. Adds throughput * f_r Li cos(theta)
+    / pdf (times the MIS weight with ``"mis"``; 1 for a point light, which BSDF sampling
+    cannot find). For a point on a light triangle, Li = Le and pdf = pdf_area |x - x'|^2 /
+    cos(theta'): the homework's Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area.
+    Returns the shadow rays.
     """
-    if scene.point_lights is not None or scene.sky is not None:
-        return direct_light_all_kinds(film, scene, accel, hit, u, settings)
-    light = scene.area_lights.sample(u)
-    to_light = light.points - hit.p
-    dist2 = dot(to_light, to_light)
-    wi = to_light / np.sqrt(dist2)[:, None]
-    cos_theta = dot(hit.n, wi)
-    cos_theta_light = -dot(light.normals, wi)
-    # Points that do not face each other exchange no light and need no shadow ray (a
-    # third of them in the Cornell box: docs/performance.md). Nor do mirrors and glass,
-    # whose f_r is 0 for any direction but the one they choose.
-    facing = np.flatnonzero((cos_theta > 0) & (cos_theta_light > 0) & ~hit.delta)
-    visible = sees(accel, hit, facing, take_rows(light.target, facing))
-    f = shade(hit, "eval", hit.wo, wi, hit.n)
-    geometry = visible * cos_theta * cos_theta_light / (dist2 * light.pdf_area)
+    sampled = sampled_lights(scene, settings)
+    light, kind = scene.light_sampler.sample_li(hit.p, u, sampled)
+    cos_theta = dot(hit.n, light.wi)
+    # Points that do not face their light sample exchange no light and need no shadow ray (a
+    # third of them in the Cornell box: docs/performance.md; a light seen from behind has pdf
+    # 0). Nor do mirrors and glass, whose f_r is 0 for any direction but the one they choose.
+    usable = np.flatnonzero((cos_theta > 0) & (light.pdf > 0) & ~hit.delta)
+    visible = sees(accel, hit, usable, take_rows(light.target, usable))
+    weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
-        pdf_light = solid_angle_pdf(light.pdf_area, dist2, cos_theta_light)  # (rows not facing add 0)
-        geometry *= mis_weight(pdf_light, shade(hit, "pdf", hit.wo, wi, hit.n), settings.heuristic)
-    radiance = hit.throughput * f
+        bsdf_pdf = shade(hit, "pdf", hit.wo, light.wi, hit.n)
+        if scene.light_sampler.is_delta.any():  # no BSDF sample finds a point light: weight 1
+            bsdf_pdf = np.where(scene.light_sampler.is_delta.take(kind), 0, bsdf_pdf)
+        weight *= mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
+    radiance = hit.throughput * shade(hit, "eval", hit.wo, light.wi, hit.n)
     radiance *= light.radiance
-    radiance *= geometry[:, None]
+    radiance *= weight[:, None]
     add_to_film(film, hit.pixel, radiance)
-    return len(facing)
-
-
-def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndarray) -> np.ndarray:
-    """(N,) bool: which vertices see their light sample, by one shadow ray each from the
-    vertices ``rows`` (the others count as not seeing it) to ``targets`` (len(rows), 3).
-
-    The ray starts ``offset`` off the surface on the side of the normal (``leave_surface``;
-    only rows whose light lies on that side come here) and stops ``SHADOW_EPSILON`` short of
-    the target, so that neither the surface it leaves nor the light blocks it.
-    """
-    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, rows)
-    visible = np.zeros(len(hit.prim), dtype=bool)
-    visible[rows] = ~accel.occluded(origin, targets - origin, 1.0 - SHADOW_EPSILON)
-    return visible
+    return len(usable)
 
 
 def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
@@ -340,71 +235,31 @@ def sampled_lights(scene: Scene, settings: PathSettings) -> np.ndarray:
     )
 
 
-def direct_light_all_kinds(
-    film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit, u: np.ndarray, settings: PathSettings
-) -> int:
-    """``direct_light`` in a scene with point lights or a sky: one light sample of any kind
-    per path, and its shadow ray.
-
-    ``u[:, 0]`` picks the kind of light (``LightSampler.pick``, among the kinds that
-    ``sampled_lights`` names) and then, stretched, serves the kind's own ``sample_li``, which
-    gives the direction wi to the light, the radiance Li arriving along it and the pdf of
-    the choice. Adds throughput * f_r Li cos(theta) / pdf, times the MIS weight with
-    ``"mis"`` (1 for a point light, which BSDF sampling cannot find). Returns the shadow rays.
-    """
-    kinds = scene.light_sampler.kinds
-    kind, u, scale = scene.light_sampler.pick(u, sampled_lights(scene, settings))
-    n = len(hit.prim)
-    wi, radiance, target = (np.zeros((n, 3), np.float32, order="F") for _ in range(3))
-    pdf = np.zeros(n, np.float32)
-    delta = np.zeros(n, dtype=bool)
-    for k, light in enumerate(kinds):
-        rows = np.flatnonzero(kind == k)
-        if len(rows) == 0:
-            continue
-        sample = light.sample_li(take_rows(hit.p, rows), take_rows(u, rows))
-        wi[rows], radiance[rows], target[rows] = sample.wi, sample.radiance, sample.target
-        pdf[rows] = sample.pdf * np.float32(scale)  # (the share among the sampled kinds)
-        delta[rows] = light.is_delta
-    cos_theta = dot(hit.n, wi)
-    usable = np.flatnonzero(
-        (cos_theta > 0) & (pdf > 0) & np.isfinite(pdf) & (radiance.max(axis=1) > 0) & ~hit.delta
-    )
-    visible = sees(accel, hit, usable, take_rows(target, usable))
-    weight = np.where(visible, cos_theta / np.where(visible, pdf, 1), 0).astype(np.float32)
-    if settings.strategy == "mis":
-        bsdf_pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
-        weight *= np.where(delta, 1, mis_weight(pdf, bsdf_pdf, settings.heuristic)).astype(np.float32)
-    add_to_film(
-        film, hit.pixel, hit.throughput * shade(hit, "eval", hit.wo, wi, hit.n) * radiance * weight[:, None]
-    )
-    return len(usable)
-
-
 def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSettings) -> None:
     """Add the sky's radiance L for the paths that escaped (``hits.prim`` < 0), weighted as
     ``add_emission`` weighs a light's: in full for camera rays and after mirrors and glass,
     and otherwise by the strategy (not at all with ``"nee"``, the MIS weight with ``"mis"``),
     unless light sampling does not sample the sky (``sampled_lights``): then in full."""
-    sky = scene.light_sampler.sky  # (its pdf holds its share of the light samples)
-    sampled = sampled_lights(scene, settings)[scene.light_sampler.kinds.index(sky)]
+    light_sampler = scene.light_sampler
+    sky = light_sampler.sky
+    sampled = sampled_lights(scene, settings)
+    sky_sampled = sampled[light_sampler.kinds.index(sky)]
     escaped = hits.prim < 0
-    counted = escaped if settings.strategy != "nee" or not sampled else escaped & paths.sees_emission
+    counted = escaped if settings.strategy != "nee" or not sky_sampled else escaped & paths.sees_emission
     rows = np.flatnonzero(counted)
     if len(rows) == 0:
         return
-    weight = np.ones(len(rows), dtype=np.float32)
-    if settings.strategy == "mis" and sampled and paths.pdf is not None:
+    radiance = np.broadcast_to(sky.radiance.astype(np.float32), (len(rows), 3))
+    if settings.strategy == "mis" and sky_sampled and paths.pdf is not None:
+        # The density with which light sampling would have picked these directions.
+        pdf_light = light_sampler.pdf_li(sky, LightPoint(radiance), sampled)
         weight = np.where(
             paths.sees_emission.take(rows),
             1.0,
-            mis_weight(paths.pdf.take(rows), np.float32(sky.pdf), settings.heuristic),
+            mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
         ).astype(np.float32)
-    add_to_film(
-        film,
-        paths.pixel.take(rows),
-        take_rows(paths.throughput, rows) * (sky.radiance.astype(np.float32) * weight[:, None]),
-    )
+        radiance = radiance * weight[:, None]
+    add_to_film(film, paths.pixel.take(rows), take_rows(paths.throughput, rows) * radiance)
 
 
 def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray | None) -> np.ndarray:
@@ -449,64 +304,3 @@ def scatter(
         sample=kept(hit.sample, go_on, every),
         pdf=kept(pdf, go_on, every),
     )
-
-
-def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarray) -> np.ndarray:
-    """(N, 3) origins of new rays from points ``p`` along ``wi``: moved ``offset`` off the
-    surface along ``n``, to the side ``wi`` goes to (so a ray neither hits the surface it
-    leaves nor starts on the wrong side of it; pbrt-v4's ``OffsetRayOrigin``)."""
-    side = np.where(dot(wi, n) >= 0, offset, -offset)
-    return p + side[:, None] * n
-
-
-def material_groups(scene: Scene, prim: np.ndarray, uv: np.ndarray | None = None) -> list:
-    """[(rows, material)]: the material that shades each group of hits.
-
-    Materials of one kind (all ``Diffuse`` in the Cornell box) are stacked into one
-    (``Scene.material_table``) whose parameters are taken per hit, so the common case is
-    one group over every row (``rows`` is None: no copying at all). A textured material
-    looks its parameters up at the hits' texture coordinates ``uv`` (N, 2).
-    """
-    table = scene.material_table
-    if len(table.groups) == 1:
-        return [(None, taken(table.groups[0], table.triangle_row.take(prim), uv))]
-    group_of = table.triangle_group.take(prim)
-    groups = []
-    for g, stacked in enumerate(table.groups):
-        rows = np.flatnonzero(group_of == g)
-        if len(rows):
-            groups.append(
-                (
-                    rows,
-                    taken(
-                        stacked,
-                        table.triangle_row.take(prim.take(rows)),
-                        None if uv is None else take_rows(uv, rows),
-                    ),
-                )
-            )
-    return groups
-
-
-def taken(stacked, index: np.ndarray, uv: np.ndarray | None):
-    """``stacked.take(index)``: a stacked material's parameters for each hit, looked up at
-    the hits' uv for a textured one (``Material.take``)."""
-    return stacked.take(index, uv) if getattr(stacked, "textured", False) else stacked.take(index)
-
-
-def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
-    """Call ``material.<method>(*arrays)`` for every hit, each with its own material.
-
-    With several groups the rows of each are gathered, shaded and put back.
-    """
-    if hit.materials[0][0] is None:
-        return getattr(hit.materials[0][1], method)(*arrays)
-    outputs: tuple[np.ndarray, ...] = ()
-    for rows, material in hit.materials:
-        result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
-        parts = result if isinstance(result, tuple) else (result,)
-        if not outputs:
-            outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
-        for out, part in zip(outputs, parts, strict=True):
-            out[rows] = part
-    return outputs if len(outputs) > 1 else outputs[0]

@@ -49,17 +49,8 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.integrators.path import (
-    Paths,
-    PathSettings,
-    SurfaceHit,
-    add_emission,
-    add_sky,
-    direct_light,
-    leave_surface,
-    sampled_lights,
-    surface_hit,
-)
+from ptlab.integrators.path import PathSettings, add_emission, add_sky, direct_light, sampled_lights
+from ptlab.integrators.wavefront import Paths, SurfaceHit, leave_surface, surface_hit
 from ptlab.materials.dielectric import Dielectric
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scattering import fresnel_dielectric, reflect, refract

@@ -56,6 +56,9 @@ class RenderResult:
         rays: closest-hit plus shadow rays traced, over the whole render.
         query_seconds: time spent inside ray queries, summed over workers.
         sampler_seconds: time spent inside the sampler, summed over workers.
+        nonfinite: samples that were NaN or infinite and were left out of the image, over
+            the whole render (``ptlab.integrators.wavefront.add_to_film``): 0 unless a
+            material or an integrator has a bug.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
             depth at which Russian roulette started and the workers.
@@ -70,6 +73,7 @@ class RenderResult:
     rays: int
     query_seconds: float
     sampler_seconds: float
+    nonfinite: int = 0
     settings: dict = field(default_factory=dict)
 
     @property
@@ -192,6 +196,7 @@ def render_result(
         rays=film.rays,
         query_seconds=film.query_seconds,
         sampler_seconds=film.sampler_seconds,
+        nonfinite=film.nonfinite,
         settings=dict(
             record,
             scene=scene.name,
@@ -246,4 +251,11 @@ def render(
         progress: show a progress bar (on a terminal, or in a notebook), or a line per pass.
     """
     options = RenderOptions.of(args, options, keywords)
-    return render_result(scene, options=options, executor=executor, progress=progress or None).image
+    result = render_result(scene, options=options, executor=executor, progress=progress or None)
+    if result.nonfinite:  # (a bug in a material or an integrator; ``render_result`` counts them)
+        warnings.warn(
+            f"{result.nonfinite} samples were NaN or infinite and were left out of the image",
+            RuntimeWarning,
+            stacklevel=2,
+        )
+    return result.image

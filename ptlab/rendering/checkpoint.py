@@ -61,6 +61,7 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict, command: dict 
                 rays=np.int64(film.rays),
                 query_seconds=np.float64(film.query_seconds),
                 sampler_seconds=np.float64(film.sampler_seconds),
+                nonfinite=np.int64(film.nonfinite),
                 identity=json.dumps(dict(identity, format=FORMAT_VERSION)),
                 command=json.dumps(command or {}),
             )
@@ -82,6 +83,8 @@ def read_checkpoint(path: str | Path) -> tuple[dict, dict, dict[str, np.ndarray]
                 k: data[k]
                 for k in ("sums", "passes", "passes_done", "rays", "query_seconds", "sampler_seconds")
             }
+            # (checkpoints written before the count was kept have none: 0)
+            arrays["nonfinite"] = data["nonfinite"] if "nonfinite" in data else np.int64(0)
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
     if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
@@ -118,6 +121,7 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])
     film.sampler_seconds = float(arrays["sampler_seconds"])
+    film.nonfinite = int(arrays["nonfinite"])
 
 
 def _fits(arrays: dict, film: Film) -> bool:

@@ -22,6 +22,8 @@ class Film:
         passes_done: (tiles,) passes added for each tile.
         rays, query_seconds, sampler_seconds: work done so far (rays traced, seconds inside
             ray queries and inside the sampler).
+        nonfinite: samples that were NaN or infinite and were left out of ``sums``
+            (``ptlab.integrators.wavefront.add_to_film``).
     """
 
     def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int]):
@@ -32,6 +34,7 @@ class Film:
         self.rays = 0
         self.query_seconds = 0.0
         self.sampler_seconds = 0.0
+        self.nonfinite = 0
         self.pending: dict[tuple[int, int], JobResult] = {}
 
     def add(self, result: JobResult) -> None:
@@ -46,6 +49,7 @@ class Film:
             self.rays += ready.rays
             self.query_seconds += ready.query_seconds
             self.sampler_seconds += ready.sampler_seconds
+            self.nonfinite += ready.nonfinite
 
     @property
     def tile_spp(self) -> np.ndarray:

@@ -30,7 +30,8 @@ from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
 from ptlab.integrators import INTEGRATORS
-from ptlab.integrators.path import Paths, PathSettings, trace_paths
+from ptlab.integrators.path import PathSettings, trace_paths
+from ptlab.integrators.wavefront import Paths, counting_nonfinite
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
@@ -85,6 +86,7 @@ class JobResult:
     rays: int
     query_seconds: float
     sampler_seconds: float = 0.0
+    nonfinite: int = 0  # samples NaN or infinite, left out of the sums (``add_to_film``)
 
 
 @dataclass(frozen=True)
@@ -141,13 +143,15 @@ def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     # student's in its place (ptlab.exercises.plug).
     trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
     # (A TimedSampler is a Sampler by what it does, keys and get, not by class.)
-    rays = trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
+    with counting_nonfinite() as nonfinite:
+        rays = trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
     return JobResult(
         job=job,
         sums=film.reshape(tile_height, tile_width, 3),
         rays=rays,
         query_seconds=timed.seconds,
         sampler_seconds=sampler.seconds,
+        nonfinite=nonfinite.count,
     )
 
 

@@ -349,7 +349,7 @@ class _Server:
         k): the library's ``shade``, here, so that all the rows take one request."""
         from types import SimpleNamespace
 
-        from ptlab.integrators.path import shade
+        from ptlab.integrators.wavefront import shade
 
         groups = [(np.flatnonzero(which == k), self.handles[h]) for k, h in enumerate(handles)]
         hit = SimpleNamespace(prim=which, materials=[g for g in groups if len(g[0])])

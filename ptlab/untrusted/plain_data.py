@@ -31,7 +31,8 @@ from itertools import islice
 import numpy as np
 
 from ptlab.accel.base import Hits
-from ptlab.integrators.path import Paths, PathSettings, SurfaceHit
+from ptlab.integrators.path import PathSettings
+from ptlab.integrators.wavefront import Paths, SurfaceHit
 from ptlab.lights import ShapeSample
 from ptlab.rendering.jobs import Job, JobResult, Tile
 

@@ -34,7 +34,7 @@ from ptlab.exercises.finite import CHANNELS, at_pixel, at_row, require_finite
 
 if TYPE_CHECKING:
     from ptlab.accel import Accelerator
-    from ptlab.integrators.path import SurfaceHit
+    from ptlab.integrators.wavefront import SurfaceHit
     from ptlab.scene import Scene
 
 #: The furnace (``furnace_scene``): a closed sphere whose inner wall emits LE and reflects
@@ -98,7 +98,7 @@ def first_hits(scene: Scene, count: int = 20_000, seed: int = 70) -> tuple[Accel
     """
     from ptlab.accel import make_accelerator
     from ptlab.camera import generate_rays
-    from ptlab.integrators.path import Paths, surface_hit
+    from ptlab.integrators.wavefront import Paths, surface_hit
 
     accel = make_accelerator(scene.triangles)
     rng = np.random.default_rng(seed)
@@ -326,7 +326,7 @@ def _check_paths(paths, count: int):
     missing = [name for name in fields if not hasattr(paths, name)]
     if missing:
         raise CheckFailed(
-            f"scatter must return a ptlab.integrators.path.Paths (missing {', '.join(missing)})"
+            f"scatter must return a ptlab.integrators.wavefront.Paths (missing {', '.join(missing)})"
         )
     rows = len(paths.pixel)
     if rows > count:
@@ -372,7 +372,7 @@ class _FlakyDiffuse:
 
 
 def _check_pdf_near_zero(scatter) -> None:
-    from ptlab.integrators.path import SurfaceHit
+    from ptlab.integrators.wavefront import SurfaceHit
 
     rng = np.random.default_rng(75)
     count = 4000
@@ -407,7 +407,7 @@ def _check_pdf_near_zero(scatter) -> None:
         paths = scatter(furnace_scene(), hit, u.copy(), np.ones(count, dtype=bool))
     fields = ("origins", "dirs", "throughput", "pixel")
     if any(not hasattr(paths, name) for name in fields):
-        raise CheckFailed("scatter must return a ptlab.integrators.path.Paths")
+        raise CheckFailed("scatter must return a ptlab.integrators.wavefront.Paths")
     throughput = np.asarray(paths.throughput, dtype=np.float64)
     bad = ~np.isfinite(throughput).all(axis=1)
     if bad.any():
@@ -700,7 +700,7 @@ CHAPTER = Chapter(
     functions=("direct_light", "russian_roulette", "scatter", "trace_paths"),
     answers=tuple(
         f"ptlab.integrators.path.{name}"
-        for name in ("direct_light", "direct_light_all_kinds", "russian_roulette", "scatter", "trace_paths")
+        for name in ("direct_light", "russian_roulette", "scatter", "trace_paths")
     ),
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},

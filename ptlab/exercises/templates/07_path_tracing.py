@@ -14,7 +14,8 @@ live paths at once, as whole-array NumPy operations ("wavefront"): ``hit.p`` hol
 points of thousands of paths, and so on. Never loop over paths in Python (a loop would be
 thousands of times slower, and the checks have time limits); Python loops over bounces only.
 
-The library gives you (``ptlab.integrators.path``; read it):
+The library gives you (``ptlab.integrators.wavefront``; read it, and ``ptlab.integrators.path``,
+whose answer this is):
 
 * ``Paths``: the rays of the live paths (origins, dirs, throughput, pixel, sees_emission,
   sample: each path's key to its random numbers);
@@ -36,7 +37,7 @@ vectors are (N, 3), float32 in the renderer.
 
 import numpy as np
 
-from ptlab.integrators.path import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
+from ptlab.integrators.wavefront import SHADOW_EPSILON, Paths, add_to_film, shade, surface_hit
 from ptlab.samplers import BounceUniforms
 from ptlab.vectors import dot, take_rows
 

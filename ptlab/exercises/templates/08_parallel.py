@@ -35,7 +35,8 @@ import numpy as np
 
 from ptlab.accel import make_accelerator, resolve_backend
 from ptlab.camera import generate_rays
-from ptlab.integrators.path import Paths, PathSettings, trace_paths
+from ptlab.integrators.path import PathSettings, trace_paths
+from ptlab.integrators.wavefront import Paths
 from ptlab.rendering.jobs import RenderSetup, Tile
 from ptlab.rendering.settings import parse_resolution
 from ptlab.samplers import BounceUniforms

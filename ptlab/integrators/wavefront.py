@@ -1,0 +1,265 @@
+"""The wavefront toolkit: a batch of paths as arrays, and what every integrator does to it.
+
+A wavefront tracer advances a whole batch of paths one bounce at a time, each step a few
+whole-array operations, instead of following one path to its end (Laine, Karras and Aila
+2013, "Megakernels considered harmful"; pbrt-v4 chapter 15, the GPU integrator). The state
+of the batch is structure-of-arrays, one row per path (``Paths``; at a surface,
+``SurfaceHit``); dead paths are compacted away (``kept``), each hit's material is found
+(``material_groups``) and called for its rows (``shade``), new rays leave the surface
+(``leave_surface``), shadow rays test what a vertex sees (``sees``), and radiance is added
+into the film per pixel (``add_to_film``), where a NaN or infinite sample is left out and
+counted (``counting_nonfinite``).
+
+The integrators (``path.py``, ``whitted.py``, ``debug.py``) are written with these pieces, so
+that each reads like its pseudo-code.
+"""
+
+from __future__ import annotations
+
+import warnings
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
+from dataclasses import dataclass
+from typing import overload
+
+import numpy as np
+
+from ptlab.accel.base import Accelerator
+from ptlab.scene import Scene
+from ptlab.vectors import dot, take_rows
+
+#: A shadow ray stops this fraction short of the (offset) light point (pbrt's ShadowEpsilon).
+SHADOW_EPSILON = 1e-4
+
+
+@dataclass
+class Paths:
+    """The live paths of a batch, as structure-of-arrays (one row per path)."""
+
+    origins: np.ndarray  # (N, 3) float32
+    dirs: np.ndarray  # (N, 3) float32 unit
+    throughput: np.ndarray  # (N, 3) float32, product of f cos / pdf so far
+    pixel: np.ndarray  # (N,) intp, the film row each path adds its radiance to
+    sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
+    sample: np.ndarray  # (N,) uint64 sampler keys: whose random numbers the path uses
+    pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
+
+
+@dataclass
+class SurfaceHit:
+    """The live paths at their current vertex (one row per path)."""
+
+    prim: np.ndarray  # (N,) intp triangle ids
+    p: np.ndarray  # (N, 3) float32 hit points
+    n: np.ndarray  # (N, 3) unit shading normal, turned to the side of wo
+    wo: np.ndarray  # (N, 3) unit direction back along the ray
+    front: np.ndarray  # (N,) bool: the ray hit the triangle's front face
+    offset: np.ndarray  # (N,) float32: how far new rays start off the surface
+    throughput: np.ndarray  # (N, 3) float32
+    pixel: np.ndarray  # (N,) intp
+    sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
+    sample: np.ndarray  # (N,) uint64 sampler keys (``ptlab.samplers``)
+    materials: list  # [(rows, material)]: who shades which rows (``material_groups``)
+    delta: np.ndarray  # (N,) bool: the material here is a mirror or glass
+    t: np.ndarray  # (N,) distance from the previous vertex
+    pdf: np.ndarray | None  # (N,) pdf with which the previous vertex chose this direction
+
+
+@overload
+def kept(a: np.ndarray, rows: np.ndarray, every_row: bool) -> np.ndarray: ...
+@overload
+def kept(a: None, rows: np.ndarray, every_row: bool) -> None: ...
+def kept(a: np.ndarray | None, rows: np.ndarray, every_row: bool) -> np.ndarray | None:
+    """Rows ``rows`` of ``a`` (None stays None); ``a`` itself, not a copy, when ``rows`` are
+    all of its rows, as after the first bounces in a closed room, where no path ends."""
+    if a is None or every_row:
+        return a
+    return take_rows(a, rows)
+
+
+def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
+    """The vertices of the paths that hit something; the others are dropped.
+
+    Where every path hit, the vertices share the paths' arrays (``kept``)."""
+    alive = np.flatnonzero(hits.prim >= 0)
+    every = len(alive) == len(hits.prim)
+    prim = kept(hits.prim, alive, every)
+    # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
+    data = scene.triangle_data.take(prim, axis=1)  # (13, N); .T gives (N, 3) views
+    v0, e1, e2, n, offset = data[0:3].T, data[3:6].T, data[6:9].T, data[9:12].T, data[12]
+    u, v = kept(hits.u, alive, every)[:, None], kept(hits.v, alive, every)[:, None]
+    # The point from its barycentrics: more accurate than origin + t * dir (pbrt-v4 6.8.5),
+    # computed in place: v0 + u e1 + v e2 with two temporaries fewer.
+    p = u * e1
+    p += v0
+    p += v * e2
+    wo = -kept(paths.dirs, alive, every)
+    front = dot(n, wo) > 0
+    # Materials are two-sided: shade on the side the ray came from.
+    n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
+    uv = scene.uv_at(prim, u[:, 0], v[:, 0]) if scene.triangle_uv is not None else None
+    materials = material_groups(scene, prim, uv)
+    delta = np.zeros(len(prim), dtype=bool)
+    for rows, material in materials:
+        if material.is_delta:
+            delta[slice(None) if rows is None else rows] = True
+    return SurfaceHit(
+        prim=prim,
+        p=p,
+        n=n,
+        wo=wo,
+        front=front,
+        offset=offset,
+        throughput=kept(paths.throughput, alive, every),
+        pixel=kept(paths.pixel, alive, every),
+        sees_emission=kept(paths.sees_emission, alive, every),
+        sample=kept(paths.sample, alive, every),
+        materials=materials,
+        delta=delta,
+        t=kept(hits.t, alive, every),
+        pdf=kept(paths.pdf, alive, every),
+    )
+
+
+@dataclass
+class NonFinite:
+    """The samples whose radiance was NaN or infinite (a material's bug, a pdf of 0), which
+    ``add_to_film`` left out of the film. A sample here is one row that ``add_to_film`` was
+    given: a path adds one at each vertex where it finds light.
+
+    Attributes:
+        count: how many.
+        first_pixel: the film row of the first of them (-1 while there is none).
+    """
+
+    count: int = 0
+    first_pixel: int = -1
+
+
+#: Where ``add_to_film`` counts, inside ``counting_nonfinite`` (one per thread: each thread
+#: runs in a context of its own, so jobs on threads count apart).
+_nonfinite: ContextVar[NonFinite | None] = ContextVar("nonfinite", default=None)
+
+
+@contextmanager
+def counting_nonfinite() -> Iterator[NonFinite]:
+    """Count, in the ``NonFinite`` yielded, the samples that ``add_to_film`` leaves out
+    while the block runs (``ptlab.rendering.jobs.run_job`` counts each job's)."""
+    tally = NonFinite()
+    token = _nonfinite.set(tally)
+    try:
+        yield tally
+    finally:
+        _nonfinite.reset(token)
+
+
+def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> None:
+    """film[pixel[k]] += radiance[k] for every k, in float64.
+
+    ``np.bincount`` with weights sums repeated pixels correctly, and faster than
+    ``np.add.at`` (docs/performance.md). A NaN or infinite sample is left out, so that it
+    does not poison its pixel for good, and counted (``counting_nonfinite``; outside it, a
+    ``RuntimeWarning`` says so), so that the bug that made it does not go unseen. It is looked
+    for in the per-pixel sums, which are far fewer than the samples: the common case costs
+    nothing extra.
+    """
+    sums = np.stack(
+        [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)], axis=1
+    )
+    if not np.isfinite(sums).all():
+        bad = ~np.isfinite(radiance).all(axis=1)
+        if bad.any():  # (else finite samples whose sum overflowed: kept, as inf)
+            _count_nonfinite(pixel[bad])
+            return add_to_film(film, pixel[~bad], radiance[~bad])
+    film += sums
+
+
+def _count_nonfinite(pixel: np.ndarray) -> None:
+    """Count samples left out of the film at film rows ``pixel`` (``NonFinite``)."""
+    tally = _nonfinite.get()
+    if tally is None:
+        warnings.warn(
+            f"{len(pixel)} samples were NaN or infinite and were left out of the film",
+            RuntimeWarning,
+            stacklevel=3,
+        )
+        return
+    if tally.count == 0:
+        tally.first_pixel = int(pixel[0])
+    tally.count += len(pixel)
+
+
+def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndarray) -> np.ndarray:
+    """(N,) bool: which vertices see their light sample, by one shadow ray each from the
+    vertices ``rows`` (the others count as not seeing it) to ``targets`` (len(rows), 3).
+
+    The ray starts ``offset`` off the surface on the side of the normal (``leave_surface``;
+    only rows whose light lies on that side come here) and stops ``SHADOW_EPSILON`` short of
+    the target, so that neither the surface it leaves nor the light blocks it.
+    """
+    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, rows)
+    visible = np.zeros(len(hit.prim), dtype=bool)
+    visible[rows] = ~accel.occluded(origin, targets - origin, 1.0 - SHADOW_EPSILON)
+    return visible
+
+
+def leave_surface(p: np.ndarray, n: np.ndarray, offset: np.ndarray, wi: np.ndarray) -> np.ndarray:
+    """(N, 3) origins of new rays from points ``p`` along ``wi``: moved ``offset`` off the
+    surface along ``n``, to the side ``wi`` goes to (so a ray neither hits the surface it
+    leaves nor starts on the wrong side of it; pbrt-v4's ``OffsetRayOrigin``)."""
+    side = np.where(dot(wi, n) >= 0, offset, -offset)
+    return p + side[:, None] * n
+
+
+def material_groups(scene: Scene, prim: np.ndarray, uv: np.ndarray | None = None) -> list:
+    """[(rows, material)]: the material that shades each group of hits.
+
+    Materials of one kind (all ``Diffuse`` in the Cornell box) are stacked into one
+    (``Scene.material_table``) whose parameters are taken per hit, so the common case is
+    one group over every row (``rows`` is None: no copying at all). A textured material
+    looks its parameters up at the hits' texture coordinates ``uv`` (N, 2).
+    """
+    table = scene.material_table
+    if len(table.groups) == 1:
+        return [(None, taken(table.groups[0], table.triangle_row.take(prim), uv))]
+    group_of = table.triangle_group.take(prim)
+    groups = []
+    for g, stacked in enumerate(table.groups):
+        rows = np.flatnonzero(group_of == g)
+        if len(rows):
+            groups.append(
+                (
+                    rows,
+                    taken(
+                        stacked,
+                        table.triangle_row.take(prim.take(rows)),
+                        None if uv is None else take_rows(uv, rows),
+                    ),
+                )
+            )
+    return groups
+
+
+def taken(stacked, index: np.ndarray, uv: np.ndarray | None):
+    """``stacked.take(index)``: a stacked material's parameters for each hit, looked up at
+    the hits' uv for a textured one (``Material.take``)."""
+    return stacked.take(index, uv) if getattr(stacked, "textured", False) else stacked.take(index)
+
+
+def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
+    """Call ``material.<method>(*arrays)`` for every hit, each with its own material.
+
+    With several groups the rows of each are gathered, shaded and put back.
+    """
+    if hit.materials[0][0] is None:
+        return getattr(hit.materials[0][1], method)(*arrays)
+    outputs: tuple[np.ndarray, ...] = ()
+    for rows, material in hit.materials:
+        result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
+        parts = result if isinstance(result, tuple) else (result,)
+        if not outputs:
+            outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
+        for out, part in zip(outputs, parts, strict=True):
+            out[rows] = part
+    return outputs if len(outputs) > 1 else outputs[0]

@@ -1,0 +1,57 @@
+"""The wavefront toolkit (``ptlab.integrators.wavefront``): the film's sums per pixel (NaN and
+infinite samples left out and counted) and new rays leaving a surface. (Its use by the
+integrators: ``test_path.py``, ``test_whitted.py``.)
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ptlab.integrators.wavefront import add_to_film, counting_nonfinite, leave_surface
+
+# -- the film ------------------------------------------------------------------------------
+
+
+def test_the_film_adds_every_contribution_to_its_pixel_in_float64():
+    rng = np.random.default_rng(1)
+    pixel = rng.integers(0, 7, size=1000)
+    radiance = rng.random((1000, 3)).astype(np.float32)
+    film = np.full((7, 3), 0.5)
+    add_to_film(film, pixel, radiance)
+    expected = np.full((7, 3), 0.5)
+    np.add.at(expected, pixel, radiance.astype(np.float64))
+    assert film.dtype == np.float64
+    np.testing.assert_allclose(film, expected, rtol=1e-12)
+
+
+@pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
+def test_a_nan_or_infinite_sample_is_left_out_and_counted_and_the_rest_of_its_pixel_kept():
+    film = np.zeros((3, 3))
+    radiance = np.array([[1, 1, 1], [np.nan, 0, 0], [2, 2, 2], [np.inf, 1, 1], [3, 3, 3]], np.float32)
+    with counting_nonfinite() as nonfinite:
+        add_to_film(film, np.array([0, 0, 1, 1, 2]), radiance)
+        add_to_film(film, np.array([2]), np.array([[0, -np.inf, 0]], np.float32))
+    np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
+    assert (nonfinite.count, nonfinite.first_pixel) == (3, 0)
+    # Outside a count, a warning says so: never silently.
+    with pytest.warns(RuntimeWarning, match="1 samples were NaN or infinite"):
+        add_to_film(film, np.array([1]), np.array([[np.nan, 0, 0]], np.float32))
+    np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
+
+
+# -- leaving a surface -----------------------------------------------------------------------
+
+
+def test_a_new_ray_starts_offset_along_the_normal_on_the_side_it_goes_to():
+    rng = np.random.default_rng(2)
+    n = rng.normal(size=(1000, 3))
+    n /= np.linalg.norm(n, axis=1, keepdims=True)
+    wi = rng.normal(size=(1000, 3))
+    wi /= np.linalg.norm(wi, axis=1, keepdims=True)
+    wi[:10] -= (wi[:10] * n[:10]).sum(axis=1, keepdims=True) * n[:10]  # tangent: counts as above
+    p = rng.normal(size=(1000, 3))
+    offset = rng.uniform(1e-4, 1e-2, size=1000)
+    moved = leave_surface(p, n, offset, wi) - p
+    side = np.where((wi * n).sum(axis=1) >= 0, 1.0, -1.0)
+    np.testing.assert_allclose(moved, (side * offset)[:, None] * n, rtol=1e-12, atol=1e-15)
