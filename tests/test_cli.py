@@ -535,6 +535,7 @@ def test_a_render_that_sees_no_light_warns_in_one_line(tmp_path, capsys):
             "1",
             "--workers",
             "1",
+            "--quiet",
             "--out",
             str(tmp_path / "dark.png"),
         ]

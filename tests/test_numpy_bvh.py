@@ -372,7 +372,7 @@ def test_single_axis_aligned_quad(max_leaf_size, every_triangle):
         np.testing.assert_allclose(
             origins + hits.t[:, None] * np.array(dirs), np.column_stack([xy, np.ones(n)]), atol=1e-6
         )
-    from_above = bvh.intersect([*origins, 0, 0, 2], np.tile([0, 0, -1], (n, 1)))
+    from_above = bvh.intersect(origins + np.array([0, 0, 2]), np.tile([0, 0, -1], (n, 1)))
     assert from_above.hit.all()
     assert np.all(from_above.t == 1.0)
     # One zero component, and rays in the quad's plane (a miss, as for Embree).
