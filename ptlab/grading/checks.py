@@ -740,9 +740,8 @@ def check_reflectance(lobes: list[Lobe]) -> Check:
     shares = [lobe.failed / lobe.samples for lobe in lobes]
     worst = int(np.argmax(shares))
     albedo = np.array([lobe.reflectance for lobe in lobes])
-    statistic = (
-        f"max ∫ f cos = {albedo.max():.4g}, max failed share {shares[worst]:.1%} (wo {lobes[worst].degrees:g}°)"
-    )
+    where = f"wo {lobes[worst].degrees:g}°"
+    statistic = f"max ∫ f cos = {albedo.max():.4g}, max failed share {shares[worst]:.1%} ({where})"
     threshold = f"failed share <= {MAX_FAILED_SHARE:.0%}, ∫ f cos > {BLACK:g}"
     if shares[worst] > MAX_FAILED_SHARE:
         lobe = lobes[worst]
