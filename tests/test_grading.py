@@ -363,7 +363,7 @@ class Black:
     """Cosine sampling with its pdf (the homework's three functions), eval 0 everywhere."""
 
     def eval(self, wo, wi, n):
-        return np.zeros((len(wo), 3))
+        return np.zeros((len(wo), 3), dtype=wi.dtype)
 
     def pdf(self, wo, wi, n):
         return Diffuse().pdf(wo, wi, n)
