@@ -17,8 +17,9 @@ import wrong_materials as wrong
 from helpers import Recording, assert_every_call_mixes_its_rows
 
 from ptlab.cli import main as ptlab_main
-from ptlab.grading import check_material, write_plots
+from ptlab.grading import check_material, checks, write_plots
 from ptlab.grading.checks import chi2_sf, pooled_chi_square, z_two_sided
+from ptlab.grading.probes import Kept
 from ptlab.grading.sphere import SphereGrid
 from ptlab.materials import Diffuse, Microfacet
 
@@ -63,6 +64,7 @@ def test_default_run_is_the_issues_and_reproducible():
         "chi-square",
         "pdf normalisation",
         "energy",
+        "reflectance",
         "estimator agreement",
         "sample_weight",
         "reciprocity",
@@ -330,3 +332,109 @@ def test_row_independence_holds_for_float32_arithmetic_and_a_student_process(cap
     assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000"]) == 0
     out = capsys.readouterr().out
     assert "row independence" in out and "PASSED" in out
+
+
+# -- batches of other sizes; materials that give no direction or reflect nothing ----------------
+
+
+class RightOnlyInTheGradersSizes(Diffuse):
+    """7.6x too bright in a call of more than 10 000 rows, except in sizes the old harness
+    used (multiples of 1000, the samples, or of 3, its quadrature's): a render's sizes."""
+
+    def eval(self, wo, wi, n):
+        rows = len(wo)
+        return super().eval(wo, wi, n) * (7.6 if rows > 10_000 and rows % 3 and rows % 1000 else 1.0)
+
+
+class GivesNoDirection:
+    """sample returns -n (pdf 0 there), eval and pdf 0: consistent, and useless."""
+
+    def eval(self, wo, wi, n):
+        return np.zeros((len(wo), 3))
+
+    def pdf(self, wo, wi, n):
+        return np.zeros(len(wo))
+
+    def sample(self, wo, n, u):
+        return -np.asarray(n)
+
+
+class Black:
+    """Cosine sampling with its pdf (the homework's three functions), eval 0 everywhere."""
+
+    def eval(self, wo, wi, n):
+        return np.zeros((len(wo), 3), dtype=wi.dtype)
+
+    def pdf(self, wo, wi, n):
+        return Diffuse().pdf(wo, wi, n)
+
+    def sample(self, wo, n, u):
+        return Diffuse().sample(wo, n, u)
+
+
+def test_batch_sizes_hold_a_renders_batch_and_others_drawn_per_run():
+    first, second = checks.batch_sizes(), checks.batch_sizes()
+    assert first[0] == second[0] == checks.RENDER_BATCH == 2**18
+    for sizes in (first, second):
+        assert len(sizes) == 1 + checks.RANDOM_BATCHES
+        assert all(checks.ROW_INDEPENDENCE_ROWS < s <= checks.LARGEST_BATCH for s in sizes)
+    assert first[1:] != second[1:]  # (fresh entropy: equal with probability below 1e-12)
+
+
+def test_kept_rows_go_inside_a_larger_batch_at_random_places_in_their_layout():
+    rng = np.random.default_rng(0)
+    rows = 100
+    wo = np.asfortranarray(rng.normal(size=(rows, 3)).astype(np.float32))
+    u = np.ascontiguousarray(rng.random((rows, 2)).astype(np.float32))
+    record = Kept.first_rows("sample", (wo, wo, u), np.zeros((rows, 3)), 8)
+    arguments, places = record.inside(5000, rng)
+    assert [a.shape for a in arguments] == [(5000, 3), (5000, 3), (5000, 2)]
+    assert arguments[0].dtype == np.float32 and arguments[0].flags.f_contiguous
+    assert arguments[2].flags.c_contiguous and (arguments[2] < 1).all() and (arguments[2] >= 0).all()
+    np.testing.assert_array_equal(arguments[0][places], wo[:8])
+    assert len(set(places.tolist())) == 8
+    # The other rows are the pool's rows turned: a rotation keeps each one's length.
+    others = np.setdiff1d(np.arange(5000), places)
+    lengths = np.linalg.norm(wo.astype(np.float64), axis=1)
+    turned = np.linalg.norm(arguments[0][others].astype(np.float64), axis=1)
+    assert np.abs(turned[:, None] - lengths[None, :]).min(axis=1).max() < 1e-5
+    assert not np.isin(arguments[0][others], wo).all()  # (turned, not copied)
+
+
+@pytest.mark.slow
+def test_a_material_wrong_only_in_a_renders_batch_sizes_fails_row_independence():
+    report = check_material(RightOnlyInTheGradersSizes((0.8, 0.5, 0.2)), samples=20_000)
+    assert report.failed == ["row independence"], str(report)
+    assert "inside a batch of 262144 rows" in report["row independence"].hint
+
+
+@pytest.mark.slow
+def test_row_independence_passes_inside_batches_of_many_sizes():
+    material = Microfacet((1, 1, 1), alpha=0.05)
+    kept: list = []
+    rng = np.random.default_rng(5)
+    checks.check_float32(material, rng, kept=kept)
+    sizes = [33, 1000, 4097, 2**18, 2**19]
+    assert checks.check_row_independence(material, kept, rng, sizes=sizes).verdict == "pass"
+
+
+@pytest.mark.slow
+def test_a_material_that_gives_no_direction_fails_with_a_clear_hint():
+    report = check_material(GivesNoDirection(), samples=20_000)
+    assert report.failed == ["reflectance"], str(report)
+    assert report["reflectance"].hint.startswith("sample returns no direction with a positive pdf")
+
+
+@pytest.mark.slow
+def test_a_black_material_passes_with_a_warning_that_says_so():
+    report = check_material(Black(), samples=20_000)
+    assert report.passed and report.warned == ["reflectance"], str(report)
+    assert "reflects nothing: albedo 0 for every probe" in report["reflectance"].hint
+    assert str(report).endswith("PASSED, with warnings: reflectance")
+
+
+@pytest.mark.slow
+def test_a_sampler_failing_half_its_samples_is_no_mistake():
+    # GGX with alpha 1 reflects half of its visible normals below the surface at wo 0.
+    report = check_material(Microfacet((1, 1, 1), alpha=1.0), samples=20_000, wo_degrees=(0, 80))
+    assert report["reflectance"].verdict == "pass", str(report)

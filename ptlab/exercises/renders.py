@@ -178,7 +178,8 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
     independent estimates of the same picture and their spread gives the standard error.
     (Stratified and sobol samples would make the passes of one pixel correlated, parts of
     one pattern.) The render runs in this process (``workers=1``), where ``plugged``
-    functions are seen.
+    functions are seen, with the render's own tiles (``TILE_SIZE``): its calls are a
+    render's batches, not sizes of the grader's own.
     """
     from ptlab.rendering import render_result
 
@@ -195,7 +196,6 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
         res=res,
         seed=seed,
         workers=1,
-        tile_size=res,
         spp_per_pass=spp_per_pass,
         on_pass=keep,
         **dict(dict(sampler="independent"), **options),

@@ -88,6 +88,7 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
         ("chi-square", lambda: checks.check_chi_square(material, lobes, streams[3])),
         ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
         ("energy", lambda: checks.check_energy(lobes)),
+        ("reflectance", lambda: checks.check_reflectance(lobes)),
         ("estimator agreement", lambda: checks.check_estimator(lobes)),
         ("sample_weight", lambda: checks.check_sample_weight(pointwise)),
     ):

@@ -19,7 +19,8 @@ axes to axes. They keep every cosine to +z exactly (n lands on an axis, and its 
 nonzero component multiplies the z component alone).
 
 ``Kept`` holds a few rows of a large call, so that ``check_row_independence`` can ask them
-again one by one.
+again one by one, in another order, and inside batches of other sizes (``Kept.inside``: up to
+a render's batch, the other rows made from more rows of the same call, each turned anew).
 """
 
 from __future__ import annotations
@@ -140,15 +141,21 @@ class Probe:
         return back
 
 
+#: Rows of a call kept besides the asked ones, to make the other rows of a larger batch from.
+POOL_ROWS = 1024
+
+
 @dataclass
 class Kept:
     """The first rows of one call of a material: its arguments and its answer (a tuple of
-    arrays for ``sample_weight``), with the number of rows the call had."""
+    arrays for ``sample_weight``), with the number of rows the call had, and the arguments
+    of up to ``POOL_ROWS`` rows of it (``pool``) to fill larger batches with."""
 
     method: str
     arguments: tuple
     answer: tuple
     batch_rows: int
+    pool: tuple = ()
 
     @classmethod
     def first_rows(cls, method: str, arguments: tuple, answer, rows: int) -> Kept:
@@ -158,18 +165,56 @@ class Kept:
             tuple(rows_of(a, slice(0, rows)) for a in arguments),
             tuple(rows_of(np.asarray(p), slice(0, rows)) for p in parts),
             len(arguments[0]),
+            tuple(rows_of(a, slice(0, POOL_ROWS)) for a in arguments),
         )
 
     @property
     def rows(self) -> int:
         return len(self.arguments[0])
 
+    def inside(self, size: int, rng: np.random.Generator) -> tuple[tuple, np.ndarray]:
+        """The kept rows' arguments inside a batch of ``size`` (> ``rows``) rows, in the dtype
+        and layout of the call: the kept rows at random places in a random order, the others
+        rows of ``pool`` each turned by a rotation of its own (u drawn anew). Returns the
+        arguments and the (rows,) places of the kept rows."""
+        places = rng.choice(size, self.rows, replace=False)
+        others = np.ones(size, dtype=bool)
+        others[places] = False
+        filler = self._filler(size - self.rows, rng)
+        arguments = []
+        for kept, fill in zip(self.arguments, filler, strict=True):
+            full = np.empty((size, *kept.shape[1:]), dtype=kept.dtype, order="F" if _fortran(kept) else "C")
+            full[places], full[others] = kept, fill
+            arguments.append(full)
+        return tuple(arguments), places
+
+    def _filler(self, count: int, rng: np.random.Generator) -> list[np.ndarray]:
+        """``count`` rows like the pool's: directions turned by a random rotation per row
+        (one for all of a row's directions), other columns (u) uniform in [0, 1)."""
+        pool = self.pool or self.arguments
+        which = rng.integers(0, len(pool[0]), count)
+        turn = Rotations.draw(rng, count)
+        filler = []
+        for a in pool:
+            if a.ndim == 2 and a.shape[1] == 3:
+                filler.append(turn.apply(a[which].astype(np.float64)).astype(a.dtype))
+            elif a.ndim == 2 and a.dtype.kind == "f":
+                below_one = np.nextafter(a.dtype.type(1), a.dtype.type(0))
+                filler.append(np.minimum(rng.random((count, a.shape[1])).astype(a.dtype), below_one))
+            else:
+                filler.append(a[which])
+        return filler
+
+
+def _fortran(a: np.ndarray) -> bool:
+    return a.ndim == 2 and a.flags.f_contiguous and not a.flags.c_contiguous
+
 
 def rows_of(a: np.ndarray, index) -> np.ndarray:
     """The rows ``index`` (a slice or an index array) of ``a``, copied in ``a``'s memory layout
     (column-major stays column-major: the material sees the arrays it saw in the batch)."""
     taken = a[index]
-    if a.ndim == 2 and a.flags.f_contiguous and not a.flags.c_contiguous:
+    if _fortran(a):
         return np.asfortranarray(taken)
     return np.ascontiguousarray(taken)
 

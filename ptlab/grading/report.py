@@ -75,6 +75,11 @@ class Report:
         """The names of the failed checks."""
         return [check.name for check in self.checks if not check.passed]
 
+    @property
+    def warned(self) -> list[str]:
+        """The names of the checks that warn."""
+        return [check.name for check in self.checks if check.verdict == "warn"]
+
     def __getitem__(self, name: str) -> Check:
         for check in self.checks:
             if check.name == name:
@@ -94,6 +99,8 @@ class Report:
             return [f"{first}  {hint_lines[0]}".rstrip()] + [" " * indent + h for h in hint_lines[1:]]
 
         verdict_line = "PASSED" if self.passed else f"FAILED: {', '.join(self.failed)}"
+        if self.passed and self.warned:
+            verdict_line += f", with warnings: {', '.join(self.warned)}"
         lines = [
             f"{self.material}: seed {self.seed}, {self.samples:,} samples per wo, {self.seconds:.1f} s",
             *line(header),

@@ -20,6 +20,7 @@ from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require,
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 from ptlab.grading.probes import Turned
+from ptlab.rendering.sizes import SPP_PER_PASS
 
 ALBEDO = (0.8, 0.5, 0.2)
 
@@ -197,14 +198,47 @@ def check_pdf_normalisation(module) -> str:
     return f"the pdf integrates to {total:.4f} over the sphere, 0 below the surface"
 
 
-def run_harness(material, seed: int, what: str, grade_command: str) -> str:
+#: Pairs of directions on which the harness's points first compare the material's eval with
+#: the expected one (``reflects_as_expected``).
+REFLECTANCE_ROWS = 1000
+
+
+def reflects_as_expected(material, expected_eval: Callable, seed: int, what: str) -> None:
+    """``CheckFailed`` unless ``material``'s eval equals ``expected_eval(wo, wi, n)`` (to a
+    relative 1e-3) on random pairs above the surface, every row turned by a rotation of its
+    own: the harness's points are for consistency of the material the chapter asks for, and
+    a material that reflects nothing (eval 0, sample failing) is consistent too."""
+    rng = np.random.default_rng([seed, 1])
+    wo, wi, n = random_pairs(rng, REFLECTANCE_ROWS)
+    f = _call(Turned(material, rng), "eval", wo, wi, n)
+    expected = np.asarray(expected_eval(wo, wi, n), dtype=np.float64)
+    if np.allclose(f, expected, rtol=1e-3, atol=1e-9):
+        return
+    black = " (it reflects nothing: eval is 0 everywhere)" if not np.abs(f).max() > 0 else ""
+    raise CheckFailed(
+        f"the harness's points need the eval the chapter asks for (the reflectance{what}), but yours "
+        f"differs from it by up to {np.abs(f - expected).max():.3g}{black}: see the eval check"
+    )
+
+
+def run_harness(
+    material, seed: int, what: str, grade_command: str, expected_eval: Callable | None = None
+) -> str:
     """``ptlab.grading.check_material`` on the student's material; a ``CheckFailed`` that
     names each failed check with its hint (checks that failed alike, said once), ``what``
-    the material was and the ``ptlab grade`` command that prints the whole table."""
+    the material was and the ``ptlab grade`` command that prints the whole table. With
+    ``expected_eval``, the material's eval must first be it (``reflects_as_expected``), and
+    a warning of the harness (a material reflecting nothing) fails too."""
     from ptlab.grading import check_material
 
     probe(material)
+    if expected_eval is not None:
+        reflects_as_expected(material, expected_eval, seed, what)
     report = check_material(material, seed=seed, samples=HARNESS_SAMPLES)
+    if report.passed and expected_eval is not None and report.warned:
+        names = ", ".join(report.warned)
+        hints = "; ".join(c.hint for c in report.checks if c.verdict == "warn")
+        raise CheckFailed(f"the material harness warns of {names}{what}: {hints}")
     if report.passed:
         return (
             f"every check of ptlab.grading.check_material passes{what} ({HARNESS_SAMPLES:,} samples per wo)"
@@ -221,24 +255,50 @@ def run_harness(material, seed: int, what: str, grade_command: str) -> str:
 
 
 def check_harness(module) -> str:
-    return run_harness(_material(module), 6, "", f"ptlab grade {student_file(module)}:Lambertian")
+    albedo = np.asarray(ALBEDO) / math.pi
+
+    def lambert(wo, wi, n):
+        return np.broadcast_to(albedo, wo.shape)
+
+    return run_harness(
+        _material(module), 6, "", f"ptlab grade {student_file(module)}:Lambertian", expected_eval=lambert
+    )
 
 
 #: The seed of the render check (scripts/render_false_alarm.py renders with others).
 RENDER_SEED = 6
 
 
-def render_options(seed: int) -> dict:
-    """The render both sides of chapter 6's comparison make: 32 x 32, 16 passes of 8 spp.
+#: Samples per pixel in each pass of the render check: drawn per run from fresh entropy in
+#: this range (both renders of one check alike), so that the sizes of the material's calls
+#: (the first bounce's 24 576 to 40 960 paths, shared among the scene's materials, then
+#: fewer at every bounce) are a render's and cannot be known beforehand. At least 24: every
+#: material of the Cornell box then gets calls of more than 10 000 rows (the white one about
+#: 60% of the paths). Costs 1.5x to 2.5x the time of a render of 16 spp per pass.
+RENDER_SPP_PER_PASS = (24, 40)
+
+
+def render_spp_per_pass(rng: np.random.Generator | None = None) -> int:
+    """A number of samples per pass in ``RENDER_SPP_PER_PASS``, drawn from fresh entropy."""
+    low, high = RENDER_SPP_PER_PASS
+    return int((rng or np.random.default_rng()).integers(low, high + 1))
+
+
+def render_options(seed: int, spp_per_pass: int = SPP_PER_PASS) -> dict:
+    """The render both sides of chapter 6's comparison make: 32 x 32, 16 passes of
+    ``spp_per_pass`` spp (the render check draws it: ``render_spp_per_pass``), in the
+    render's own tiles (``pass_images``).
 
     max_depth 6: a wrong pdf can make the weights grow at every bounce (so that Russian
     roulette never ends a path); bounded paths keep that a finite, clearly visible
     brightening instead of a render that runs out of time.
     """
-    return dict(res=32, passes=16, spp_per_pass=8, seed=seed, max_depth=6)
+    return dict(res=32, passes=16, spp_per_pass=spp_per_pass, seed=seed, max_depth=6)
 
 
-def render_passes(material_for: Callable | None = None, seed: int = RENDER_SEED) -> np.ndarray:
+def render_passes(
+    material_for: Callable | None = None, seed: int = RENDER_SEED, spp_per_pass: int = SPP_PER_PASS
+) -> np.ndarray:
     """The ``pass_images`` of the Cornell box with ``material_for(albedo)`` in place of
     every diffuse material, or with the library's own if None."""
     import ptlab
@@ -247,13 +307,14 @@ def render_passes(material_for: Callable | None = None, seed: int = RENDER_SEED)
     scene = ptlab.load_scene("cornell-box")
     if material_for is not None:
         scene = replace_materials(scene, lambda m: material_for(m.albedo) if isinstance(m, Diffuse) else None)
-    return pass_images(scene, **render_options(seed))
+    return pass_images(scene, **render_options(seed, spp_per_pass))
 
 
 def check_render(module) -> str:
     probe(_material(module))
-    library = render_passes()
-    student = render_passes(lambda albedo: _material(module, albedo))
+    spp_per_pass = render_spp_per_pass()
+    library = render_passes(spp_per_pass=spp_per_pass)
+    student = render_passes(lambda albedo: _material(module, albedo), spp_per_pass=spp_per_pass)
     return compare_renders(
         student,
         library,

@@ -19,9 +19,10 @@ from collections.abc import Callable
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require, student_file
-from ptlab.exercises.chapters.ch06_diffuse import probe, random_pairs, run_harness
+from ptlab.exercises.chapters.ch06_diffuse import probe, random_pairs, render_spp_per_pass, run_harness
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
+from ptlab.rendering.sizes import SPP_PER_PASS
 
 ALPHAS = (0.05, 0.2, 0.5, 1.0)
 GOLD = (1.0, 0.782, 0.344)
@@ -207,6 +208,8 @@ def _eval_hint(f: np.ndarray, wo, wi, n, alpha: float) -> str:
 
 
 def _harness(module, sampling: str, alpha: float) -> str:
+    from ptlab.materials import Microfacet
+
     material = _metal(module, (1.0, 1.0, 1.0), alpha, sampling)
     arguments = shlex.quote(json.dumps({"f0": [1.0, 1.0, 1.0], "alpha": alpha, "sampling": sampling}))
     return run_harness(
@@ -214,6 +217,7 @@ def _harness(module, sampling: str, alpha: float) -> str:
         9,
         f" for a white metal (F0 = 1) with alpha {alpha} and sampling {sampling!r}",
         f"ptlab grade {student_file(module)}:GGXMetal --args {arguments}",
+        expected_eval=Microfacet((1.0, 1.0, 1.0), alpha=alpha).eval,
     )
 
 
@@ -231,9 +235,11 @@ RENDER_SEED = 9
 LIBRARY_SAMPLING = {"ggx": "vndf", "hemisphere": "hemisphere"}
 
 
-def render_options(seed: int) -> dict:
-    """The render both sides of chapter 9's comparisons make: 32 x 32, 16 passes of 8 spp."""
-    return dict(res=32, passes=16, spp_per_pass=8, seed=seed, max_depth=6)
+def render_options(seed: int, spp_per_pass: int = SPP_PER_PASS) -> dict:
+    """The render both sides of chapter 9's comparisons make: 32 x 32, 16 passes of
+    ``spp_per_pass`` spp (drawn per run by the render checks, as chapter 6's:
+    ``render_spp_per_pass``)."""
+    return dict(res=32, passes=16, spp_per_pass=spp_per_pass, seed=seed, max_depth=6)
 
 
 def metals_scene():
@@ -247,7 +253,12 @@ def metals_scene():
     return scene
 
 
-def render_passes(sampling: str, metal_for: Callable | None = None, seed: int = RENDER_SEED) -> np.ndarray:
+def render_passes(
+    sampling: str,
+    metal_for: Callable | None = None,
+    seed: int = RENDER_SEED,
+    spp_per_pass: int = SPP_PER_PASS,
+) -> np.ndarray:
     """The ``pass_images`` of ``metals_scene`` with ``metal_for(f0, alpha)`` in place of its
     metals, or with the library's own sampling in the way of ``sampling`` if None."""
     from ptlab.materials import Microfacet
@@ -259,13 +270,16 @@ def render_passes(sampling: str, metal_for: Callable | None = None, seed: int = 
             return m.with_sampling(LIBRARY_SAMPLING[sampling])
         return metal_for(m.f0, m.alpha)
 
-    return pass_images(replace_materials(metals_scene(), replace), **render_options(seed))
+    return pass_images(replace_materials(metals_scene(), replace), **render_options(seed, spp_per_pass))
 
 
 def _render(module, sampling: str) -> str:
     probe(_metal(module, sampling=sampling))
-    library = render_passes(sampling)
-    student = render_passes(sampling, lambda f0, alpha: _metal(module, f0, alpha, sampling))
+    spp_per_pass = render_spp_per_pass()
+    library = render_passes(sampling, spp_per_pass=spp_per_pass)
+    student = render_passes(
+        sampling, lambda f0, alpha: _metal(module, f0, alpha, sampling), spp_per_pass=spp_per_pass
+    )
     what = "hemisphere sampling" if sampling == "hemisphere" else "your importance sampling"
     hint = (
         "is eval right at every angle?"
