@@ -4,8 +4,10 @@ Known answers come from the definition of the hit: ``o + t d = (1 - u - v) v0 + 
 (Möller and Trumbore 1997; GAMES101 lecture 13). Rays are aimed at chosen ``(t, u, v)``,
 just inside and just outside each edge, parallel to the triangle, at triangles behind the
 origin and at the back face; 2000 random rays and triangles are compared with a direct
-linear solve. Then the student's function runs inside the NumPy BVH, and a path-traced
-Cornell box (whose hit points are built from ``u, v``) must match the library's.
+linear solve. The hit checks judge ``t`` (whether and where a ray hits), the barycentrics
+check ``u, v`` of the same rays: an answer without barycentrics earns the hits. Then the
+student's function runs inside the NumPy BVH, and a path-traced Cornell box (whose hit
+points are built from ``u, v``) must match the library's.
 """
 
 from __future__ import annotations
