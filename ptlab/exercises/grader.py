@@ -168,10 +168,10 @@ def grade(
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
-    passed: dict[str, bool] = {}
+    earlier: dict[str, CheckResult] = {}
     with ProcessGuard() as guard:
         for check in chapter.checks:
-            unmet = [name for name in check.requires if not passed[name]]
+            unmet = [earlier[name] for name in check.requires if not earlier[name].passed]
             left = deadline - time.monotonic()
             if isinstance(taken, str):
                 result = CheckResult(check.name, 0, check.points, False, table_message(taken), 0.0)
@@ -185,7 +185,8 @@ def grade(
                     0.0,
                 )
             elif unmet and not check.quick:  # (a render: its message is not worth the wait)
-                result = CheckResult(check.name, 0, check.points, False, not_graded_until(unmet), 0.0)
+                message = f"{not_graded_until(unmet)}; '{unmet[0].name}' says: {unmet[0].message}"
+                result = CheckResult(check.name, 0, check.points, False, table_message(message), 0.0)
             else:
                 result, hung = run_check(
                     check, taken, min(check.timeout * timeout_scale, left), guard, on_output, rules, user
@@ -194,7 +195,7 @@ def grade(
                     taken = f"not run: {result.message}"
                 if unmet:
                     result = gated(result, unmet)
-            passed[check.name] = result.passed
+            earlier[check.name] = result
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
@@ -259,13 +260,13 @@ def run_check(
     ), hung
 
 
-def not_graded_until(unmet: list[str]) -> str:
+def not_graded_until(unmet: list[CheckResult]) -> str:
     """Why a check scores nothing: the checks of the core behaviour it builds on failed."""
-    names = " and ".join(f"'{name}'" for name in unmet)
+    names = " and ".join(f"'{r.name}'" for r in unmet)
     return f"not graded until {names} pass{'es' if len(unmet) == 1 else ''}"
 
 
-def gated(result: CheckResult, unmet: list[str]) -> CheckResult:
+def gated(result: CheckResult, unmet: list[CheckResult]) -> CheckResult:
     """``result`` of a check whose requirements ``unmet`` failed: no points, and a message
     that says why and what the check found by itself (a property a trivial answer may
     share, so it earns nothing alone)."""
