@@ -26,6 +26,9 @@ from ptlab.untrusted import Arguments, Rules, copied_answer, library_answer
 
 #: The exercises package: templates/ and solutions/ are beside this file.
 HERE = Path(__file__).parent
+#: Seconds of time limit up to which a check is quick (``ChapterCheck.quick``): the unit
+#: checks; the renders take longer.
+QUICK_CHECK = 30.0
 
 
 class CheckFailed(Exception):  # noqa: N818 (a verdict, not an error of the grader)
@@ -41,12 +44,22 @@ class ChapterCheck:
         points: what it is worth.
         run: ``run(student_module) -> note``; raises ``CheckFailed`` when the code is wrong.
         timeout: seconds it may take before it counts as hanging.
+        requires: the names of earlier checks of the core behaviour this one builds on.
+            A check of a secondary property ("unit directions", "parallel rays") that a
+            trivial answer also has (every ray forward, every ray missing) scores only
+            when they pass; until then it scores 0 and says so (``grader.gated``).
     """
 
     name: str
     points: int
     run: Callable[[ModuleType], str]
     timeout: float = 60.0
+    requires: tuple[str, ...] = ()
+
+    @property
+    def quick(self) -> bool:
+        """Cheap enough to run even when it scores nothing: its message may still help."""
+        return self.timeout <= QUICK_CHECK
 
 
 @dataclass(frozen=True)
@@ -76,6 +89,17 @@ class Chapter:
     writes: dict[str, tuple[str, ...]] = field(default_factory=dict)
     scratch: dict[str, tuple[str, ...]] = field(default_factory=dict)
     programs: bool = False
+
+    def __post_init__(self) -> None:
+        earlier: set[str] = set()
+        for check in self.checks:
+            unknown = set(check.requires) - earlier
+            if unknown:
+                raise ValueError(
+                    f"chapter {self.number}: check {check.name!r} requires {sorted(unknown)}, "
+                    f"which are not earlier checks of the chapter"
+                )
+            earlier.add(check.name)
 
     @property
     def stem(self) -> str:

@@ -10,18 +10,20 @@ touch a verdict.
 
 Every check is worth some points and has a time limit: a student's function that loops
 forever, crashes its process or sends nonsense costs that check's points, and the grader
-goes on to the next one. A check is a plain function of the student's module: it returns a
-short note of what it measured, or raises ``CheckFailed`` with a message for the student.
-An exception the student's code raised becomes the check's message too (the error, and the
-line of the student's file it came from), never a traceback. Every process the student's
-code started is ended before ``grade`` returns, and so before any result is written.
+goes on to the next one. A check of a secondary property (``ChapterCheck.requires``) scores
+only when the checks of the core behaviour it builds on passed. A check is a plain function
+of the student's module: it returns a short note of what it measured, or raises
+``CheckFailed`` with a message for the student. An exception the student's code raised
+becomes the check's message too (the error, and the line of the student's file it came
+from), never a traceback. Every process the student's code started is ended before ``grade``
+returns, and so before any result is written.
 """
 
 from __future__ import annotations
 
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from ptlab.errors import PtlabError
@@ -169,8 +171,10 @@ def grade(
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
+    earlier: dict[str, CheckResult] = {}
     with ProcessGuard() as guard:
         for check in chapter.checks:
+            unmet = [earlier[name] for name in check.requires if not earlier[name].passed]
             left = deadline - time.monotonic()
             if isinstance(taken, str):
                 result = CheckResult(check.name, 0, check.points, False, table_message(taken), 0.0)
@@ -183,12 +187,18 @@ def grade(
                     f"not run: grading reached its overall limit of {overall:.0f} s",
                     0.0,
                 )
+            elif unmet and not check.quick:  # (a render: its message is not worth the wait)
+                message = f"{not_graded_until(unmet)}; '{unmet[0].name}' says: {unmet[0].message}"
+                result = CheckResult(check.name, 0, check.points, False, table_message(message), 0.0)
             else:
                 result, hung = run_check(
                     check, taken, min(check.timeout * timeout_scale, left), guard, on_output, rules, user
                 )
                 if hung:  # every later check would wait as long again for nothing
                     taken = f"not run: {result.message}"
+                if unmet:
+                    result = gated(result, unmet)
+            earlier[check.name] = result
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
@@ -251,6 +261,21 @@ def run_check(
         table_message(message),
         time.perf_counter() - start,
     ), hung
+
+
+def not_graded_until(unmet: list[CheckResult]) -> str:
+    """Why a check scores nothing: the checks of the core behaviour it builds on failed."""
+    names = " and ".join(f"'{r.name}'" for r in unmet)
+    return f"not graded until {names} pass{'es' if len(unmet) == 1 else ''}"
+
+
+def gated(result: CheckResult, unmet: list[CheckResult]) -> CheckResult:
+    """``result`` of a check whose requirements ``unmet`` failed: no points, and a message
+    that says why and what the check found by itself (a property a trivial answer may
+    share, so it earns nothing alone)."""
+    verdict = "passes" if result.passed else "fails"
+    message = f"{not_graded_until(unmet)}; by itself it {verdict}: {result.message}"
+    return replace(result, points=0, passed=False, message=table_message(message))
 
 
 def table_message(text: str) -> str:

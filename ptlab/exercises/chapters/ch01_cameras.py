@@ -58,7 +58,30 @@ def check_centre_ray(module) -> str:
             f"the ray through the image's centre should go along forward "
             f"{np.round(camera.forward, 4)}, not {np.round(dirs[0], 4)}"
         )
-    return "the centre ray goes along forward"
+    _require_fan(module, camera)
+    return "the centre ray goes along forward, and the corners' rays fan out from it"
+
+
+def _require_fan(module, camera) -> None:
+    """The rays through the four corner pixels leave the centre ray, each its own way: a
+    constant forward direction (which has the centre ray right) fails here."""
+    from ptlab.camera import generate_rays
+
+    width, height = 5, 3
+    pixel_x, pixel_y, u = np.array([0, 4, 0, 4]), np.array([0, 0, 2, 2]), np.full((4, 2), 0.5)
+    _, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
+    _, expected = generate_rays(camera, width, height, pixel_x, pixel_y, u.astype(np.float32))
+    unit = dirs / np.maximum(np.linalg.norm(dirs, axis=1, keepdims=True), 1e-300)
+    off_forward = np.arccos(np.clip(unit @ camera.forward, -1, 1))
+    want = np.arccos(np.clip(expected @ camera.forward, -1, 1))
+    spread = np.arccos(np.clip(unit @ unit.T, -1, 1))[np.triu_indices(4, 1)]
+    # A tenth of the pinhole's angles: a wrong field of view passes, the same ray everywhere does not.
+    if not (np.all(off_forward >= want / 10) and np.all(spread >= want.min() / 10)):
+        raise CheckFailed(
+            "the rays through the four corner pixels should fan out from the centre ray, "
+            "each its own way; yours go (nearly) the same way as it or as each other "
+            "(a direction must depend on its pixel)"
+        )
 
 
 def check_unit_length(module) -> str:
@@ -149,9 +172,11 @@ CHAPTER = Chapter(
     answers=("ptlab.camera.generate_rays",),
     checks=(
         ChapterCheck("centre ray", 2, check_centre_ray, timeout=30),
-        ChapterCheck("unit directions", 1, check_unit_length, timeout=30),
+        # Any constant unit direction has length 1, and a constant one up and to the left
+        # has pixel (0, 0)'s signs: these score only once the rays fan out from the centre.
+        ChapterCheck("unit directions", 1, check_unit_length, timeout=30, requires=("centre ray",)),
         ChapterCheck("field of view", 2, check_field_of_view, timeout=30),
-        ChapterCheck("image orientation", 1, check_orientation, timeout=30),
+        ChapterCheck("image orientation", 1, check_orientation, timeout=30, requires=("centre ray",)),
         ChapterCheck("jittered rays", 2, check_known_rays, timeout=30),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),

@@ -4,8 +4,10 @@ Known answers come from the definition of the hit: ``o + t d = (1 - u - v) v0 + 
 (Möller and Trumbore 1997; GAMES101 lecture 13). Rays are aimed at chosen ``(t, u, v)``,
 just inside and just outside each edge, parallel to the triangle, at triangles behind the
 origin and at the back face; 2000 random rays and triangles are compared with a direct
-linear solve. Then the student's function runs inside the NumPy BVH, and a path-traced
-Cornell box (whose hit points are built from ``u, v``) must match the library's.
+linear solve. The hit checks judge ``t`` (whether and where a ray hits), the barycentrics
+check ``u, v`` of the same rays: an answer without barycentrics earns the hits. Then the
+student's function runs inside the NumPy BVH, and a path-traced Cornell box (whose hit
+points are built from ``u, v``) must match the library's.
 """
 
 from __future__ import annotations
@@ -79,27 +81,34 @@ def _edges(triangle, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return tuple(np.tile(a, (n, 1)) for a in (v0, v1 - v0, v2 - v0))
 
 
-def _expect_hits(module, triangle, uv, t, dirs, what: str) -> int:
-    """The student's hits at known (t, u, v); a failure names the first one off."""
+def _expect_hits(module, triangle, uv, t, dirs, what: str, barycentrics: bool = False) -> int:
+    """The student's hits at known (t, u, v): each must hit at ``t`` or, with
+    ``barycentrics``, have (u, v) = ``uv`` where it hits (a miss is the hit checks' to
+    report). A failure names the first one off."""
     t_want = np.broadcast_to(np.asarray(t, dtype=np.float64), len(uv))
     t_got, u_got, v_got = _call(module, *_aimed(triangle, uv, t_want, dirs))
     for i, (u_want, v_want) in enumerate(uv):
         got, want = (t_got[i], u_got[i], v_got[i]), (t_want[i], u_want, v_want)
-        if np.allclose(got, want, rtol=1e-5, atol=1e-6):
+        if barycentrics:
+            if not np.isfinite(t_got[i]) or np.allclose(got[1:], want[1:], rtol=1e-5, atol=1e-6):
+                continue
+            hint = ""
+            if np.allclose((u_got[i], v_got[i]), (v_want, u_want), rtol=1e-5, atol=1e-6):
+                hint = " (u and v swapped: u goes with e1 = v1 - v0)"
+            elif np.isclose(u_got[i] + v_got[i], 1 - u_want - v_want, atol=1e-6):
+                hint = " (u, v should weigh v1 and v2; 1 - u - v weighs v0)"
+            raise CheckFailed(
+                f"{what}: the ray at (t, u, v) = {_fmt(want)} hits at (u, v) = {_fmt(got[1:])}{hint}"
+            )
+        if np.isclose(t_got[i], t_want[i], rtol=1e-5, atol=1e-6):
             continue
         if not np.isfinite(t_got[i]):
             raise CheckFailed(
                 f"{what}: the ray at (t, u, v) = {_fmt(want)} should hit, yours "
                 f"misses (t = {t_got[i]}){_miss_hint(triangle, dirs, t_want[i])}"
             )
-        hint = ""
-        if np.allclose((u_got[i], v_got[i]), (v_want, u_want), rtol=1e-5, atol=1e-6):
-            hint = " (u and v swapped: u goes with e1 = v1 - v0)"
-        elif np.isclose(u_got[i] + v_got[i], 1 - u_want - v_want, atol=1e-6):
-            hint = " (u, v should weigh v1 and v2; 1 - u - v weighs v0)"
-        elif np.isclose(t_got[i], -t_want[i], rtol=1e-5):
-            hint = " (t has the wrong sign)"
-        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} gets (t, u, v) = {_fmt(got)}{hint}")
+        hint = " (t has the wrong sign)" if np.isclose(t_got[i], -t_want[i], rtol=1e-5) else ""
+        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} hits at t = {t_got[i]:.4g}{hint}")
     return len(uv)
 
 
@@ -118,23 +127,36 @@ def _fmt(values) -> str:
     return "(" + ", ".join(f"{x:.4g}" for x in values) + ")"
 
 
-def check_known_hits(module) -> str:
-    n = _expect_hits(
-        module,
+#: Rays aimed at known points of the triangles: (triangle, (u, v) of each ray, t, direction,
+#: what they are). Those hitting the front face from in front, those hitting it from behind
+#: (negative t), and those hitting the back face (det < 0).
+FRONT_HITS = (
+    (UNIT, ((0.25, 0.5), (0.1, 0.1), (0.6, 0.3)), 1.0, UNIT_FRONT, "the unit triangle, rays along -z"),
+    (SLANTED, ((0.2, 0.3), (0.7, 0.1), (0.05, 0.9)), (2.5, 0.5, 7.0), SLANTED_FRONT, "a slanted triangle"),
+)
+BEHIND_HITS = (
+    (UNIT, ((0.25, 0.5), (0.6, 0.2)), -1.0, UNIT_FRONT, "the unit triangle 1 unit behind the origin"),
+)
+BACK_HITS = (
+    (
         UNIT,
-        [(0.25, 0.5), (0.1, 0.1), (0.6, 0.3)],
+        ((0.25, 0.5), (0.6, 0.2)),
         1.0,
-        UNIT_FRONT,
-        "the unit triangle, rays along -z",
-    )
-    n += _expect_hits(
-        module,
+        tuple(np.negative(UNIT_FRONT)),
+        "the unit triangle from below (its back face: det < 0)",
+    ),
+    (
         SLANTED,
-        [(0.2, 0.3), (0.7, 0.1), (0.05, 0.9)],
-        [2.5, 0.5, 7.0],
-        SLANTED_FRONT,
-        "a slanted triangle",
-    )
+        ((0.2, 0.3),),
+        2.0,
+        tuple(np.negative(SLANTED_FRONT)),
+        "the slanted triangle from its back (det < 0)",
+    ),
+)
+
+
+def check_known_hits(module) -> str:
+    n = sum(_expect_hits(module, *case) for case in FRONT_HITS)
     t, _, _ = _call(module, *_aimed(UNIT, [(0.25, 0.5)], 0.5, (0, 0, -2)))
     if not np.isclose(t[0], 0.5, rtol=1e-5):
         raise CheckFailed(
@@ -142,7 +164,7 @@ def check_known_hits(module) -> str:
             f"is at t = 0.5, yours says t = {t[0]:.4g} (t is in units of |d|: "
             f"do not normalise d)"
         )
-    return f"{n + 1} rays hit at the expected t, u and v"
+    return f"{n + 1} rays hit at the expected t"
 
 
 def check_edges(module) -> str:
@@ -187,7 +209,8 @@ def check_parallel(module) -> str:
 
 
 def check_behind(module) -> str:
-    t, u, v = _call(module, *_aimed(UNIT, [(0.25, 0.5), (0.6, 0.2)], -1.0, UNIT_FRONT))
+    ((triangle, uv, t_want, dirs, _),) = BEHIND_HITS
+    t, _, _ = _call(module, *_aimed(triangle, uv, t_want, dirs))
     if not np.all(np.isfinite(t)):
         raise CheckFailed(
             "a triangle behind the ray's origin must still come back as a hit "
@@ -195,52 +218,31 @@ def check_behind(module) -> str:
             "tmin < t < tmax is the BVH's job: it needs tmin to skip the "
             "surface a ray starts on"
         )
-    if not np.allclose(t, -1.0, rtol=1e-5):
+    if not np.allclose(t, t_want, rtol=1e-5):
         raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours gives {_fmt(t)}")
-    want = np.array([[0.25, 0.5], [0.6, 0.2]])
-    got = np.stack([u, v], axis=1)
-    if not np.allclose(got, want, atol=1e-6):
-        hint = (
-            " (u and v swapped: u goes with e1 = v1 - v0)"
-            if np.allclose(got, want[:, ::-1], atol=1e-6)
-            else ""
-        )
-        raise CheckFailed(
-            f"behind the origin, (u, v) are still the hit points' barycentrics, "
-            f"{_fmt(want[0])} and {_fmt(want[1])} for the two rays; yours are "
-            f"{_fmt(got[0])} and {_fmt(got[1])}{hint}"
-        )
     return "triangles behind the origin come back with t = -1"
 
 
 def check_both_faces(module) -> str:
-    n = _expect_hits(
-        module,
-        UNIT,
-        [(0.25, 0.5), (0.6, 0.2)],
-        1.0,
-        np.negative(UNIT_FRONT),
-        "the unit triangle from below (its back face: det < 0)",
-    )
-    n += _expect_hits(
-        module,
-        SLANTED,
-        [(0.2, 0.3)],
-        2.0,
-        np.negative(SLANTED_FRONT),
-        "the slanted triangle from its back (det < 0)",
-    )
+    n = sum(_expect_hits(module, *case) for case in BACK_HITS)
     return f"{n} rays hit the back faces (no culling: det < 0 is a hit too)"
 
 
-def check_many(module) -> str:
+def _random_cases(n: int = 2000):
+    """``n`` random rays and triangles (o, d, v0, e1, e2), each ray's (t, u, v) from a direct
+    3 x 3 linear solve of o + t d = v0 + u e1 + v e2, and whether the ray hits (inside)."""
     rng = np.random.default_rng(1)
-    n = 2000
     o, d, v0, e1, e2 = (rng.normal(size=(n, 3)) for _ in range(5))
-    t, u, v = _call(module, o, d, v0, e1, e2)
-    # o + t d = v0 + u e1 + v e2, solved as a 3x3 linear system per ray.
     tuv = np.linalg.solve(np.stack([d, -e1, -e2], axis=-1), (v0 - o)[..., None])[..., 0]
     inside = (tuv[:, 1] >= 0) & (tuv[:, 2] >= 0) & (tuv[:, 1] + tuv[:, 2] <= 1)
+    return (o, d, v0, e1, e2), tuv, inside
+
+
+def check_many(module) -> str:
+    rays, tuv, inside = _random_cases()
+    o, d, v0, e1, e2 = rays
+    n = len(o)
+    t, _, _ = _call(module, *rays)
     clear = np.min(np.abs([tuv[:, 1], tuv[:, 2], 1 - tuv[:, 1] - tuv[:, 2]]), axis=0) > 1e-6
     wrong = clear & (np.isfinite(t) != inside)
     if wrong.any():
@@ -253,14 +255,29 @@ def check_many(module) -> str:
             f"where they should not, e.g. ray {i}, whose (t, u, v) is "
             f"{_fmt(tuv[i])}{hint}"
         )
-    for name, got, want in zip("tuv", (t, u, v), tuv.T, strict=True):
-        error = np.abs(got[inside] - want[inside]) / np.maximum(1, np.abs(want[inside]))
-        if error.max() > 1e-6:
-            raise CheckFailed(
-                f"{name} of random rays is off by up to {error.max():.2g}"
-                f"{_error_hint(name, error.max(), (t, u, v), tuv, inside)}"
+    error = np.abs(t[inside] - tuv[inside, 0]) / np.maximum(1, np.abs(tuv[inside, 0]))
+    if error.max() > 1e-6:
+        raise CheckFailed(
+            f"t of random rays is off by up to {error.max():.2g}{_error_hint('t', error.max())}"
+        )
+    return f"{n} random rays and triangles hit and miss, at the t of a direct linear solve"
+
+
+def check_barycentrics(module) -> str:
+    n = sum(_expect_hits(module, *case, barycentrics=True) for case in FRONT_HITS + BEHIND_HITS + BACK_HITS)
+    rays, tuv, inside = _random_cases()
+    t, u, v = _call(module, *rays)
+    hits = inside & np.isfinite(t)  # (a ray that should hit and misses is 'many rays'' to report)
+    for name, got, want in (("u", u, tuv[:, 1]), ("v", v, tuv[:, 2])):
+        error = np.abs(got[hits] - want[hits]).max(initial=0.0)
+        if error > 1e-6:
+            swapped = np.allclose(u[hits], tuv[hits, 2], atol=1e-6) and np.allclose(
+                v[hits], tuv[hits, 1], atol=1e-6
             )
-    return f"{n} random rays and triangles agree with a direct linear solve"
+            raise CheckFailed(
+                f"{name} of random hits is off by up to {error:.2g}{_error_hint(name, error, swapped)}"
+            )
+    return f"(u, v) of {n} aimed rays and {hits.sum()} random hits are their barycentrics"
 
 
 #: Errors up to this are small numerical slips (computing these rays in float32 is off by up
@@ -268,7 +285,7 @@ def check_many(module) -> str:
 SMALL_ERROR = 1e-4
 
 
-def _error_hint(name: str, error: float, got, tuv: np.ndarray, inside: np.ndarray) -> str:
+def _error_hint(name: str, error: float, swapped: bool = False) -> str:
     """Why the student's ``name`` (t, u or v) of random hits is off by ``error``."""
     if error <= SMALL_ERROR:
         return (
@@ -276,9 +293,7 @@ def _error_hint(name: str, error: float, got, tuv: np.ndarray, inside: np.ndarra
             "computation in lower precision? Keep the dtype you are given, float64 here, "
             "and divide by det itself)"
         )
-    t, u, v = (g[inside] for g in got)
-    t_want, u_want, v_want = tuv[inside].T
-    if np.allclose(u, v_want, atol=1e-6) and np.allclose(v, u_want, atol=1e-6):
+    if swapped:
         return (
             ": u and v are swapped (u weighs v1 and goes with e1 = v1 - v0, the lecture's b1 = s1 . s / det)"
         )
@@ -326,12 +341,16 @@ CHAPTER = Chapter(
     functions=("ray_triangle",),
     answers=("ptlab.accel.triangle.ray_triangle",),
     checks=(
+        # Hits and distances first (t), the barycentrics (u, v) apart: an answer without
+        # them still earns the hit checks. Every ray missing gets parallel rays right, and a
+        # constant t = -1 the rays behind: those score only once known hits pass.
         ChapterCheck("known hits", 2, check_known_hits, timeout=30),
-        ChapterCheck("outside each edge", 2, check_edges, timeout=30),
-        ChapterCheck("parallel rays", 1, check_parallel, timeout=30),
-        ChapterCheck("behind the origin", 1, check_behind, timeout=30),
-        ChapterCheck("both faces", 1, check_both_faces, timeout=30),
+        ChapterCheck("outside each edge", 1, check_edges, timeout=30),
+        ChapterCheck("parallel rays", 1, check_parallel, timeout=30, requires=("known hits",)),
+        ChapterCheck("behind the origin", 1, check_behind, timeout=30, requires=("known hits",)),
+        ChapterCheck("both faces", 1, check_both_faces, timeout=30, requires=("known hits",)),
         ChapterCheck("many rays", 1, check_many, timeout=30),
+        ChapterCheck("barycentrics", 1, check_barycentrics, timeout=30, requires=("known hits",)),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),
 )

@@ -414,7 +414,11 @@ CHAPTER = Chapter(
         ChapterCheck("reflect", 2, check_reflect, timeout=20),
         ChapterCheck("refract", 2, check_refract, timeout=20),
         ChapterCheck("fresnel", 2, check_fresnel, timeout=20),
-        ChapterCheck("total internal reflection", 1, check_total_internal_reflection, timeout=20),
+        # F = 1 for every angle is right beyond the critical angle, and a constant refract
+        # never NaN: this scores only once the Fresnel equations themselves are right.
+        ChapterCheck(
+            "total internal reflection", 1, check_total_internal_reflection, timeout=20, requires=("fresnel",)
+        ),
         ChapterCheck("render", 3, check_render, timeout=60),
     ),
 )

@@ -573,9 +573,14 @@ CHAPTER = Chapter(
         ChapterCheck("empty sides", 1, check_empty_sides, timeout=30),
         ChapterCheck("best split", 1, check_best_split, timeout=30),
         ChapterCheck("near child first", 1, check_child_order, timeout=30),
-        ChapterCheck("closest hits", 2, check_closest_hits, timeout=60),
+        # Any build the wrappers accept (any split that divides a node, the SAH's or not)
+        # makes a valid tree, and any child order visits both children: the BVH then finds
+        # the right hits with no work of the student's. What these two add of theirs is the
+        # traversal piece inside the real BVH, so they score with its own check (a median
+        # split with a right child_order earns them; the SAH's points it does not).
+        ChapterCheck("closest hits", 2, check_closest_hits, timeout=60, requires=("near child first",)),
         ChapterCheck("tree quality", 1, check_tree_quality, timeout=60),
         ChapterCheck("traversal order", 1, check_traversal_order, timeout=60),
-        ChapterCheck("render", 1, check_render, timeout=60),
+        ChapterCheck("render", 1, check_render, timeout=60, requires=("near child first",)),
     ),
 )
