@@ -102,7 +102,7 @@ def columns(chapter: Chapter) -> list[str]:
     return (
         ["student", "file", "score", "max_score"]
         + [c.name for c in chapter.checks]
-        + ["first_failure", "seconds"]
+        + ["first_failure", "seconds", "grading_seed"]
     )
 
 
@@ -195,10 +195,12 @@ def grade_all(
     timeout_scale: float = 1.0,
     progress: bool = False,
     user: str | None = None,
+    seed: int | None = None,
 ) -> dict[str, dict]:
     """Grade every submission in ``folder`` the grader's record does not vouch for (see the
     module docstring); all rows by student. ``user``: whom the students' code runs as
-    (``--student-user``)."""
+    (``--student-user``); ``seed``: the grading seed of every student (None: a fresh one
+    each, in the row's ``grading_seed``)."""
     student_user(user)  # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
     import_nothing_from_here()
@@ -218,7 +220,7 @@ def grade_all(
             file=sys.stderr,
         )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
-    runner = _Runner(chapter, timeout_scale, limit, user)
+    runner = _Runner(chapter, timeout_scale, limit, user, seed)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
         runner.guard = guard
         futures = {pool.submit(runner.grade, w): w for w in todo}
@@ -235,9 +237,16 @@ def grade_all(
 class _Runner:
     """Grades one student at a time per thread, each in a grader process of its own."""
 
-    def __init__(self, chapter: Chapter, timeout_scale: float, limit: float, user: str | None = None):
+    def __init__(
+        self,
+        chapter: Chapter,
+        timeout_scale: float,
+        limit: float,
+        user: str | None = None,
+        seed: int | None = None,
+    ):
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
-        self.user = user
+        self.user, self.seed = user, seed
         self.guard: ProcessGuard | None = None
         self._lock = threading.Lock()
         self._running: set[int] = set()
@@ -260,7 +269,7 @@ class _Runner:
             row["first_failure"] = problem
             return row
         results = {c["name"]: c for c in report["checks"]}
-        row["score"] = report["score"]
+        row["score"], row["grading_seed"] = report["score"], report["grading_seed"]
         for check in self.chapter.checks:
             row[check.name] = results[check.name]["points"]
         failed = [c for c in report["checks"] if not c["passed"]]
@@ -280,6 +289,8 @@ class _Runner:
         ]
         if self.user is not None:
             command += ["--student-user", self.user]
+        if self.seed is not None:
+            command += ["--grading-seed", str(self.seed)]
         if work.own_folder:
             command.append("--own-folder")
         with self._lock:
@@ -312,6 +323,7 @@ def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:
         valid = (
             names == [c.name for c in chapter.checks]
             and type(report["score"]) is int
+            and type(report["grading_seed"]) is int
             and all(
                 type(c["points"]) is int and type(c["passed"]) is bool and type(c["message"]) is str
                 for c in report["checks"]
@@ -340,6 +352,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("file")
     parser.add_argument("--timeout-scale", type=float, default=1.0)
     parser.add_argument("--student-user")
+    parser.add_argument("--grading-seed", type=int)
     parser.add_argument(
         "--own-folder", action="store_true", help="the Python files beside FILE are the student's too"
     )
@@ -350,6 +363,7 @@ def main(argv: list[str] | None = None) -> int:
         timeout_scale=args.timeout_scale,
         user=args.student_user,
         with_folder=args.own_folder,
+        seed=args.grading_seed,
     )
     print(json.dumps(result.as_dict()))
     return 0

@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.exercises.chapter import CheckFailed
+from ptlab.exercises.chapter import CheckFailed, grading_seed, new_grading_seed
 from ptlab.untrusted import (
     ImportFailed,
     ProcessGuard,
@@ -74,6 +74,8 @@ class Grade:
     Attributes:
         sha256: the file's content as graded (hex), so that a record of the grade can tell
             whether the file changed since.
+        grading_seed: the seed every check drew its inputs from (fresh for each grading:
+            ``--grading-seed`` grades again with the same inputs, for the same verdict).
     """
 
     chapter: int
@@ -81,6 +83,7 @@ class Grade:
     file: str
     results: list[CheckResult]
     sha256: str = ""
+    grading_seed: int = 0
 
     @property
     def score(self) -> int:
@@ -104,6 +107,7 @@ class Grade:
             max_score=self.max_score,
             full_marks=self.full_marks,
             sha256=self.sha256,
+            grading_seed=self.grading_seed,
             checks=[asdict(r) for r in self.results],
         )
 
@@ -119,6 +123,9 @@ class Grade:
             f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
             f"{'full marks' if self.full_marks else ''}"
         )
+        lines.append(
+            f"  grading seed {self.grading_seed} (--grading-seed {self.grading_seed} grades again alike)"
+        )
         return "\n".join(lines)
 
 
@@ -131,6 +138,7 @@ def grade(
     user: str | None = None,
     with_folder: bool = True,
     library_answer: bool = False,
+    seed: int | None = None,
 ) -> Grade:
     """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
 
@@ -144,6 +152,10 @@ def grade(
             their own), and are copied with it; else ``path`` alone.
         library_answer: ``path`` is the chapter's own answer file, graded as itself (the
             tests and the graders' measurements; never a student's file).
+        seed: the grading seed, which every check draws its inputs and render seeds from
+            (``ptlab.exercises.chapter.grading_rng``); None: a fresh one, so that no answer
+            computed beforehand for known inputs can be replayed. A recorded seed gives the
+            same inputs again.
 
     Raises:
         PtlabError: no such file, or no such ``user`` (or one that cannot run ptlab).
@@ -163,10 +175,11 @@ def grade(
         sha256 = taken.sha256
     except RefusedSubmission as refused:  # (its bytes are not read: it may be a link)
         taken, sha256 = str(refused), ""
+    seed = new_grading_seed() if seed is None else seed
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
-    with ProcessGuard() as guard:
+    with ProcessGuard() as guard, grading_seed(seed):
         for check in chapter.checks:
             left = deadline - time.monotonic()
             if isinstance(taken, str):
@@ -189,7 +202,7 @@ def grade(
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
-    return Grade(chapter.number, chapter.title, str(path), results, sha256)
+    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed)
 
 
 def _import_what_checks_use(rules) -> None:
