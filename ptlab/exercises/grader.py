@@ -124,7 +124,8 @@ class Grade:
             f"{'full marks' if self.full_marks else ''}"
         )
         lines.append(
-            f"  grading seed {self.grading_seed} (--grading-seed {self.grading_seed} grades again alike)"
+            f"  grading seed {self.grading_seed} (--grading-seed {self.grading_seed} grades again "
+            f"with the same inputs)"
         )
         return "\n".join(lines)
 

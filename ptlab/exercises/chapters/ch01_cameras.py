@@ -33,7 +33,7 @@ def _camera():
 def _size(stream: int, even: bool) -> tuple[int, int]:
     """(width, height) of the grading run's image for one check: even or odd both."""
     rng = grading_rng(stream)
-    return tuple(int(2 * rng.integers(2, 30) + (0 if even else 1)) for _ in range(2))
+    return tuple(int(2 * rng.integers(2, 21) + (0 if even else 1)) for _ in range(2))
 
 
 def _rays(module, camera, width, height, pixel_x, pixel_y, u):
