@@ -54,6 +54,11 @@ def grading_seed(seed: int) -> Iterator[int]:
         _GRADING_SEED.reset(token)
 
 
+def active_grading_seed() -> int | None:
+    """The seed of the grading under way (``grading_seed``), or None outside one."""
+    return _GRADING_SEED.get()
+
+
 def _current_grading_seed() -> int:
     seed = _GRADING_SEED.get()
     if seed is None:  # a check's inputs would be fixed, and so replayable

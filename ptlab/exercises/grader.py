@@ -26,7 +26,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.exercises.chapter import CheckFailed, grading_seed, new_grading_seed
+from ptlab.exercises.chapter import CheckFailed, active_grading_seed, grading_seed, new_grading_seed
 from ptlab.untrusted import (
     ImportFailed,
     ProcessGuard,
@@ -119,13 +119,11 @@ class Grade:
         for r in self.results:
             verdict = "pass" if r.passed else "FAIL"
             lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {r.message}")
+        # (on the total's line: the table keeps a line per check, and two more)
         lines.append(
             f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
-            f"{'full marks' if self.full_marks else ''}"
-        )
-        lines.append(
-            f"  grading seed {self.grading_seed} (--grading-seed {self.grading_seed} grades again "
-            f"with the same inputs)"
+            f"{'full marks  ' if self.full_marks else ''}grading seed {self.grading_seed} "
+            f"(--grading-seed {self.grading_seed} grades again with the same inputs)"
         )
         return "\n".join(lines)
 
@@ -230,13 +228,19 @@ def run_check(
     user: str | None = None,
 ) -> tuple[CheckResult, bool]:
     """Run one check on a fresh process of the student's submission, stopped after
-    ``timeout`` s. Returns the result, and whether importing the file took too long."""
+    ``timeout`` s. Returns the result, and whether importing the file took too long. The
+    check draws its inputs from the grading seed under way (``grade``'s), or from a fresh
+    one of its own if none is."""
     start = time.perf_counter()
     passed, hung = False, False
+    seed = active_grading_seed()
     try:
-        with Submission(
-            submission, guard, time_limit=timeout, on_output=on_output, rules=rules, user=user
-        ) as running:
+        with (
+            grading_seed(new_grading_seed() if seed is None else seed),
+            Submission(
+                submission, guard, time_limit=timeout, on_output=on_output, rules=rules, user=user
+            ) as running,
+        ):
             message, passed = str(check.run(running.module)), True
     except CheckFailed as failure:
         message = str(failure)
