@@ -2,9 +2,13 @@
 
     python scripts/false_alarm_rate.py                 # 200 seeds, 10^6 samples per wo
     python scripts/false_alarm_rate.py --seeds 50 --samples 200000 --every-material
+    python scripts/false_alarm_rate.py --seeds 5 --first-seed 1    # grading seeds 1..5
 
-Seed k grades the (k mod M)-th of M correct materials (or, with ``--every-material``, all of
-them), with the harness's defaults otherwise. Four of them compute in float32, as a
+Trial k draws a fresh grading seed (from the operating system, as the exercise grader does;
+or ``--first-seed`` K + k) and grades the (k mod M)-th of M correct materials (or, with
+``--every-material``, all of them) with the harness's seed that the material-harness checks
+of chapters 6 and 9 derive from it (``ptlab.exercises.chapter.grading_seed_for``), the
+harness's defaults otherwise. Four of them compute in float32, as a
 student's material may (the renderer passes float32 arrays): the library's on float32
 copies of the arguments, and a Lambertian whose pi is ``np.float32(math.pi)``; they have only
 the homework's three functions, as the graders accept. It prints each failure with the
@@ -25,6 +29,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np  # noqa: E402
 from scipy.stats import beta  # noqa: E402
 
+from ptlab.exercises.chapter import grading_seed, grading_seed_for, new_grading_seed  # noqa: E402
 from ptlab.grading import check_material  # noqa: E402
 from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror  # noqa: E402
 
@@ -91,7 +96,8 @@ MATERIALS = [
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--seeds", type=int, default=200)
+    parser.add_argument("--seeds", type=int, default=200, help="trials, one grading seed each")
+    parser.add_argument("--first-seed", type=int, help="grading seeds K, K+1, ... (default: fresh ones)")
     parser.add_argument("--samples", type=int, default=1_000_000)
     parser.add_argument(
         "--every-material", action="store_true", help="grade every material on every seed (M times longer)"
@@ -99,22 +105,29 @@ def main() -> None:
     args = parser.parse_args()
     runs = failures = 0
     start = time.perf_counter()
-    for seed in range(args.seeds):
-        chosen = MATERIALS if args.every_material else [MATERIALS[seed % len(MATERIALS)]]
+    for trial in range(args.seeds):
+        chosen = MATERIALS if args.every_material else [MATERIALS[trial % len(MATERIALS)]]
+        graded = new_grading_seed() if args.first_seed is None else args.first_seed + trial
+        with grading_seed(graded):
+            seed = grading_seed_for(6)  # (chapter 6's harness check: stream 6)
         for material in chosen:
             report = check_material(material, seed=seed, samples=args.samples)
             runs += 1
             if not report.passed:
                 failures += 1
-                print(f"seed {seed}: {report.material} failed {', '.join(report.failed)}", flush=True)
+                print(
+                    f"grading seed {graded} (harness seed {seed}): {report.material} failed "
+                    f"{', '.join(report.failed)}",
+                    flush=True,
+                )
                 for check in report.checks:
                     if not check.passed:
                         print(
                             f"    {check.name}: {check.statistic} (threshold {check.threshold})", flush=True
                         )
-        if (seed + 1) % 20 == 0:
+        if (trial + 1) % 20 == 0:
             print(
-                f"... {seed + 1} seeds, {runs} runs, {failures} failures, "
+                f"... {trial + 1} seeds, {runs} runs, {failures} failures, "
                 f"{time.perf_counter() - start:.0f} s",
                 flush=True,
             )

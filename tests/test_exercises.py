@@ -32,6 +32,10 @@ WRONG = Path(__file__).parent / "exercises"
 #: The wrong answers that are right answers with the mistake patched in, by name.
 PATCHED = tomllib.loads((WRONG / "wrong_answers.toml").read_text(encoding="utf-8"))
 CHAPTERS = all_chapters()
+#: The grading seed of the tests whose verdicts rest on statistics (each grading otherwise
+#: draws a fresh one): deterministic, and a false alarm at the checks' stated rates would
+#: show on every run, not now and then.
+GRADING_SEED = 25
 
 
 def _ids(chapters):
@@ -42,7 +46,7 @@ def _ids(chapters):
 @pytest.mark.subprocess
 @pytest.mark.parametrize("found", CHAPTERS, ids=_ids(CHAPTERS))
 def test_the_library_answer_gets_full_marks(found, tmp_path):
-    result = grade(found, found.solution, library_answer=True)
+    result = grade(found, found.solution, library_answer=True, seed=GRADING_SEED)
     assert result.full_marks, result.table()
 
 
@@ -131,7 +135,7 @@ def test_typical_wrong_answers_fail_exactly_the_checks_meant_to_catch_them(name,
     expected = _expected(name)
     path = tmp_path / f"{name}.py"
     path.write_text(_wrong_answer_text(name), encoding="utf-8")
-    result = grade(chapter(name[:2]), path)
+    result = grade(chapter(name[:2]), path, seed=GRADING_SEED)
     failed = {r.name for r in result.results if not r.passed}
     assert failed == set(expected["failures"]), result.table()
     messages = {r.name: r.message for r in result.results}
@@ -154,7 +158,7 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     from ptlab.grading import check_material
     from ptlab.untrusted.child import import_file
 
-    result = grade(chapter(path.name[:2]), path)
+    result = grade(chapter(path.name[:2]), path, seed=GRADING_SEED)
     assert result.full_marks, result.table()
     module = import_file(path)
     materials = [getattr(module, name)() for name in ("Lambertian", "GGXMetal") if hasattr(module, name)]

@@ -181,7 +181,7 @@ def columns(chapter: Chapter) -> list[str]:
     return (
         ["student", "file", "score", "max_score"]
         + [c.name for c in chapter.checks]
-        + ["first_failure", "seconds"]
+        + ["first_failure", "seconds", "grading_seed"]
     )
 
 
@@ -288,10 +288,12 @@ def grade_all(
     timeout_scale: float = 1.0,
     progress: bool = False,
     user: str | None = None,
+    seed: int | None = None,
 ) -> dict[str, dict]:
     """Grade every submission in ``folder`` the grader's record does not vouch for (see the
     module docstring); all rows by student. ``user``: whom the students' code runs as
-    (``--student-user``)."""
+    (``--student-user``); ``seed``: the grading seed of every student (None: a fresh one
+    each, in the row's ``grading_seed``)."""
     student_user(user)  # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
     import_nothing_from_here()
@@ -311,7 +313,7 @@ def grade_all(
             file=sys.stderr,
         )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
-    runner = _Runner(chapter, timeout_scale, limit, user, workers)
+    runner = _Runner(chapter, timeout_scale, limit, user, workers, seed)
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
         runner.guard = guard
         futures = {pool.submit(runner.grade, w): w for w in todo}
@@ -336,10 +338,16 @@ class _Runner:
     """
 
     def __init__(
-        self, chapter: Chapter, timeout_scale: float, limit: float, user: str | None = None, workers: int = 1
+        self,
+        chapter: Chapter,
+        timeout_scale: float,
+        limit: float,
+        user: str | None = None,
+        workers: int = 1,
+        seed: int | None = None,
     ):
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
-        self.user = user
+        self.user, self.seed = user, seed
         self.slots: queue.SimpleQueue[int] | None = None
         base = student_user(user)
         if base is not None and workers > 1:
@@ -374,7 +382,7 @@ class _Runner:
             row["first_failure"] = problem
             return row
         results = {c["name"]: c for c in report["checks"]}
-        row["score"] = report["score"]
+        row["score"], row["grading_seed"] = report["score"], report["grading_seed"]
         for check in self.chapter.checks:
             row[check.name] = results[check.name]["points"]
         failed = [c for c in report["checks"] if not c["passed"]]
@@ -396,6 +404,8 @@ class _Runner:
             command += ["--student-user", self.user]
         if slot is not None:
             command += ["--slot", str(slot)]
+        if self.seed is not None:
+            command += ["--grading-seed", str(self.seed)]
         if work.own_folder:
             command.append("--own-folder")
         with self._lock:
@@ -428,6 +438,7 @@ def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:
         valid = (
             names == [c.name for c in chapter.checks]
             and type(report["score"]) is int
+            and type(report["grading_seed"]) is int
             and all(
                 type(c["points"]) is int and type(c["passed"]) is bool and type(c["message"]) is str
                 for c in report["checks"]
@@ -457,6 +468,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--timeout-scale", type=float, default=1.0)
     parser.add_argument("--student-user")
     parser.add_argument("--slot", type=int, default=0, help="the uid of the pool's slot (see _Runner)")
+    parser.add_argument("--grading-seed", type=int)
     parser.add_argument(
         "--own-folder", action="store_true", help="the Python files beside FILE are the student's too"
     )
@@ -468,6 +480,7 @@ def main(argv: list[str] | None = None) -> int:
         timeout_scale=args.timeout_scale,
         user=args.student_user if user is None else pool_user(user, args.slot),
         with_folder=args.own_folder,
+        seed=args.grading_seed,
     )
     print(json.dumps(result.as_dict()))
     return 0

@@ -13,8 +13,11 @@ this module only describes them.
 from __future__ import annotations
 
 import ast
+import secrets
 import shlex
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
@@ -29,6 +32,54 @@ HERE = Path(__file__).parent
 #: Seconds of time limit up to which a check is quick (``ChapterCheck.quick``): the unit
 #: checks; the renders take longer.
 QUICK_CHECK = 30.0
+
+
+#: The seed of the grading run under way (``grading_seed``), None outside one.
+_GRADING_SEED: ContextVar[int | None] = ContextVar("grading_seed", default=None)
+
+
+def new_grading_seed() -> int:
+    """A fresh grading seed, from the operating system's randomness: nobody can know it
+    before the grading starts, so no answer computed beforehand matches its inputs."""
+    return secrets.randbits(63)
+
+
+@contextmanager
+def grading_seed(seed: int) -> Iterator[int]:
+    """A ``with`` block in which the checks draw their inputs from ``seed``
+    (``grading_rng``, ``grading_seed_for``)."""
+    if not (isinstance(seed, int) and 0 <= seed < 2**63):
+        raise ValueError(f"grading seed {seed!r}: must be an integer in [0, 2**63)")
+    token = _GRADING_SEED.set(seed)
+    try:
+        yield seed
+    finally:
+        _GRADING_SEED.reset(token)
+
+
+def active_grading_seed() -> int | None:
+    """The seed of the grading under way (``grading_seed``), or None outside one."""
+    return _GRADING_SEED.get()
+
+
+def _current_grading_seed() -> int:
+    seed = _GRADING_SEED.get()
+    if seed is None:  # a check's inputs would be fixed, and so replayable
+        raise RuntimeError("a check's inputs come from a grading seed: run it inside grading_seed(seed)")
+    return seed
+
+
+def grading_rng(stream: int) -> np.random.Generator:
+    """The generator of a check's random inputs: stream ``stream`` (a number of its own per
+    use within a chapter) of the grading run's seed. The grader computes the references
+    from the same inputs, so a fresh seed makes every input, and every answer, new."""
+    return np.random.default_rng([_current_grading_seed(), stream, 0])
+
+
+def grading_seed_for(stream: int) -> int:
+    """A render's seed (0 .. 2^32 - 1): stream ``stream`` of the grading run's seed."""
+    sequence = np.random.SeedSequence([_current_grading_seed(), stream, 1])  # (not rng's)
+    return int(sequence.generate_state(1)[0])
 
 
 class CheckFailed(Exception):  # noqa: N818 (a verdict, not an error of the grader)

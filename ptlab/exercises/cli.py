@@ -37,6 +37,14 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         metavar="X",
         help="multiply every check's time limit by X (slow machines)",
     )
+    graded.add_argument(
+        "--grading-seed",
+        type=_seed,
+        metavar="N",
+        help="the seed the checks draw their inputs from (default: a fresh one each time, "
+        "recorded in the table, the JSON and the CSV; give a recorded one to reproduce "
+        "that verdict exactly)",
+    )
     add_student_user_argument(graded)
 
     start = actions.add_parser(
@@ -161,6 +169,17 @@ def _timeout_scale(args) -> float:
     return args.timeout_scale
 
 
+def _seed(text: str) -> int:
+    """``--grading-seed``'s value: an integer in [0, 2^63)."""
+    try:
+        seed = int(text)
+    except ValueError:
+        seed = -1
+    if not 0 <= seed < 2**63:
+        raise argparse.ArgumentTypeError(f"{text!r}: must be an integer from 0 to 2^63 - 1")
+    return seed
+
+
 def _check(args) -> int:
     from ptlab.exercises import chapter
     from ptlab.exercises.grader import grade
@@ -183,6 +202,7 @@ def _check(args) -> int:
         echo=echo,
         on_output=relay("    | "),
         user=args.student_user,
+        seed=args.grading_seed,
     )
     # grade() has ended every process of the student's code: nothing can change what follows.
     print_verdict(result.table())  # (a reader gone away changes nothing below, nor the exit code)
@@ -268,6 +288,7 @@ def _grade_all(args) -> int:
         timeout_scale=scale,
         progress=sys.stderr.isatty(),
         user=args.student_user,
+        seed=args.grading_seed,
     )
     full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
     print(f"{len(rows)} students in {csv_path}: {full} with full marks")

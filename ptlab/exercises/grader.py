@@ -27,7 +27,7 @@ from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from ptlab.errors import PtlabError
-from ptlab.exercises.chapter import CheckFailed
+from ptlab.exercises.chapter import CheckFailed, active_grading_seed, grading_seed, new_grading_seed
 from ptlab.untrusted import (
     ImportFailed,
     ProcessGuard,
@@ -77,6 +77,8 @@ class Grade:
     Attributes:
         sha256: the file's content as graded (hex), so that a record of the grade can tell
             whether the file changed since.
+        grading_seed: the seed every check drew its inputs from (fresh for each grading:
+            ``--grading-seed`` grades again with the same inputs, for the same verdict).
     """
 
     chapter: int
@@ -84,6 +86,7 @@ class Grade:
     file: str
     results: list[CheckResult]
     sha256: str = ""
+    grading_seed: int = 0
 
     @property
     def score(self) -> int:
@@ -107,6 +110,7 @@ class Grade:
             max_score=self.max_score,
             full_marks=self.full_marks,
             sha256=self.sha256,
+            grading_seed=self.grading_seed,
             checks=[asdict(r) for r in self.results],
         )
 
@@ -119,9 +123,11 @@ class Grade:
             verdict = "pass" if r.passed else "FAIL"
             message = table_message(r.message)
             lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {message}")
+        # (on the total's line: the table keeps a line per check, and two more)
         lines.append(
             f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
-            f"{'full marks' if self.full_marks else ''}"
+            f"{'full marks  ' if self.full_marks else ''}grading seed {self.grading_seed} "
+            f"(--grading-seed {self.grading_seed} grades again with the same inputs)"
         )
         return "\n".join(lines)
 
@@ -135,6 +141,7 @@ def grade(
     user: str | StudentUser | None = None,
     with_folder: bool = True,
     library_answer: bool = False,
+    seed: int | None = None,
 ) -> Grade:
     """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
 
@@ -149,6 +156,10 @@ def grade(
             their own), and are copied with it; else ``path`` alone.
         library_answer: ``path`` is the chapter's own answer file, graded as itself (the
             tests and the graders' measurements; never a student's file).
+        seed: the grading seed, which every check draws its inputs and render seeds from
+            (``ptlab.exercises.chapter.grading_rng``); None: a fresh one, so that no answer
+            computed beforehand for known inputs can be replayed. A recorded seed gives the
+            same inputs again.
 
     Raises:
         PtlabError: no such file, or no such ``user`` (or one that cannot run ptlab).
@@ -168,11 +179,12 @@ def grade(
         sha256 = taken.sha256
     except RefusedSubmission as refused:  # (its bytes are not read: it may be a link)
         taken, sha256 = str(refused), ""
+    seed = new_grading_seed() if seed is None else seed
     overall = overall_limit(chapter, timeout_scale)
     deadline = time.monotonic() + overall
     results = []
     earlier: dict[str, CheckResult] = {}
-    with ProcessGuard() as guard:
+    with ProcessGuard() as guard, grading_seed(seed):
         for check in chapter.checks:
             unmet = [earlier[name] for name in check.requires if not earlier[name].passed]
             left = deadline - time.monotonic()
@@ -202,7 +214,7 @@ def grade(
             if echo is not None:
                 echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
             results.append(result)
-    return Grade(chapter.number, chapter.title, str(path), results, sha256)
+    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed)
 
 
 def _import_what_checks_use(rules) -> None:
@@ -229,13 +241,19 @@ def run_check(
     user: str | StudentUser | None = None,
 ) -> tuple[CheckResult, bool]:
     """Run one check on a fresh process of the student's submission, stopped after
-    ``timeout`` s. Returns the result, and whether importing the file took too long."""
+    ``timeout`` s. Returns the result, and whether importing the file took too long. The
+    check draws its inputs from the grading seed under way (``grade``'s), or from a fresh
+    one of its own if none is."""
     start = time.perf_counter()
     passed, hung = False, False
+    seed = active_grading_seed()
     try:
-        with Submission(
-            submission, guard, time_limit=timeout, on_output=on_output, rules=rules, user=user
-        ) as running:
+        with (
+            grading_seed(new_grading_seed() if seed is None else seed),
+            Submission(
+                submission, guard, time_limit=timeout, on_output=on_output, rules=rules, user=user
+            ) as running,
+        ):
             message, passed = str(check.run(running.module)), True
     except CheckFailed as failure:
         message = str(failure)

@@ -2,7 +2,9 @@
 
 Known answers come from the pinhole model itself (the centre ray is ``forward``, the edge of
 the image is fov_y / 2 off it, pixel (0, 0) is top left), then the student's rays render the
-Cornell box's normals, which must match the library's picture.
+Cornell box's normals, which must match the library's picture. The camera, the image sizes
+and the pixels come from the grading seed (``ptlab.exercises.chapter.grading_rng``): new
+for every grading, so no rays computed beforehand match.
 """
 
 from __future__ import annotations
@@ -12,14 +14,26 @@ import math
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
 from ptlab.exercises.finite import require_finite
 
 
 def _camera():
+    """The grading run's camera: somewhere, looking somewhere, leaning a little, 30 to 80
+    degrees of vertical field of view."""
     from ptlab.camera import Camera
 
-    return Camera.look_at((1.0, 2.0, 3.0), (1.5, 1.8, -2.0), up=(0.1, 1.0, 0.0), fov_y=50.0)
+    rng = grading_rng(0)
+    position = rng.uniform(-3, 3, 3)
+    target = position + rng.normal(size=3)
+    up = np.array([0.0, 1.0, 0.0]) + rng.uniform(-0.3, 0.3, 3)
+    return Camera.look_at(tuple(position), tuple(target), up=tuple(up), fov_y=float(rng.uniform(30, 80)))
+
+
+def _size(stream: int, even: bool) -> tuple[int, int]:
+    """(width, height) of the grading run's image for one check: even or odd both."""
+    rng = grading_rng(stream)
+    return tuple(int(2 * rng.integers(2, 21) + (0 if even else 1)) for _ in range(2))
 
 
 def _rays(module, camera, width, height, pixel_x, pixel_y, u):
@@ -50,7 +64,8 @@ def _rays(module, camera, width, height, pixel_x, pixel_y, u):
 
 def check_centre_ray(module) -> str:
     camera = _camera()
-    origins, dirs = _rays(module, camera, 5, 3, [2], [1], [[0.5, 0.5]])
+    width, height = _size(2, even=False)
+    origins, dirs = _rays(module, camera, width, height, [width // 2], [height // 2], [[0.5, 0.5]])
     if not np.allclose(origins[0], camera.position, atol=1e-5):
         raise CheckFailed(f"the ray should start at the eye {camera.position}, not {origins[0]}")
     if not np.allclose(dirs[0], camera.forward, atol=1e-5):
@@ -85,9 +100,16 @@ def _require_fan(module, camera) -> None:
 
 
 def check_unit_length(module) -> str:
-    rng = np.random.default_rng(1)
+    rng = grading_rng(1)
+    width, height = _size(3, even=True)
     _, dirs = _rays(
-        module, _camera(), 64, 48, rng.integers(0, 64, 500), rng.integers(0, 48, 500), rng.random((500, 2))
+        module,
+        _camera(),
+        width,
+        height,
+        rng.integers(0, width, 500),
+        rng.integers(0, height, 500),
+        rng.random((500, 2)),
     )
     length = np.linalg.norm(dirs, axis=1)
     worst = np.argmax(np.abs(length - 1))
@@ -100,9 +122,10 @@ def check_unit_length(module) -> str:
 
 def check_field_of_view(module) -> str:
     camera = _camera()
-    width, height = 40, 20
+    width, height = _size(4, even=True)
     # The middle of the top edge and the middle of the left edge.
-    _, dirs = _rays(module, camera, width, height, [20, 0], [0, 10], [[0.0, 0.0], [0.0, 0.0]])
+    middle = [width // 2, 0], [0, height // 2]
+    _, dirs = _rays(module, camera, width, height, *middle, [[0.0, 0.0], [0.0, 0.0]])
     half_fov = math.radians(camera.fov_y) / 2
     top_angle = math.acos(np.clip(dirs[0] @ camera.forward, -1, 1))
     if not abs(top_angle - half_fov) <= 1e-4:
@@ -123,7 +146,8 @@ def check_field_of_view(module) -> str:
 
 def check_orientation(module) -> str:
     camera = _camera()
-    _, dirs = _rays(module, camera, 10, 10, [0], [0], [[0.0, 0.0]])
+    width, height = _size(5, even=True)
+    _, dirs = _rays(module, camera, width, height, [0], [0], [[0.0, 0.0]])
     if not dirs[0] @ camera.up > 0:
         raise CheckFailed("pixel (0, 0) should be at the top of the image (rows go down, y up)")
     if not dirs[0] @ camera.right < 0:
@@ -135,10 +159,12 @@ def check_known_rays(module) -> str:
     from ptlab.camera import generate_rays
 
     camera = _camera()
-    rng = np.random.default_rng(7)
-    pixel_x, pixel_y, u = rng.integers(0, 32, 200), rng.integers(0, 24, 200), rng.random((200, 2))
-    _, expected = generate_rays(camera, 32, 24, pixel_x, pixel_y, u.astype(np.float32))
-    _, dirs = _rays(module, camera, 32, 24, pixel_x, pixel_y, u)
+    rng = grading_rng(7)
+    width, height = _size(6, even=True)
+    pixel_x, pixel_y = rng.integers(0, width, 200), rng.integers(0, height, 200)
+    u = rng.random((200, 2))
+    _, expected = generate_rays(camera, width, height, pixel_x, pixel_y, u.astype(np.float32))
+    _, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
     worst = np.abs(dirs - expected).max()
     if not worst <= 1e-4:
         raise CheckFailed(

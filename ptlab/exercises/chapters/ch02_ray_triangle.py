@@ -8,13 +8,17 @@ linear solve. The hit checks judge ``t`` (whether and where a ray hits), the bar
 check ``u, v`` of the same rays: an answer without barycentrics earns the hits. Then the
 student's function runs inside the NumPy BVH, and a path-traced Cornell box (whose hit
 points are built from ``u, v``) must match the library's.
+
+Every grading moves the whole of each case by a turn and a shift of its own (``_moved``,
+from the grading seed), which leaves ``(t, u, v)`` as they are; the random rays and the
+render's seed come from the grading seed too. So no answers stored for known inputs match.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import require_finite
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
@@ -30,14 +34,32 @@ SLANTED_FRONT = (-0.3, 0.4, -1.2)
 #: compares the regions (false-alarm rate at most 1e-3). The library's picture comes from
 #: the fastest backend: the same hits, so the same picture up to rounding.
 RENDER = dict(res=32, passes=8, spp_per_pass=4, integrator="path", max_depth=2)
-#: The seed of the render check (scripts/render_false_alarm.py renders with others).
+#: The stream of the grading seed that the render check's seed comes from.
 RENDER_SEED = 5
 
 
+def _moved(origins, dirs, v0, e1, e2) -> tuple[np.ndarray, ...]:
+    """The rays and triangles turned by one of the 24 rotations that permute the axes (with
+    signs: exact in floating point, so a ray parallel to a triangle stays exactly parallel,
+    and a front face stays a front face) and shifted by multiples of 1/16, both drawn from
+    the grading seed: the same (t, u, v), other numbers."""
+    rng = grading_rng(20)
+    while True:
+        turn = np.eye(3)[rng.permutation(3)] * rng.choice([-1.0, 1.0], 3)[:, None]
+        if np.linalg.det(turn) > 0:
+            break
+    shift = rng.integers(-64, 65, 3) / 16
+    points = (np.asarray(a, dtype=np.float64) @ turn.T for a in (origins, dirs, v0, e1, e2))
+    origins, dirs, v0, e1, e2 = points
+    return origins + shift, dirs, v0 + shift, e1, e2
+
+
 def _call(module, origins, dirs, v0, e1, e2):
-    """The student's (t, u, v) as float64 (N,) arrays, or a clear failure."""
+    """The student's (t, u, v) as float64 (N,) arrays, or a clear failure: for the rays and
+    triangles ``_moved`` by the grading seed."""
     (ray_triangle,) = require(module, "ray_triangle")
     n = len(origins)
+    origins, dirs, v0, e1, e2 = _moved(origins, dirs, v0, e1, e2)
     with np.errstate(all="ignore"):  # NaN and inf are judged below, not warned about
         result = ray_triangle(origins, dirs, v0, e1, e2)
     if not (isinstance(result, tuple) and len(result) == 3):
@@ -231,7 +253,7 @@ def check_both_faces(module) -> str:
 def _random_cases(n: int = 2000):
     """``n`` random rays and triangles (o, d, v0, e1, e2), each ray's (t, u, v) from a direct
     3 x 3 linear solve of o + t d = v0 + u e1 + v e2, and whether the ray hits (inside)."""
-    rng = np.random.default_rng(1)
+    rng = grading_rng(1)
     o, d, v0, e1, e2 = (rng.normal(size=(n, 3)) for _ in range(5))
     tuv = np.linalg.solve(np.stack([d, -e1, -e2], axis=-1), (v0 - o)[..., None])[..., 0]
     inside = (tuv[:, 1] >= 0) & (tuv[:, 2] >= 0) & (tuv[:, 1] + tuv[:, 2] <= 1)
@@ -329,7 +351,7 @@ def check_render(module) -> str:
         "your intersections",
         ptlab.accel.numpy_bvh,
         dict(ray_triangle=student_ray_triangle),
-        passes=dict(RENDER, seed=RENDER_SEED),
+        passes=dict(RENDER, seed=grading_seed_for(RENDER_SEED)),
         hint="wrong hit points from u, v, or missing triangles?",
     )
 

@@ -14,6 +14,10 @@ imports them by name with ``from ... import``, so that is where they are plugged
 walls with a mirror sphere and a glass sphere. Whitted's tracer spends no random numbers on
 mirrors and glass, so with the same seed the two images must agree pixel for pixel, up to
 float rounding: a deterministic check.
+
+The normals, angles, indices of refraction and the render's seed come from the grading seed
+(``ptlab.exercises.chapter.grading_rng``), new for each grading: answers stored for known
+inputs match none of them.
 """
 
 from __future__ import annotations
@@ -24,7 +28,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import at_pixel, finite_array, require_finite
 
 if TYPE_CHECKING:
@@ -59,9 +63,20 @@ def _call(function, name: str, *args, shape) -> np.ndarray:
     )
 
 
-def _random_cases(seed: int, count: int = 500):
+def _normal(stream: int) -> np.ndarray:
+    """(1, 3): a random unit normal, stream ``stream`` of the grading seed."""
+    return _unit(grading_rng(stream).normal(size=(1, 3)))
+
+
+def _indices(stream: int) -> tuple[float, float]:
+    """(glass, diamond): indices of refraction around GLASS and DIAMOND, from the grading seed."""
+    rng = grading_rng(stream)
+    return float(rng.uniform(1.3, 1.7)), float(rng.uniform(2.2, 2.6))
+
+
+def _random_cases(stream: int, count: int = 500):
     """(wo, n): random unit normals, and wo above each at angles up to 89 degrees."""
-    rng = np.random.default_rng(seed)
+    rng = grading_rng(stream)
     n = _unit(rng.normal(size=(count, 3)))
     from ptlab.sampling import to_world
 
@@ -76,7 +91,7 @@ def _random_cases(seed: int, count: int = 500):
 
 def check_reflect(module) -> str:
     (reflect,) = require(module, "reflect")
-    n = np.array([[0.0, 1.0, 0.0]])
+    n = _normal(30)
     straight = _call(reflect, "reflect", n.copy(), n.copy(), shape=(1, 3))
     if np.allclose(straight, -n, atol=1e-6):
         raise CheckFailed(
@@ -87,7 +102,7 @@ def check_reflect(module) -> str:
     if not np.allclose(straight, n, atol=1e-6):
         raise CheckFailed(
             f"at normal incidence the mirror sends the ray straight back: "
-            f"reflect(n, n) must be n = {n[0]}, not {np.round(straight[0], 4)}"
+            f"reflect(n, n) must be n = {np.round(n[0], 4)}, not {np.round(straight[0], 4)}"
         )
     wo, n = _random_cases(31)
     expected = 2 * np.sum(wo * n, axis=1, keepdims=True) * n - wo
@@ -130,23 +145,25 @@ def snell(wo: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
 
 def check_refract(module) -> str:
     (refract,) = require(module, "refract")
-    n = np.array([[0.0, 1.0, 0.0]])
-    for eta in (GLASS, 1 / GLASS):
+    n = _normal(35)
+    glass, diamond = _indices(36)
+    jitter = grading_rng(37).uniform(-3, 3, 3)
+    for eta in (glass, 1 / glass):
         straight = _call(refract, "refract", n.copy(), n.copy(), eta, shape=(1, 3))
         if not np.allclose(straight, -n, atol=1e-6):
             raise CheckFailed(
                 f"at normal incidence light goes straight through: refract(n, n, "
-                f"{eta:.3f}) must be -n = {-n[0]}, not {np.round(straight[0], 4)} "
+                f"{eta:.3f}) must be -n = {np.round(-n[0], 4)}, not {np.round(straight[0], 4)} "
                 f"(the refracted ray leaves on the *other* side of the surface)"
             )
     # Leaving glass first: with eta taken the wrong way up, it bends the wrong way there
     # (entering, it would be totally reflected, which says less).
-    for eta, degrees in [(1 / GLASS, 30.0), (GLASS, 45.0), (DIAMOND, 70.0)]:
+    for eta, degrees in zip((1 / glass, glass, diamond), jitter + (30.0, 45.0, 70.0), strict=True):
         wo = _directions(np.radians([degrees]), n[0])
         wt = _call(refract, "refract", wo, n.copy(), eta, shape=(1, 3))
         if not np.isclose(np.linalg.norm(wt), 1, atol=1e-5):
             raise CheckFailed(
-                f"the refracted direction must be a unit vector; at {degrees:g} "
+                f"the refracted direction must be a unit vector; at {degrees:.1f} "
                 f"degrees with eta {eta:.3f} its length is {np.linalg.norm(wt):.4f}"
             )
         sin_i = math.sin(math.radians(degrees))
@@ -160,7 +177,7 @@ def check_refract(module) -> str:
                 else ""
             )
             raise CheckFailed(
-                f"Snell's law: at {degrees:g} degrees with eta = {eta:.3f}, "
+                f"Snell's law: at {degrees:.1f} degrees with eta = {eta:.3f}, "
                 f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
                 f"{sin_t:.4f}{hint}"
             )
@@ -170,7 +187,7 @@ def check_refract(module) -> str:
                 "it points away from the surface on the other side"
             )
     wo, n = _random_cases(32)
-    for eta in (GLASS, 1 / GLASS, np.where(np.arange(len(wo)) % 2, GLASS, 1 / GLASS)):
+    for eta in (glass, 1 / glass, np.where(np.arange(len(wo)) % 2, glass, 1 / glass)):
         column = eta[:, None] if np.ndim(eta) else eta
         refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column**2)  # not totally reflected
         expected = snell(wo, n, column)
@@ -209,7 +226,9 @@ def fresnel_reference(cos_theta_i: np.ndarray, eta) -> np.ndarray:
 
 def check_fresnel(module) -> str:
     (fresnel,) = require(module, "fresnel")
-    for eta in (GLASS, 1 / GLASS, DIAMOND):
+    glass, diamond = _indices(38)
+    rng = grading_rng(39)
+    for eta in (glass, 1 / glass, diamond):
         normal = _call(fresnel, "fresnel", np.array([1.0]), eta, shape=(1,))[0]
         expected = ((eta - 1) / (eta + 1)) ** 2
         if not math.isclose(normal, expected, abs_tol=1e-6):
@@ -217,14 +236,14 @@ def check_fresnel(module) -> str:
                 f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
                 f"for eta = {eta:.3f}; yours is {normal:.5f}"
             )
-    grazing = _call(fresnel, "fresnel", np.array([1e-4]), GLASS, shape=(1,))[0]
+    grazing = _call(fresnel, "fresnel", np.array([1e-4]), glass, shape=(1,))[0]
     if not grazing >= 0.99:
         raise CheckFailed(
             f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
             f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4"
         )
-    cos_i = np.linspace(0.02, 1, 200)
-    for eta in (GLASS, 1 / GLASS, DIAMOND, np.linspace(1.1, 2.0, 200)):
+    cos_i = np.sort(rng.uniform(0.02, 1, 200))
+    for eta in (glass, 1 / glass, diamond, rng.uniform(1.1, 2.0, 200)):
         expected = fresnel_reference(cos_i, eta)
         F = _call(fresnel, "fresnel", cos_i, eta, shape=cos_i.shape)  # noqa: N806 (the usual name)
         if not np.abs(F - expected).max() <= 1e-5:
@@ -255,19 +274,21 @@ def check_fresnel(module) -> str:
 
 def check_total_internal_reflection(module) -> str:
     fresnel, refract = require(module, "fresnel", "refract")
-    eta = 1 / GLASS
+    glass, _ = _indices(40)
+    rng = grading_rng(34)
+    eta = 1 / glass
     critical = math.degrees(math.asin(eta))
-    degrees = np.array([critical + 0.5, 50.0, 60.0, 75.0, 89.0])
+    degrees = np.concatenate([[critical + 0.5], np.sort(rng.uniform(critical + 1, 89, 4))])
     F = _call(fresnel, "fresnel", np.cos(np.radians(degrees)), eta, shape=degrees.shape)  # noqa: N806
     if not np.abs(F - 1).max() <= 1e-6:
         bad = int(np.argmax(np.abs(F - 1)))
         raise CheckFailed(
-            f"leaving glass (eta = 1 / {GLASS}) beyond the critical angle "
+            f"leaving glass (eta = 1 / {glass:.3f}) beyond the critical angle "
             f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
             f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
             f"eta > 1 has no solution: return 1 there)"
         )
-    n = _unit(np.random.default_rng(34).normal(size=(len(degrees), 3)))  # (no row repeats n)
+    n = _unit(rng.normal(size=(len(degrees), 3)))  # (no row repeats n)
     wo = np.concatenate(
         [_directions(np.radians(d)[None], normal) for d, normal in zip(degrees, n, strict=True)]
     )
@@ -380,7 +401,7 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
         if f is not None
     }
     in_mirror = {"reflect": reflect} if reflect is not None else {}
-    options = dict(dict(spp=2, res=48, seed=3, workers=1), **options)
+    options = dict(dict(spp=2, res=48, workers=1), **options)
     with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
         return ptlab.render(scene, integrator="whitted", **options)
 
@@ -388,8 +409,9 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
 def check_render(module) -> str:
     reflect, refract, fresnel = require(module, "reflect", "refract", "fresnel")
     scene = spheres_scene()
-    expected = whitted_image(scene)
-    image = whitted_image(scene, reflect, refract, fresnel)
+    seed = grading_seed_for(3)
+    expected = whitted_image(scene, seed=seed)
+    image = whitted_image(scene, reflect, refract, fresnel, seed=seed)
     require_finite(image, "the render", at_pixel)
     # Float rounding may send a ray that grazes an edge to the other side of it: allow a few
     # pixels to differ, none of the others by more than 0.1%.

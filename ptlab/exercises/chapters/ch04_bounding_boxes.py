@@ -6,29 +6,49 @@ boxes behind the ray or beyond ``tmax``, rays that start inside, rays parallel t
 (``inv_dirs = ±inf``; on a boundary plane ``0 * inf`` is NaN), and flat boxes of zero
 thickness like the leaves around the Cornell box's walls. Then the student's slab test
 runs inside the NumPy BVH, and the Cornell box's normals must come out as the library's.
+
+Every grading moves each case by a mirroring and permutation of the axes and a shift of its
+own (``_moved``, from the grading seed): the same hits at the same t, other numbers, so no
+answers stored for known inputs match.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))  # the square z = 1, 0 <= x, y <= 1
 
 
+def _moved(origins, dirs, box_min, box_max) -> tuple[np.ndarray, ...]:
+    """(N, 3) rays and boxes with their axes permuted and mirrored, and shifted by multiples
+    of 1/16, all drawn from the grading seed: exact in float32 for the cases here (a ray on
+    a slab's plane stays on it), and the same hits at the same t."""
+    rng = grading_rng(40)
+    axes, signs = rng.permutation(3), rng.choice([-1.0, 1.0], 3)
+    shift = rng.integers(-32, 33, 3) / 16
+    # (taking columns, not a product with a matrix, keeps the sign of a -0.0)
+    origins, dirs, corner_a, corner_b = (
+        np.asarray(a, dtype=np.float64)[:, axes] * signs for a in (origins, dirs, box_min, box_max)
+    )
+    corner_a, corner_b = corner_a + shift, corner_b + shift
+    return origins + shift, dirs, np.minimum(corner_a, corner_b), np.maximum(corner_a, corner_b)
+
+
 def _slab(module, origins, dirs, box_min, box_max, tmin=0.0, tmax=np.inf):
     """The student's (hit, t_enter) for rays and boxes (one box for all, or one per ray),
-    checked for shape, type and NaN."""
+    ``_moved`` by the grading seed, checked for shape, type and NaN."""
     (slab_test,) = require(module, "slab_test")
     origins = np.asarray(origins, dtype=np.float32).reshape(-1, 3)
     dirs = np.asarray(dirs, dtype=np.float32).reshape(-1, 3)
     n = len(origins)
+    box_min = np.broadcast_to(np.asarray(box_min, dtype=np.float32), (n, 3))
+    box_max = np.broadcast_to(np.asarray(box_max, dtype=np.float32), (n, 3))
+    origins, dirs, box_min, box_max = (a.astype(np.float32) for a in _moved(origins, dirs, box_min, box_max))
     with np.errstate(divide="ignore"):
         inv_dirs = (1 / dirs).astype(np.float32)
-    box_min = np.broadcast_to(np.asarray(box_min, dtype=np.float32), (n, 3)).copy()
-    box_max = np.broadcast_to(np.asarray(box_max, dtype=np.float32), (n, 3)).copy()
     with np.errstate(all="ignore"):  # NaN and inf are judged below, not warned about
         result = slab_test(origins, inv_dirs, box_min, box_max, np.copy(tmin), np.copy(tmax))
     return _checked(result, n)

@@ -8,7 +8,9 @@ plane by plane with plain loops. Then the pieces go into the NumPy BVH: its clos
 and shadow-ray answers must equal brute force (every ray against every triangle); the
 tree's SAH cost must be close to the library's (a median split or a cost without the
 areas builds a correct tree that is measurably worse); front-to-back traversal must test
-as few boxes as the library's; and the Cornell box must look the same.
+as few boxes as the library's; and the Cornell box must look the same. The meshes' random
+parts, the rays, the nodes and the directions come from the grading seed
+(``ptlab.exercises.chapter.grading_rng``), new for each grading.
 """
 
 from __future__ import annotations
@@ -17,7 +19,7 @@ import copy
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test
@@ -72,7 +74,7 @@ def uneven_mesh() -> np.ndarray:
     """(756, 3, 3): a room 0..556 with two blocks, a ball in one corner and a cloud of 400
     small triangles in another: big and small triangles unevenly spread, where the SAH's
     areas matter."""
-    rng = np.random.default_rng(8)
+    rng = grading_rng(8)
     cloud = rng.uniform(380, 520, (400, 1, 3)) + rng.normal(scale=6, size=(400, 3, 3))
     return np.concatenate(
         [
@@ -89,7 +91,7 @@ def row_of_balls() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Eight balls in a row along x, and 4000 rays along the row from both ends:
     (T, 3, 3) triangles, (N, 3) origins, (N, 3) directions."""
     tris = np.concatenate([_ball([3.0 * i, 0, 0], 1.0) for i in range(8)])
-    rng = np.random.default_rng(9)
+    rng = grading_rng(9)
     n = 4000
     forward = np.arange(n) % 2 == 0
     origins = np.column_stack([np.where(forward, -5.0, 26.0), rng.uniform(-0.8, 0.8, (n, 2))])
@@ -99,7 +101,7 @@ def row_of_balls() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _random_rays(n: int) -> tuple[np.ndarray, np.ndarray]:
     """(n, 3) float32 origins (most in the room, some outside) and random directions."""
-    rng = np.random.default_rng(10)
+    rng = grading_rng(10)
     origins = np.where(rng.random((n, 1)) < 0.8, rng.uniform(1, 555, (n, 3)), rng.uniform(-300, 856, (n, 3)))
     return origins.astype(np.float32), rng.normal(size=(n, 3)).astype(np.float32)
 
@@ -245,7 +247,7 @@ def _checked_child_order(child_order):
 # -- unit checks --------------------------------------------------------------------------
 
 
-def _binned_example(seed: int, flat_node: bool = False):
+def _binned_example(stream: int, flat_node: bool = False):
     """Two nodes (9 and 12 triangles, given as boxes) binned into 5 bins per axis as
     ``build_bvh`` bins them: ``(bin_count, bin_lo, bin_hi, node_lo, node_hi)``.
 
@@ -253,7 +255,7 @@ def _binned_example(seed: int, flat_node: bool = False):
     ``flat_node``, node 1 lies in the plane z = 5, like a wall of the Cornell box: all its
     centroids fall into bin 0 along z, and no z split divides it.
     """
-    rng = np.random.default_rng(seed)
+    rng = grading_rng(stream)
     b = 5
     count = np.zeros((b, 2, 3), np.intp)
     bin_lo = np.full((b, 2, 3, 3), np.inf, np.float32)
@@ -333,7 +335,7 @@ def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
 
 def check_split_costs(module) -> str:
     split_costs = _pieces(module, "split_costs")["split_costs"]
-    example = _binned_example(seed=1)
+    example = _binned_example(stream=1)
     want = _expected_costs(*example, traversal_cost=0.5)
     got = split_costs(*example, traversal_cost=0.5)
     _compare_costs(got, want, "0.5 + (N_L S_L + N_R S_R) / S")
@@ -342,7 +344,7 @@ def check_split_costs(module) -> str:
 
 def check_empty_sides(module) -> str:
     (split_costs,) = require(module, "split_costs")
-    example = _binned_example(seed=2, flat_node=True)
+    example = _binned_example(stream=2, flat_node=True)
     want = _expected_costs(*example, traversal_cost=1.0)
     with np.errstate(all="ignore"):
         got = np.asarray(split_costs(*copy.deepcopy(example), traversal_cost=1.0), dtype=np.float64)
@@ -363,7 +365,8 @@ def check_empty_sides(module) -> str:
 
 def check_best_split(module) -> str:
     best_split = _pieces(module, "best_split")["best_split"]
-    cost = np.full((3, 5, 3), 50.0)
+    rng = grading_rng(12)
+    cost = rng.uniform(20, 60, (3, 5, 3))  # (every one dearer than the cheapest below)
     cost[2, 0, 1] = 7.5  # node 0: 10 triangles, must split, cheapest at plane 2 along y
     cost[0, 0, 2] = 7.6
     cost[1, 1, 0] = 3.5  # node 1: 3 triangles, cheapest split costs more than 3: a leaf
@@ -373,8 +376,14 @@ def check_best_split(module) -> str:
     cost[0, 3, 2] = 9.0
     cost[:, 4] = np.inf  # node 4: 1 triangle, nothing divides it: a leaf
     size = np.array([10, 3, 3, 8, 1])
-    split_bin, split_axis, make_leaf = best_split(cost, size, 4)
-    want_leaf = [False, True, False, False, True]
+    want_leaf = np.array([False, True, False, False, True])
+    wants = {0: (2, 1), 2: (0, 2), 3: (0, 2)}
+    # The nodes in an order of the grading seed's: node k here is order[k] above.
+    order = rng.permutation(5)
+    cost, size, want_leaf = cost[:, order], size[order], want_leaf[order]
+    wants = {int(np.flatnonzero(order == node)[0]): want for node, want in wants.items()}
+    split_bin, split_axis, make_leaf = best_split(cost.copy(), size.copy(), 4)
+    want_leaf = list(want_leaf)
     if list(make_leaf) != want_leaf:
         node = int(np.flatnonzero(make_leaf != want_leaf)[0])
         rule = (
@@ -386,7 +395,7 @@ def check_best_split(module) -> str:
             f"{cost[:, node].min()}) should {'' if want_leaf[node] else 'not '}be "
             f"a leaf: {rule}"
         )
-    for node, want in [(0, (2, 1)), (2, (0, 2)), (3, (0, 2))]:
+    for node, want in sorted(wants.items()):
         if (split_bin[node], split_axis[node]) != want:
             raise CheckFailed(
                 f"node {node}: the cheapest split is plane {want[0]} along "
@@ -399,23 +408,13 @@ def check_best_split(module) -> str:
 
 def check_child_order(module) -> str:
     child_order = _pieces(module, "child_order")["child_order"]
-    first_child = np.array([1, 1, 3, 3, 5, 5, 7, 7])
-    axis = np.array([0, 0, 1, 1, 2, 2, 0, 1])
-    dirs = np.array(
-        [
-            [1, -1, -1],
-            [-1, 1, 1],
-            [-1, 2, -1],
-            [1, -2, 1],
-            [-1, -1, 0.5],
-            [1, 1, -0.5],
-            [0.2, -1, -1],
-            [1, -0.3, 1],
-        ],
-        dtype=np.float32,
-    )
-    want = first_child + (dirs[np.arange(8), axis] < 0)
-    near, far = child_order(first_child, axis, dirs)
+    rng = grading_rng(13)
+    first_child = 2 * rng.integers(0, 50, 32) + 1
+    axis = np.tile([0, 1, 2], 11)[:32]
+    # Both signs along every axis; no component near 0, where either child may come first.
+    dirs = (rng.choice([-1, 1], (32, 3)) * rng.uniform(0.1, 2, (32, 3))).astype(np.float32)
+    want = first_child + (dirs[np.arange(32), axis] < 0)
+    near, far = child_order(first_child.copy(), axis.copy(), dirs.copy())
     wrong = np.flatnonzero(near != want)
     if wrong.size:
         i = wrong[0]
@@ -438,7 +437,7 @@ def check_closest_hits(module) -> str:
 
     tris = uneven_mesh()
     origins, dirs = _random_rays(3000)
-    tmax = np.random.default_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
+    tmax = grading_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
     t_all = _brute_force(tris, origins, dirs)
     with plugged(numpy_bvh, **_pieces(module, *PIECES)):
         bvh = numpy_bvh.NumpyBVH(tris.copy())

@@ -16,7 +16,15 @@ from collections.abc import Callable
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require, student_file
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+    student_file,
+)
 from ptlab.exercises.finite import finite_array
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 from ptlab.grading.probes import Turned
@@ -42,7 +50,7 @@ def probe(material) -> None:
     written yet, one that raises, or one that returns the wrong shape, is reported as itself
     (once, with the shapes) before a long check starts."""
     rows = 5  # not 3: a (3, 3) result would hide rows and colours swapped
-    material = Turned(material, np.random.default_rng(60))  # (no row repeats n: see below)
+    material = Turned(material, grading_rng(60))  # (no row repeats n: see below)
     n = np.tile([0.0, 0.0, 1.0], (rows, 1))
     wo = _unit(
         np.array([[0.6, 0.0, 0.8], [0.0, 0.28, 0.96], [-0.3, 0.4, 0.5], [0.1, 0.1, 1.0], [0.9, -0.2, 0.3]])
@@ -84,7 +92,7 @@ def random_pairs(rng, count: int):
 
 def check_eval(module) -> str:
     material = _material(module)
-    rng = np.random.default_rng(61)
+    rng = grading_rng(61)
     wo, wi, n = random_pairs(rng, 500)
     expected = np.asarray(ALBEDO) / math.pi
     cos_theta_i = np.sum(wi * n, axis=1)
@@ -125,7 +133,7 @@ def check_eval(module) -> str:
 
 
 def check_sample(module) -> str:
-    rng = np.random.default_rng(62)
+    rng = grading_rng(62)
     # Every row turned by a rotation of its own (and the samples turned back): a material
     # cannot tell these repeated directions from a render's.
     material = Turned(_material(module), rng)
@@ -171,7 +179,7 @@ def _sphere_integral(function, n: np.ndarray, rows: int = 400, cols: int = 64) -
 
 
 def check_pdf_normalisation(module) -> str:
-    material = Turned(_material(module), np.random.default_rng(63))  # (see check_sample)
+    material = Turned(_material(module), grading_rng(63))  # (see check_sample)
     n = _unit(np.array([0.3, -0.5, 0.8]))
     wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
     rows = 400 * 64
@@ -261,15 +269,19 @@ def check_harness(module) -> str:
         return np.broadcast_to(albedo, wo.shape)
 
     return run_harness(
-        _material(module), 6, "", f"ptlab grade {student_file(module)}:Lambertian", expected_eval=lambert
+        _material(module),
+        grading_seed_for(6),
+        "",
+        f"ptlab grade {student_file(module)}:Lambertian",
+        expected_eval=lambert,
     )
 
 
-#: The seed of the render check (scripts/render_false_alarm.py renders with others).
+#: The stream of the grading seed that the render check's seed comes from.
 RENDER_SEED = 6
 
 
-#: Samples per pixel in each pass of the render check: drawn per run from fresh entropy in
+#: Samples per pixel in each pass of the render check: drawn per grading in
 #: this range (both renders of one check alike), so that the sizes of the material's calls
 #: (the first bounce's 24 576 to 40 960 paths, shared among the scene's materials, then
 #: fewer at every bounce) are a render's and cannot be known beforehand. At least 24: every
@@ -277,9 +289,13 @@ RENDER_SEED = 6
 #: 60% of the paths). Costs 1.5x to 2.5x the time of a render of 16 spp per pass.
 RENDER_SPP_PER_PASS = (24, 40)
 
+#: The stream of the grading seed that the render check's samples per pass come from.
+SPP_STREAM = 64
+
 
 def render_spp_per_pass(rng: np.random.Generator | None = None) -> int:
-    """A number of samples per pass in ``RENDER_SPP_PER_PASS``, drawn from fresh entropy."""
+    """A number of samples per pass in ``RENDER_SPP_PER_PASS``, drawn from ``rng`` (the
+    grading seed's, so that ``--grading-seed`` repeats it) or else from fresh entropy."""
     low, high = RENDER_SPP_PER_PASS
     return int((rng or np.random.default_rng()).integers(low, high + 1))
 
@@ -297,7 +313,7 @@ def render_options(seed: int, spp_per_pass: int = SPP_PER_PASS) -> dict:
 
 
 def render_passes(
-    material_for: Callable | None = None, seed: int = RENDER_SEED, spp_per_pass: int = SPP_PER_PASS
+    material_for: Callable | None = None, seed: int = 0, spp_per_pass: int = SPP_PER_PASS
 ) -> np.ndarray:
     """The ``pass_images`` of the Cornell box with ``material_for(albedo)`` in place of
     every diffuse material, or with the library's own if None."""
@@ -312,15 +328,17 @@ def render_passes(
 
 def check_render(module) -> str:
     probe(_material(module))
-    spp_per_pass = render_spp_per_pass()
-    library = render_passes(spp_per_pass=spp_per_pass)
-    student = render_passes(lambda albedo: _material(module, albedo), spp_per_pass=spp_per_pass)
+    seed = grading_seed_for(RENDER_SEED)
+    spp_per_pass = render_spp_per_pass(grading_rng(SPP_STREAM))
+    library = render_passes(seed=seed, spp_per_pass=spp_per_pass)
+    student = render_passes(lambda albedo: _material(module, albedo), seed, spp_per_pass=spp_per_pass)
     return compare_renders(
         student,
         library,
         "the Cornell box with your material",
         hint="brighter: each bounce carries too much light, from a pdf too "
         "small or an f_r too big; darker: too little",
+        spp=render_options(seed)["spp_per_pass"],
     )
 
 

@@ -25,7 +25,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import at_pixel, require_finite
 from ptlab.untrusted import submission_of
 
@@ -34,7 +34,8 @@ if TYPE_CHECKING:
     from ptlab.scene import Scene
 
 #: What the render checks render: the furnace at 48 x 40 (odd tiles at the right and bottom
-#: edges with TILE = 16), SPP samples per pixel, seed SEED.
+#: edges with TILE = 16), SPP samples per pixel, the seed stream SEED of the grading seed
+#: (``ptlab.exercises.chapter.grading_seed_for``: new for each grading).
 RES, SPP, TILE, SEED = (48, 40), 8, 16, 8
 #: The share of pixels (about twice as bright as the library's) that says pixels were added
 #: twice: 10 of the 1920, where noise makes 0 to 3 (measured on 5 pairs of seeds).
@@ -47,7 +48,12 @@ def _scene() -> Scene:
     return furnace_scene()
 
 
-def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
+def _seed() -> int:
+    """The render checks' seed: stream SEED of the grading seed."""
+    return grading_seed_for(SEED)
+
+
+def _setup(scene: Scene) -> RenderSetup:
     from ptlab.accel import resolve_backend
     from ptlab.integrators.path import PathSettings
     from ptlab.rendering.jobs import RenderSetup
@@ -57,7 +63,7 @@ def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
         backend=resolve_backend("auto"),
         width=RES[0],
         height=RES[1],
-        seed=seed,
+        seed=_seed(),
         settings=PathSettings(),
     )
 
@@ -68,6 +74,8 @@ def _setup(scene: Scene, seed: int = SEED) -> RenderSetup:
 def check_tiles(module) -> str:
     (make_tiles,) = require(module, "make_tiles")
     cases = [(37, 23, 8), (64, 64, 16), (5, 3, 8), (100, 1, 7), (16, 48, 16)]
+    rng = grading_rng(80)  # and three sizes new for each grading
+    cases += [tuple(int(n) for n in rng.integers(1, (100, 100, 20))) for _ in range(3)]
     for width, height, size in cases:
         tiles = list(make_tiles(width, height, size))
         where = f"make_tiles({width}, {height}, {size})"
@@ -204,7 +212,7 @@ def importable(module: ModuleType) -> ModuleType:
 def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
     (render_parallel,) = require(module, "render_parallel")
     try:
-        result = render_parallel(_scene(), spp, RES, seed=SEED, workers=workers, tile_size=TILE)
+        result = render_parallel(_scene(), spp, RES, seed=_seed(), workers=workers, tile_size=TILE)
     finally:
         submission_of(module).end_started_processes()  # workers left behind
     if not (isinstance(result, tuple) and len(result) == 2):
@@ -274,7 +282,7 @@ def check_library(module) -> str:
     from ptlab.rendering import render_result
 
     expected = render_result(
-        _scene(), spp=SPP, res=RES, seed=SEED, workers=1, tile_size=TILE, spp_per_pass=SPP
+        _scene(), spp=SPP, res=RES, seed=_seed(), workers=1, tile_size=TILE, spp_per_pass=SPP
     ).image
     image, _ = _render(importable(module), workers=2)
     empty = image.max(axis=2) == 0
@@ -313,7 +321,7 @@ def check_library(module) -> str:
             f"one pass) in {differ.sum()} of {differ.size} pixels and is "
             f"{ratio:.3f}x as bright: {hint}"
         )
-    return f"the image is the library's, bit for bit (seed {SEED}, {TILE} x {TILE} tiles)"
+    return f"the image is the library's, bit for bit (seed {_seed()}, {TILE} x {TILE} tiles)"
 
 
 CHAPTER = Chapter(

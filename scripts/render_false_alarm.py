@@ -1,0 +1,201 @@
+"""Measure the render checks' noise ratios and false alarms over many grading seeds (not run in CI).
+
+    python scripts/render_false_alarm.py --seeds 40 --variance-ratios
+    python scripts/render_false_alarm.py --seeds 40 --check "ch07 white furnace"
+    python scripts/render_false_alarm.py --seeds 5 --first-seed 1      # grading seeds 1..5
+
+Each trial draws a fresh grading seed (from the operating system, as the grader does; or
+``--first-seed`` K, K + 1, ...) and, inside it, renders what each render check renders (the
+same settings, seeds and furnace parameters, through the chapters' own functions): the
+library's passes, and a right answer's, whose functions (the right answers of
+tests/exercises, which draw random numbers or sample otherwise than the library) are
+plugged in directly in this process. It prints, per check, how many comparisons failed
+(``compare_renders`` or ``furnace_verdict``, both sides of the noise test included) with the
+rate's 95% Clopper-Pearson interval, and with ``--variance-ratios`` the largest and the
+smallest variance ratio (right answer / library, the half-th largest and smallest over the
+regions, as ``renders.noise_verdict`` takes them) over the trials. ``--constant`` also
+grades, in every trial, a converged answer (the library's passes' mean in every pass) and
+counts how often the too-clean test catches it (it must be every time).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+import numpy as np  # noqa: E402
+from scipy.stats import beta  # noqa: E402
+
+from ptlab.exercises.chapter import CheckFailed, grading_seed, grading_seed_for, new_grading_seed  # noqa: E402
+from ptlab.exercises.renders import compare_renders, regions_of  # noqa: E402
+
+RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
+
+
+def right_answer(name: str):
+    """The right answer tests/exercises/``name``.py as a module of this process."""
+    spec = importlib.util.spec_from_file_location(f"right_{name}", RIGHT / f"{name}.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def ch06(name: str) -> Callable:
+    from ptlab.exercises.chapters.ch06_diffuse import RENDER_SEED, render_passes
+
+    module = right_answer(name)
+
+    def render():
+        seed = grading_seed_for(RENDER_SEED)
+        return render_passes(module.Lambertian, seed), render_passes(seed=seed), "regions"
+
+    return render
+
+
+def ch09(sampling: str) -> Callable:
+    from ptlab.exercises.chapters.ch09_microfacet import RENDER_SEED, render_passes
+
+    module = right_answer("09_right_walter")
+
+    def render():
+        seed = grading_seed_for(RENDER_SEED)
+        student = render_passes(sampling, lambda f0, alpha: module.GGXMetal(f0, alpha, sampling), seed)
+        return student, render_passes(sampling, seed=seed), "regions"
+
+    return render
+
+
+def ch07_furnace() -> tuple:
+    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+
+    module = right_answer("07_right_own_random")
+
+    def render():
+        albedo, le = ch07.furnace_parameters()
+        settings = dict(seed=grading_seed_for(ch07.FURNACE_SEED), albedo=albedo, emission=le)
+        settings.update(rr=1.0, max_depth=ch07.FURNACE_DEPTH)
+        student = ch07.furnace_images(module.trace_paths, **settings)
+        library = ch07.furnace_images(**settings)
+        return student, library, ch07.furnace_radiance(ch07.FURNACE_DEPTH, albedo, le)
+
+    return render
+
+
+def ch07_roulette() -> tuple:
+    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+
+    module = right_answer("07_right_own_random")
+
+    def render():
+        albedo, le = ch07.furnace_parameters()
+        seed = grading_seed_for(ch07.FURNACE_SEED + 100)
+        student = ch07.roulette_furnace_images(module.russian_roulette, seed, albedo, le)
+        library = ch07.roulette_furnace_images(seed=seed, albedo=albedo, emission=le)
+        return student, library, ch07.furnace_radiance(None, albedo, le)
+
+    return render
+
+
+def ch07_cornell() -> Callable:
+    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+
+    module = right_answer("07_right_own_random")
+
+    def render():
+        seed = grading_seed_for(ch07.CORNELL_SEED)
+        return ch07.cornell_passes(module.trace_paths, seed), ch07.cornell_passes(seed=seed), "regions"
+
+    return render
+
+
+CHECKS = {
+    "ch06 render, uniform sampling": lambda: ch06("06_right_uniform"),
+    "ch06 render, float32 class": lambda: ch06("06_right_plain_class_float32"),
+    "ch07 white furnace": ch07_furnace,
+    "ch07 roulette": ch07_roulette,
+    "ch07 Cornell box": ch07_cornell,
+    "ch09 render, Walter sampling": lambda: ch09("ggx"),
+    "ch09 render, hemisphere": lambda: ch09("hemisphere"),
+}
+
+
+def regions(images: np.ndarray, kind) -> np.ndarray:
+    """The per-pass region values the noise test compares: colours summed, or the red
+    (the furnace's)."""
+    return regions_of(images).sum(axis=-1) if kind == "regions" else regions_of(images)[..., 0]
+
+
+def ratios(student: np.ndarray, library: np.ndarray) -> tuple[float, float]:
+    """(half-th largest, half-th smallest) variance ratio over the regions, as
+    ``noise_verdict`` takes them (with its floor)."""
+    floor = (1e-4 * max(float(np.abs(library).mean()), 1e-12)) ** 2
+    ratio = np.maximum(student.var(axis=0, ddof=1), floor) / np.maximum(library.var(axis=0, ddof=1), floor)
+    ordered, half = np.sort(ratio, axis=None), (ratio.size + 1) // 2
+    return float(ordered[-half]), float(ordered[half - 1])
+
+
+def verdict(student: np.ndarray, library: np.ndarray, kind) -> str | None:
+    """None if the check passes ``student``, else its message."""
+    from ptlab.exercises.chapters.ch07_path_tracing import furnace_verdict
+
+    try:
+        if kind == "regions":
+            compare_renders(student, library, "the render")
+        else:
+            furnace_verdict(student, library, kind, "the furnace")
+    except CheckFailed as failure:
+        return str(failure)
+    return None
+
+
+def clopper_pearson(failures: int, trials: int) -> tuple[float, float]:
+    low = beta.ppf(0.025, failures, trials - failures + 1) if failures else 0.0
+    high = beta.ppf(0.975, failures + 1, trials - failures) if failures < trials else 1.0
+    return float(low), float(high)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=40, help="grading seeds (trials)")
+    parser.add_argument("--first-seed", type=int, help="grading seeds K, K+1, ... (default: fresh ones)")
+    parser.add_argument("--check", action="append", help="only these checks (repeatable)")
+    parser.add_argument("--variance-ratios", action="store_true", help="print the variance ratios")
+    parser.add_argument("--constant", action="store_true", help="also grade a converged answer")
+    args = parser.parse_args()
+    chosen = {name: make() for name, make in CHECKS.items() if not args.check or name in args.check}
+    failures = {name: 0 for name in chosen}
+    caught = {name: 0 for name in chosen}
+    largest = {name: 0.0 for name in chosen}
+    smallest = {name: np.inf for name in chosen}
+    for trial in range(args.seeds):
+        seed = new_grading_seed() if args.first_seed is None else args.first_seed + trial
+        with grading_seed(seed):
+            for name, render in chosen.items():
+                student, library, kind = render()
+                high, low = ratios(regions(student, kind), regions(library, kind))
+                largest[name], smallest[name] = max(largest[name], high), min(smallest[name], low)
+                message = verdict(student, library, kind)
+                if message is not None:
+                    failures[name] += 1
+                    print(f"grading seed {seed}, {name}: FAIL {message}", flush=True)
+                if args.constant:
+                    converged = np.broadcast_to(library.mean(axis=0), library.shape).copy()
+                    message = verdict(converged, library, kind)
+                    caught[name] += message is not None and "too clean" in message
+    for name in chosen:
+        low, high = clopper_pearson(failures[name], args.seeds)
+        line = f"{name}: {failures[name]} of {args.seeds} failed (95%: {low:.3g} to {high:.3g})"
+        if args.variance_ratios:
+            line += f"; variance ratio at most {largest[name]:.3g}, at least {smallest[name]:.3g}"
+        if args.constant:
+            line += f"; a converged answer caught as too clean {caught[name]} of {args.seeds} times"
+        print(line, flush=True)
+
+
+if __name__ == "__main__":
+    main()
