@@ -238,7 +238,8 @@ class AreaLights:
     def pdf_li(self, found: LightPoint) -> np.ndarray:
         """(N,) the solid-angle density of ``sample_li`` at light points ``found``:
         ``pdf_area`` turned into solid angle (``solid_angle_pdf``)."""
-        assert found.dist2 is not None and found.cos_theta_light is not None  # (a point on a triangle)
+        assert found.dist2 is not None
+        assert found.cos_theta_light is not None
         return solid_angle_pdf(self.pdf_area(found.radiance), found.dist2, found.cos_theta_light)
 
     def sample(self, u: np.ndarray) -> ShapeSample:

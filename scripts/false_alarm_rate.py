@@ -26,12 +26,12 @@ import time
 # One core, as the performance target says (NumPy's BLAS would otherwise spread over all).
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-from scipy.stats import beta  # noqa: E402
+import numpy as np
+from scipy.stats import beta
 
-from ptlab.exercises.chapter import grading_seed, grading_seed_for, new_grading_seed  # noqa: E402
-from ptlab.grading import check_material  # noqa: E402
-from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror  # noqa: E402
+from ptlab.exercises.chapter import grading_seed, grading_seed_for, new_grading_seed
+from ptlab.grading import check_material
+from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror
 
 
 class Float32:

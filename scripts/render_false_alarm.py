@@ -28,11 +28,11 @@ from pathlib import Path
 
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-import numpy as np  # noqa: E402
-from scipy.stats import beta  # noqa: E402
+import numpy as np
+from scipy.stats import beta
 
-from ptlab.exercises.chapter import CheckFailed, grading_seed, grading_seed_for, new_grading_seed  # noqa: E402
-from ptlab.exercises.renders import compare_renders, regions_of  # noqa: E402
+from ptlab.exercises.chapter import CheckFailed, grading_seed, grading_seed_for, new_grading_seed
+from ptlab.exercises.renders import compare_renders, regions_of
 
 RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
 
@@ -168,10 +168,10 @@ def main() -> None:
     parser.add_argument("--constant", action="store_true", help="also grade a converged answer")
     args = parser.parse_args()
     chosen = {name: make() for name, make in CHECKS.items() if not args.check or name in args.check}
-    failures = {name: 0 for name in chosen}
-    caught = {name: 0 for name in chosen}
-    largest = {name: 0.0 for name in chosen}
-    smallest = {name: np.inf for name in chosen}
+    failures = dict.fromkeys(chosen, 0)
+    caught = dict.fromkeys(chosen, 0)
+    largest = dict.fromkeys(chosen, 0.0)
+    smallest = dict.fromkeys(chosen, np.inf)
     for trial in range(args.seeds):
         seed = new_grading_seed() if args.first_seed is None else args.first_seed + trial
         with grading_seed(seed):

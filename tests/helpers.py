@@ -116,7 +116,7 @@ def grazing_cameras(scene) -> dict[str, Camera]:
     middle[1] = floor
     return {
         "along the floor": Camera.look_at(eye, eye + level, (0, 1, 0), fov_y=40),
-        "on the floor": Camera.look_at(middle, middle + [1, 0, 0], (0, 1, 0), fov_y=90),
+        "on the floor": Camera.look_at(middle, middle + np.array([1, 0, 0]), (0, 1, 0), fov_y=90),
     }
 
 

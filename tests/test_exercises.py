@@ -118,7 +118,8 @@ def test_each_patched_wrong_answer_is_a_right_answer_of_its_chapter_with_lines_c
     for name, wrong in PATCHED.items():
         assert re.fullmatch(r"\d\d_wrong_\w+", name), name
         assert re.fullmatch(rf"{name[:2]}_right_\w+\.py", wrong["base"]), (name, wrong["base"])
-        assert wrong["replace"] and all(r["old"] != r["new"] for r in wrong["replace"]), name
+        assert wrong["replace"], name
+        assert all(r["old"] != r["new"] for r in wrong["replace"]), name
         assert set(wrong) <= {"base", "about", "failures", "hints", "misleading", "replace"}, name
         text = _wrong_answer_text(name)
         compile(text, f"{name}.py", "exec")
@@ -169,7 +170,7 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     assert [c.verdict for c in report.checks] == ["pass"] * len(report.checks), str(report)
 
 
-@pytest.mark.parametrize("number, name", [(6, "Lambertian"), (9, "GGXMetal")])
+@pytest.mark.parametrize(("number", "name"), [(6, "Lambertian"), (9, "GGXMetal")])
 def test_the_exercise_files_keep_material_parameters_in_float32(number, name):
     from ptlab.untrusted.child import import_file
 
@@ -192,7 +193,8 @@ def test_code_that_hangs_or_raises_fails_its_check_and_grading_goes_on():
     # ... and the next checks still ran, each failing with the error and the student's line.
     assert "01_hangs_or_raises.py:" in by_name["unit directions"].message
     assert "ValueError: my bug with 500 rays" in by_name["unit directions"].message
-    assert result.score == 0 and len(result.results) == len(chapter(1).checks)
+    assert result.score == 0
+    assert len(result.results) == len(chapter(1).checks)
 
 
 def test_a_file_with_a_syntax_error_fails_with_the_line(tmp_path):
@@ -217,9 +219,11 @@ def test_check_prints_a_score_table_writes_json_and_list_shows_progress(tmp_path
     shutil.copyfile(WRONG / "01_right_own_code.py", answer)
     assert main(["exercise", "check", "1", str(answer), "--json", str(tmp_path / "r.json")]) == 0
     table = capsys.readouterr().out
-    assert "10/10" in table and "full marks" in table
+    assert "10/10" in table
+    assert "full marks" in table
     result = json.loads((tmp_path / "r.json").read_text())
-    assert result["full_marks"] and result["score"] == result["max_score"] == 10
+    assert result["full_marks"]
+    assert result["score"] == result["max_score"] == 10
     assert {c["name"] for c in result["checks"]} >= {"centre ray", "render"}
     assert main(["exercise", "list", str(tmp_path)]) == 0
     listing = capsys.readouterr().out
@@ -240,7 +244,8 @@ def test_check_exits_1_below_full_marks_and_2_for_user_errors(tmp_path, capsys):
     ]:
         assert main(["exercise", *arguments]) == 2
         error = capsys.readouterr().err
-        assert message in error and error.count("\n") == 1
+        assert message in error
+        assert error.count("\n") == 1
 
 
 @pytest.mark.slow
@@ -262,11 +267,13 @@ def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_che
     assert run.returncode == 1, run.stderr
     checks = {c["name"]: c["message"] for c in json.loads((tmp_path / "r.json").read_text())["checks"]}
     command = re.search(r"see the whole table with: ptlab (grade .*)\)$", checks["material harness"])
-    assert command and command.group(1) == "grade 'my work/attempt.py':Lambertian", checks
+    assert command, checks
+    assert command.group(1) == "grade 'my work/attempt.py':Lambertian", checks
     table = subprocess.run(
         [*ptlab, *shlex.split(command.group(1))], cwd=tmp_path, capture_output=True, text=True, timeout=300
     )
-    assert table.returncode == 1 and "chi-square" in table.stdout, table.stderr
+    assert table.returncode == 1, table.stderr
+    assert "chi-square" in table.stdout, table.stderr
 
 
 @pytest.mark.parametrize("chinese", [False, True], ids=["en", "zh"])
@@ -277,8 +284,10 @@ def test_docs_shows_a_chapters_page_and_where_its_tutorial_is(chinese, capsys):
     assert main(["exercise", "docs", "7", *(["--zh"] if chinese else [])]) == 0
     shown = capsys.readouterr().out
     assert shown.startswith(page(found, chinese).read_text(encoding="utf-8").rstrip("\n"))
-    assert ("路径追踪" in shown) == chinese and "ptlab exercise check 7" in shown
-    assert f"python {tutorial(found)} --out DIR" in shown and tutorial(found).is_file()
+    assert ("路径追踪" in shown) == chinese
+    assert "ptlab exercise check 7" in shown
+    assert f"python {tutorial(found)} --out DIR" in shown
+    assert tutorial(found).is_file()
     assert main(["exercise", "docs", "7", "--path"]) == 0
     assert capsys.readouterr().out.strip() == str(page(found))
 
@@ -304,7 +313,8 @@ def test_docs_piped_into_a_reader_that_stops_early_is_no_error():
     )
     process.stdout.close()
     error = process.stderr.read().decode()
-    assert process.wait(timeout=60) == 0 and "Traceback" not in error, error
+    assert process.wait(timeout=60) == 0, error
+    assert "Traceback" not in error, error
 
 
 # -- a whole class: ptlab exercise grade-all -------------------------------------------------
@@ -349,12 +359,17 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     assert "4 students" in capsys.readouterr().out
     rows = {row["student"]: row for row in csv.DictReader(grades.open())}
     assert set(rows) == {"alice", "bob", "carol", "dave"}
-    assert rows["alice"]["score"] == "10" and rows["alice"]["first_failure"] == ""
-    assert rows["alice"]["render"] == "2" and rows["alice"]["file"] == "alice.py"
-    assert 0 < int(rows["bob"]["score"]) < 10 and rows["bob"]["file"] == "01_cameras.py"
+    assert rows["alice"]["score"] == "10"
+    assert rows["alice"]["first_failure"] == ""
+    assert rows["alice"]["render"] == "2"
+    assert rows["alice"]["file"] == "alice.py"
+    assert 0 < int(rows["bob"]["score"]) < 10
+    assert rows["bob"]["file"] == "01_cameras.py"
     assert rows["bob"]["first_failure"].startswith("field of view: the top edge")
-    assert rows["carol"]["score"] == "0" and "took longer than" in rows["carol"]["first_failure"]
-    assert rows["dave"]["score"] == "0" and "no 01_cameras.py in the folder" in rows["dave"]["first_failure"]
+    assert rows["carol"]["score"] == "0"
+    assert "took longer than" in rows["carol"]["first_failure"]
+    assert rows["dave"]["score"] == "0"
+    assert "no 01_cameras.py in the folder" in rows["dave"]["first_failure"]
     # Resuming: the new student is graded, and bob, whose file changed since; alice, carol
     # and dave keep the rows the grader wrote (carol's hanging file is not run again).
     (folder / "bob" / "01_cameras.py").write_text("def generate_rays(:\n")
@@ -364,7 +379,8 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
     assert time.monotonic() - start < 60
     again = {row["student"]: row for row in csv.DictReader(grades.open())}
     assert all(again[name] == rows[name] for name in ("alice", "carol", "dave"))
-    assert again["erin"]["score"] == "10" and again["bob"]["score"] == "0"
+    assert again["erin"]["score"] == "10"
+    assert again["bob"]["score"] == "0"
     assert "syntax error" in again["bob"]["first_failure"]
     assert main(["exercise", "grade-all", "2", str(folder), "--csv", str(grades)]) == 2
     assert "columns are not chapter 2's" in capsys.readouterr().err
@@ -383,7 +399,8 @@ def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
         start = time.monotonic()
         row = runner.grade(Work("sleeper", sleeper))
     assert time.monotonic() - start < 15
-    assert row["score"] == 0 and "did not finish in 2 s" in row["first_failure"]
+    assert row["score"] == 0
+    assert "did not finish in 2 s" in row["first_failure"]
 
 
 # -- progress: where list looks --------------------------------------------------------------
@@ -413,19 +430,23 @@ def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, mo
 
     monkeypatch.chdir(elsewhere)  # found in the folder start made
     where, rows = listing()
-    assert str(homework.resolve()) in where and "1 record found" in where
-    assert "passed (10/10)" in rows["01"] and "01_cameras.py" in rows["01"]
+    assert str(homework.resolve()) in where
+    assert "1 record found" in where
+    assert "passed (10/10)" in rows["01"]
+    assert "01_cameras.py" in rows["01"]
     from ptlab.exercises.progress import state_file
 
     state_file().unlink()  # start's folders forgotten:
     monkeypatch.chdir(tmp_path / "course")  # found below the current folder
     where, rows = listing()
-    assert "this folder and its subfolders" in where and "passed (10/10)" in rows["01"]
+    assert "this folder and its subfolders" in where
+    assert "passed (10/10)" in rows["01"]
     (homework / "01_cameras.py").write_text("# changed\n")
     assert "10/10, file changed since" in listing()[1]["01"]
     monkeypatch.chdir(elsewhere)  # nothing here, nothing remembered
     where, rows = listing()
-    assert "no results recorded" in where and "passed" not in rows["01"]
+    assert "no results recorded" in where
+    assert "passed" not in rows["01"]
 
 
 def test_a_later_failure_replaces_a_pass_in_the_record(tmp_path):
@@ -437,7 +458,8 @@ def test_a_later_failure_replaces_a_pass_in_the_record(tmp_path):
     answer.write_text("# a second version\n")
     remember(_graded(answer, 4))
     entry = read_record(tmp_path)["01"]
-    assert entry["score"] == 4 and entry["full_marks"] is False
+    assert entry["score"] == 4
+    assert entry["full_marks"] is False
     assert entry["sha256"] == hashlib.sha256(answer.read_bytes()).hexdigest()
 
 
@@ -449,8 +471,10 @@ def test_replacing_materials_keeps_the_scenes_lights_sky_uvs_and_defaults():
 
     scene = ptlab.load_scene("games101-hw5")
     swapped = replace_materials(scene, lambda m: None if m.emission is not None else m)
-    assert swapped.point_lights is not None and scene.point_lights is not None
+    assert swapped.point_lights is not None
+    assert scene.point_lights is not None
     np.testing.assert_array_equal(swapped.point_lights.positions, scene.point_lights.positions)
-    assert swapped.sky is not None and np.array_equal(swapped.sky.radiance, scene.sky.radiance)
+    assert swapped.sky is not None
+    assert np.array_equal(swapped.sky.radiance, scene.sky.radiance)
     np.testing.assert_array_equal(swapped.uvs, scene.uvs)
     assert swapped.defaults == scene.defaults

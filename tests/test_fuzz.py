@@ -42,7 +42,10 @@ CORNELL_DATA = tomllib.loads(CORNELL_TOML)
 MESH_NAMES = sorted(p.name for p in (CORNELL / "meshes").glob("*.obj"))
 TINY = ["--res", "4", "--spp", "1", "--workers", "1", "--quiet"]
 #: What ``ptlab render`` says of an image that saw no light (a camera that sees nothing lit).
-BLACK = "ptlab: warning: the image is black: no camera ray saw or received any light (do the lights face the scene?)\n"
+BLACK = (
+    "ptlab: warning: the image is black: no camera ray saw or received any light "
+    "(do the lights face the scene?)\n"
+)
 #: Problems of the whole scene, which name no key.
 SCENE_LEVEL = ("has no light", "lights have zero area", "lights' total power")
 

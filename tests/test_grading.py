@@ -114,7 +114,7 @@ def reports():
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name, check, phrase", MISTAKES, ids=[f"{m[0]}-{m[1]}" for m in MISTAKES])
+@pytest.mark.parametrize(("name", "check", "phrase"), MISTAKES, ids=[f"{m[0]}-{m[1]}" for m in MISTAKES])
 def test_wrong_material_fails_with_the_right_hint(reports, name, check, phrase):
     report = reports[name]
     assert not report.passed
@@ -146,7 +146,8 @@ def test_a_material_that_raises_fails_instead_of_crashing():
 @pytest.mark.slow
 def test_plots_of_a_failed_chi_square(tmp_path, reports):
     written = write_plots(reports["UniformSamplingCosinePdf"], tmp_path)
-    assert len(written) == 9 and all(p.suffix == ".png" and p.stat().st_size > 0 for p in written)
+    assert len(written) == 9
+    assert all(p.suffix == ".png" and p.stat().st_size > 0 for p in written)
     assert write_plots(check_material(Diffuse(), samples=5000), tmp_path / "none") == []
 
 
@@ -172,7 +173,8 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
         return np.column_stack([1.0 + lobe, w[np.arange(len(w)), lobe] ** 2])
 
     totals, errors = grid.integrate_lobes(f, lambda fine, area: 1e-12 + 0 * fine, 2)
-    assert totals.shape == (2, grid.cells, 2) and errors.shape == (2, 2)
+    assert totals.shape == (2, grid.cells, 2)
+    assert errors.shape == (2, 2)
     np.testing.assert_allclose(totals[0, :, 0], 4 * math.pi / grid.cells, rtol=1e-12)
     np.testing.assert_allclose(totals[1, :, 0], 8 * math.pi / grid.cells, rtol=1e-12)
     np.testing.assert_allclose(totals[:, :, 1].sum(axis=1), 4 * math.pi / 3, rtol=1e-10)
@@ -203,7 +205,8 @@ def test_grade_exit_codes(tmp_path, capsys):
         == 1
     )
     out = capsys.readouterr().out
-    assert "FAILED" in out and "2x too small" in out
+    assert "FAILED" in out
+    assert "2x too small" in out
     assert len(list((tmp_path / "plots").glob("*.png"))) == 9
     assert (
         ptlab_main(
@@ -215,7 +218,7 @@ def test_grade_exit_codes(tmp_path, capsys):
 
 @pytest.mark.subprocess
 @pytest.mark.parametrize(
-    "target, args, message",
+    ("target", "args", "message"),
     [
         ("missing.py:Material", "{}", "no such file"),
         ("{wrong}:NoSuchClass", "{}", "no class or object named"),
@@ -232,7 +235,9 @@ def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, a
     target = target.format(wrong=WRONG_FILE, syntax=syntax)
     assert ptlab_main(["grade", target, "--args", args]) == 2
     err = capsys.readouterr().err
-    assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
+    assert message in err
+    assert len(err.strip().splitlines()) == 1
+    assert "Traceback" not in err
 
 
 # -- any object with the homework's three functions; float32 arithmetic ------------------------
@@ -272,7 +277,8 @@ def test_ptlab_grade_takes_a_class_that_inherits_from_nothing(capsys):
         == 0
     )
     out = capsys.readouterr().out
-    assert out.startswith("Lambertian object") and "PASSED" in out
+    assert out.startswith("Lambertian object")
+    assert "PASSED" in out
 
 
 class Float32Pi(Diffuse):
@@ -321,7 +327,8 @@ def test_no_probe_repeats_one_wo_or_n_on_every_row():
 
 def test_a_material_right_only_for_repeated_rows_fails_in_process():
     report = check_material(wrong.RightOnlyForRepeatedRows(), samples=SAMPLES)
-    assert report["energy"].verdict == "FAIL" and "without the 1/pi" in report["energy"].hint
+    assert report["energy"].verdict == "FAIL"
+    assert "without the 1/pi" in report["energy"].hint
     assert report["row independence"].verdict == "FAIL"
 
 
@@ -331,7 +338,8 @@ def test_row_independence_holds_for_float32_arithmetic_and_a_student_process(cap
     # again alone and shuffled, in float64 and in float32, gives the same answer.
     assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000"]) == 0
     out = capsys.readouterr().out
-    assert "row independence" in out and "PASSED" in out
+    assert "row independence" in out
+    assert "PASSED" in out
 
 
 # -- batches of other sizes; materials that give no direction or reflect nothing ----------------
@@ -389,8 +397,11 @@ def test_kept_rows_go_inside_a_larger_batch_at_random_places_in_their_layout():
     record = Kept.first_rows("sample", (wo, wo, u), np.zeros((rows, 3)), 8)
     arguments, places = record.inside(5000, rng)
     assert [a.shape for a in arguments] == [(5000, 3), (5000, 3), (5000, 2)]
-    assert arguments[0].dtype == np.float32 and arguments[0].flags.f_contiguous
-    assert arguments[2].flags.c_contiguous and (arguments[2] < 1).all() and (arguments[2] >= 0).all()
+    assert arguments[0].dtype == np.float32
+    assert arguments[0].flags.f_contiguous
+    assert arguments[2].flags.c_contiguous
+    assert (arguments[2] < 1).all()
+    assert (arguments[2] >= 0).all()
     np.testing.assert_array_equal(arguments[0][places], wo[:8])
     assert len(set(places.tolist())) == 8
     # The other rows are the pool's rows turned: a rotation keeps each one's length.
@@ -428,7 +439,8 @@ def test_a_material_that_gives_no_direction_fails_with_a_clear_hint():
 @pytest.mark.slow
 def test_a_black_material_passes_with_a_warning_that_says_so():
     report = check_material(Black(), samples=20_000)
-    assert report.passed and report.warned == ["reflectance"], str(report)
+    assert report.passed, str(report)
+    assert report.warned == ["reflectance"], str(report)
     assert "reflects nothing: albedo 0 for every probe" in report["reflectance"].hint
     assert str(report).endswith("PASSED, with warnings: reflectance")
 

@@ -120,7 +120,8 @@ def test_point_lights_are_picked_by_power_and_fall_off_as_the_square_of_distance
     np.testing.assert_allclose(sample.wi[~first][0], [0.6, 0.8, 0], rtol=1e-6)
     np.testing.assert_allclose(sample.pdf, np.where(first, 0.6, 0.4), rtol=1e-6)
     # No ray finds a point light: to MIS, its density is 0 (a delta light).
-    assert lights.is_delta and not lights.pdf_li(LightPoint(sample.radiance)).any()
+    assert lights.is_delta
+    assert not lights.pdf_li(LightPoint(sample.radiance)).any()
 
 
 @pytest.mark.parametrize("intensity", [[[-1.0, 1, 1]], [[0.0, 0, 0]]])
@@ -191,10 +192,12 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
     kind, stretched = sampler.pick(u, np.array([True, True, False]))
     assert np.bincount(kind).tolist() == [400, 600]
     np.testing.assert_allclose(sampler.pmf_among(np.array([True, True, False])), [0.4, 0.6, 0])
-    assert (stretched[:, 0] < 1).all() and (stretched[:, 0] >= 0).all()
+    assert (stretched[:, 0] < 1).all()
+    assert (stretched[:, 0] >= 0).all()
     # One kind to pick: u is left as it was.
     kind, stretched = sampler.pick(u, np.array([False, True, False]))
-    assert (kind == 1).all() and stretched is u
+    assert (kind == 1).all()
+    assert stretched is u
 
 
 def test_a_light_samples_density_is_the_kinds_probability_times_its_own():
@@ -231,6 +234,7 @@ def test_build_lights_shares_the_samples_and_leaves_the_given_lights_as_they_are
     np.testing.assert_allclose(sampler.pmf, shares)
     assert sampler.sky.distance == 7.0
     # The sky given is left as it is: shadow rays toward the one sampled go out of the scene.
-    assert sky.distance == 1.0 and sampler.sky is not sky
+    assert sky.distance == 1.0
+    assert sampler.sky is not sky
     np.testing.assert_array_equal(sampler.sky.radiance, sky.radiance)
     assert build_lights(triangles[2:], radiance[2:], np.zeros(1)) is None  # no light at all

@@ -62,7 +62,7 @@ def floor_under_a_light(light: np.ndarray, radiance: float, albedo: float = 0.5)
 
 def vertices_below(scene: Scene, accel, points: np.ndarray, seed: int = 0):
     """The ``SurfaceHit`` of rays shot straight down onto the floor at ``points`` (N, 3)."""
-    origins = points + [0.0, 0.5, 0.0]
+    origins = points + np.array([0.0, 0.5, 0.0])
     dirs = np.tile([0.0, -1.0, 0.0], (len(points), 1))
     paths = camera_paths(origins, dirs, seed)
     return surface_hit(scene, paths, accel.intersect(paths.origins, paths.dirs))
@@ -142,7 +142,7 @@ def test_throughput_roulette_survives_with_the_largest_channel_at_most_one(floor
     np.testing.assert_array_equal(hit.throughput[1], throughput[1])  # bright: never dies
 
 
-@pytest.mark.parametrize("rr, start", [(0.1, 3), ("throughput", None)])
+@pytest.mark.parametrize(("rr", "start"), [(0.1, 3), ("throughput", None)])
 def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
     settings = PathSettings(rr=rr, rr_min_depth=start)
     dim = np.full((100, 3), 0.01, np.float32)  # would die almost surely
@@ -217,7 +217,7 @@ def test_direct_light_behind_a_blocker_is_black(floor):
     accel = make_accelerator(blocked.triangles, "embree")
     # Rays from below the blocker, down to the floor under the light.
     points = np.tile([0.05, 0.0, 0.02], (256, 1))
-    paths = camera_paths(points + [0, 0.25, 0], np.tile([0.0, -1.0, 0.0], (256, 1)))
+    paths = camera_paths(points + np.array([0, 0.25, 0]), np.tile([0.0, -1.0, 0.0], (256, 1)))
     hit = surface_hit(blocked, paths, accel.intersect(paths.origins, paths.dirs))
     film = np.zeros((256, 3))
     u = np.random.default_rng(4).random((256, 2)).astype(np.float32)
@@ -229,7 +229,7 @@ def test_direct_light_behind_a_blocker_is_black(floor):
 
 
 @pytest.mark.parametrize(
-    "strategy, rr", [("nee", "throughput"), ("bsdf", "throughput"), ("mis", "throughput"), ("nee", 0.8)]
+    ("strategy", "rr"), [("nee", "throughput"), ("bsdf", "throughput"), ("mis", "throughput"), ("nee", 0.8)]
 )
 def test_paths_in_a_furnace_see_emission_over_one_minus_albedo(strategy, rr):
     # Every surface of a closed sphere emits Le and reflects albedo a: every ray sees

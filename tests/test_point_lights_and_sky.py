@@ -66,7 +66,7 @@ ONE_LIGHT = ([[0.0, HEIGHT, 0.0]], [[10.0, 20.0, 30.0]])
 
 
 @pytest.mark.parametrize(
-    "integrator, strategy, backend",
+    ("integrator", "strategy", "backend"),
     [
         ("path", "nee", "embree"),
         ("path", "mis", "embree"),
@@ -104,7 +104,7 @@ def z_score(image: np.ndarray, expected: np.ndarray) -> float:
 
 
 @pytest.mark.parametrize(
-    "integrator, strategy", [("path", "nee"), ("path", "mis"), ("path", "bsdf"), ("whitted", "nee")]
+    ("integrator", "strategy"), [("path", "nee"), ("path", "mis"), ("path", "bsdf"), ("whitted", "nee")]
 )
 def test_two_point_lights_and_a_sky_add_up(integrator, strategy):
     # Light sampling picks one of the two point lights (by power, 3 : 2) or the sky (1/2)
@@ -180,7 +180,8 @@ def test_whitted_sees_the_sky_but_is_not_lit_by_it():
     image = ptlab.render(sky_furnace(0.7), integrator="whitted", **options)
     covered = ptlab.render(sky_furnace(0.7), integrator="albedo", **options)
     np.testing.assert_allclose(image, 0.7 * (1 - covered), atol=1e-6)
-    assert (covered == 1).any() and (covered == 0).any()
+    assert (covered == 1).any()
+    assert (covered == 0).any()
 
 
 def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
@@ -203,7 +204,8 @@ def test_every_strategy_agrees_under_an_area_light_a_point_light_and_the_sky():
     )
     assert scene.area_lights.normals[0, 1] == -1  # the lamp shines down
     # The scene keeps the lights it was given; the light sampler picks the sky half the time.
-    assert scene.point_lights is point_lights and scene.sky is sky
+    assert scene.point_lights is point_lights
+    assert scene.sky is sky
     assert scene.light_sampler.pmf[scene.light_sampler.kinds.index(scene.light_sampler.sky)] == 0.5
     images = {
         strategy: ptlab.render(

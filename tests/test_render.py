@@ -62,7 +62,8 @@ def test_furnace_with_the_homeworks_fixed_roulette(sampling, sampler):
 def test_furnace_is_exact_per_pixel_without_noise_in_emission_only_mode():
     # max_depth 0: the camera sees emission and nothing else, exactly Le in every pixel.
     image = ptlab.render(closed_box_scene(0.5, 0.3), spp=2, res=(16, 12), max_depth=0)
-    assert image.shape == (12, 16, 3) and image.dtype == np.float32
+    assert image.shape == (12, 16, 3)
+    assert image.dtype == np.float32
     np.testing.assert_allclose(image, 0.3, rtol=1e-6)
 
 
@@ -120,7 +121,8 @@ def test_pixels_that_see_only_the_light_show_its_radiance(cornell):
     np.testing.assert_allclose(direct[on_light], np.broadcast_to(radiance, (on_light.sum(), 3)), rtol=1e-5)
     # The full estimate adds what the light's own albedo (0.65) reflects: a little more.
     full = ptlab.render(cornell, spp=16, res=64)[on_light]
-    assert np.all(full >= radiance * (1 - 1e-5)) and np.all(full <= radiance * 1.06)
+    assert np.all(full >= radiance * (1 - 1e-5))
+    assert np.all(full <= radiance * 1.06)
 
 
 def test_backends_give_the_same_cornell_image(cornell):
@@ -197,7 +199,8 @@ def test_nan_from_a_material_never_reaches_the_image_and_is_counted(cornell):
         image = ptlab.render(scene, spp=4, res=24, workers=1)
     assert np.isfinite(image).all()
     # The finite contributions survive: the light and the lit walls still show.
-    assert image.max() > 10 and image.mean() > 0.1
+    assert image.max() > 10
+    assert image.mean() > 0.1
     # Counted, not hidden; the same count whatever the tiles (each job counts its own).
     counts = {
         tile: render_result(scene, spp=4, res=24, workers=1, tile_size=tile).nonfinite for tile in (8, 24)
@@ -256,7 +259,7 @@ def test_a_mirror_shows_the_light_it_reflects():
     np.testing.assert_allclose(image, 1.0, rtol=1e-5)
 
 
-@pytest.mark.parametrize("strategy, heuristic", [("bsdf", "power"), ("mis", "power"), ("mis", "balance")])
+@pytest.mark.parametrize(("strategy", "heuristic"), [("bsdf", "power"), ("mis", "power"), ("mis", "balance")])
 def test_every_strategy_renders_the_furnace(strategy, heuristic):
     means = image_means(
         closed_box_scene(0.5, 0.3),
@@ -279,7 +282,8 @@ def test_roulette_starts_at_the_given_depth():
         ptlab.render_result(scene, spp=8, res=16, workers=1, rr=0.5, rr_depth=depth) for depth in (0, 4)
     )
     assert late.rays > 2 * early.rays
-    assert late.settings["rr_depth"] == 4 and early.settings["rr_depth"] == 0
+    assert late.settings["rr_depth"] == 4
+    assert early.settings["rr_depth"] == 0
     means = image_means(scene, seeds=range(10), spp=16, res=16, workers=1, rr=0.5, rr_depth=4)
     standard_error = means[:, 0].std(ddof=1) / np.sqrt(len(means))
     assert abs(means[:, 0].mean() - 0.6) < 3 * standard_error + 1e-3

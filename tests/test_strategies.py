@@ -339,7 +339,7 @@ INTEGRATORS = [("path", "nee"), ("path", "bsdf"), ("path", "mis"), ("whitted", "
 
 @pytest.mark.parametrize("backend", ["embree", pytest.param("numpy", marks=pytest.mark.slow)])
 @pytest.mark.parametrize(
-    "integrator, strategy", INTEGRATORS, ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS]
+    ("integrator", "strategy"), INTEGRATORS, ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS]
 )
 #: games101-hw5's 100k triangles would take the numpy backend 3 s a render to build:
 #: tests/test_games101_scenes.py checks it the same way, with one structure per backend.

@@ -61,16 +61,21 @@ def test_plain_data_crosses_as_itself():
         "tile": Tile(1, 0, 0, 4, 4),
     }
     back = _roundtrip(value)
-    assert back["a"] == value["a"] and back[(1, 2)] == {3, 4} and back["tile"] == Tile(1, 0, 0, 4, 4)
+    assert back["a"] == value["a"]
+    assert back[(1, 2)] == {3, 4}
+    assert back["tile"] == Tile(1, 0, 0, 4, 4)
     for got, sent in zip(back["arrays"], value["arrays"], strict=True):
-        assert got.dtype == sent.dtype and got.shape == sent.shape and np.array_equal(got, sent)
-    assert type(back["scalar"]) is np.float32 and back["scalar"] == 1.5
+        assert got.dtype == sent.dtype
+        assert got.shape == sent.shape
+        assert np.array_equal(got, sent)
+    assert type(back["scalar"]) is np.float32
+    assert back["scalar"] == 1.5
     assert _roundtrip(iter(range(3))) == [0, 1, 2]
     assert _roundtrip(object())["type"] == "object"  # a handle, not the object
 
 
 @pytest.mark.parametrize(
-    "tree, parts",
+    ("tree", "parts"),
     [
         ({"pickle": "x"}, []),
         ({"array": 3}, []),
@@ -184,14 +189,18 @@ def test_calls_change_the_graders_arguments_as_they_would_in_its_own_process(tmp
     with ProcessGuard() as guard, Submission(path, guard, time_limit=30, rules=rules) as submission:
         module = submission.module
         assert module.add_into(film, paths, rng) == expected
-        assert (film == 1).all() and (paths.throughput == 2).all() and paths.pixel[0] == 7
+        assert (film == 1).all()
+        assert (paths.throughput == 2).all()
+        assert paths.pixel[0] == 7
         assert rng.random() == np.random.default_rng(1).random(2)[1]  # its state moved on
         with pytest.raises(StudentError) as raised:
             module.fail()
         assert type(raised.value).__name__ == "ZeroDivisionError"
         assert raised.value.describe() == "ZeroDivisionError: oops (student.py:8)"
         material, x = module.Material(3), np.ones(2)
-        assert material.k == 3 and material.eval(x) == 3 and (x == 1).all()  # methods: results only
+        assert material.k == 3
+        assert material.eval(x) == 3
+        assert (x == 1).all()
         assert getattr(module, "missing", None) is None
 
 
@@ -237,7 +246,7 @@ def test_the_guard_ends_processes_that_left_their_session_and_their_parent():
 
 
 @pytest.mark.parametrize(
-    "source, origin",
+    ("source", "origin"),
     [
         ("from ptlab.integrators.path import trace_paths", "ptlab.integrators.path.trace_paths"),
         (
@@ -272,7 +281,7 @@ def test_functions_that_are_ptlabs_own(source, origin):
 
 
 @pytest.mark.parametrize(
-    "source, origin",
+    ("source", "origin"),
     [
         ("import ptlab.materials\nclass L(ptlab.materials.Diffuse):\n    pass", "ptlab.materials.Diffuse"),
         (
@@ -313,7 +322,8 @@ def test_output_of_the_students_code_is_passed_on_not_mixed_into_results(tmp_pat
     path.write_text("print('hello from import')\n" + RIGHT_CAMERA.read_text())
     lines = []
     result = grade(chapter(1), path, on_output=lines.append)
-    assert result.full_marks and lines.count("hello from import") == len(chapter(1).checks)
+    assert result.full_marks
+    assert lines.count("hello from import") == len(chapter(1).checks)
 
 
 def test_the_schema_encoder_refuses_arrays_of_objects():

@@ -292,7 +292,8 @@ def test_glass_slab_reflects_kr_and_transmits_the_rest_through_both_faces(room_i
         d, np.cross(v1 - v0, v2 - v0) / np.linalg.norm(np.cross(v1 - v0, v2 - v0)), SLAB_ETA
     )
     assert 0.1 < kr < 0.3
-    assert branches["R"].wall == "right" and np.allclose(branches["R"].weight, kr)
+    assert branches["R"].wall == "right"
+    assert np.allclose(branches["R"].weight, kr)
     assert branches["TT"].wall == "far"
     np.testing.assert_allclose(branches["TT"].weight, (1 - kr) ** 2 * np.square(SLAB_TRANSMITTANCE))
     assert {leaf.wall for leaf in leaves} == {"right", "far"}
@@ -306,7 +307,7 @@ def test_glass_prism_reflects_totally_inside(room_images, backend):
     # reflected whole (kr = 1, no refracted ray) up through the top face to the ceiling,
     # the classic porro-prism turn.
     scene = mirror_glass_room()
-    o, d = pixel_rays(scene, RES, 12, 15)[0]
+    _o, d = pixel_rays(scene, RES, 12, 15)[0]
     inside, _ = homework_refract(d, np.array([0.0, 0.0, -1.0]), PRISM_ETA)
     cos_hypotenuse = inside @ np.array([0.0, -1.0, 1.0]) / math.sqrt(2)
     assert cos_hypotenuse < math.cos(math.asin(1 / PRISM_ETA))
@@ -349,7 +350,8 @@ def test_the_glass_split_is_the_dielectrics_own_choice_averaged():
     wi_reflect, one = glass.sample_weight(wo, n, always, front)
     wi_refract, weight_refract = glass.sample_weight(wo, n, always + np.float32(0.9999999), front)
     kr = weight_r[:, 0]
-    assert (kr == 1).sum() > 20 and ((kr > 0) & (kr < 1)).sum() > 200  # both regimes tested
+    assert (kr == 1).sum() > 20
+    assert ((kr > 0) & (kr < 1)).sum() > 200
     np.testing.assert_allclose(one, 1)
     np.testing.assert_allclose(wi_r, wi_reflect, atol=1e-6)
     refracts = kr < 1
@@ -395,7 +397,8 @@ def test_diffuse_surfaces_get_no_indirect_light(cornell):
     whitted = ptlab.render(cornell, integrator="whitted", spp=4, res=32, workers=1)
     path = ptlab.render(cornell, integrator="path", spp=4, res=32, workers=1)
     assert (whitted[on_ceiling] == 0).all()
-    assert path[on_ceiling].mean() > 0.05 and (path[on_ceiling].max(axis=1) > 0).mean() > 0.9
+    assert path[on_ceiling].mean() > 0.05
+    assert (path[on_ceiling].max(axis=1) > 0).mean() > 0.9
 
 
 def renders(scene, seeds, **kwargs) -> np.ndarray:
@@ -444,7 +447,8 @@ def test_direct_light_agrees_with_the_path_tracer_at_one_bounce():
 def test_cornell_boxes_render_clean_images_and_bright_lights(name):
     scene = ptlab.load_scene(name)
     image = ptlab.render(scene, integrator="whitted", spp=4, res=64, workers=1)
-    assert np.isfinite(image).all() and (image >= 0).all()
+    assert np.isfinite(image).all()
+    assert (image >= 0).all()
     on_light = footprint_on(scene, 64, emitters(scene)) == 1
     assert on_light.sum() >= 4
     radiance = scene.materials[scene.material_names.index("light")].emission

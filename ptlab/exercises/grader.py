@@ -222,7 +222,7 @@ def _import_what_checks_use(rules) -> None:
     libraries (trimesh and SciPy take a second or more), and the answers' fingerprints.
     Nothing is imported once a student's process runs, which could plant modules where an
     import would look (the current folder, were it on ``sys.path``)."""
-    import scipy.special  # noqa: F401
+    import scipy.special
     import scipy.stats  # noqa: F401
     import trimesh  # noqa: F401
 

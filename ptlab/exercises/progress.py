@@ -143,7 +143,7 @@ def remember_folder(folder: Path) -> None:
         return
     try:
         state_file().parent.mkdir(parents=True, exist_ok=True)
-        _write_json(state_file(), names + [folder])
+        _write_json(state_file(), [*names, folder])
     except OSError:
         pass
 

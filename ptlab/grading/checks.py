@@ -526,20 +526,7 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float, rng: np.ra
                 f"surface, where pdf is 0 (expected {expected:.1%}): sample returns directions in the "
                 "wrong hemisphere (local z not mapped to n, or a flipped sign?)"
             )
-    best, best_p = None, -1.0
-    models = _candidate_integrals(material, lobes, rng)
-    for name in CANDIDATES:
-        p_min = 1.0
-        for lobe, model in zip(lobes, models, strict=True):
-            m = model[name]
-            successes = lobe.samples - lobe.failed
-            if successes == 0 or not np.isfinite(m).all() or m.sum() <= 0:
-                p_min = 0.0
-                break
-            statistic, dof = pooled_chi_square(lobe.observed, successes * m / m.sum())
-            p_min = min(p_min, chi2_sf(statistic, dof))
-        if p_min > best_p:
-            best, best_p = name, p_min
+    best, best_p = _best_candidate(material, lobes, rng)
     if best_p >= threshold / 10:
         factor = float(
             np.mean([lobe.pdf_integral / max(1e-300, 1 - lobe.failed / lobe.samples) for lobe in lobes])
@@ -565,6 +552,26 @@ def explain_chi_square(material, lobes: list[Lobe], threshold: float, rng: np.ra
         "the samples' histogram does not follow pdf (see --plots): sample and pdf describe "
         "different distributions (a wrong warp, the pdf of another sampling, a missing Jacobian?)"
     )
+
+
+def _best_candidate(material, lobes: list[Lobe], rng: np.random.Generator) -> tuple[str, float]:
+    """The name of the ``CANDIDATES`` mistake that the successful samples fit best, and its
+    p-value: the least, over the lobes, of Pearson's test against pdf * g."""
+    best, best_p = "", -1.0
+    models = _candidate_integrals(material, lobes, rng)
+    for name in CANDIDATES:
+        p_min = 1.0
+        for lobe, model in zip(lobes, models, strict=True):
+            m = model[name]
+            successes = lobe.samples - lobe.failed
+            if successes == 0 or not np.isfinite(m).all() or m.sum() <= 0:
+                p_min = 0.0
+                break
+            statistic, dof = pooled_chi_square(lobe.observed, successes * m / m.sum())
+            p_min = min(p_min, chi2_sf(statistic, dof))
+        if p_min > best_p:
+            best, best_p = name, p_min
+    return best, best_p
 
 
 def _candidate_integrals(material, lobes: list[Lobe], rng: np.random.Generator) -> list[dict]:
@@ -1190,8 +1197,9 @@ def check_row_independence(
             ("alone", tuple(np.concatenate([a[j] for a in alone]) for j in range(len(record.answer))), None),
             ("in another order", _ask_again(material, record, order), order),
         ]
-        for size in sizes:
-            asked.append((f"inside a batch of {size} rows", *_ask_inside(material, record, size, rng)))
+        asked += [
+            (f"inside a batch of {size} rows", *_ask_inside(material, record, size, rng)) for size in sizes
+        ]
         for how, answers, order_of in asked:
             for j, answer in enumerate(record.answer):
                 expected = answer if order_of is None else answer[order_of]

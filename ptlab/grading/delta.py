@@ -57,7 +57,7 @@ ENERGY_SLACK = 1e-3
 def hammersley(count: int) -> np.ndarray:
     """(count, 2) points: u0 = (i + 1/2) / count, u1 = i's bits reversed (a (0, 2)-net in base 2)."""
     i = np.arange(count, dtype=np.uint64)
-    bits = int(math.ceil(math.log2(count)))
+    bits = math.ceil(math.log2(count))
     reversed_ = np.zeros_like(i)
     for b in range(bits):
         reversed_ |= ((i >> np.uint64(b)) & np.uint64(1)) << np.uint64(bits - 1 - b)

@@ -108,4 +108,4 @@ class Report:
         ]
         for row in rows:
             lines += line(row)
-        return "\n".join(lines + [verdict_line])
+        return "\n".join([*lines, verdict_line])

@@ -259,7 +259,7 @@ def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
         result = getattr(material, method)(*(take_rows(a, rows) for a in arrays))
         parts = result if isinstance(result, tuple) else (result,)
         if not outputs:
-            outputs = tuple(np.zeros((len(hit.prim),) + r.shape[1:], r.dtype, order="F") for r in parts)
+            outputs = tuple(np.zeros((len(hit.prim), *r.shape[1:]), r.dtype, order="F") for r in parts)
         for out, part in zip(outputs, parts, strict=True):
             out[rows] = part
     return outputs if len(outputs) > 1 else outputs[0]

@@ -37,9 +37,9 @@ if TYPE_CHECKING:
     )
 
 __all__ = [
+    "DEFAULT_RES",
     "SPP_PER_PASS",
     "TILE_SIZE",
-    "DEFAULT_RES",
     "RenderOptions",
     "RenderResult",
     "pass_schedule",

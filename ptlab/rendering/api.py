@@ -221,10 +221,7 @@ def _progress_reports(progress, film: Film) -> tuple[Callable[[Film], None] | No
 
 def pass_schedule(spp: int, spp_per_pass: int | None = None) -> list[int]:
     """Samples per pixel of each pass of a render (``SPP_PER_PASS`` by default)."""
-    if spp_per_pass is None:
-        spp_per_pass = SPP_PER_PASS
-    else:
-        spp_per_pass = check_integer("spp per pass", spp_per_pass, 1)
+    spp_per_pass = SPP_PER_PASS if spp_per_pass is None else check_integer("spp per pass", spp_per_pass, 1)
     return pass_sizes(spp, min(spp, spp_per_pass))
 
 

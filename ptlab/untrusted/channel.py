@@ -11,6 +11,7 @@ mean is decided by ``ptlab.untrusted.plain_data``. The child's side (``read_mess
 
 from __future__ import annotations
 
+import contextlib
 import fcntl
 import os
 import select
@@ -47,10 +48,8 @@ class ChannelError(Exception):
 
 def enlarge(fd: int) -> None:
     """Give the pipe ``fd`` a 1 MiB buffer where the system allows it."""
-    try:
+    with contextlib.suppress(AttributeError, OSError):
         fcntl.fcntl(fd, fcntl.F_SETPIPE_SZ, PIPE_SIZE)
-    except (AttributeError, OSError):
-        pass
 
 
 class Channel:
@@ -194,17 +193,15 @@ class Channel:
             return
         try:
             self.on_output(shown(line.decode("utf-8", "replace").removesuffix("\r")))
-        except Exception:  # noqa: BLE001 (whatever it was, the relay is what failed, not the check)
+        except Exception:
             self.on_output = None
 
     def close(self) -> None:
         self.flush_output()
         for fd in (self.send_fd, self.receive_fd, self.output_fd):
             if fd is not None:
-                try:
+                with contextlib.suppress(OSError):
                     os.close(fd)
-                except OSError:
-                    pass
         self.send_fd = self.receive_fd = self.output_fd = None
 
 

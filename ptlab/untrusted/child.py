@@ -26,6 +26,7 @@ those into its own arguments, as if the function had run in its process.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import importlib
 import importlib.util
@@ -141,7 +142,7 @@ def import_file(path: Path):
     except Refused as error:  # one of the grader's rules (ptlab.untrusted.confinement)
         sys.modules.pop(module_name, None)
         raise GradeLoadError(f"{path.name}: {_text(error)}") from None
-    except BaseException as error:  # anything the student's module raises on import  # noqa: B036
+    except BaseException as error:  # anything the student's module raises on import
         sys.modules.pop(module_name, None)
         raise GradeLoadError(
             f"{path.name}: importing it raised {type(error).__name__}: {_text(error)}"
@@ -253,10 +254,8 @@ def _close_inherited(keep: set[int]) -> None:
         open_fds = range(3, 1024)
     for fd in open_fds:
         if fd > 2 and fd not in keep:
-            try:
+            with contextlib.suppress(OSError):
                 os.close(fd)
-            except OSError:
-                pass
     # Forget them: multiprocessing's own records of the inherited ends just closed.
     forkserver._forkserver._forkserver_alive_fd = None
     forkserver._forkserver._inherited_fds = None
@@ -265,13 +264,11 @@ def _close_inherited(keep: set[int]) -> None:
 
 
 def _lower_limit(name: int, value: int) -> None:
-    soft, hard = resource.getrlimit(name)
+    _soft, hard = resource.getrlimit(name)
     if hard != resource.RLIM_INFINITY:
         value = min(value, hard)
-    try:
+    with contextlib.suppress(ValueError, OSError):
         resource.setrlimit(name, (value, value))
-    except (ValueError, OSError):
-        pass
 
 
 def _user_tasks() -> int:
@@ -316,7 +313,7 @@ class _Server:
             envelope = getattr(self, f"do_{operation}")(encoder, *arguments)
         except UnsendableError as error:
             envelope = {"unreadable": str(error)}
-        except BaseException as error:  # the student's code raised: report it  # noqa: B036
+        except BaseException as error:  # the student's code raised: report it
             envelope = {"raised": self.describe_error(error)}
         self.send(dict(id=request_id, **envelope), encoder.parts)
 
@@ -434,7 +431,7 @@ def _code_file(value) -> Path | None:
 def _text(error: BaseException) -> str:
     try:
         return str(error)[:MAX_MESSAGE_TEXT]
-    except BaseException:  # noqa: B036 (a student's __str__ that raises)
+    except BaseException:
         return f"(a {type(error).__name__} whose message cannot be shown)"
 
 
@@ -493,8 +490,8 @@ class _Snapshot:
         elif depth < 4:
             for step, child in _children(value):
                 if _rebindable(value):
-                    self.entries.append((path + [step], "identity", value, child))
-                self._walk(child, path + [step], depth + 1)
+                    self.entries.append(([*path, step], "identity", value, child))
+                self._walk(child, [*path, step], depth + 1)
 
     def changes(self) -> list[tuple]:
         found = []

@@ -193,14 +193,24 @@ def _tokens(node: ast.AST) -> list[str]:
     if isinstance(node, ast.BoolOp):
         return [f"BoolOp:{type(node.op).__name__}", *_sorted_operands(node.values)]
     if isinstance(node, ast.Compare) and len(node.ops) == 1:
-        op, left, right = type(node.ops[0]), node.left, node.comparators[0]
-        if op in _MIRRORED:
-            op, left, right = _MIRRORED[op], right, left
-        if op in _SYMMETRIC:
-            return [f"Compare:{op.__name__}", *_sorted_operands([left, right])]
-        return [f"Compare:{op.__name__}", *_tokens(left), *_tokens(right)]
+        return _comparison(node)
     if isinstance(node, ast.Global | ast.Nonlocal | ast.Pass):
         return []
+    return _node_and_children(node)
+
+
+def _comparison(node: ast.Compare) -> list[str]:
+    """``a > b`` as ``b < a`` reads, and the operands of ``==`` and ``!=`` in sorted order."""
+    op, left, right = type(node.ops[0]), node.left, node.comparators[0]
+    if op in _MIRRORED:
+        op, left, right = _MIRRORED[op], right, left
+    if op in _SYMMETRIC:
+        return [f"Compare:{op.__name__}", *_sorted_operands([left, right])]
+    return [f"Compare:{op.__name__}", *_tokens(left), *_tokens(right)]
+
+
+def _node_and_children(node: ast.AST) -> list[str]:
+    """Any other node: its label, then its children's tokens (statements reduced)."""
     out = [_label(node)]
     for name, value in ast.iter_fields(node):
         if name in _DROPPED_FIELDS or (name == "args" and isinstance(node, FunctionNode | ast.Lambda)):

@@ -98,10 +98,7 @@ class Encoder:
             if isinstance(value, container):
                 return {tag: [self.encode(item, depth + 1) for item in value]}
         if isinstance(value, Iterator):
-            items = list(islice(value, MAX_ITEMS + 1))
-            if len(items) > MAX_ITEMS:
-                raise UnsendableError(f"an iterator of more than {MAX_ITEMS:,} items")
-            return {"list": [self.encode(item, depth + 1) for item in items]}
+            return {"list": [self.encode(item, depth + 1) for item in _items_of(value)]}
         if callable(value) and not is_dataclass(value):
             return dict(function=self.keep(value), **self.describe(value))
         return {"object": self.keep(value), "type": kind.__name__}
@@ -119,6 +116,14 @@ class Encoder:
             raise UnsendableError(f"an array of {array.dtype} (the grader reads arrays of numbers)")
         self.parts.append(npy_part(array))
         return len(self.parts) - 1
+
+
+def _items_of(iterator: Iterator) -> list:
+    """The items of an iterator (sent as a list), at most ``MAX_ITEMS`` of them."""
+    items = list(islice(iterator, MAX_ITEMS + 1))
+    if len(items) > MAX_ITEMS:
+        raise UnsendableError(f"an iterator of more than {MAX_ITEMS:,} items")
+    return items
 
 
 def npy_part(array: np.ndarray) -> tuple[bytes, memoryview]:
@@ -229,20 +234,8 @@ class Decoder:
             raise MalformedError(f"a value of JSON type {type(tree).__name__}")
         tag = next(iter(tree))
         body = tree[tag]
-        if tag in ("list", "tuple", "set") and len(tree) == 1:
-            items = [self.decode(item, depth + 1) for item in self._list(body)]
-            try:
-                return {"list": list, "tuple": tuple, "set": set}[tag](items)
-            except TypeError:
-                raise MalformedError("a set of unhashable items") from None
-        if tag == "dict" and len(tree) == 1:
-            pairs = [self._list(pair) for pair in self._list(body)]
-            if any(len(pair) != 2 for pair in pairs):
-                raise MalformedError("a dict entry that is not a [key, value] pair")
-            try:
-                return {self.decode(k, depth + 1): self.decode(v, depth + 1) for k, v in pairs}
-            except TypeError:
-                raise MalformedError("a dict with an unhashable key") from None
+        if tag in ("list", "tuple", "set", "dict") and len(tree) == 1:
+            return self._collection(tag, body, depth)
         if tag == "array" and len(tree) == 1:
             if type(body) is not int or not 0 <= body < len(self.arrays):
                 raise MalformedError(f"a reference to array part {body!r}")
@@ -254,10 +247,31 @@ class Decoder:
         if tag == "function" and set(tree) == {"function", "name", "kind", "origin", "parameters"}:
             return self.remote(self._callable_tag(tree))
         if tag == "object" and set(tree) == {"object", "type"}:
-            if type(body) is not int or type(tree["type"]) is not str:
-                raise MalformedError("an object tag without a handle and a type name")
-            return self.remote({"object": body, "type": clean_text(tree["type"])})
+            return self.remote(self._object_tag(body, tree["type"]))
         raise MalformedError(f"an unknown tag {tag!r}")
+
+    @staticmethod
+    def _object_tag(handle, type_name) -> dict:
+        """An object's tag (its handle in the other process and its type's name), checked."""
+        if type(handle) is not int or type(type_name) is not str:
+            raise MalformedError("an object tag without a handle and a type name")
+        return {"object": handle, "type": clean_text(type_name)}
+
+    def _collection(self, tag: str, body, depth: int):
+        """A list, tuple, set or dict (a list of [key, value] pairs) of decoded items."""
+        if tag == "dict":
+            pairs = [self._list(pair) for pair in self._list(body)]
+            if any(len(pair) != 2 for pair in pairs):
+                raise MalformedError("a dict entry that is not a [key, value] pair")
+            try:
+                return {self.decode(k, depth + 1): self.decode(v, depth + 1) for k, v in pairs}
+            except TypeError:
+                raise MalformedError("a dict with an unhashable key") from None
+        items = [self.decode(item, depth + 1) for item in self._list(body)]
+        try:
+            return {"list": list, "tuple": tuple, "set": set}[tag](items)
+        except TypeError:
+            raise MalformedError("a set of unhashable items") from None
 
     @staticmethod
     def _list(value) -> list:

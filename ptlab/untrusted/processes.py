@@ -16,6 +16,7 @@ it is given, which a process that left the group escapes (see docs/grading-secur
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import signal
@@ -163,17 +164,13 @@ class ProcessGuard:
 
 
 def _signal(pid: int, signum: int) -> None:
-    try:
+    with contextlib.suppress(ProcessLookupError, PermissionError):
         os.kill(pid, signum)
-    except (ProcessLookupError, PermissionError):
-        pass
 
 
 def _signal_group(pid: int, signum: int) -> None:
-    try:
+    with contextlib.suppress(ProcessLookupError, PermissionError):
         os.killpg(pid, signum)
-    except (ProcessLookupError, PermissionError):
-        pass
 
 
 def _reap(pids: set[int], me: int) -> None:

@@ -15,6 +15,7 @@ its message and the line of the student's file it came from.
 
 from __future__ import annotations
 
+import contextlib
 import inspect
 from pathlib import Path
 from typing import TYPE_CHECKING, Protocol
@@ -108,15 +109,14 @@ class RemoteFunction:
         #: module it was taken from, for the graded functions; None drops every change.
         self.arguments = None
         if tag["parameters"] is not None:
-            try:
+            # (names or an order Python would not accept: no signature)
+            with contextlib.suppress(TypeError, ValueError):
                 self.__signature__ = inspect.Signature(
                     [
                         inspect.Parameter(name, inspect._ParameterKind(kind))
                         for name, kind in tag["parameters"]
                     ]
                 )
-            except (TypeError, ValueError):  # names or an order Python would not accept
-                pass
 
     @property
     def is_class(self) -> bool:

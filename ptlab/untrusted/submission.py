@@ -72,7 +72,7 @@ MAX_REPLY = 1 << 30
 IMPORT_TIME_LIMIT = 60.0
 
 
-class SubmissionFailed(BaseException):  # noqa: N818 (ends a check, like KeyboardInterrupt)
+class SubmissionFailed(BaseException):
     """The student's process cannot go on: too slow, ended, or a reply out of the schema.
 
     Attributes:
@@ -590,9 +590,7 @@ def _step(container, kind: str, key):
 
 
 def _rebind(container, kind: str, key, value) -> None:
-    if kind == "item" and isinstance(container, list):
-        container[key] = value
-    elif kind == "key" and isinstance(container, dict):
+    if (kind == "item" and isinstance(container, list)) or (kind == "key" and isinstance(container, dict)):
         container[key] = value
     elif kind == "field" and is_dataclass(container) and not type(container).__dataclass_params__.frozen:
         setattr(container, key, value)

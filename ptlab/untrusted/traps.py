@@ -20,7 +20,7 @@ import types
 from ptlab.untrusted.copies import ANSWER_METHODS, resolve
 
 
-class LibraryAnswerCalled(BaseException):  # noqa: N818 (a verdict, not an error)
+class LibraryAnswerCalled(BaseException):
     """The student's code called one of ptlab's own answers.
 
     A ``BaseException``, so that an ``except Exception`` in the student's code does not

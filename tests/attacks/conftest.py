@@ -13,7 +13,7 @@ from attacks.hostile import SUBMISSIONS
 
 @pytest.fixture(autouse=True)
 def _nothing_left_behind(nothing_left_behind):
-    yield
+    return
 
 
 @pytest.fixture

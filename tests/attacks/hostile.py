@@ -30,5 +30,6 @@ def assert_honest_failure(result, reason: str = "") -> None:
     """Every check of the ``Grade`` failed, with ``reason`` in its message and no traceback."""
     assert result.score == 0, result.table()
     for check in result.results:
-        assert not check.passed and reason in check.message, result.table()
+        assert not check.passed, result.table()
+        assert reason in check.message, result.table()
         assert "Traceback" not in check.message

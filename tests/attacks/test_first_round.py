@@ -43,7 +43,7 @@ def test_the_grader_never_unpickles_what_the_student_sends(attack):
 
 
 @pytest.mark.parametrize(
-    "source, reason",
+    ("source", "reason"),
     [
         ("import os\nos._exit(0)\n", "ended during importing your file"),
         ("import time\ntime.sleep(3600)\n", "took longer than"),
@@ -67,15 +67,18 @@ def test_processes_that_outlive_the_grader_are_ended_before_it_writes_results(at
         main(["exercise", "check", "1", str(path), "--json", str(result_file), "--timeout-scale", "0.3"]) == 1
     )
     pids = printed_pids(capsys.readouterr().err)
-    assert len(pids) >= 2 and alive(pids) == []
+    assert len(pids) >= 2
+    assert alive(pids) == []
     time.sleep(0.5)  # time for a survivor to rewrite the result
     written = json.loads(result_file.read_text())
-    assert written["score"] == 0 and written["full_marks"] is False
+    assert written["score"] == 0
+    assert written["full_marks"] is False
     # The forged progress record: chapter 1's entry is the real result now, and chapter 9's
     # forged pass (for a file that is not there) is not shown as passed.
     assert main(["exercise", "list", str(path.parent)]) == 0
     rows = {line[:2]: line for line in capsys.readouterr().out.splitlines()[2:]}
-    assert "0/10 points" in rows["01"] and "passed" not in rows["09"]
+    assert "0/10 points" in rows["01"]
+    assert "passed" not in rows["09"]
 
 
 def test_a_process_holding_the_graders_stdout_does_not_keep_its_reader_waiting(attack, tmp_path):
@@ -104,10 +107,12 @@ def test_a_process_holding_the_graders_stdout_does_not_keep_its_reader_waiting(a
         stderr.seek(0)
         err = stderr.read()
     pids = printed_pids(err)
-    assert len(pids) >= 2 and alive(pids) == [], err
+    assert len(pids) >= 2, err
+    assert alive(pids) == [], err
     out = grader.stdout.read()
     grader.stdout.close()
-    assert grader.returncode == 1 and "0/10" in out
+    assert grader.returncode == 1
+    assert "0/10" in out
     assert "Traceback" not in err
 
 
@@ -156,7 +161,8 @@ def test_a_malformed_reply_fails_the_check_with_one_line_in_bounded_time(tmp_pat
     assert time.monotonic() - start < 15
     assert not result.passed
     expected = "took longer than" if what == "a half message" else "malformed reply"
-    assert expected in result.message and "Traceback" not in result.message
+    assert expected in result.message
+    assert "Traceback" not in result.message
 
 
 def test_the_librarys_answers_under_the_students_names_earn_nothing(attack):
@@ -180,7 +186,8 @@ def test_what_the_students_code_says_cannot_forge_lines_of_the_table(tmp_path):
     )
     result = grade(chapter(1), path, timeout_scale=0.2)
     lines = result.table().splitlines()
-    assert len(lines) == 3 + len(chapter(1).checks) + 1 and result.score == 0
+    assert len(lines) == 3 + len(chapter(1).checks) + 1
+    assert result.score == 0
     assert all("\x1b" not in line and "oops render 2/2 pass ok total" in line for line in lines[3:-1])
 
 
@@ -193,7 +200,8 @@ def test_resource_limits_hold_in_the_students_process(tmp_path):
     )
     with ProcessGuard() as guard:
         result, _ = run_check(chapter(1).checks[0], path, 10.0, guard, rules=chapter(1).rules)
-    assert not result.passed and "MemoryError" in result.message
+    assert not result.passed
+    assert "MemoryError" in result.message
 
 
 # -- attacks on ptlab grade -----------------------------------------------------------------
@@ -203,11 +211,13 @@ def test_ptlab_grade_judges_in_its_own_process_whatever_the_file_patches(attack,
     path = attack("bright_material_patching.py")
     assert main(["grade", f"{path}:Bright", "--samples", "20000"]) == 1
     out = capsys.readouterr().out
-    assert "FAILED" in out and "energy" in out and "PASSED" not in out
+    assert "FAILED" in out
+    assert "energy" in out
+    assert "PASSED" not in out
 
 
 @pytest.mark.parametrize(
-    "source, reason",
+    ("source", "reason"),
     [
         ("import os\nos._exit(0)\n", "ended during importing"),
         ("import time\ntime.sleep(3600)\n", "took longer than"),
@@ -220,7 +230,8 @@ def test_ptlab_grade_of_a_file_that_exits_or_hangs_at_import(tmp_path, capsys, s
     assert main(["grade", f"{path}:Material", "--time-limit", "2"]) == 2
     assert time.monotonic() - start < 20
     err = capsys.readouterr().err
-    assert reason in err and len(err.strip().splitlines()) == 1
+    assert reason in err
+    assert len(err.strip().splitlines()) == 1
 
 
 def test_ptlab_grade_refuses_the_librarys_own_material(attack, capsys):

@@ -38,7 +38,8 @@ def test_a_material_that_knows_the_graders_batch_sizes_gets_no_harness_or_render
     result = grade(chapter(6), attack("harness_batch_size.py", "06_diffuse.py"))
     checks = _by_name(result)
     for name in ("material harness", "render"):
-        assert not checks[name].passed and checks[name].points == 0, result.table()
+        assert not checks[name].passed, result.table()
+        assert checks[name].points == 0, result.table()
     assert "row independence" in checks["material harness"].message, result.table()
     assert "brighter" in checks["render"].message, result.table()
     # It is right in small calls: the checks made of them still say so (nothing else fails).
@@ -53,7 +54,7 @@ def test_a_material_that_gives_no_direction_fails_ptlab_grade(attack, capsys):
     assert "sample returns no direction with a positive pdf" in " ".join(out.split()), out
 
 
-@pytest.mark.parametrize("number, name", [(6, "06_diffuse.py"), (9, "09_microfacet.py")])
+@pytest.mark.parametrize(("number", "name"), [(6, "06_diffuse.py"), (9, "09_microfacet.py")])
 def test_a_material_that_gives_no_direction_gets_nothing(attack, number, name):
     result = grade(chapter(number), attack("harness_null.py", name))
     assert result.score == 0, result.table()
@@ -73,11 +74,12 @@ def test_a_black_material_passes_ptlab_grade_with_a_warning(attack, capsys):
     assert "reflects nothing: albedo 0 for every probe" in " ".join(out.split()), out
 
 
-@pytest.mark.parametrize("number, name", [(6, "06_diffuse.py"), (9, "09_microfacet.py")])
+@pytest.mark.parametrize(("number", "name"), [(6, "06_diffuse.py"), (9, "09_microfacet.py")])
 def test_a_black_material_earns_no_harness_points(attack, number, name):
     result = grade(chapter(number), attack("harness_black.py", name))
     harness = [c for c in result.results if "harness" in c.name]
-    assert harness and all(not c.passed and c.points == 0 for c in harness), result.table()
+    assert harness, result.table()
+    assert all(not c.passed and c.points == 0 for c in harness), result.table()
     assert all("reflects nothing" in c.message or "not graded until" in c.message for c in harness), (
         result.table()
     )

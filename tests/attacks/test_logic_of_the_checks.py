@@ -39,12 +39,12 @@ def test_only_the_arguments_a_function_writes_come_back(tmp_path):
     film, u, scratch = np.zeros(4), np.ones(4), np.ones(4)
     with ProcessGuard() as guard, Submission(path, guard, time_limit=30, rules=rules) as submission:
         submission.module.step(film, u, scratch)
-        assert (film == 1).all() and (scratch == 1).all() and (u == 1).all()
-        try:
+        assert (film == 1).all()
+        assert (scratch == 1).all()
+        assert (u == 1).all()
+        with pytest.raises(ArgumentChanged) as changed:
             submission.module.cheat(film, u, scratch)
-            raise AssertionError("a change to a read-only argument went through")
-        except ArgumentChanged as changed:
-            assert "cheat changed its argument u, which it must only read" in changed.describe()
+        assert "cheat changed its argument u, which it must only read" in changed.value.describe()
         assert (u == 1).all()  # and nothing of it reached the grader
 
 

@@ -80,7 +80,9 @@ def test_the_students_code_runs_as_nobody_with_no_way_back(attack):
     assert who["seccomp"] == "2 no_new_privs 1 capabilities 0000000000000000"
     assert who["network"] == "lo"  # a network namespace of its own
     folder, mode, _, home, _, environment = who["folder"].split(" ")
-    assert mode == "0o700" and home == folder and Path(folder).name.startswith("ptlab-student-")
+    assert mode == "0o700"
+    assert home == folder
+    assert Path(folder).name.startswith("ptlab-student-")
     assert not Path(folder).exists()  # removed with its process
     assert set(environment.split(",")) <= {
         "PATH",
@@ -115,7 +117,8 @@ def test_root_may_opt_out_and_an_unknown_user_is_refused(attack, tmp_path):
         "no-such-user",
         cwd=tmp_path,
     )
-    assert refused.returncode == 2 and "no such user" in refused.stderr
+    assert refused.returncode == 2
+    assert "no such user" in refused.stderr
     assert len(refused.stderr.strip().splitlines()) == 1
 
 
@@ -167,8 +170,10 @@ def test_attaching_to_the_grader_gets_nowhere(attack):
     )
     assert result.score == 0, result.table()
     tried = list(dict.fromkeys(line for line in lines if line.startswith("tried ")))
-    assert len(tried) == 4 and not any("it worked" in line for line in tried), tried
-    assert "may not start programs" in tried[0] and "ctypes" in tried[1]
+    assert len(tried) == 4, tried
+    assert not any("it worked" in line for line in tried), tried
+    assert "may not start programs" in tried[0]
+    assert "ctypes" in tried[1]
 
 
 def test_forging_the_result_then_killing_the_grader_leaves_no_marks(tmp_path):
@@ -191,9 +196,11 @@ def test_forging_the_result_then_killing_the_grader_leaves_no_marks(tmp_path):
     )
     assert checked.returncode == 1, checked.stderr
     tried = [line for line in checked.stderr.splitlines() if "tried " in line]
-    assert tried and not any("it worked" in line for line in tried), tried
+    assert tried, tried
+    assert not any("it worked" in line for line in tried), tried
     written = json.loads((out / "result.json").read_text())
-    assert written["score"] == 0 and written["full_marks"] is False
+    assert written["score"] == 0
+    assert written["full_marks"] is False
     listing = _ptlab("exercise", "list", str(student), cwd=tmp_path)
     assert "passed" not in listing.stdout, listing.stdout
 
@@ -252,7 +259,8 @@ def test_grade_all_resumes_only_from_what_it_wrote_itself(tmp_path):
     assert first.returncode == 0, first.stderr
     assert "each takes at most" in first.stderr  # the worst case, stated
     rows = _rows(grades)
-    assert rows["attacker"]["score"] == "0" and rows["next"]["score"] == "12"
+    assert rows["attacker"]["score"] == "0"
+    assert rows["next"]["score"] == "12"
     # Forged as a student of the grader's own user could: the attacker's row to full marks,
     # the next student's to nothing, and one for a student who handed in nothing.
     forged = dict(rows["attacker"], score="12", first_failure="")
@@ -267,7 +275,8 @@ def test_grade_all_resumes_only_from_what_it_wrote_itself(tmp_path):
     assert again.returncode == 0, again.stderr
     rows = _rows(grades)
     assert set(rows) == {"attacker", "next"}
-    assert rows["attacker"]["score"] == "0" and rows["next"]["score"] == "12"
+    assert rows["attacker"]["score"] == "0"
+    assert rows["next"]["score"] == "12"
 
 
 def test_modules_planted_where_the_graders_run_are_never_imported(tmp_path):
@@ -323,7 +332,8 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
     assert checked.returncode == 0, checked.stdout + checked.stderr
     # The audit hook refuses it first now (another process's /proc files); the kernel's
     # refusal of a non-dumpable process's files to its own user is checked without the hook:
-    assert "| refused" in checked.stderr and "read the fork server" not in checked.stderr
+    assert "| refused" in checked.stderr
+    assert "read the fork server" not in checked.stderr
     probe = (
         "import os\nfrom ptlab.untrusted.processes import make_undumpable\nmake_undumpable()\n"
         "parent = os.getpid()\nif os.fork() == 0:\n    try:\n"
@@ -345,4 +355,5 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
     other = _as_nobody(
         "exercise", "check", "1", str(answer), "--student-user", "daemon", cwd=home, environment=environment
     )
-    assert other.returncode == 2 and "only root can run students' code as another user" in other.stderr
+    assert other.returncode == 2
+    assert "only root can run students' code as another user" in other.stderr

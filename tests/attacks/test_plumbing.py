@@ -75,7 +75,8 @@ def test_an_output_relay_that_raises_stops_relaying_not_grading(tmp_path):
     os.write(write, b"one\ntwo\nthree")
     os.close(write)
     channel.close()  # (raised before: the pipes stayed open and the folder was kept)
-    assert calls == ["one"] and channel.output_fd is None
+    assert calls == ["one"]
+    assert channel.output_fd is None
 
 
 @pytest.mark.subprocess
@@ -90,7 +91,8 @@ def test_a_file_name_cannot_forge_lines_of_the_table(tmp_path):
     assert [line for line in table.splitlines() if line.lstrip().startswith("total")] == [
         table.splitlines()[-1]
     ]
-    assert "full marks" not in table.splitlines()[-1] and _hidden(table) == []
+    assert "full marks" not in table.splitlines()[-1]
+    assert _hidden(table) == []
     assert f"x\\n{forged}\\n\\x1b[2K.py" in table.splitlines()[0]
 
 
@@ -101,9 +103,11 @@ def test_printed_escapes_reach_the_terminal_only_as_text(tmp_path):
     path.write_bytes((SUBMISSIONS / "plumbing_rewrites_the_terminal.py").read_bytes())
     checked = _ptlab("exercise", "check", "1", str(path), "--timeout-scale", "0.2", cwd=tmp_path)
     assert checked.returncode == 1
-    assert _hidden(checked.stdout) == [] and _hidden(checked.stderr) == []
+    assert _hidden(checked.stdout) == []
+    assert _hidden(checked.stderr) == []
     forged = [line for line in checked.stderr.splitlines() if "full marks" in line]
-    assert forged and all(line.startswith("    | ") for line in forged), checked.stderr
+    assert forged, checked.stderr
+    assert all(line.startswith("    | ") for line in forged), checked.stderr
     # The verdict: the table's last line, every check failed, the import's message one line.
     assert checked.stdout.splitlines()[-1].split()[:2] == ["total", "0/10"]
     assert "full marks" not in checked.stdout.splitlines()[-1]
@@ -119,13 +123,16 @@ def test_printed_escapes_reach_the_terminal_only_as_text(tmp_path):
 def test_no_cell_a_spreadsheet_reads_as_a_formula(value):
     cell = safe_cell(value)
     assert not cell.lstrip().startswith(("=", "+", "-", "@", "\uff1d", "\uff0b", "\uff0d", "\uff20"))
-    assert _hidden(cell) == [] and "\n" not in cell and cell.lstrip("'").lstrip() == shown(value).lstrip()
+    assert _hidden(cell) == []
+    assert "\n" not in cell
+    assert cell.lstrip("'").lstrip() == shown(value).lstrip()
     assert safe_cell(cell) == cell
 
 
 def test_a_cell_keeps_one_line_and_plain_text():
     assert safe_cell('a\nb,"c"\x1b[2K') == 'a\\nb,"c"\\x1b[2K'
-    assert safe_cell("alice") == "alice" and safe_cell(12) == "12"
+    assert safe_cell("alice") == "alice"
+    assert safe_cell(12) == "12"
     out = io.StringIO()
     csv.writer(out).writerow([safe_cell("first\nsecond"), safe_cell("x\r\ny")])
     assert len(out.getvalue().splitlines()) == 1
@@ -166,10 +173,13 @@ def test_names_that_collide_each_get_a_row_that_says_so(tmp_path):
     assert len(students) == len(set(students)) == 17 - 2 - 1  # entries, but gina's and frank's files
     by_entry = {w.entry: w for w in work}
     for entry in ("alice.py", "alice/", "Bob.py", "bob.py", "carol./", "carol.py", "=x.py", "'=x.py"):
-        assert by_entry[entry].file is None and "ambiguous" in by_entry[entry].problem, entry
+        assert by_entry[entry].file is None, entry
+        assert "ambiguous" in by_entry[entry].problem, entry
     accented = [w for w in work if w.entry.endswith("mile.py")]
-    assert len(accented) == 2 and all("ambiguous" in w.problem for w in accented)
-    assert by_entry["dave.py"].file is not None and by_entry["dave.py"].student == "dave"
+    assert len(accented) == 2
+    assert all("ambiguous" in w.problem for w in accented)
+    assert by_entry["dave.py"].file is not None
+    assert by_entry["dave.py"].student == "dave"
     assert "not a regular file (a FIFO)" in by_entry["erin.py"].problem
     assert "not a regular file (a FIFO)" in by_entry["frank/"].problem
     assert by_entry["gina/"].file is not None
@@ -208,7 +218,8 @@ def test_grade_all_grades_what_it_can_and_a_fifo_hangs_nothing(tmp_path):
     assert graded.returncode == 0, graded.stderr
     assert time.monotonic() - start < 200
     rows = list(csv.DictReader(grades.open(encoding="utf-8")))
-    assert len(rows) == 14 and len({row["student"] for row in rows}) == 14
+    assert len(rows) == 14
+    assert len({row["student"] for row in rows}) == 14
     assert sum("ambiguous" in row["first_failure"] for row in rows) == 10
     assert {row["student"]: row["score"] for row in rows}["dave"] == "0"
     assert all(not cell.lstrip().startswith(("=", "+", "-", "@")) for row in rows for cell in row.values())

@@ -16,5 +16,7 @@ def test_a_material_right_only_for_repeated_rows_fails(attack, capsys):
     path = attack("recognises_the_grader.py")
     assert main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 1
     out = capsys.readouterr().out
-    assert "FAILED" in out and "PASSED" not in out
-    assert "energy" in out and "without the 1/pi" in out
+    assert "FAILED" in out
+    assert "PASSED" not in out
+    assert "energy" in out
+    assert "without the 1/pi" in out

@@ -194,7 +194,8 @@ def test_an_honest_answer_keeps_full_marks_under_any_grading_seed(seed):
     for name in ("01_right_own_code.py", "05_right_own_code.py", "07_right_own_random.py"):
         path = Path(__file__).parents[1] / "exercises" / name
         result = grade(chapter(int(name[:2])), path, timeout_scale=2.0, seed=seed)
-        assert result.full_marks and result.grading_seed == seed, result.table()
+        assert result.full_marks, result.table()
+        assert result.grading_seed == seed, result.table()
 
 
 def test_the_recorded_grading_seed_reproduces_the_verdict(tmp_path):
@@ -207,12 +208,13 @@ def test_the_recorded_grading_seed_reproduces_the_verdict(tmp_path):
     for extra in ([], ["--grading-seed"]):
         out = tmp_path / f"result{len(runs)}.json"
         if extra:
-            extra = extra + [str(runs[0]["grading_seed"])]
+            extra = [*extra, str(runs[0]["grading_seed"])]
         command = [sys.executable, "-m", "ptlab.cli", "exercise", "check", "1", str(path), "--json", str(out)]
         subprocess.run(command + extra, capture_output=True, text=True, timeout=300)
         runs.append(json.loads(out.read_text()))
     first, again = runs
-    assert isinstance(first["grading_seed"], int) and again["grading_seed"] == first["grading_seed"]
+    assert isinstance(first["grading_seed"], int)
+    assert again["grading_seed"] == first["grading_seed"]
     assert first["score"] < first["max_score"]
     assert [c["message"] for c in again["checks"]] == [c["message"] for c in first["checks"]]
 

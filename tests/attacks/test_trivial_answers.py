@@ -49,7 +49,8 @@ def test_a_render_right_with_any_slab_test_is_not_run_before_the_slab_test_works
     assert render.message.startswith(
         "not graded until 'entering a box' and 'misses' pass; 'entering a box' says: a ray entering"
     ), result.table()
-    assert render.points == 0 and render.seconds == 0.0
+    assert render.points == 0
+    assert render.seconds == 0.0
 
 
 @pytest.mark.slow

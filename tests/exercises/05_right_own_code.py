@@ -6,7 +6,7 @@ marks; the chapter's typical wrong answers are this file with the mistake patche
 
 import numpy as np
 
-__all__ = ["split_costs", "best_split", "child_order"]
+__all__ = ["best_split", "child_order", "split_costs"]
 
 
 def _half_area(lo, hi):

@@ -158,7 +158,7 @@ def check_refract(module) -> str:
             )
     # Leaving glass first: with eta taken the wrong way up, it bends the wrong way there
     # (entering, it would be totally reflected, which says less).
-    for eta, degrees in zip((1 / glass, glass, diamond), jitter + (30.0, 45.0, 70.0), strict=True):
+    for eta, degrees in zip((1 / glass, glass, diamond), jitter + np.array([30.0, 45.0, 70.0]), strict=True):
         wo = _directions(np.radians([degrees]), n[0])
         wt = _call(refract, "refract", wo, n.copy(), eta, shape=(1, 3))
         if not np.isclose(np.linalg.norm(wt), 1, atol=1e-5):
@@ -375,7 +375,7 @@ def spheres_scene() -> Scene:
         (read_mesh_triangles(meshes / f"{name}.obj"), cornell.material_names.index(material))
         for name, material in (("floor", "white"), ("left", "red"), ("right", "green"), ("light", "light"))
     ]
-    materials = list(cornell.materials) + [Mirror(), Dielectric(eta=GLASS)]
+    materials = [*list(cornell.materials), Mirror(), Dielectric(eta=GLASS)]
     sphere = icosphere(3)
     parts += [
         (sphere * 100 + [380, 100, 370], len(materials) - 2),
@@ -383,7 +383,7 @@ def spheres_scene() -> Scene:
     ]
     triangles = np.concatenate([t for t, _ in parts])
     ids = np.concatenate([np.full(len(t), k) for t, k in parts])
-    names = list(cornell.material_names) + ["mirror", "glass"]
+    names = [*list(cornell.material_names), "mirror", "glass"]
     return Scene(triangles, ids, materials, cornell.camera, "cornell-spheres", names)
 
 

@@ -414,7 +414,7 @@ def check_child_order(module) -> str:
     # Both signs along every axis; no component near 0, where either child may come first.
     dirs = (rng.choice([-1, 1], (32, 3)) * rng.uniform(0.1, 2, (32, 3))).astype(np.float32)
     want = first_child + (dirs[np.arange(32), axis] < 0)
-    near, far = child_order(first_child.copy(), axis.copy(), dirs.copy())
+    near, _far = child_order(first_child.copy(), axis.copy(), dirs.copy())
     wrong = np.flatnonzero(near != want)
     if wrong.size:
         i = wrong[0]

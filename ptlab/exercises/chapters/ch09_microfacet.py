@@ -329,8 +329,11 @@ CHAPTER = Chapter(
     slug="microfacet",
     title="Microfacet materials",
     functions=("D", "G1", "G2", "fresnel_schlick", "GGXMetal.eval", "GGXMetal.sample", "GGXMetal.pdf"),
-    answers=tuple(f"ptlab.materials.microfacet.{name}" for name in ("D", "G1", "G2", "Lambda", "Microfacet"))
-    + ("ptlab.scattering.F_schlick", "ptlab.sampling.ggx_visible_normals"),
+    answers=(
+        *tuple(f"ptlab.materials.microfacet.{name}" for name in ("D", "G1", "G2", "Lambda", "Microfacet")),
+        "ptlab.scattering.F_schlick",
+        "ptlab.sampling.ggx_visible_normals",
+    ),
     checks=(
         ChapterCheck("D normalisation", 2, check_d, timeout=30),
         ChapterCheck("Smith G", 1, check_g, timeout=30),

@@ -4,4 +4,4 @@ from ``ptlab.scattering`` (the same signatures)."""
 from ptlab.scattering import fresnel_dielectric as fresnel
 from ptlab.scattering import reflect, refract
 
-__all__ = ["reflect", "refract", "fresnel"]
+__all__ = ["fresnel", "reflect", "refract"]

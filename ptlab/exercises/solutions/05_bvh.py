@@ -3,4 +3,4 @@ of ``ptlab.accel.numpy_bvh``."""
 
 from ptlab.accel.numpy_bvh import best_split, child_order, split_costs
 
-__all__ = ["split_costs", "best_split", "child_order"]
+__all__ = ["best_split", "child_order", "split_costs"]

@@ -14,7 +14,7 @@ from ptlab.integrators.path import PathSettings
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
 from ptlab.rendering.settings import parse_resolution
 
-__all__ = ["make_tiles", "render_tile", "render_parallel"]
+__all__ = ["make_tiles", "render_parallel", "render_tile"]
 
 #: In each worker process: the accelerator of the render it works for (built once).
 _accelerators: dict = {}

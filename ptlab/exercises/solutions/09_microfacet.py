@@ -11,7 +11,7 @@ from ptlab.materials import Microfacet
 from ptlab.materials.microfacet import G1, G2, D
 from ptlab.scattering import F_schlick as fresnel_schlick
 
-__all__ = ["D", "G1", "G2", "fresnel_schlick", "GGXMetal"]
+__all__ = ["G1", "G2", "D", "GGXMetal", "fresnel_schlick"]
 
 
 class GGXMetal(Microfacet):

@@ -6,7 +6,7 @@ names call it with each.
 
 from ptlab.integrators.path import mis_weight
 
-__all__ = ["balance_heuristic", "power_heuristic", "mis_weight"]
+__all__ = ["balance_heuristic", "mis_weight", "power_heuristic"]
 
 
 def balance_heuristic(pdf, other):

@@ -3,6 +3,7 @@
 verdict), then leave with os._exit(0) before anything else can be asked. The old grader read
 its verdict from one of those pipes and gave full marks."""
 
+import contextlib
 import json
 import os
 import pickle
@@ -18,8 +19,6 @@ _verdict = pickle.dumps((True, "ok"))
 _forged = b"".join(_frame({"id": i, "ready": True, "value": True}) for i in range(64))
 _forged += struct.pack("!i", len(_verdict)) + _verdict
 for _fd in range(3, 256):
-    try:
+    with contextlib.suppress(OSError):
         os.write(_fd, _forged)
-    except OSError:
-        pass
 os._exit(0)

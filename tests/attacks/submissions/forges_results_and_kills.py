@@ -27,7 +27,7 @@ def _try(step, attempt, *arguments):
     try:
         attempt(*arguments)
         print(f"tried {step}: it worked", flush=True)
-    except BaseException as error:  # noqa: B036
+    except BaseException as error:
         print(f"tried {step}: {type(error).__name__}: {error}", flush=True)
 
 

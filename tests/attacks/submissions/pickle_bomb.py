@@ -3,6 +3,7 @@ file writes such a pickle to every file descriptor; ``generate_rays`` returns an
 pickle does the same. Whoever unpickles it appends its pid to ``pickle_bomb.ran`` beside this
 file: the grader's pid must never be there."""
 
+import contextlib
 import os
 import pickle
 from pathlib import Path
@@ -18,10 +19,8 @@ class Bomb:
 
 _payload = pickle.dumps(Bomb())
 for _fd in range(3, 256):
-    try:
+    with contextlib.suppress(OSError):
         os.write(_fd, len(_payload).to_bytes(4, "big") + _payload)
-    except OSError:
-        pass
 
 
 def generate_rays(camera, width, height, pixel_x, pixel_y, u):
