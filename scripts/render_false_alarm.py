@@ -31,7 +31,13 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np
 from scipy.stats import beta
 
-from ptlab.exercises.chapter import CheckFailed, grading_seed, grading_seed_for, new_grading_seed
+from ptlab.exercises.chapter import (
+    CheckFailed,
+    grading_rng,
+    grading_seed,
+    grading_seed_for,
+    new_grading_seed,
+)
 from ptlab.exercises.renders import compare_renders, regions_of
 
 RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
@@ -46,26 +52,38 @@ def right_answer(name: str):
 
 
 def ch06(name: str) -> Callable:
-    from ptlab.exercises.chapters.ch06_diffuse import RENDER_SEED, render_passes
+    from ptlab.exercises.chapters.ch06_diffuse import (
+        RENDER_SEED,
+        SPP_STREAM,
+        render_passes,
+        render_spp_per_pass,
+    )
 
     module = right_answer(name)
 
-    def render():
-        seed = grading_seed_for(RENDER_SEED)
-        return render_passes(module.Lambertian, seed), render_passes(seed=seed), "regions"
+    def render():  # (as check_render makes them: the seed and the samples per pass drawn)
+        seed, spp = grading_seed_for(RENDER_SEED), render_spp_per_pass(grading_rng(SPP_STREAM))
+        return (
+            render_passes(module.Lambertian, seed, spp_per_pass=spp),
+            render_passes(seed=seed, spp_per_pass=spp),
+            "regions",
+        )
 
     return render
 
 
 def ch09(sampling: str) -> Callable:
-    from ptlab.exercises.chapters.ch09_microfacet import RENDER_SEED, render_passes
+    from ptlab.exercises.chapters.ch06_diffuse import render_spp_per_pass
+    from ptlab.exercises.chapters.ch09_microfacet import RENDER_SEED, SPP_STREAM, render_passes
 
     module = right_answer("09_right_walter")
 
-    def render():
-        seed = grading_seed_for(RENDER_SEED)
-        student = render_passes(sampling, lambda f0, alpha: module.GGXMetal(f0, alpha, sampling), seed)
-        return student, render_passes(sampling, seed=seed), "regions"
+    def render():  # (as _render makes them)
+        seed, spp = grading_seed_for(RENDER_SEED), render_spp_per_pass(grading_rng(SPP_STREAM))
+        student = render_passes(
+            sampling, lambda f0, alpha: module.GGXMetal(f0, alpha, sampling), seed, spp_per_pass=spp
+        )
+        return student, render_passes(sampling, seed=seed, spp_per_pass=spp), "regions"
 
     return render
 
