@@ -41,3 +41,29 @@ def test_tutorial_runs_at_reduced_settings(script, tmp_path):
     )
     assert run.returncode == 0, run.stderr[-2000:]
     assert list(tmp_path.glob("*.png")), f"{script.name} wrote no picture"
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+@pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
+def test_tutorial_runs_as_a_notebook_in_a_fresh_kernel(script, tmp_path, monkeypatch):
+    """Each tutorial script is a notebook too (jupytext's percent format); executed in a fresh
+    kernel (nbclient) at small settings, it writes its pictures and shows them."""
+    import jupytext
+    from nbclient import NotebookClient
+
+    notebook = jupytext.read(script)
+    assert sum(cell.cell_type == "code" for cell in notebook.cells) >= 3  # (imports, main, the call)
+    monkeypatch.setenv("PTLAB_TUTORIAL_ARGS", f"--res 32 --spp 1 --out '{tmp_path}'")
+    NotebookClient(
+        notebook, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    ).execute()
+    written = sorted(tmp_path.glob("*.png"))
+    assert written, f"{script.name} wrote no picture"
+    shown = [
+        output
+        for cell in notebook.cells
+        for output in cell.get("outputs", [])
+        if "image/png" in output.get("data", {})
+    ]
+    assert len(shown) == len(written), f"{script.name} showed {len(shown)} of its {len(written)} pictures"

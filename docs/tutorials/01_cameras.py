@@ -1,3 +1,4 @@
+# %%
 """Chapter 1 tutorial: what a pinhole camera sees.
 
 Renders the Cornell box's surface normals (each ray's first hit, coloured by the normal's
@@ -18,7 +19,7 @@ import ptlab
 import ptlab.rendering.jobs
 from ptlab.camera import generate_rays
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 
 
@@ -27,6 +28,7 @@ def upside_down_rays(camera, width, height, pixel_x, pixel_y, u):
     return generate_rays(camera, width, height, pixel_x, height - 1 - pixel_y, u)
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=256, spp=4)
 
@@ -54,7 +56,9 @@ def main() -> None:
     with plugged(ptlab.rendering.jobs, generate_rays=upside_down_rays):
         write_image(out / "cameras-wrong.png", ptlab.render(scene, **options))
     print(f"wrote {out / 'cameras.png'} and {out / 'cameras-wrong.png'}")
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 2 tutorial: what Möller-Trumbore finds, and what a missing test does.
 
 Traces a few rays at one triangle with ``ptlab.accel.triangle.ray_triangle`` and prints
@@ -18,7 +19,7 @@ import ptlab
 import ptlab.accel.numpy_bvh
 from ptlab.accel.triangle import ray_triangle
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 
 
@@ -28,6 +29,7 @@ def swapped_uv_ray_triangle(origins, dirs, v0, e1, e2):
     return t, v, u
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=16)
 
@@ -55,7 +57,9 @@ def main() -> None:
         f"wrote {out / 'ray-triangle.png'} and {out / 'ray-triangle-wrong.png'} "
         f"(the second with u and v swapped)"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 3 tutorial: Whitted-style ray tracing with a mirror and a glass sphere.
 
 Prints the laws of a smooth surface at a few angles (the mirror direction, Snell's law, the
@@ -20,7 +21,7 @@ import numpy as np
 
 import ptlab
 from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.scattering import fresnel_dielectric, reflect, refract
 
@@ -34,6 +35,7 @@ def fresnel_inverted(cos_theta_i, eta):
     return fresnel_dielectric(cos_theta_i, 1 / np.asarray(eta, dtype=np.result_type(cos_theta_i)))
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=160, spp=8)
 
@@ -89,7 +91,9 @@ def main() -> None:
     )
     write_image(out / "games101-hw5.png", np.concatenate([whitted, path], axis=1))
     print(f"wrote {out / 'games101-hw5.png'}: Whitted (left) and path tracing with MIS (right)")
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 4 tutorial: the slab test, and the flat boxes a strict test misses.
 
 Asks ``ptlab.accel.numpy_bvh.slab_test`` about a unit box and a flat box (the square z = 1)
@@ -18,7 +19,7 @@ import ptlab
 import ptlab.accel.numpy_bvh
 from ptlab.accel.numpy_bvh import build_bvh, slab_test
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 
 
@@ -32,6 +33,7 @@ def strict_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
     return t_enter < t_exit, t_enter
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=256, spp=4)
 
@@ -67,7 +69,9 @@ def main() -> None:
         f"wrote {out / 'bounding-boxes.png'} and {out / 'bounding-boxes-wrong.png'} (the second "
         f"with the strict test)"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 5 tutorial: the BVH of Homework 6's bunny, its boxes, and what the SAH saves.
 
 Builds the NumPy BVH over the Stanford bunny of ``games101-hw6`` (4968 triangles) twice:
@@ -22,7 +23,7 @@ import ptlab.accel.numpy_bvh as numpy_bvh
 from ptlab.camera import generate_rays
 from ptlab.exercises.chapters.ch05_bvh import sah_cost
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 
 #: A ray's tag, carried in its tmin: ray i starts at t = i * TAG (see ``boxes_entered``).
 TAG = 1e-7
@@ -91,6 +92,7 @@ def project(camera, width: int, height: int, points: np.ndarray) -> np.ndarray:
     return np.stack([(x + 1) / 2 * width, (1 - y) / 2 * height], axis=-1)
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=240, spp=1, spp_help="camera rays per pixel")
     import matplotlib
@@ -153,7 +155,9 @@ def main() -> None:
         f"wrote {out / 'bvh.png'} and {out / 'bvh-wrong.png'}: boxes entered per camera ray, "
         f"inferno colours from black (0) to pale yellow ({top:.0f} or more)"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

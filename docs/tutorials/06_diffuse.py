@@ -1,3 +1,4 @@
+# %%
 """Chapter 6 tutorial: Monte Carlo integration and the diffuse material.
 
 First a Monte Carlo estimate of the reflectance of a white Lambertian surface, the integral
@@ -16,7 +17,7 @@ import numpy as np
 
 import ptlab
 from ptlab.exercises.renders import replace_materials
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Diffuse, Material
 
@@ -48,6 +49,7 @@ def reflectance_estimates(material, samples: int, estimates: int, rng) -> np.nda
     return weight[:, 0].reshape(estimates, samples).mean(axis=1)
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=64)
 
@@ -78,7 +80,9 @@ def main() -> None:
     write_image(out / "diffuse.png", right_image)
     write_image(out / "diffuse-wrong.png", wrong_image)
     print(f"wrote {out / 'diffuse.png'} and {out / 'diffuse-wrong.png'}")
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 7 tutorial: the path tracer, and its three classic mistakes.
 
 Renders the white furnace (a closed sphere that glows Le = 0.3 and reflects albedo 0.5
@@ -20,7 +21,7 @@ import ptlab
 import ptlab.integrators.path as path
 from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.wavefront import SHADOW_EPSILON, add_to_film, shade
 from ptlab.vectors import dot
@@ -69,6 +70,7 @@ def render(scene, mistake: str | None, **options) -> np.ndarray:
         return ptlab.render(scene, workers=1, **options)
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=64)
 
@@ -100,7 +102,9 @@ def main() -> None:
         )
         write_image(out / name, image)
     print(f"wrote {', '.join(str(out / name) for name in names.values())}")
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 8 tutorial: rendering over tiles on several processes, reproducibly.
 
 Renders the Cornell box tile by tile on a pool of 2 worker processes, each tile's job taking
@@ -23,7 +24,7 @@ import numpy as np
 
 import ptlab
 from ptlab.accel import make_accelerator, resolve_backend
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import in_notebook, show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import PathSettings
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
@@ -51,7 +52,10 @@ def render_parallel(scene, spp: int, res: int, workers: int, per_worker_rng: boo
     )
     sums = np.zeros((res, res, 3))
     pids = {}
-    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("forkserver")) as pool:
+    # A notebook's functions live in its kernel's __main__, which a fresh process cannot
+    # import: there the workers are forked, and inherit them (Linux and macOS).
+    start_method = "fork" if in_notebook() else "forkserver"
+    with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start_method)) as pool:
         futures = [
             pool.submit(render_tile, setup, tile, spp, per_worker_rng) for tile in make_tiles(res, res, 32)
         ]
@@ -74,6 +78,7 @@ def tiles_picture(image: np.ndarray, pids: dict, res: int) -> np.ndarray:
     return picture
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=16)
     scene = ptlab.load_scene("cornell-box")
@@ -117,7 +122,9 @@ def main() -> None:
         f"wrote {out / 'parallel-tiles.png'} (tiles tinted by process) and "
         f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with a sampler per worker)"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

@@ -1,3 +1,4 @@
+# %%
 """Chapter 9 tutorial: GGX microfacet metals and their importance sampling.
 
 Prints the checks' first principles (D is normalised, G1 is 1 at the normal and falls at
@@ -20,7 +21,7 @@ import numpy as np
 import ptlab
 from ptlab.exercises.chapters.ch09_microfacet import metals_scene
 from ptlab.exercises.renders import replace_materials
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Material, Microfacet
 from ptlab.materials.microfacet import G1, D
@@ -54,6 +55,7 @@ class HalfVectorPdf(Material):
         return above * D(dot(h, n), self.alpha) * dot(h, n)  # / (4 |wo . h|) forgotten
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=32)
 
@@ -87,7 +89,9 @@ def main() -> None:
         "same spp: the hemisphere picture is noisier on the sharp gold sphere; the wrong one is "
         "darker in the reflections, where the pdf 4 |wo . h| times too big shrinks the weights"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()

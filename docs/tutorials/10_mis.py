@@ -1,3 +1,4 @@
+# %%
 """Chapter 10 tutorial: multiple importance sampling on Veach's scene.
 
 Prints the two strategies' MIS weights for a few pairs of densities, then renders
@@ -17,7 +18,7 @@ import numpy as np
 import ptlab
 import ptlab.integrators.path
 from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import tutorial_options
+from ptlab.exercises.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import mis_weight
 
@@ -27,6 +28,7 @@ def weight_one(pdf, other, heuristic="power"):
     return np.ones_like(pdf)
 
 
+# %%
 def main() -> None:
     args, out = tutorial_options(__doc__, res=128, spp=32)
 
@@ -61,7 +63,9 @@ def main() -> None:
         f"wrote {out / 'mis-wrong.png'}: both strategies weighted 1, mean brightness "
         f"{image.mean():.4f} (too bright: double counting)"
     )
+    show_pictures(out)
 
 
+# %%
 if __name__ == "__main__":
     main()
