@@ -87,3 +87,42 @@ def test_progress_is_a_line_per_pass_where_stderr_is_not_a_terminal(tmp_path):
         [*command, "--quiet", "--out", str(tmp_path / "q.png")], capture_output=True, text=True
     )
     assert quiet.stderr == ""
+
+
+@pytest.mark.subprocess
+def test_a_terminal_that_reports_no_columns_still_gets_a_bar(tmp_path):
+    """Some ptys report 0 columns; tqdm then drew no bar at all. The bar takes 80 there."""
+    import fcntl
+    import os
+    import pty
+    import struct
+    import termios
+
+    leader, follower = pty.openpty()
+    fcntl.ioctl(follower, termios.TIOCSWINSZ, struct.pack("HHHH", 24, 0, 0, 0))  # 0 columns
+    command = [sys.executable, "-m", "ptlab", "render", "cornell-box", "--res", "16", "--spp", "32"]
+    env = {key: value for key, value in os.environ.items() if key not in ("COLUMNS", "LINES")}
+    process = subprocess.Popen(
+        [*command, "--workers", "1", "--out", str(tmp_path / "box.png")],
+        stdin=follower,
+        stdout=subprocess.DEVNULL,
+        stderr=follower,
+        env=env,
+    )
+    os.close(follower)
+    output = b""
+    while True:
+        try:
+            chunk = os.read(leader, 4096)
+        except OSError:  # (the pty closed: the process ended)
+            break
+        if not chunk:
+            break
+        output += chunk
+    assert process.wait(timeout=120) == 0
+    os.close(leader)
+    assert b"pass 2/2" in output
+    # A whole meter, to its closing bracket: with no width tqdm cut it, and drew a bar of one
+    # character.
+    assert b"sample/s]" in output
+    assert "█████".encode() in output

@@ -7,13 +7,22 @@ finished; with ``--quiet``, nothing.
 
 from __future__ import annotations
 
-import shutil
+import os
 import sys
 import time
 
 from tqdm import tqdm
 
 from ptlab.rendering.film import Film
+
+
+def _columns_of(stream) -> int:
+    """The width of the terminal ``stream`` writes to, 0 where it reports none; 80 where
+    ``stream`` is no terminal (the bar is off there anyway)."""
+    try:
+        return os.get_terminal_size(stream.fileno()).columns
+    except (OSError, ValueError, AttributeError):
+        return 80
 
 
 class ProgressBar:
@@ -38,8 +47,8 @@ class ProgressBar:
             from tqdm.auto import tqdm as bar_class
         else:
             bar_class = tqdm
-        # A terminal that reports 0 columns (some ptys) would get no bar at all: 80 then.
-        columns = shutil.get_terminal_size((80, 24)).columns
+        # A terminal that reports 0 columns (some ptys) would get a bar of no width: 80 then.
+        columns = _columns_of(sys.stderr)
         self.bar = bar_class(
             total=total_samples,
             initial=initial,
