@@ -7,7 +7,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
+
+from ptlab.image import read_image
 
 TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
 
@@ -41,6 +44,13 @@ def test_tutorial_runs_at_reduced_settings(script, tmp_path):
     )
     assert run.returncode == 0, run.stderr[-2000:]
     assert list(tmp_path.glob("*.png")), f"{script.name} wrote no picture"
+    # A picture of the chapter's typical mistake shows it: it differs from the right one (or,
+    # where it is itself a difference, as chapter 8's, it is not black).
+    for wrong in tmp_path.glob("*-wrong.png"):
+        right = wrong.with_name(wrong.name.replace("-wrong", ""))
+        shown = read_image(wrong)[0]
+        changed = np.any(shown != (read_image(right)[0] if right.exists() else 0), axis=2).mean()
+        assert changed > 0.01, f"{wrong.name} shows no mistake: {changed:.1%} of its pixels differ"
 
 
 @pytest.mark.slow

@@ -62,8 +62,11 @@ def main() -> None:
     )
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1, backend="numpy")
-    write_image(out / "bounding-boxes.png", ptlab.render(scene, **options))
-    with plugged(ptlab.accel.numpy_bvh, slab_test=strict_slab_test):
+    # The Cornell box's 32 triangles are fewer than SMALL_SCENE, below which the NumPy BVH
+    # tests every triangle and no box: 0 makes the render walk the tree, through slab_test.
+    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0):
+        write_image(out / "bounding-boxes.png", ptlab.render(scene, **options))
+    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0, slab_test=strict_slab_test):
         write_image(out / "bounding-boxes-wrong.png", ptlab.render(scene, **options))
     print(
         f"wrote {out / 'bounding-boxes.png'} and {out / 'bounding-boxes-wrong.png'} (the second "
