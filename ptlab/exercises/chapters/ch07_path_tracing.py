@@ -657,7 +657,9 @@ def furnace_verdict(
     if mean > expected:
         hint = (
             "too bright: is emission added on every hit *and* by direct_light (double "
-            "counting)? After a diffuse bounce, only direct_light counts the light"
+            "counting)? After a diffuse bounce, only direct_light counts the light: add a "
+            "hit's emission only where hit.sees_emission is True (camera rays, and after "
+            "a mirror or glass)"
         )
     elif emission_only is not None and np.abs(emission_only()).max() == 0:
         hint = (

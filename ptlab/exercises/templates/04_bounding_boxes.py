@@ -51,5 +51,8 @@ def slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
           that axis must not restrict it. ``np.maximum`` and ``np.minimum`` spread NaN
           (a NaN in t0 or t1 makes both that axis's near and far t NaN); ``np.fmax`` and
           ``np.fmin`` skip it (``np.fmax.reduce(a, axis=1)`` over the three axes).
+        * That ``0 * inf`` is meant, so NumPy's "RuntimeWarning: invalid value encountered
+          in multiply" says nothing wrong here. Compute the crossings inside
+          ``with np.errstate(invalid="ignore"):`` to keep it quiet.
     """
     raise NotImplementedError("slab_test")
