@@ -132,6 +132,7 @@ def check_field_of_view(module) -> str:
         raise CheckFailed(
             f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
             f"degrees off forward, yours is {math.degrees(top_angle):.2f}"
+            f"{_field_of_view_hint(top_angle, camera.fov_y, width / height)}"
         )
     expected_side = math.atan(math.tan(half_fov) * width / height)
     side_angle = math.acos(np.clip(dirs[1] @ camera.forward, -1, 1))
@@ -144,12 +145,40 @@ def check_field_of_view(module) -> str:
     return "the image spans fov_y vertically, times the aspect ratio across"
 
 
+def _field_of_view_hint(top_angle: float, fov_y: float, aspect: float) -> str:
+    """Which typical mistake gives the top edge the angle ``top_angle`` (radians), if one does."""
+    half = math.radians(fov_y) / 2
+    mistakes = {
+        "fov_y is in degrees: math.tan takes radians (math.radians(fov_y))": math.atan(
+            abs(math.tan(fov_y / 2))
+        ),
+        "tan(fov_y / 2) reaches the top edge: the whole fov_y is twice that": math.atan(math.tan(2 * half)),
+        "the aspect ratio (width / height) widens x, not y": math.atan(math.tan(half) * aspect),
+        "the aspect ratio (width / height) widens x; y is not divided by it": math.atan(
+            math.tan(half) / aspect
+        ),
+    }
+    for hint, angle in mistakes.items():
+        if abs(top_angle - angle) <= 1e-4:
+            return f" ({hint})"
+    return ""
+
+
 def check_orientation(module) -> str:
     camera = _camera()
     width, height = _size(5, even=True)
     _, dirs = _rays(module, camera, width, height, [0], [0], [[0.0, 0.0]])
     if not dirs[0] @ camera.up > 0:
-        raise CheckFailed("pixel (0, 0) should be at the top of the image (rows go down, y up)")
+        hint = "rows go down, y up"
+        if math.tan(camera.fov_y / 2) < 0:  # (degrees taken as radians can turn tan negative)
+            _, top = _rays(module, camera, width, height, [width // 2], [0], [[0.0, 0.0]])
+            below = math.acos(np.clip(top[0] @ camera.forward, -1, 1))
+            if abs(below - math.atan(abs(math.tan(camera.fov_y / 2)))) <= 1e-4:
+                hint = (
+                    f"tan({camera.fov_y / 2:g}) < 0 turns the image over: fov_y is in degrees, "
+                    "and math.tan takes radians (math.radians(fov_y))"
+                )
+        raise CheckFailed(f"pixel (0, 0) should be at the top of the image ({hint})")
     if not dirs[0] @ camera.right < 0:
         raise CheckFailed("pixel (0, 0) should be on the left of the image (x grows to the right)")
     return "pixel (0, 0) is the top-left corner"
@@ -169,9 +198,27 @@ def check_known_rays(module) -> str:
     if not worst <= 1e-4:
         raise CheckFailed(
             f"rays through jittered points differ from the pinhole model's by up "
-            f"to {worst:.4f} (is u added to the pixel coordinates?)"
+            f"to {worst:.4f}{_jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u)}"
         )
     return "200 jittered rays match the pinhole model"
+
+
+def _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u) -> str:
+    """Which handling of the jitter ``u`` the student's rays ``dirs`` match, if a typical
+    mistake's: each is the pinhole model with u changed."""
+    from ptlab.camera import generate_rays
+
+    mistakes = {
+        "u is ignored: the ray goes through the pixel's centre; the point is pixel + u": np.full_like(u, 0.5),
+        "u is added, and half a pixel more: the point is pixel + u, u already spans the pixel": u + 0.5,
+        "u[:, 0] goes with x and u[:, 1] with y": u[:, ::-1],
+        "the point is pixel + u, not pixel - u": -u,
+    }
+    for hint, changed in mistakes.items():
+        _, wrong = generate_rays(camera, width, height, pixel_x, pixel_y, changed.astype(np.float32))
+        if np.abs(dirs - wrong).max() <= 1e-4:
+            return f" ({hint})"
+    return " (is u added to the pixel coordinates, and nothing else?)"
 
 
 def check_render(module) -> str:
