@@ -423,17 +423,27 @@ def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, mo
     remember(_graded(homework / "01_cameras.py", 10))
     capsys.readouterr()
 
-    def listing() -> tuple[str, dict]:
-        assert main(["exercise", "list"]) == 0
+    def listing(*options: str) -> tuple[str, dict]:
+        assert main(["exercise", "list", *options]) == 0
         lines = capsys.readouterr().out.splitlines()
         return lines[0], {line[:2]: line for line in lines[2:]}
 
-    monkeypatch.chdir(elsewhere)  # found in the folder start made
+    monkeypatch.chdir(elsewhere)  # not by default: on a shared account, others' work is there
     where, rows = listing()
+    assert "no results recorded" in where
+    assert "--all also looks in the folders 'start' made" in where
+    assert rows["01"].split()[-2:] != ["passed", "(10/10)"]
+    where, rows = listing("--all")  # found in the folder start made
     assert str(homework.resolve()) in where
     assert "1 record found" in where
     assert "passed (10/10)" in rows["01"]
     assert "01_cameras.py" in rows["01"]
+    assert main(["exercise", "list", "--forget", str(homework)]) == 0
+    assert "forgot" in capsys.readouterr().out
+    where, rows = listing("--all")  # forgotten
+    assert "no results recorded" in where
+    assert main(["exercise", "list", "--forget", str(homework)]) == 2
+    assert "not a folder 'ptlab exercise start' remembers" in capsys.readouterr().err
     from ptlab.exercises.progress import state_file
 
     state_file().unlink()  # start's folders forgotten:

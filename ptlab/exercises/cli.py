@@ -76,11 +76,17 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         "list",
         help="list the chapters and which you have passed",
         description="List the chapters with the last result of each, from the records that "
-        "'check' keeps beside the files it checked: in DIR and its subfolders, or "
-        "(without DIR) in this folder, its subfolders and the folders 'start' "
-        "copied files into.",
+        "'check' keeps beside the files it checked: in DIR (default: this folder) and its "
+        "subfolders; with --all, also in the folders 'start' copied files into on this "
+        "account (on a shared machine, other people's too).",
     )
-    listing.add_argument("dir", nargs="?", help="where to look (default: here, and the folders 'start' made)")
+    listing.add_argument("dir", nargs="?", help="where to look (default: here)")
+    listing.add_argument(
+        "--all", action="store_true", help="also look in every folder 'start' copied files into"
+    )
+    listing.add_argument(
+        "--forget", metavar="DIR", help="stop remembering DIR, a folder 'start' copied files into"
+    )
 
     docs = actions.add_parser(
         "docs",
@@ -229,24 +235,36 @@ def _remove_old_result(path: Path) -> None:
 
 def _list(args) -> int:
     from ptlab.exercises import all_chapters
-    from ptlab.exercises.progress import find_progress, folders_below, started_folders, status
+    from ptlab.exercises.progress import (
+        find_progress,
+        folders_below,
+        forget_folder,
+        started_folders,
+        status,
+    )
 
-    if args.dir is not None:
-        top = Path(args.dir)
-        if not top.is_dir():
-            raise PtlabError(f"{top}: no such folder")
-        places, folders = [f"{top} and its subfolders"], folders_below(top)
-    else:
+    if args.forget is not None:
+        forget_folder(Path(args.forget))
+        print(f"forgot {shown(Path(args.forget))}: 'list --all' no longer looks there")
+        return 0
+    top = Path(args.dir) if args.dir is not None else Path.cwd()
+    if not top.is_dir():
+        raise PtlabError(f"{top}: no such folder")
+    places = [f"{'this folder' if args.dir is None else shown(top)} and its subfolders"]
+    folders = folders_below(top)
+    if args.all:
         started = started_folders()
-        places = ["this folder and its subfolders"] + [str(f) for f in started]
-        folders = folders_below(Path.cwd()) + started
+        places += [shown(f) for f in started]
+        folders += started
     progress, records = find_progress(folders)
     print(
         f"looked in {'; '.join(places)}: "
         + (
             f"{len(records)} record{'s' if len(records) != 1 else ''} found"
             if records
-            else "no results recorded ('ptlab exercise check' records them beside the file it checks)"
+            else "no results recorded ('ptlab exercise check' records them beside the file it checks"
+            + ("" if args.all else "; --all also looks in the folders 'start' made")
+            + ")"
         )
     )
     print(f"{'NN':2}  {'chapter':52}  {'status':26}  {'file':30}  write")

@@ -4,8 +4,9 @@
 file's folder (after every process of the student's code has ended, atomically), and
 ``ptlab exercise start`` remembers the folders it copies exercise files into (in
 ``$XDG_STATE_HOME/ptlab/exercise-folders.json``, by default under ``~/.local/state``).
-``ptlab exercise list`` reads the records of the current folder, its subfolders and the
-remembered folders, and says where it looked.
+``ptlab exercise list`` reads the records of the current folder and its subfolders (with
+``--all``, of the remembered folders too: on a shared account, other people's), and says
+where it looked; ``--forget DIR`` drops a remembered folder.
 
 The record beside the file is a convenience, not proof: whoever may write that folder may
 write it. So the grader never reads it; each check replaces its chapter's entry (a pass is
@@ -27,6 +28,7 @@ import time
 from pathlib import Path
 
 from ptlab.atomic import write_atomically
+from ptlab.errors import PtlabError
 
 RECORD = ".ptlab-exercises.json"
 #: The grader's own copy of the entries it wrote, in its private state.
@@ -146,6 +148,15 @@ def remember_folder(folder: Path) -> None:
         _write_json(state_file(), [*names, folder])
     except OSError:
         pass
+
+
+def forget_folder(folder: Path) -> None:
+    """Stop remembering ``folder`` (``list --all`` no longer looks there)."""
+    names = [str(p) for p in started_folders()]
+    wanted = str(folder.resolve())
+    if wanted not in names:
+        raise PtlabError(f"{folder}: not a folder 'ptlab exercise start' remembers")
+    _write_json(state_file(), [name for name in names if name != wanted])
 
 
 # -- finding the records ---------------------------------------------------------------
