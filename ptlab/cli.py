@@ -346,11 +346,16 @@ def _render(args) -> int:
                 result = render_result(scene, stop=stop, **run)
         finally:
             progress.close()
-    if result.nonfinite:  # (a bug in a material or an integrator: said even with --quiet)
-        print(f"ptlab: {result.nonfinite} samples were NaN or infinite and were left out", file=sys.stderr)
-    if not result.complete:
-        return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
-    _write(out, result, args.exposure)
+        # The render is over; writing what it has must not be cut short (a KeyboardInterrupt
+        # inside OpenImageIO's import aborts the process): a signal now only waits.
+        signals.holding = True
+        if result.nonfinite:  # (a bug in a material or an integrator: said even with --quiet)
+            print(
+                f"ptlab: {result.nonfinite} samples were NaN or infinite and were left out", file=sys.stderr
+            )
+        if not result.complete:
+            return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
+        _write(out, result, args.exposure)
     if not (result.image > 0).any() and options.integrator in ("path", "whitted"):
         print(
             "ptlab: warning: the image is black: no camera ray saw or received any light "
@@ -452,11 +457,13 @@ class _StopOnSignal:
     """Turns the first Ctrl-C (SIGINT) or SIGTERM into a polite stop request.
 
     The render then ends the jobs in flight and keeps the passes done; a second Ctrl-C
-    interrupts at once. ``exit_code`` is then 128 + the first signal's number.
+    interrupts it at once, but once ``holding`` (the render over) it waits for the image to be
+    written. ``exit_code`` is then 128 + the first signal's number.
     """
 
     def __enter__(self) -> _StopOnSignal:
         self.requested = threading.Event()
+        self.holding = False  # (True: a signal is noted, never raised)
         self.exit_code = 128 + signal.SIGINT
         self.previous: dict[int, Any] = {}
         if threading.current_thread() is threading.main_thread():
@@ -465,7 +472,7 @@ class _StopOnSignal:
         return self
 
     def _handle(self, signum, frame) -> None:
-        if self.requested.is_set():
+        if self.requested.is_set() and not self.holding:
             raise KeyboardInterrupt
         self.exit_code = 128 + signum
         self.requested.set()
