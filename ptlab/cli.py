@@ -673,9 +673,9 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except PtlabError as error:
-        from ptlab.untrusted.shown import one_line  # (it may quote a student's file name)
+        from ptlab.untrusted.shown import shown_line  # (it may quote a student's file name)
 
-        print(f"ptlab: error: {one_line(error)}", file=sys.stderr)
+        print(f"ptlab: error: {shown_line(error)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("ptlab: interrupted", file=sys.stderr)

@@ -42,7 +42,7 @@ from ptlab.untrusted import (
     student_user,
     take_in,
 )
-from ptlab.untrusted.shown import one_line, shown
+from ptlab.untrusted.shown import shown, shown_line
 
 #: Seconds the whole grading may take beyond the sum of its checks' limits (starting the
 #: fork server, the library's own renders).
@@ -301,4 +301,4 @@ def table_message(text: str) -> str:
     quote what the student's code said, or a file name, which must not forge lines of the
     table): runs of white space, newlines included, become one space; every other
     character a terminal could act on is shown as its escape (``ptlab.untrusted.shown``)."""
-    return one_line(text, MAX_MESSAGE)
+    return shown_line(text, MAX_MESSAGE)

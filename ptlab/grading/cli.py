@@ -41,7 +41,7 @@ from ptlab.untrusted import (
     take_in,
 )
 from ptlab.untrusted.copies import copied_class, describe_copies, is_a_copy
-from ptlab.untrusted.shown import one_line, print_verdict, relay, shown
+from ptlab.untrusted.shown import print_verdict, relay, shown, shown_line
 from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
@@ -131,12 +131,12 @@ def run_grade(args: argparse.Namespace) -> int:
                     report = check_material(material, seed=args.seed, samples=args.samples)
                     failure = None
         except ImportFailed as error:
-            raise GradeLoadError(one_line(str(error))) from None
+            raise GradeLoadError(shown_line(str(error))) from None
         except (SubmissionFailed, StudentError) as error:
             failure = error.describe() if isinstance(error, StudentError) else str(error)
     # Everything the file started has ended: only now is anything written.
     if failure is not None:
-        print_verdict(f"{shown(args.target)}: FAILED: {one_line(failure)}")
+        print_verdict(f"{shown(args.target)}: FAILED: {shown_line(failure)}")
         return 1
     print_verdict(str(report))
     if args.plots and not report.passed:

@@ -35,7 +35,7 @@ def shown(text: object) -> str:
     return "".join(_escape(c) if unicodedata.category(c) in HIDDEN else c for c in text)
 
 
-def one_line(text: object, limit: int = 1000) -> str:
+def shown_line(text: object, limit: int = 1000) -> str:
     """``text`` as one shown line of at most ``limit`` characters: runs of white space,
     newlines included, become one space, and the rest is ``shown``."""
     line = shown(" ".join(str(text).split()))
