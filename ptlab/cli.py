@@ -248,6 +248,13 @@ def _add_bench(commands) -> None:
         "at its image's size, alternately --repeat times, as whole processes",
     )
     bench.add_argument(
+        "--tail",
+        action="store_true",
+        help="time each bounce of one-worker renders, batches kept full and, alternately "
+        "(--repeat times), left to run dry as before path regeneration; print the share "
+        "of time in bounces with few live paths, and the ratio of times",
+    )
+    bench.add_argument(
         "--cpp-args",
         default="{spp}",
         metavar="ARGS",
@@ -350,9 +357,7 @@ def _render(args) -> int:
         # inside OpenImageIO's import aborts the process): a signal now only waits.
         signals.holding = True
         if result.nonfinite:  # (a bug in a material or an integrator: said even with --quiet)
-            print(
-                f"ptlab: {result.nonfinite} samples were NaN or infinite and were left out", file=sys.stderr
-            )
+            print(f"ptlab: {result.nonfinite_message()}", file=sys.stderr)
         if not result.complete:
             return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
         _write(out, result, args.exposure)
@@ -572,6 +577,24 @@ def _bench(args) -> int:
     spp = args.spp if args.spp is not None else (64 if args.accuracy else 16)
     if res <= 0 or spp <= 0:
         raise PtlabError("--res and --spp must be positive")
+    if args.tail:
+        from ptlab.measure.tail import run_tail
+        from ptlab.scene_file import load_scene
+
+        if not 1 <= args.repeat <= 100:
+            raise PtlabError(f"--repeat {args.repeat}: must be from 1 to 100")
+        scene = load_scene("cornell-box")
+        for estimator in args.estimator or ["homework", "default"]:
+            print(f"{scene.summary()}; {res}x{res}, {spp} spp, {estimator} estimator, 1 worker")
+            run_tail(
+                scene,
+                ESTIMATOR_OPTIONS[estimator],
+                res,
+                spp,
+                args.repeat,
+                (args.backend or [RenderOptions.backend])[0],
+            )
+        return 0
     if args.accuracy:
         if not 1 <= args.repeat <= 100:
             raise PtlabError(f"--repeat {args.repeat}: must be from 1 to 100")

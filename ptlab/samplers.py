@@ -90,8 +90,11 @@ def mix64(x: np.ndarray) -> np.ndarray:
     return x
 
 
-def _counter(dim: int, salt: int = 0) -> np.uint64:
-    """The stream position of dimension ``dim``: (dim + 1) * _GAMMA (+ a salt), mod 2^64."""
+def _counter(dim: int | np.ndarray, salt: int = 0) -> np.uint64 | np.ndarray:
+    """The stream position of dimension ``dim``: (dim + 1) * _GAMMA (+ a salt), mod 2^64
+    (per row, for an (N,) array of dimensions: uint64 arithmetic wraps around by itself)."""
+    if isinstance(dim, np.ndarray):
+        return (dim.astype(_U64) + _U64(1)) * _U64(_GAMMA) + _U64(salt)
     return _U64(((int(dim) + 1) * _GAMMA + salt) & _MASK64)
 
 
@@ -158,21 +161,52 @@ class Sampler:
         """(N,) uint32: what of the sample index goes into a key (by default, the index)."""
         return index
 
-    def get(self, keys: np.ndarray, dim: int, count: int) -> np.ndarray:
+    def get(self, keys: np.ndarray, dim: int | np.ndarray, count: int) -> np.ndarray:
         """(N, count) float32 uniforms in [0, 1), in the column-major layout of
         ``ptlab.vectors``.
 
         Args:
             keys: (N,) from ``keys``.
             dim: the first dimension of the request; a pair (count 2) is stratified together.
+                An (N,) array asks each row for its own dimension (paths at different depths
+                in one batch: ``BounceUniforms``).
             count: 1 or 2.
         """
+        if isinstance(dim, np.ndarray):
+            return self._get_per_row(keys, dim, count)
         patterned = dim < PATTERNED_DIMENSIONS
         if count == 1:
             return (self.one(keys, dim) if patterned else independent_one(keys, dim))[:, None]
         if count == 2:
             return np.stack(self.pair(keys, dim) if patterned else independent_pair(keys, dim)).T
         raise ValueError(f"count must be 1 or 2, got {count}")
+
+    def _get_per_row(self, keys: np.ndarray, dims: np.ndarray, count: int) -> np.ndarray:
+        """``get`` with a dimension per row, a run of rows with one dimension at a time.
+
+        A batch kept full by path regeneration is a few such runs: the paths that entered it
+        together stay together, in order, and are at one depth (``ptlab.integrators.path``).
+        Rows in any other order are grouped by dimension first.
+        """
+        ends = np.flatnonzero(dims[1:] != dims[:-1]) + 1
+        if len(ends) > 64:  # (not runs: gather each dimension's rows)
+            out = np.empty((len(keys), count), dtype=np.float32, order="F")
+            for dim in np.unique(dims):
+                rows = np.flatnonzero(dims == dim)
+                out[rows] = self.get(keys.take(rows), int(dim), count)
+            return out
+        starts = [0, *ends.tolist()]
+        stops = [*starts[1:], len(keys)]
+        out = np.empty((len(keys), count), dtype=np.float32, order="F")
+        for a, b in zip(starts, stops, strict=True):
+            # (``get``'s choice, written straight into the rows: one copy fewer.)
+            dim, run = int(dims[a]), keys[a:b]
+            patterned = dim < PATTERNED_DIMENSIONS
+            if count == 1:
+                out[a:b, 0] = self.one(run, dim) if patterned else independent_one(run, dim)
+            else:
+                out[a:b, 0], out[a:b, 1] = self.pair(run, dim) if patterned else independent_pair(run, dim)
+        return out
 
     def one(self, keys: np.ndarray, dim: int) -> np.ndarray:
         """(N,) float32 uniforms of dimension ``dim``."""
@@ -183,7 +217,7 @@ class Sampler:
         raise NotImplementedError
 
 
-def sample_hash(keys: np.ndarray, dim: int) -> np.ndarray:
+def sample_hash(keys: np.ndarray, dim: int | np.ndarray) -> np.ndarray:
     """(N,) uint64: 64 random bits of each sample in dimension ``dim``."""
     return mix64(keys + _counter(dim))
 
@@ -194,12 +228,12 @@ def pattern_hash(keys: np.ndarray, dim: int) -> np.ndarray:
     return mix64((keys >> _U64(32)) + _counter(dim, salt=0x632BE59BD9B4E019))
 
 
-def independent_one(keys: np.ndarray, dim: int) -> np.ndarray:
+def independent_one(keys: np.ndarray, dim: int | np.ndarray) -> np.ndarray:
     """(N,) float32 independent uniforms of dimension ``dim``."""
     return unit_float(_high(sample_hash(keys, dim)))
 
 
-def independent_pair(keys: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray]:
+def independent_pair(keys: np.ndarray, dim: int | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Two (N,) float32 arrays of independent uniforms, from one 64-bit hash."""
     bits = sample_hash(keys, dim)
     return unit_float(_high(bits)), unit_float(bits.astype(_U32))
@@ -384,7 +418,7 @@ class TimedSampler:
         finally:
             self.seconds += time.perf_counter() - start
 
-    def get(self, keys: np.ndarray, dim: int, count: int) -> np.ndarray:
+    def get(self, keys: np.ndarray, dim: int | np.ndarray, count: int) -> np.ndarray:
         start = time.perf_counter()
         try:
             return self.inner.get(keys, dim, count)
@@ -399,7 +433,9 @@ class BounceUniforms:
     Args:
         sampler: the render's sampler.
         keys: (N,) the paths' sampler keys.
-        depth: the bounce, 0 at the surface a camera ray hits.
+        depth: the bounce, 0 at the surface a camera ray hits: one for the batch, or (N,) one
+            per path, when the batch holds paths at different depths (path regeneration,
+            ``ptlab.integrators.path``).
     """
 
     #: The camera's jitter inside the pixel is the pair of dimensions (0, 1).
@@ -407,7 +443,7 @@ class BounceUniforms:
     #: Dimensions each bounce uses: the light pair, roulette, the BSDF pair.
     PER_BOUNCE = 5
 
-    def __init__(self, sampler: Sampler, keys: np.ndarray, depth: int):
+    def __init__(self, sampler: Sampler, keys: np.ndarray, depth: int | np.ndarray):
         self.sampler, self.keys = sampler, keys
         self.first = 2 + self.PER_BOUNCE * depth
 

@@ -41,10 +41,15 @@ def test_render_says_how_many_samples_were_nan_and_writes_the_count(tmp_path, mo
     out = tmp_path / "box.exr"
     args = ["render", "cornell-box", "--spp", "2", "--res", "16", "--workers", "1", "--out", str(out)]
     assert main([*args, "--quiet"]) == 0
-    message = r"ptlab: (\d+) samples were NaN or infinite and were left out\n"
+    message = (
+        r"ptlab: (\d+) samples were NaN or infinite and were left out of the image; "
+        r"the first at pixel \((\d+), (\d+)\), depth (\d+)\n"
+    )
     said = re.fullmatch(message, capsys.readouterr().err)
     assert said
     assert int(said[1]) > 0
+    assert 0 <= int(said[2]) < 16
+    assert 0 <= int(said[3]) < 16
     assert read_image(out)[1]["nonfinite"] == int(said[1])
 
 

@@ -93,6 +93,20 @@ def test_sample_never_returns_nan_and_its_weight_is_finite_and_not_negative(mate
 
 
 @pytest.mark.parametrize("material", MATERIALS, ids=repr)
+def test_a_sample_carries_the_pdf_that_pdf_gives_its_direction(material):
+    # What MIS weighs the emission found along wi with: the same numbers, bit for bit, as
+    # sample_weight followed by pdf (which the renderer then need not call).
+    n, wo, _, u = directions_everywhere(ROWS, 3)
+    n, wo, u = (np.asfortranarray(a, dtype=np.float32) for a in (n, wo, u))
+    front = np.ones(ROWS, dtype=bool)
+    wi, weight, pdf = material.sample_weight_pdf(wo, n, u, front)
+    expected_wi, expected_weight = material.sample_weight(wo, n, u, front)
+    np.testing.assert_array_equal(wi, expected_wi)
+    np.testing.assert_array_equal(weight, expected_weight)
+    np.testing.assert_array_equal(pdf, material.pdf(wo, wi, n))
+
+
+@pytest.mark.parametrize("material", MATERIALS, ids=repr)
 def test_eval_and_pdf_are_finite_and_not_negative_everywhere(material):
     n, wo, wi, _ = directions_everywhere(ROWS, 1)
     f, pdf = material.eval(wo, wi, n), material.pdf(wo, wi, n)

@@ -124,7 +124,7 @@ def test_fixed_roulette_keeps_a_fraction_p_and_divides_their_throughput_by_p(flo
     count, colour = 10_000, np.array([0.2, 0.5, 1.0])
     u = ((np.arange(count) + 0.5) / count).astype(np.float32)  # stratified: exact fractions
     hit = carrying(floor, np.tile(colour, (count, 1)))
-    survive = russian_roulette(hit, 0, PathSettings(rr=rr), u)
+    survive = russian_roulette(hit, PathSettings(rr=rr), u)
     assert survive.mean() == pytest.approx(rr, abs=1 / count)
     np.testing.assert_allclose(hit.throughput[survive], np.tile(colour / rr, (survive.sum(), 1)), rtol=1e-6)
     # Unbiased: the survivors carry, on average over all the paths, what all of them carried.
@@ -136,7 +136,7 @@ def test_throughput_roulette_survives_with_the_largest_channel_at_most_one(floor
     throughput = np.array([[0.1, 0.25, 0.05], [2.0, 0.1, 0.1], [0.5, 0.5, 0.5]], np.float32)
     hit = carrying(floor, throughput)
     u = np.array([0.24, 0.999, 0.51], np.float32)
-    survive = russian_roulette(hit, 5, PathSettings(rr="throughput"), u)
+    survive = russian_roulette(at_depth(hit, 5), PathSettings(rr="throughput"), u)
     np.testing.assert_array_equal(survive, [True, True, False])
     np.testing.assert_allclose(hit.throughput[0], throughput[0] / 0.25, rtol=1e-6)
     np.testing.assert_array_equal(hit.throughput[1], throughput[1])  # bright: never dies
@@ -148,10 +148,20 @@ def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
     dim = np.full((100, 3), 0.01, np.float32)  # would die almost surely
     u = np.full(100, 0.999, np.float32)
     for depth in range(settings.roulette_starts):
-        hit = carrying(floor, dim)
-        assert russian_roulette(hit, depth, settings, u).all()
+        hit = at_depth(carrying(floor, dim), depth)
+        assert russian_roulette(hit, settings, u).all()
         np.testing.assert_array_equal(hit.throughput, dim)
-    assert not russian_roulette(carrying(floor, dim), settings.roulette_starts, settings, u).any()
+    assert not russian_roulette(at_depth(carrying(floor, dim), settings.roulette_starts), settings, u).any()
+    # A batch of paths at several depths (path regeneration): each row by its own depth.
+    depth = np.arange(100) % (settings.roulette_starts + 1)
+    survive = russian_roulette(at_depth(carrying(floor, dim), depth), settings, u)
+    np.testing.assert_array_equal(survive, depth < settings.roulette_starts)
+
+
+def at_depth(hit, depth):
+    """``hit`` with its paths at ``depth``: one for all, or (N,) one per path."""
+    hit.paths.depth = depth
+    return hit
 
 
 # -- leaving a surface -----------------------------------------------------------------------

@@ -202,10 +202,14 @@ def test_nan_from_a_material_never_reaches_the_image_and_is_counted(cornell):
     assert image.max() > 10
     assert image.mean() > 0.1
     # Counted, not hidden; the same count whatever the tiles (each job counts its own).
-    counts = {
-        tile: render_result(scene, spp=4, res=24, workers=1, tile_size=tile).nonfinite for tile in (8, 24)
-    }
-    assert counts[8] == counts[24] > 0
+    results = {tile: render_result(scene, spp=4, res=24, workers=1, tile_size=tile) for tile in (8, 24)}
+    assert results[8].nonfinite == results[24].nonfinite > 0
+    # And where the first was: the same pixel and depth whatever the tiles.
+    x, y, depth = results[8].first_nonfinite
+    assert results[24].first_nonfinite == (x, y, depth)
+    assert 0 <= x < 24
+    assert 0 <= y < 24
+    assert depth >= 0
     assert render_result(cornell, spp=4, res=24, workers=1).nonfinite == 0
 
 
@@ -327,3 +331,59 @@ def test_debug_views_show_normals_albedo_and_depth(cornell):
     expected = np.where(np.isfinite(t), t, 0).reshape(64, 64)
     close = np.isclose(depth[..., 0], expected, rtol=0.02)
     assert close.mean() > 0.9, close.mean()
+
+
+# -- batches kept full (path regeneration) ----------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("scene", "kwargs"),
+    [
+        ("cornell-box", dict()),
+        ("cornell-box", dict(strategy="mis", sampler="stratified")),
+        ("cornell-box", dict(sampling="uniform", rr=0.8, max_depth=3)),
+        ("veach-mis", dict(strategy="mis", heuristic="balance")),
+        ("games101-hw5", dict(strategy="mis")),  # a sky, point lights, glass: rays escape
+    ],
+)
+def test_batches_kept_full_give_the_image_of_batches_left_to_run_dry(monkeypatch, scene, kwargs):
+    # Each path's numbers are a function of its pixel, sample and depth, and each path adds
+    # its radiance up on its own: so new camera paths joining a batch at every bounce, from
+    # the next job too, change nothing, bit for bit. (The default batch, 2^18 paths, holds
+    # all of this render's 20k: one batch that runs dry, as before path regeneration.)
+    from ptlab.integrators import path
+    from ptlab.rendering import jobs
+
+    options = dict(spp=5, res=(40, 32), seed=3, workers=1, tile_size=16, **kwargs)
+    dry = render_result(scene, **options).image
+    refills = []
+    more = jobs.CameraSamples.more
+
+    def counted(self, count):
+        refills.append(count)
+        return more(self, count)
+
+    monkeypatch.setattr(jobs.CameraSamples, "more", counted)
+    monkeypatch.setattr(path, "BATCH_PATHS", 1500)
+    monkeypatch.setattr(path, "REFILL_BELOW", 1000)
+    monkeypatch.setattr(jobs, "MAX_GROUP_SAMPLES", 5000)  # groups of several tiles
+    full = render_result(scene, **options).image
+    # (It did refill: new paths joined a batch that still held older ones.)
+    assert sum(0 < count < 1500 for count in refills) >= 3
+    np.testing.assert_array_equal(full, dry)
+
+
+def test_job_groups_take_every_job_once_in_order_and_shrink_toward_the_end():
+    from ptlab.rendering.jobs import MAX_GROUP_SAMPLES, Job, job_groups, make_tiles
+
+    tiles = make_tiles(784, 784, 128)  # 49 tiles, the last row and column 16 pixels wide
+    jobs = [Job(tile, 0, 16) for tile in tiles]
+    for workers in (1, 2, 8):
+        groups = job_groups(jobs, workers)
+        assert [job for group in groups for job in group] == jobs
+        samples = [sum(j.tile.shape[0] * j.tile.shape[1] * j.spp for j in group) for group in groups]
+        # No group above the cap (unless one job alone is), and the last one small: a
+        # worker busy with it alone waits for nothing long.
+        assert all(s <= MAX_GROUP_SAMPLES or len(g) == 1 for s, g in zip(samples, groups, strict=True))
+        assert samples[-1] <= sum(samples) / (2 * workers)
+        assert len(groups) < len(jobs)  # (the point: fewer tails)

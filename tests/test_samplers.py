@@ -245,3 +245,23 @@ def test_every_sampler_gives_the_cornell_image(name):
         difference.mean(axis=0),
         standard_error,
     )
+
+
+@pytest.mark.parametrize("name", SAMPLERS)
+@pytest.mark.parametrize("layout", ["runs", "shuffled"])
+def test_a_dimension_per_row_gives_each_row_what_its_own_dimension_would(name, layout):
+    # A batch kept full holds paths at several depths, each asking for its own dimension:
+    # in runs (paths that entered together stay together) or, in general, in any order.
+    sampler = make_sampler(name, seed=5, spp=16)
+    rows = 3000
+    keys = sampler.keys(np.arange(rows) % 97, np.arange(rows) // 97)
+    depth = np.repeat([9, 4, 2, 1, 0], rows // 5)
+    if layout == "shuffled":
+        depth = np.random.default_rng(0).permutation(depth)
+    for count, offset in ((2, 0), (1, 2), (2, 3)):  # light, roulette, bsdf
+        dims = 2 + BounceUniforms.PER_BOUNCE * depth + offset
+        got = sampler.get(keys, dims, count)
+        for d in np.unique(depth):
+            mine = depth == d
+            expected = sampler.get(keys[mine], int(2 + BounceUniforms.PER_BOUNCE * d + offset), count)
+            np.testing.assert_array_equal(got[mine], expected)

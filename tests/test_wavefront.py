@@ -25,6 +25,25 @@ def test_the_film_adds_every_contribution_to_its_pixel_in_float64():
     np.testing.assert_allclose(film, expected, rtol=1e-12)
 
 
+@pytest.mark.parametrize(
+    "rows",
+    [
+        np.arange(0, 3000, 2),  # a batch's paths, each its own row, in order: added in place
+        np.arange(1500)[::-1] * 2,  # the same rows in another order
+        np.arange(1500) % 700,  # repeated rows, many of them: bincount
+        np.array([5, 5, 3, 5]),  # repeated rows, few of them in a large film: add.at
+    ],
+)
+def test_the_film_adds_each_row_whatever_their_order_and_repeats(rows):
+    radiance = np.asfortranarray(np.random.default_rng(3).random((len(rows), 3)).astype(np.float32))
+    for order in ("F", "C"):  # (a render's per-path film, and a student's np.zeros)
+        film = np.zeros((3000, 3), order=order)
+        add_to_film(film, rows, radiance)
+        expected = np.zeros((3000, 3))
+        np.add.at(expected, rows, radiance.astype(np.float64))
+        np.testing.assert_allclose(film, expected, rtol=1e-12)
+
+
 @pytest.mark.filterwarnings("ignore:invalid value:RuntimeWarning")
 def test_a_nan_or_infinite_sample_is_left_out_and_counted_and_the_rest_of_its_pixel_kept():
     film = np.zeros((3, 3))
@@ -33,7 +52,11 @@ def test_a_nan_or_infinite_sample_is_left_out_and_counted_and_the_rest_of_its_pi
         add_to_film(film, np.array([0, 0, 1, 1, 2]), radiance)
         add_to_film(film, np.array([2]), np.array([[0, -np.inf, 0]], np.float32))
     np.testing.assert_array_equal(film, [[1, 1, 1], [2, 2, 2], [3, 3, 3]])
-    assert (nonfinite.count, nonfinite.first_pixel) == (3, 0)
+    assert (nonfinite.count, nonfinite.first_row, nonfinite.first_depth) == (3, 0, 0)
+    # The depth where the caller says it, one for all or per row.
+    with counting_nonfinite() as nonfinite:
+        add_to_film(np.zeros((3, 3)), np.array([0, 1, 2]), radiance[2:], depth=np.array([4, 7, 5]))
+    assert (nonfinite.count, nonfinite.first_row, nonfinite.first_depth) == (1, 1, 7)
     # Outside a count, a warning says so: never silently.
     with pytest.warns(RuntimeWarning, match="1 samples were NaN or infinite"):
         add_to_film(film, np.array([1]), np.array([[np.nan, 0, 0]], np.float32))

@@ -41,6 +41,7 @@ every integrator shares, ``ptlab.integrators.wavefront``.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -53,6 +54,7 @@ from ptlab.integrators.wavefront import (
     Paths,
     SurfaceHit,
     add_to_film,
+    joined,
     kept,
     leave_surface,
     sees,
@@ -102,48 +104,72 @@ STRATEGIES = ("nee", "bsdf", "mis")
 HEURISTICS = ("power", "balance")
 
 
+#: The most paths a batch holds when it takes new camera paths as old ones end (``more``).
+#: Per path, a bounce costs the same from about 30k paths to 2^18 and more, and a third more
+#: below 10k (``ptlab bench --tail``; docs/performance.md).
+BATCH_PATHS = 2**18
+#: A batch with fewer live paths than this takes new camera paths, up to ``BATCH_PATHS``.
+REFILL_BELOW = BATCH_PATHS // 2
+
+
 def trace_paths(
-    film: np.ndarray, scene: Scene, accel: Accelerator, paths: Paths, sampler: Sampler, settings: PathSettings
+    film: np.ndarray,
+    scene: Scene,
+    accel: Accelerator,
+    paths: Paths,
+    sampler: Sampler,
+    settings: PathSettings,
+    more: Callable[[int], Paths | None] | None = None,
 ) -> int:
     """Trace a batch of camera paths to the end, adding their radiance into ``film``.
 
     Args:
-        film: (P, 3) float64 sums of radiance per pixel, updated in place.
+        film: (rows, 3) float64 sums of radiance, per pixel or per path (``paths.pixel`` are
+            its rows), updated in place.
         paths: the camera rays, throughput 1.
         sampler: where each path's random numbers come from (``ptlab.samplers``: one
             dimension layout, ``BounceUniforms``, for every integrator).
+        more: where more camera paths come from, ``more(count)`` giving at most ``count``
+            of them, or None when there are none left. The batch then stays full ("path
+            regeneration": Laine, Karras and Aila 2013): whenever fewer than
+            ``REFILL_BELOW`` paths live, new camera paths fill it up to ``BATCH_PATHS``,
+            and each path goes on at its own depth (``Paths.depth``). Without it the batch
+            dwindles to its last path, each of those bounces paying NumPy's fixed costs.
 
     Returns:
         the number of rays traced (closest-hit and shadow rays).
     """
     rays = 0
-    for depth in range(settings.max_depth + 1):
+    while True:
+        if more is not None and len(paths) < REFILL_BELOW:
+            new = more(BATCH_PATHS - len(paths))
+            if new is None:
+                more = None  # (no camera paths left: the batch runs dry)
+            else:
+                paths = joined(paths, new)
+        if len(paths) == 0:
+            return rays
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
         if scene.sky is not None:
             add_sky(film, scene, paths, hits, settings)  # the paths that escape see the sky
         hit = surface_hit(scene, paths, hits)  # drops the paths that missed
+        paths = hit.paths
         if len(hit.prim) == 0:
-            break
+            continue
         if settings.strategy != "nee" or hit.sees_emission.any():
             add_emission(film, scene, hit, settings)  # the fix for the black light
-        if depth == settings.max_depth:
-            break
-        u = BounceUniforms(sampler, hit.sample, depth)  # this bounce's random numbers
+        ending = np.asarray(hit.depth >= settings.max_depth)  # these paths end here
+        if ending.all():
+            paths = hit.paths.take(np.zeros(0, dtype=np.intp))
+            continue
+        u = BounceUniforms(sampler, hit.sample, hit.depth)  # this bounce's random numbers
         if sampled_lights(scene, settings).any():
-            rays += direct_light(film, scene, accel, hit, u.light(), settings)
-        u_roulette = u.roulette() if depth >= settings.roulette_starts else None
-        survive = russian_roulette(hit, depth, settings, u_roulette)
-        paths = scatter(
-            scene,
-            hit,
-            u.bsdf(),
-            survive,  # keeps the survivors only
-            with_pdf=settings.strategy == "mis",
-        )
-        if len(paths.pixel) == 0:
-            break
-    return rays
+            rays += direct_light(film, scene, accel, hit, u.light(), settings, ending=ending)
+        going_on = np.ones(len(hit.prim), dtype=bool) & ~ending
+        if np.any(hit.depth >= settings.roulette_starts):
+            going_on = going_on & russian_roulette(hit, settings, u.roulette())
+        paths = scatter(scene, hit, u.bsdf(), going_on, with_pdf=settings.strategy == "mis")
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
@@ -168,7 +194,9 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
             hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
         )
         emitted *= weight.astype(np.float32)[:, None]
-    add_to_film(film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted)
+    add_to_film(
+        film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted, _rows_of(hit.depth, rows)
+    )
 
 
 def mis_weight(pdf: np.ndarray, other: np.ndarray | np.floating, heuristic: str = "power") -> np.ndarray:
@@ -184,7 +212,13 @@ def mis_weight(pdf: np.ndarray, other: np.ndarray | np.floating, heuristic: str 
 
 
 def direct_light(
-    film: np.ndarray, scene: Scene, accel: Accelerator, hit: SurfaceHit, u: np.ndarray, settings: PathSettings
+    film: np.ndarray,
+    scene: Scene,
+    accel: Accelerator,
+    hit: SurfaceHit,
+    u: np.ndarray,
+    settings: PathSettings,
+    ending: np.ndarray | None = None,
 ) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
@@ -195,7 +229,8 @@ def direct_light(
     / pdf (times the MIS weight with ``"mis"``; 1 for a point light, which BSDF sampling
     cannot find). For a point on a light triangle, Li = Le and pdf = pdf_area |x - x'|^2 /
     cos(theta'): the homework's Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area.
-    Returns the shadow rays.
+    ``ending``: (N,) bool, the paths that end at this vertex (at the most bounces), which take
+    no light sample. Returns the shadow rays.
     """
     sampled = sampled_lights(scene, settings)
     light, kind = scene.light_sampler.sample_li(hit.p, u, sampled)
@@ -203,7 +238,10 @@ def direct_light(
     # Points that do not face their light sample exchange no light and need no shadow ray (a
     # third of them in the Cornell box: docs/performance.md; a light seen from behind has pdf
     # 0). Nor do mirrors and glass, whose f_r is 0 for any direction but the one they choose.
-    usable = np.flatnonzero((cos_theta > 0) & (light.pdf > 0) & ~hit.delta)
+    usable = (cos_theta > 0) & (light.pdf > 0) & ~hit.delta
+    if ending is not None:
+        usable &= ~ending
+    usable = np.flatnonzero(usable)
     visible = sees(accel, hit, usable, take_rows(light.target, usable))
     weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
@@ -214,7 +252,7 @@ def direct_light(
     radiance = hit.throughput * shade(hit, "eval", hit.wo, light.wi, hit.n)
     radiance *= light.radiance
     radiance *= weight[:, None]
-    add_to_film(film, hit.pixel, radiance)
+    add_to_film(film, hit.pixel, radiance, hit.depth)
     return len(usable)
 
 
@@ -259,25 +297,36 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
             mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
         ).astype(np.float32)
         radiance = radiance * weight[:, None]
-    add_to_film(film, paths.pixel.take(rows), take_rows(paths.throughput, rows) * radiance)
+    # (A path that escapes after its vertex at depth d sees the sky at depth d + 1.)
+    add_to_film(
+        film,
+        paths.pixel.take(rows),
+        take_rows(paths.throughput, rows) * radiance,
+        _rows_of(paths.depth, rows),
+    )
 
 
-def russian_roulette(hit: SurfaceHit, depth: int, settings: PathSettings, u: np.ndarray | None) -> np.ndarray:
+def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> np.ndarray:
     """(N,) bool: which paths go on. Their throughput is divided by the survival odds.
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
-    u: (N,) uniforms, or None before roulette starts (every path goes on).
+    u: (N,) uniforms. Paths not yet at ``settings.roulette_starts`` all go on (survival 1).
     """
-    if depth < settings.roulette_starts:
-        return np.ones(len(hit.prim), dtype=bool)
     if settings.rr == "throughput":
         t = hit.throughput
         survival = np.minimum(np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2]), 1.0)
     else:
         survival = np.float32(settings.rr)
+    if isinstance(hit.depth, np.ndarray):  # (paths at several depths: some may be too young)
+        survival = np.where(hit.depth >= settings.roulette_starts, survival, np.float32(1))
     survive = u < survival
     hit.throughput /= np.where(survive, survival, np.float32(1))[:, None]
     return survive
+
+
+def _rows_of(depth: int | np.ndarray, rows: np.ndarray) -> int | np.ndarray:
+    """The depths of rows ``rows`` of a batch whose depth is ``depth`` (one, or one per row)."""
+    return depth.take(rows) if isinstance(depth, np.ndarray) else depth
 
 
 def scatter(
@@ -287,14 +336,18 @@ def scatter(
 
     ``with_pdf`` keeps the pdf of each sampled direction, which MIS weighs emission with.
     """
-    wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
-    pdf = shade(hit, "pdf", hit.wo, wi, hit.n) if with_pdf else None
+    pdf = None
+    if with_pdf:  # (the sample carries its pdf: ``Material.sample_weight_pdf``)
+        wi, weight, pdf = shade(hit, "sample_weight_pdf", hit.wo, hit.n, u, hit.front)
+    else:
+        wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
     throughput = hit.throughput * weight
     go_on = np.flatnonzero(
         survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0) | (throughput[:, 2] > 0))
     )
     every = len(go_on) == len(survive)
     wi, n, p, offset = (kept(a, go_on, every) for a in (wi, hit.n, hit.p, hit.offset))
+    depth = hit.depth
     return Paths(
         origins=leave_surface(p, n, offset, wi),
         dirs=wi,
@@ -303,4 +356,5 @@ def scatter(
         sees_emission=kept(hit.delta, go_on, every),
         sample=kept(hit.sample, go_on, every),
         pdf=kept(pdf, go_on, every),
+        depth=(kept(depth, go_on, every) if isinstance(depth, np.ndarray) else depth) + 1,
     )

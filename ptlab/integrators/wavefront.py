@@ -20,7 +20,7 @@ import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from contextvars import ContextVar
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import overload
 
 import numpy as np
@@ -35,7 +35,8 @@ SHADOW_EPSILON = 1e-4
 
 @dataclass
 class Paths:
-    """The live paths of a batch, as structure-of-arrays (one row per path)."""
+    """The state of a batch of paths, as structure-of-arrays: one row per path, every field
+    of a path in this one object, compacted together (``take``) when paths end."""
 
     origins: np.ndarray  # (N, 3) float32
     dirs: np.ndarray  # (N, 3) float32 unit
@@ -44,11 +45,65 @@ class Paths:
     sees_emission: np.ndarray  # (N,) bool: add the emission the ray hits (camera or delta bounce)
     sample: np.ndarray  # (N,) uint64 sampler keys: whose random numbers the path uses
     pdf: np.ndarray | None = None  # (N,) solid-angle pdf that chose dirs ("mis" only)
+    #: The bounce each path is at (0: a camera ray): one for the whole batch, or (N,) intp
+    #: when the batch holds paths at different depths (path regeneration, ``path.py``).
+    depth: int | np.ndarray = 0
+
+    def __len__(self) -> int:
+        return len(self.pixel)
+
+    def take(self, rows: np.ndarray) -> Paths:
+        """The paths ``rows`` (an index array), every field at once: the one place where a
+        batch is compacted."""
+        return Paths(
+            origins=take_rows(self.origins, rows),
+            dirs=take_rows(self.dirs, rows),
+            throughput=take_rows(self.throughput, rows),
+            pixel=self.pixel.take(rows),
+            sees_emission=self.sees_emission.take(rows),
+            sample=self.sample.take(rows),
+            pdf=None if self.pdf is None else self.pdf.take(rows),
+            depth=self.depth.take(rows) if isinstance(self.depth, np.ndarray) else self.depth,
+        )
+
+    def depths(self) -> np.ndarray:
+        """(N,) the depth of each path."""
+        if isinstance(self.depth, np.ndarray):
+            return self.depth
+        return np.full(len(self), self.depth, dtype=np.intp)
+
+
+def joined(first: Paths, second: Paths) -> Paths:
+    """One batch of the paths of ``first``, then those of ``second`` (new camera paths that fill
+    a batch's free rows). A pdf missing on one side is 0 there (camera rays have none)."""
+
+    def both(a: np.ndarray | None, b: np.ndarray | None, count_a: int, count_b: int) -> np.ndarray | None:
+        if a is None and b is None:
+            return None
+        a = np.zeros(count_a, np.float32) if a is None else a
+        b = np.zeros(count_b, np.float32) if b is None else b
+        return np.concatenate([a, b])
+
+    def rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        return np.concatenate([a.T, b.T], axis=1).T if a.ndim == 2 else np.concatenate([a, b])
+
+    return Paths(
+        origins=rows(first.origins, second.origins),
+        dirs=rows(first.dirs, second.dirs),
+        throughput=rows(first.throughput, second.throughput),
+        pixel=rows(first.pixel, second.pixel),
+        sees_emission=rows(first.sees_emission, second.sees_emission),
+        sample=rows(first.sample, second.sample),
+        pdf=both(first.pdf, second.pdf, len(first), len(second)),
+        depth=rows(first.depths(), second.depths()),
+    )
 
 
 @dataclass
 class SurfaceHit:
-    """The live paths at their current vertex (one row per path)."""
+    """The live paths at their current vertex: the vertex's geometry, one row per path, and
+    the paths themselves (``paths``; ``hit.throughput`` is ``hit.paths.throughput``, and so
+    on for every field of ``Paths`` that a vertex needs)."""
 
     prim: np.ndarray  # (N,) intp triangle ids
     p: np.ndarray  # (N, 3) float32 hit points
@@ -56,14 +111,50 @@ class SurfaceHit:
     wo: np.ndarray  # (N, 3) unit direction back along the ray
     front: np.ndarray  # (N,) bool: the ray hit the triangle's front face
     offset: np.ndarray  # (N,) float32: how far new rays start off the surface
-    throughput: np.ndarray  # (N, 3) float32
-    pixel: np.ndarray  # (N,) intp
-    sees_emission: np.ndarray  # (N,) bool, from the ray that arrived here
-    sample: np.ndarray  # (N,) uint64 sampler keys (``ptlab.samplers``)
     materials: list  # [(rows, material)]: who shades which rows (``material_groups``)
     delta: np.ndarray  # (N,) bool: the material here is a mirror or glass
     t: np.ndarray  # (N,) distance from the previous vertex
-    pdf: np.ndarray | None  # (N,) pdf with which the previous vertex chose this direction
+    paths: Paths  # the paths that arrived here, row for row
+
+    # The paths' fields, read (and throughput and pixel written) through the vertex, as
+    # chapter 7's files do.
+    @property
+    def throughput(self) -> np.ndarray:
+        """(N, 3) float32: the paths' throughput."""
+        return self.paths.throughput
+
+    @throughput.setter
+    def throughput(self, value: np.ndarray) -> None:
+        self.paths.throughput = value
+
+    @property
+    def pixel(self) -> np.ndarray:
+        """(N,) intp: the film rows the paths add their radiance to."""
+        return self.paths.pixel
+
+    @pixel.setter
+    def pixel(self, value: np.ndarray) -> None:
+        self.paths.pixel = value
+
+    @property
+    def sees_emission(self) -> np.ndarray:
+        """(N,) bool, from the ray that arrived here."""
+        return self.paths.sees_emission
+
+    @property
+    def sample(self) -> np.ndarray:
+        """(N,) uint64 sampler keys (``ptlab.samplers``)."""
+        return self.paths.sample
+
+    @property
+    def pdf(self) -> np.ndarray | None:
+        """(N,) the pdf with which the previous vertex chose this direction, or None."""
+        return self.paths.pdf
+
+    @property
+    def depth(self) -> int | np.ndarray:
+        """The paths' depth (``Paths.depth``)."""
+        return self.paths.depth
 
 
 @overload
@@ -81,9 +172,12 @@ def kept(a: np.ndarray | None, rows: np.ndarray, every_row: bool) -> np.ndarray 
 def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     """The vertices of the paths that hit something; the others are dropped.
 
-    Where every path hit, the vertices share the paths' arrays (``kept``)."""
+    Where every path hit (as in a closed room), the vertices share the paths' arrays: no copy.
+    """
     alive = np.flatnonzero(hits.prim >= 0)
     every = len(alive) == len(hits.prim)
+    if not every:
+        paths = paths.take(alive)
     prim = kept(hits.prim, alive, every)
     # One gather of the triangles' packed data instead of five (``Scene.triangle_data``).
     data = scene.triangle_data.take(prim, axis=1)  # (13, N); .T gives (N, 3) views
@@ -94,7 +188,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     p = u * e1
     p += v0
     p += v * e2
-    wo = -kept(paths.dirs, alive, every)
+    wo = -paths.dirs
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
     n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
@@ -104,6 +198,9 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     for rows, material in materials:
         if material.is_delta:
             delta[slice(None) if rows is None else rows] = True
+    tally = _nonfinite.get()
+    if tally is not None:
+        tally.bounces += 1  # (the depth a student's loop is at, for ``NonFinite``)
     return SurfaceHit(
         prim=prim,
         p=p,
@@ -111,14 +208,10 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
         wo=wo,
         front=front,
         offset=offset,
-        throughput=kept(paths.throughput, alive, every),
-        pixel=kept(paths.pixel, alive, every),
-        sees_emission=kept(paths.sees_emission, alive, every),
-        sample=kept(paths.sample, alive, every),
         materials=materials,
         delta=delta,
         t=kept(hits.t, alive, every),
-        pdf=kept(paths.pdf, alive, every),
+        paths=paths,
     )
 
 
@@ -130,11 +223,20 @@ class NonFinite:
 
     Attributes:
         count: how many.
-        first_pixel: the film row of the first of them (-1 while there is none).
+        first_row: the film row of the first of them (-1 while there is none).
+        first_depth: the depth at which it was found (-1 while there is none).
+        rows: the film rows of all of them, an array per ``add_to_film`` call that had some.
+        depths: their depths, arrays alike.
+        bounces: the vertices found so far (``surface_hit`` calls): the depth of a loop that
+            does not say its own.
     """
 
     count: int = 0
-    first_pixel: int = -1
+    first_row: int = -1
+    first_depth: int = -1
+    rows: list[np.ndarray] = field(default_factory=list)
+    depths: list[np.ndarray] = field(default_factory=list)
+    bounces: int = 0
 
 
 #: Where ``add_to_film`` counts, inside ``counting_nonfinite`` (one per thread: each thread
@@ -145,7 +247,7 @@ _nonfinite: ContextVar[NonFinite | None] = ContextVar("nonfinite", default=None)
 @contextmanager
 def counting_nonfinite() -> Iterator[NonFinite]:
     """Count, in the ``NonFinite`` yielded, the samples that ``add_to_film`` leaves out
-    while the block runs (``ptlab.rendering.jobs.run_job`` counts each job's)."""
+    while the block runs (``ptlab.rendering.jobs.run_jobs`` counts each job's)."""
     tally = NonFinite()
     token = _nonfinite.set(tally)
     try:
@@ -154,29 +256,41 @@ def counting_nonfinite() -> Iterator[NonFinite]:
         _nonfinite.reset(token)
 
 
-def add_to_film(film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray) -> None:
+def add_to_film(
+    film: np.ndarray, pixel: np.ndarray, radiance: np.ndarray, depth: int | np.ndarray | None = None
+) -> None:
     """film[pixel[k]] += radiance[k] for every k, in float64.
 
-    ``np.bincount`` with weights sums repeated pixels correctly, and faster than
-    ``np.add.at`` (docs/performance.md). A NaN or infinite sample is left out, so that it
-    does not poison its pixel for good, and counted (``counting_nonfinite``; outside it, a
-    ``RuntimeWarning`` says so), so that the bug that made it does not go unseen. It is looked
-    for in the per-pixel sums, which are far fewer than the samples: the common case costs
-    nothing extra.
+    A film has a row per pixel, or, in a render, a row per path (``ptlab.rendering.jobs``,
+    which sums a pixel's paths afterwards, in one order whatever the batch they were traced in).
+    A NaN or infinite sample is left out, so that it does not poison its pixel for good, and
+    counted (``counting_nonfinite``, with ``depth``, the sample's bounce, where the caller
+    knows it; outside it, a ``RuntimeWarning`` says so), so that the bug that made it does not
+    go unseen. One sum over the samples finds them: the common case costs little.
     """
-    sums = np.stack(
-        [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)], axis=1
-    )
-    if not np.isfinite(sums).all():
+    if not np.isfinite(radiance.sum()):
         bad = ~np.isfinite(radiance).all(axis=1)
-        if bad.any():  # (else finite samples whose sum overflowed: kept, as inf)
-            _count_nonfinite(pixel[bad])
-            return add_to_film(film, pixel[~bad], radiance[~bad])
-    film += sums
+        if bad.any():  # (else finite samples whose sum overflowed: kept)
+            _count_nonfinite(pixel[bad], depth[bad] if isinstance(depth, np.ndarray) else depth)
+            keep = np.flatnonzero(~bad)
+            pixel, radiance = pixel.take(keep), take_rows(radiance, keep)
+    if len(pixel) and (pixel[1:] > pixel[:-1]).all():
+        # Each row once (a batch's paths, in order): add in place, column by column.
+        for c in range(3):
+            column = film[:, c]
+            column[pixel] += radiance[:, c]
+    elif len(pixel) > len(film) // 8:
+        # ``np.bincount`` with weights sums repeated rows correctly, and faster than
+        # ``np.add.at`` when the rows are many (docs/performance.md).
+        sums = [np.bincount(pixel, weights=radiance[:, c], minlength=len(film)) for c in range(3)]
+        film += np.stack(sums, axis=1)
+    else:
+        np.add.at(film, pixel, radiance)
 
 
-def _count_nonfinite(pixel: np.ndarray) -> None:
-    """Count samples left out of the film at film rows ``pixel`` (``NonFinite``)."""
+def _count_nonfinite(pixel: np.ndarray, depth: int | np.ndarray | None) -> None:
+    """Count samples left out of the film at film rows ``pixel``, found at ``depth`` (one, one
+    per sample, or None: the bounces counted so far say) (``NonFinite``)."""
     tally = _nonfinite.get()
     if tally is None:
         warnings.warn(
@@ -185,9 +299,14 @@ def _count_nonfinite(pixel: np.ndarray) -> None:
             stacklevel=3,
         )
         return
+    if depth is None:
+        depth = max(tally.bounces - 1, 0)
+    depths = np.broadcast_to(np.asarray(depth, dtype=np.intp), pixel.shape)
     if tally.count == 0:
-        tally.first_pixel = int(pixel[0])
+        tally.first_row, tally.first_depth = int(pixel[0]), int(depths[0])
     tally.count += len(pixel)
+    tally.rows.append(pixel)
+    tally.depths.append(depths)
 
 
 def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndarray) -> np.ndarray:

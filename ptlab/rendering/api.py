@@ -59,6 +59,8 @@ class RenderResult:
         nonfinite: samples that were NaN or infinite and were left out of the image, over
             the whole render (``ptlab.integrators.wavefront.add_to_film``): 0 unless a
             material or an integrator has a bug.
+        first_nonfinite: (x, y, depth) of the first of them (by pass, then tile): the pixel
+            to look at, and the bounce; None if there is none.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
             depth at which Russian roulette started and the workers.
@@ -74,6 +76,7 @@ class RenderResult:
     query_seconds: float
     sampler_seconds: float
     nonfinite: int = 0
+    first_nonfinite: tuple[int, int, int] | None = None
     settings: dict = field(default_factory=dict)
 
     @property
@@ -88,6 +91,16 @@ class RenderResult:
             f"RenderResult({self.settings.get('scene', 'scene')!r}, {width}x{height}, "
             f"{self.spp} spp, {state}, {self.seconds:.2f} s)"
         )
+
+    def nonfinite_message(self) -> str:
+        """What to say of the samples left out as NaN or infinite ("" when there is none)."""
+        if not self.nonfinite:
+            return ""
+        where = ""
+        if self.first_nonfinite is not None:
+            x, y, depth = self.first_nonfinite
+            where = f"; the first at pixel ({x}, {y}), depth {depth}"
+        return f"{self.nonfinite} samples were NaN or infinite and were left out of the image{where}"
 
     def _repr_png_(self) -> bytes:
         """The image as an sRGB PNG: how Jupyter shows a result (as Mitsuba's ``Bitmap``)."""
@@ -197,6 +210,7 @@ def render_result(
         query_seconds=film.query_seconds,
         sampler_seconds=film.sampler_seconds,
         nonfinite=film.nonfinite,
+        first_nonfinite=film.first_nonfinite,
         settings=dict(
             record,
             scene=scene.name,
@@ -250,9 +264,5 @@ def render(
     options = RenderOptions.of(args, options, keywords)
     result = render_result(scene, options=options, executor=executor, progress=progress or None)
     if result.nonfinite:  # (a bug in a material or an integrator; ``render_result`` counts them)
-        warnings.warn(
-            f"{result.nonfinite} samples were NaN or infinite and were left out of the image",
-            RuntimeWarning,
-            stacklevel=2,
-        )
+        warnings.warn(result.nonfinite_message(), RuntimeWarning, stacklevel=2)
     return result.image

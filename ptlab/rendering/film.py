@@ -24,6 +24,7 @@ class Film:
             ray queries and inside the sampler).
         nonfinite: samples that were NaN or infinite and were left out of ``sums``
             (``ptlab.integrators.wavefront.add_to_film``).
+        first_nonfinite: (x, y, depth) of the first of them, by pass and tile (None if none).
     """
 
     def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int]):
@@ -35,6 +36,8 @@ class Film:
         self.query_seconds = 0.0
         self.sampler_seconds = 0.0
         self.nonfinite = 0
+        self.first_nonfinite: tuple[int, int, int] | None = None
+        self._first_nonfinite_job = (np.inf, np.inf)
         self.pending: dict[tuple[int, int], JobResult] = {}
 
     def add(self, result: JobResult) -> None:
@@ -50,6 +53,9 @@ class Film:
             self.query_seconds += ready.query_seconds
             self.sampler_seconds += ready.sampler_seconds
             self.nonfinite += ready.nonfinite
+            job = (ready.job.pass_index, tile.index)
+            if ready.first_nonfinite is not None and job < self._first_nonfinite_job:
+                self.first_nonfinite, self._first_nonfinite_job = ready.first_nonfinite, job
 
     @property
     def tile_spp(self) -> np.ndarray:

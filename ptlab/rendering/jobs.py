@@ -31,7 +31,8 @@ from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
 from ptlab.integrators import INTEGRATORS
 from ptlab.integrators.path import PathSettings, trace_paths
-from ptlab.integrators.wavefront import Paths, counting_nonfinite
+from ptlab.integrators.path import trace_paths as library_trace_paths
+from ptlab.integrators.wavefront import NonFinite, Paths, counting_nonfinite
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
@@ -87,6 +88,8 @@ class JobResult:
     query_seconds: float
     sampler_seconds: float = 0.0
     nonfinite: int = 0  # samples NaN or infinite, left out of the sums (``add_to_film``)
+    #: The first of them, (x, y, depth): the least depth, then the first row (sample-major).
+    first_nonfinite: tuple[int, int, int] | None = None
 
 
 @dataclass(frozen=True)
@@ -115,44 +118,186 @@ class RenderSetup:
             raise ValueError(f"the sampler's seed {self.sampler.seed} is not the setup's {self.seed}")
 
 
+class CameraSamples:
+    """The camera samples of a list of jobs, one after the other, handed out as camera paths.
+
+    Sample k of the list is row k of the jobs' film, which has a row per path: a path adds
+    its radiance to its own row, and ``sums`` adds up each pixel's paths afterwards, in
+    sample order. A pixel's sum is then the same however its paths were batched (with which
+    other jobs, in which batch, at which bounce), which path regeneration needs: a batch
+    holds whichever paths are left, from one job or the next.
+
+    Within a job the samples are in sample-major order: the tile's pixel k is row k, k + n,
+    k + 2 n, ... (n pixels in the tile).
+    """
+
+    def __init__(self, setup: RenderSetup, jobs: list[Job], sampler: TimedSampler):
+        self.setup, self.jobs, self.sampler = setup, jobs, sampler
+        sizes = [job.tile.shape[0] * job.tile.shape[1] * job.spp for job in jobs]
+        #: Row of each job's first sample, and the total, as in ``np.cumsum``.
+        self.starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
+        self.handed_out = 0
+
+    @property
+    def count(self) -> int:
+        """How many samples (film rows) the jobs have in all."""
+        return int(self.starts[-1])
+
+    def more(self, count: int) -> Paths | None:
+        """The next ``count`` camera paths (fewer at the end), or None when none is left."""
+        first = self.handed_out
+        last = min(first + count, self.count)
+        if first == last:
+            return None
+        self.handed_out = last
+        return self.paths(first, last)
+
+    def paths(self, first: int, last: int) -> Paths:
+        """The camera paths of film rows ``first``, ..., ``last`` - 1."""
+        pixel_x, pixel_y, index = [np.zeros(0, np.intp)], [np.zeros(0, np.intp)], [np.zeros(0, np.intp)]
+        for j, job in enumerate(self.jobs):  # the part of the rows in each job
+            start, stop = (
+                max(first, self.starts[j]) - self.starts[j],
+                min(last, self.starts[j + 1]) - self.starts[j],
+            )
+            if start >= stop:
+                continue
+            height, width = job.tile.shape
+            n_pixels = width * height
+            # Whole samples of the tile's pixels (np.tile and np.repeat: integer division is
+            # slow), cut to the rows asked for.
+            first_sample, last_sample = start // n_pixels, (stop - 1) // n_pixels + 1
+            samples = last_sample - first_sample
+            cut = slice(start - first_sample * n_pixels, stop - first_sample * n_pixels)
+            in_tile = np.arange(n_pixels)
+            pixel_x.append(np.tile(job.tile.x0 + in_tile % width, samples)[cut])
+            pixel_y.append(np.tile(job.tile.y0 + in_tile // width, samples)[cut])
+            index.append(np.repeat(np.arange(first_sample, last_sample) + job.first_sample, n_pixels)[cut])
+        xs, ys = np.concatenate(pixel_x), np.concatenate(pixel_y)
+        setup = self.setup
+        sample = self.sampler.keys(ys * setup.width + xs, np.concatenate(index))
+        jitter = self.sampler.get(sample, BounceUniforms.PIXEL, 2)
+        origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, xs, ys, jitter)
+        return Paths(
+            origins=origins,
+            dirs=dirs,
+            throughput=np.ones((last - first, 3), dtype=np.float32, order="F"),
+            pixel=np.arange(first, last),
+            sees_emission=np.ones(last - first, dtype=bool),
+            sample=sample,
+        )
+
+    def sums(self, film: np.ndarray, j: int) -> np.ndarray:
+        """Job ``j``'s per-pixel radiance sums (tile height, tile width, 3) from the per-path
+        ``film``: each pixel's paths added one after the other, in sample order."""
+        job = self.jobs[j]
+        n_pixels = job.tile.shape[0] * job.tile.shape[1]
+        rows = film[self.starts[j] : self.starts[j + 1]]
+        total = rows[:n_pixels].copy()
+        for index in range(1, job.spp):
+            total += rows[index * n_pixels : (index + 1) * n_pixels]
+        return total.reshape(*job.tile.shape, 3)
+
+    def job_of(self, rows: np.ndarray) -> np.ndarray:
+        """The job (its place in the list) of each film row ``rows``."""
+        return np.searchsorted(self.starts, rows, side="right") - 1
+
+
 def run_job(setup: RenderSetup, job: Job, accel: Accelerator) -> JobResult:
     """Trace one job's camera paths and return their per-pixel radiance sums."""
-    tile_height, tile_width = job.tile.shape
-    n_pixels = tile_width * tile_height
-    # Sample-major order: pixel k of the tile is path k, k + n_pixels, k + 2 n_pixels, ...
-    pixel = np.tile(np.arange(n_pixels), job.spp)
-    pixel_x = job.tile.x0 + pixel % tile_width
-    pixel_y = job.tile.y0 + pixel // tile_width
-    index = np.repeat(np.arange(job.first_sample, job.first_sample + job.spp), n_pixels)
+    return run_job_group(setup, [job], accel)[0]
+
+
+def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> list[JobResult]:
+    """Trace the camera paths of several jobs in one stream of batches (the path tracer keeps
+    its batch full from the next job's samples as paths end: ``trace_paths``'s ``more``) and
+    return each job's per-pixel radiance sums.
+
+    The sums are the same, bit for bit, as each job's alone: a path's random numbers are a
+    function of its pixel and sample, and its radiance is added up on its own (``CameraSamples``).
+    """
     assert setup.sampler is not None  # (``RenderSetup.__post_init__`` makes one)
+    # (A TimedSampler is a Sampler by what it does, keys and get, not by class.)
     sampler = TimedSampler(setup.sampler)
-    sample = sampler.keys(pixel_y * setup.width + pixel_x, index)
-    jitter = sampler.get(sample, BounceUniforms.PIXEL, 2)
-    origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, pixel_x, pixel_y, jitter)
-    paths = Paths(
-        origins=origins,
-        dirs=dirs,
-        throughput=np.ones((len(pixel), 3), dtype=np.float32, order="F"),
-        pixel=pixel,
-        sees_emission=np.ones(len(pixel), dtype=bool),
-        sample=sample,
-    )
-    film = np.zeros((n_pixels, 3))
+    camera = CameraSamples(setup, jobs, sampler)
+    film = np.zeros((camera.count, 3), order="F")
     timed = TimedAccelerator(accel)
     # The path loop is called by its name in this module, where chapter 7's grader puts a
     # student's in its place (ptlab.exercises.plug).
     trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
-    # (A TimedSampler is a Sampler by what it does, keys and get, not by class.)
     with counting_nonfinite() as nonfinite:
-        rays = trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
-    return JobResult(
-        job=job,
-        sums=film.reshape(tile_height, tile_width, 3),
-        rays=rays,
-        query_seconds=timed.seconds,
-        sampler_seconds=sampler.seconds,
-        nonfinite=nonfinite.count,
-    )
+        if trace is library_trace_paths:
+            # An empty batch, which the loop fills from the jobs' samples (``more``).
+            empty = camera.paths(0, 0)
+            rays = trace(film, setup.scene, timed, empty, cast(Sampler, sampler), setup.settings, camera.more)
+        else:  # (a student's path loop, Whitted, a debug view: a job at a time)
+            rays = 0
+            for j in range(len(jobs)):
+                paths = camera.paths(camera.starts[j], camera.starts[j + 1])
+                rays += trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
+    return [
+        JobResult(
+            job=job,
+            sums=camera.sums(film, j),
+            # The work of the whole stream, counted with its first job (the film adds it up).
+            rays=rays if j == 0 else 0,
+            query_seconds=timed.seconds if j == 0 else 0.0,
+            sampler_seconds=sampler.seconds if j == 0 else 0.0,
+            **_nonfinite_in(camera, nonfinite, j),
+        )
+        for j, job in enumerate(jobs)
+    ]
+
+
+def _nonfinite_in(camera: CameraSamples, nonfinite: NonFinite, j: int) -> dict:
+    """``JobResult``'s ``nonfinite`` and ``first_nonfinite`` for job ``j``: which of the samples
+    left out (``NonFinite``) were its own, and the first of them."""
+    if not nonfinite.count:
+        return {}
+    rows, depths = np.concatenate(nonfinite.rows), np.concatenate(nonfinite.depths)
+    mine = camera.job_of(rows) == j
+    if not mine.any():
+        return {}
+    rows, depths = rows[mine], depths[mine]
+    first = np.lexsort((rows, depths))[0]
+    job = camera.jobs[j]
+    height, width = job.tile.shape
+    y, x = divmod(int(rows[first] - camera.starts[j]) % (width * height), width)
+    return {"nonfinite": len(rows), "first_nonfinite": (job.tile.x0 + x, job.tile.y0 + y, int(depths[first]))}
+
+
+#: The most samples a group of jobs has (``job_groups``): 4 jobs of 128 x 128 pixels and 16
+#: spp, about a second of one core's work, and 24 MB of per-path film.
+MAX_GROUP_SAMPLES = 2**20
+
+
+def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
+    """The jobs, in order, cut into groups that a worker runs as one (``run_job_group``).
+
+    Each group's batches end once, in a tail of bounces with few paths left, each bounce
+    paying NumPy's fixed costs: fewer, larger groups waste less. But the last groups must be
+    small, or one worker would still be busy when the others have nothing left. So the groups
+    shrink as the render goes on ("guided self-scheduling", Polychronopoulos and Kuck 1987):
+    each takes about its share of what is left, 1 / (2 workers), and at most
+    ``MAX_GROUP_SAMPLES`` samples (so that progress is shown, and a stop heard, every second
+    or so). One worker has no one to wait for: its groups are all of the largest size.
+    """
+    sizes = [job.tile.shape[0] * job.tile.shape[1] * job.spp for job in jobs]
+    left = sum(sizes)
+    groups: list[list[Job]] = []
+    group: list[Job] = []
+    taken = 0
+    for job, size in zip(jobs, sizes, strict=True):
+        share = left / (2 * workers) if workers > 1 else left
+        if group and taken + size > min(MAX_GROUP_SAMPLES, share):
+            groups.append(group)
+            left -= taken
+            group, taken = [], 0
+        group.append(job)
+        taken += size
+    if group:
+        groups.append(group)
+    return groups
 
 
 # What a worker process keeps between jobs: the setup and accelerator of recent renders.
@@ -169,12 +314,12 @@ def install_setup(setup: RenderSetup) -> None:
             _worker_renders[setup.token] = (setup, accel)
 
 
-def run_job_in_worker(setup: RenderSetup | str, job: Job) -> JobResult:
-    """``run_job`` in a worker: ``setup`` is the setup itself, or the token of one that
+def run_job_group_in_worker(setup: RenderSetup | str, jobs: list[Job]) -> list[JobResult]:
+    """``run_job_group`` in a worker: ``setup`` is the setup itself, or the token of one that
     was installed in this process beforehand (the process pool's initializer does that,
     so jobs need not carry the scene)."""
     if not isinstance(setup, str):
         install_setup(setup)
         setup = setup.token
     installed, accel = _worker_renders[setup]
-    return run_job(installed, job, accel)
+    return run_job_group(installed, jobs, accel)

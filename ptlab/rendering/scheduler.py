@@ -1,6 +1,8 @@
 """Running a render's jobs: in this process, on a process pool, or on any executor.
 
-Jobs are handed out a few at a time (at most ``2 x workers`` in flight), so memory stays
+Jobs go out in groups (``job_groups``: large at first, small at the end, so that every worker
+finishes at about the same time), each run as one stream of batches (``run_job_group``).
+Groups are handed out a few at a time (at most ``2 x workers`` in flight), so memory stays
 bounded whatever the number of samples. A process pool whose worker dies (killed by the
 system, say) is replaced, and the jobs it had not finished run again: every job is
 deterministic, so the image is the same as if nothing had happened.
@@ -19,7 +21,14 @@ from concurrent.futures.process import BrokenProcessPool
 from ptlab.accel import make_accelerator
 from ptlab.errors import PtlabError
 from ptlab.rendering.executors import process_pool
-from ptlab.rendering.jobs import Job, JobResult, RenderSetup, run_job, run_job_in_worker
+from ptlab.rendering.jobs import (
+    Job,
+    JobResult,
+    RenderSetup,
+    job_groups,
+    run_job_group,
+    run_job_group_in_worker,
+)
 
 #: How many times a pool may be replaced after its workers died before giving up.
 MAX_POOL_RESTARTS = 3
@@ -32,79 +41,86 @@ def run_jobs(
     jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
     """Yield each job's result as it finishes (in any order) until done or ``stop()``."""
+    groups = job_groups(jobs, workers)
     if executor is not None:
         yield from _run_on_executor(
-            jobs, lambda job: executor.submit(run_job_in_worker, setup, job), window=2 * workers, stop=stop
+            groups,
+            lambda group: executor.submit(run_job_group_in_worker, setup, group),
+            window=2 * workers,
+            stop=stop,
         )
     elif workers == 1:
         accel = make_accelerator(setup.scene.triangles, setup.backend)
-        for job in jobs:
+        for group in groups:
             if stop():
                 return
-            yield run_job(setup, job, accel)
+            yield from run_job_group(setup, group, accel)
     else:
-        yield from _run_on_process_pool(jobs, setup, workers, stop)
+        yield from _run_on_process_pool(groups, setup, workers, stop)
 
 
 def _run_on_executor(
-    jobs: list[Job], submit: Callable[[Job], Future], window: int, stop: Callable[[], bool]
+    groups: list[list[Job]], submit: Callable[[list[Job]], Future], window: int, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
-    pending = deque(jobs)
-    in_flight: dict[Future, Job] = {}
+    pending = deque(groups)
+    in_flight: dict[Future, list[Job]] = {}
     try:
         while pending or in_flight:
             if stop():
                 return
             while pending and len(in_flight) < window:
-                job = pending.popleft()
-                in_flight[submit(job)] = job
+                group = pending.popleft()
+                in_flight[submit(group)] = group
             done, _ = wait(in_flight, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
             for future in done:
                 del in_flight[future]
-                yield future.result()
+                yield from future.result()
     finally:
         for future in in_flight:
             future.cancel()
 
 
-def _submitter(pool: Executor, token: str) -> Callable[[Job], Future]:
-    """A function that submits a job to ``pool`` (made per pool, so it never sees a later one)."""
+def _submitter(pool: Executor, token: str) -> Callable[[list[Job]], Future]:
+    """A function that submits a group of jobs to ``pool`` (made per pool, so it never sees a
+    later one)."""
 
-    def submit(job: Job) -> Future:
-        return pool.submit(run_job_in_worker, token, job)
+    def submit(group: list[Job]) -> Future:
+        return pool.submit(run_job_group_in_worker, token, group)
 
     return submit
 
 
 def _run_on_process_pool(
-    jobs: list[Job], setup: RenderSetup, workers: int, stop: Callable[[], bool]
+    groups: list[list[Job]], setup: RenderSetup, workers: int, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
-    remaining = list(jobs)
+    remaining = groups
     for restart in range(MAX_POOL_RESTARTS + 1):
         finished: set[Job] = set()
         pool = process_pool(workers, setup)
         all_done = False
         try:
             for result in _run_on_executor(
-                remaining,
+                remaining,  # (groups)
                 _submitter(pool, setup.token),
                 window=2 * workers,
                 stop=stop,
             ):
                 finished.add(result.job)
                 yield result
-            all_done = len(finished) == len(remaining)
+            all_done = len(finished) == sum(len(group) for group in remaining)
             return
         except BrokenProcessPool:
             if stop():  # (asked to stop anyway: no new workers)
                 return
-            remaining = [job for job in remaining if job not in finished]
+            # (A group is one call: a group with a job unfinished runs again, whole.)
+            remaining = [group for group in remaining if not all(job in finished for job in group)]
             if restart == MAX_POOL_RESTARTS:
                 raise PtlabError(
                     f"worker processes died {MAX_POOL_RESTARTS + 1} times (out of memory?); giving up"
                 ) from None
             warnings.warn(
-                f"a worker process died; starting new workers for the {len(remaining)} unfinished jobs",
+                f"a worker process died; starting new workers for the "
+                f"{sum(len(group) for group in remaining)} unfinished jobs",
                 RuntimeWarning,
                 stacklevel=2,
             )

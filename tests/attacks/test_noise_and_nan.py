@@ -6,6 +6,8 @@ is."""
 
 from __future__ import annotations
 
+import re
+
 import pytest
 
 from ptlab.exercises import chapter
@@ -35,7 +37,9 @@ def test_nan_written_into_the_film_fails_and_says_where(attack):
     for name in loop:
         message = results[name].message
         assert "has NaN at pixel (x=" in message, message
-    assert "in pass 1 of 12" in results["Cornell box"].message
+    # (Which pixel and pass depends on the film's layout, which the attack writes into: a
+    # render's film has a row per path.)
+    assert re.search(r"in pass \d+ of 12", results["Cornell box"].message)
 
 
 def test_a_nan_ray_in_chapter_1s_render_fails_it(attack):

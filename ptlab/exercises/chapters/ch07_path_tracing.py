@@ -392,7 +392,7 @@ class _FlakyDiffuse:
 
 
 def _check_pdf_near_zero(scatter) -> None:
-    from ptlab.integrators.wavefront import SurfaceHit
+    from ptlab.integrators.wavefront import Paths, SurfaceHit
 
     rng = grading_rng(75)
     count = 4000
@@ -412,14 +412,17 @@ def _check_pdf_near_zero(scatter) -> None:
         wo=wo,
         front=np.ones(count, dtype=bool),
         offset=np.full(count, 1e-4, np.float32),
-        throughput=np.ones((count, 3), np.float32, order="F"),
-        pixel=np.arange(count),
-        sees_emission=np.zeros(count, dtype=bool),
-        sample=np.arange(count, dtype=np.uint64),
         materials=[(None, _FlakyDiffuse())],
         delta=np.zeros(count, dtype=bool),
         t=np.ones(count, np.float32),
-        pdf=None,
+        paths=Paths(
+            origins=p - wo,
+            dirs=wo,
+            throughput=np.ones((count, 3), np.float32, order="F"),
+            pixel=np.arange(count),
+            sees_emission=np.zeros(count, dtype=bool),
+            sample=np.arange(count, dtype=np.uint64),
+        ),
     )
     u = rng.random((count, 2), dtype=np.float32)
     failed = u[:, 0] >= 0.75
@@ -705,7 +708,7 @@ def roulette_furnace_images(
     import ptlab.integrators.path as path
     from ptlab.exercises.plug import plugged
 
-    def roulette(hit, depth, settings, u):  # the library's signature, the student's rule
+    def roulette(hit, settings, u):  # the library's signature, the student's rule
         survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u)
         return np.asarray(survive, dtype=bool)
 

@@ -23,6 +23,6 @@ def direct_light(film, scene, accel, hit, u) -> int:
 
 def russian_roulette(throughput, p_rr, u) -> tuple[np.ndarray, np.ndarray]:
     """``ptlab.integrators.path.russian_roulette`` with a fixed survival probability."""
-    hit = SimpleNamespace(throughput=throughput.copy(order="F"))
-    survive = library_russian_roulette(hit, 0, PathSettings(rr=float(p_rr)), u)
+    hit = SimpleNamespace(throughput=throughput.copy(order="F"), depth=0)
+    survive = library_russian_roulette(hit, PathSettings(rr=float(p_rr)), u)
     return survive, hit.throughput

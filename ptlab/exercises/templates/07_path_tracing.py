@@ -54,7 +54,8 @@ def direct_light(film, scene, accel, hit, u):
     the light (GAMES101 lecture 16, "sampling the light"; pbrt-v4 section 13.2).
 
     Args:
-        film: (P, 3) float64 per-pixel sums; add to it with ``add_to_film(film, hit.pixel, ...)``.
+        film: (rows, 3) float64 sums, a row per pixel (or, in a render, per path); add to it
+            with ``add_to_film(film, hit.pixel, ...)``: ``hit.pixel`` are its rows.
         scene: the ``ptlab.scene.Scene`` (``scene.area_lights`` samples the lights).
         accel: the ray-query structure (``accel.occluded`` traces shadow rays).
         hit: the ``SurfaceHit`` of N paths.

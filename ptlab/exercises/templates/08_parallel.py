@@ -90,7 +90,8 @@ def render_tile(setup, tile, spp):
         radiance summed over its spp paths; pid is ``os.getpid()``, the process that ran
         the job (the checks use it to see that the work was shared out).
 
-    The steps (``ptlab.rendering.jobs.run_job`` does the same for ``Job(tile, 0, spp)``):
+    The steps (``ptlab.rendering.jobs.run_job`` does the same for ``Job(tile, 0, spp)``, with a
+    film row per path that it then sums per pixel: the same sums, to float64 rounding):
 
     1. ``accel = accelerator_for(setup)``; ``sampler = setup.sampler``.
     2. The paths, sample-major: with n = h * w pixels in the tile, path k goes through the
