@@ -76,8 +76,11 @@ class StopAfter:
 
 @pytest.mark.parametrize("workers", [1, pytest.param(2, marks=pytest.mark.subprocess)])
 def test_stop_keeps_whole_passes_per_tile_and_resume_finishes_identically(
-    cornell, reference, tmp_path, workers
+    cornell, reference, tmp_path, workers, monkeypatch
 ):
+    # (One worker runs a pass of a render this small as one group of jobs, and a stop is heard
+    # between groups: groups of one job here, to stop in the middle of a pass.)
+    monkeypatch.setattr("ptlab.rendering.jobs.MAX_GROUP_SAMPLES", 1)
     checkpoint = tmp_path / "render.npz"
     stopper = StopAfter(jobs=13)  # 9 tiles x 3 passes: stop in pass 2
     partial = render_result(

@@ -189,6 +189,9 @@ def replace_materials(scene, replace: Callable):
 def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, **options) -> np.ndarray:
     """(passes, res, res, 3) float64: the image of each pass of one render, on its own.
 
+    Raises ``CheckFailed`` if any sample was NaN or infinite (``add_to_film`` leaves them
+    out of the image, counted, in the student's process too), naming the first.
+
     The render takes independent samples (``sampler="independent"``), so the passes are
     independent estimates of the same picture and their spread gives the standard error.
     (Stratified and sobol samples would make the passes of one pixel correlated, parts of
@@ -205,7 +208,7 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
         images.append((film.sums - done) / spp_per_pass)
         done[...] = film.sums
 
-    render_result(
+    result = render_result(
         scene,
         spp=passes * spp_per_pass,
         res=res,
@@ -215,6 +218,13 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
         on_pass=keep,
         **dict(dict(sampler="independent"), **options),
     )
+    if result.nonfinite:  # (left out of the image, which therefore looks fine: say so)
+        x, y, depth = result.first_nonfinite or (-1, -1, -1)
+        raise CheckFailed(
+            f"your code produced {result.nonfinite} NaN or infinite samples (left out of "
+            f"the image); the first at pixel (x={x}, y={y}), depth {depth}: a division by a "
+            f"pdf or a distance of 0?"
+        )
     return np.stack(images)
 
 

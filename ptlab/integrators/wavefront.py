@@ -271,7 +271,7 @@ def add_to_film(
     if not np.isfinite(radiance.sum()):
         bad = ~np.isfinite(radiance).all(axis=1)
         if bad.any():  # (else finite samples whose sum overflowed: kept)
-            _count_nonfinite(pixel[bad], depth[bad] if isinstance(depth, np.ndarray) else depth)
+            count_nonfinite(pixel[bad], depth[bad] if isinstance(depth, np.ndarray) else depth)
             keep = np.flatnonzero(~bad)
             pixel, radiance = pixel.take(keep), take_rows(radiance, keep)
     if len(pixel) and (pixel[1:] > pixel[:-1]).all():
@@ -288,9 +288,10 @@ def add_to_film(
         np.add.at(film, pixel, radiance)
 
 
-def _count_nonfinite(pixel: np.ndarray, depth: int | np.ndarray | None) -> None:
+def count_nonfinite(pixel: np.ndarray, depth: int | np.ndarray | None) -> None:
     """Count samples left out of the film at film rows ``pixel``, found at ``depth`` (one, one
-    per sample, or None: the bounces counted so far say) (``NonFinite``)."""
+    per sample, or None: the bounces counted so far say) (``NonFinite``; the graders count
+    here those that a student's process left out)."""
     tally = _nonfinite.get()
     if tally is None:
         warnings.warn(

@@ -280,7 +280,8 @@ def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
     shrink as the render goes on ("guided self-scheduling", Polychronopoulos and Kuck 1987):
     each takes about its share of what is left, 1 / (2 workers), and at most
     ``MAX_GROUP_SAMPLES`` samples (so that progress is shown, and a stop heard, every second
-    or so). One worker has no one to wait for: its groups are all of the largest size.
+    or so). One worker has no one to wait for: its groups are all of the largest size. A
+    group holds one pass: a pass is what the film shows, saves and is stopped after.
     """
     sizes = [job.tile.shape[0] * job.tile.shape[1] * job.spp for job in jobs]
     left = sum(sizes)
@@ -289,7 +290,8 @@ def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
     taken = 0
     for job, size in zip(jobs, sizes, strict=True):
         share = left / (2 * workers) if workers > 1 else left
-        if group and taken + size > min(MAX_GROUP_SAMPLES, share):
+        next_pass = bool(group) and job.pass_index != group[-1].pass_index
+        if group and (next_pass or taken + size > min(MAX_GROUP_SAMPLES, share)):
             groups.append(group)
             left -= taken
             group, taken = [], 0

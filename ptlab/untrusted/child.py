@@ -331,8 +331,14 @@ class _Server:
 
     def do_call(self, encoder: Encoder, handle: int, args: tuple, kwargs: dict, writeback: bool) -> dict:
         before = _Snapshot(args, kwargs) if writeback else None
-        result = self.handles[handle](*args, **kwargs)
+        with _counting_nonfinite() as nonfinite:
+            result = self.handles[handle](*args, **kwargs)
         envelope = {"value": encoder.encode(result)}
+        if nonfinite is not None and nonfinite.count:
+            # The samples ``add_to_film`` left out in this process, for the grader to count as
+            # its own (a render's tally is the grader's): film rows and depths.
+            rows, depths = np.concatenate(nonfinite.rows), np.concatenate(nonfinite.depths)
+            envelope["nonfinite"] = encoder.encode([rows.astype(np.int64), depths.astype(np.int64)])
         if before is not None:
             envelope["writeback"] = [
                 [path, how, encoder.encode(value)] for path, how, value in before.changes()
@@ -416,6 +422,18 @@ class _Server:
             if os.path.realpath(frame.f_code.co_filename) == graded
         ]
         return f"{self.path.name}:{lines[-1]}" if lines else None
+
+
+@contextlib.contextmanager
+def _counting_nonfinite():
+    """``counting_nonfinite`` around a call, if the student's code has the film's module (it
+    is not imported for it: chapters that never touch a film pay nothing); else None."""
+    wavefront = sys.modules.get("ptlab.integrators.wavefront")
+    if wavefront is None:
+        yield None
+        return
+    with wavefront.counting_nonfinite() as nonfinite:
+        yield nonfinite
 
 
 def _code_file(value) -> Path | None:

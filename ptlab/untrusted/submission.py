@@ -332,20 +332,12 @@ class Submission:
             self._fail("ended", during)
         envelope, decoder = self._receive(self._requests, during, deadline, limit)
         try:
-            if "raised" in envelope:
-                raise self._student_error(envelope["raised"])
-            if "unreadable" in envelope and type(envelope["unreadable"]) is str:
-                raise UnreadableResultError(
-                    "TypeError", f"{during} returned {envelope['unreadable']}", None, False
-                )
-            if "unreceived" in envelope:
-                raise RuntimeError(
-                    f"the grader could not send {during} its arguments: "
-                    f"{_collapse_whitespace(str(envelope['unreceived']))}"
-                )
+            self._raise_what_went_wrong(envelope, during)
             if "value" not in envelope:
                 raise MalformedError("a reply without a value")
             value = decoder.decode(envelope["value"])
+            if "nonfinite" in envelope:
+                _count_nonfinite(decoder.decode(envelope["nonfinite"]))
             if not changes:
                 return value
             found = envelope.get("writeback", [])
@@ -354,6 +346,20 @@ class Submission:
             return value, [self._change(entry, decoder) for entry in found]
         except MalformedError as error:
             self._fail("malformed", during, str(error))
+
+    def _raise_what_went_wrong(self, envelope: dict, during: str) -> None:
+        """Raise what a reply says went wrong: the student's code raised, its result cannot
+        be sent, or the grader's arguments could not be received."""
+        if "raised" in envelope:
+            raise self._student_error(envelope["raised"])
+        if "unreadable" in envelope and type(envelope["unreadable"]) is str:
+            returned = f"{during} returned {envelope['unreadable']}"
+            raise UnreadableResultError("TypeError", returned, None, False)
+        if "unreceived" in envelope:
+            raise RuntimeError(
+                f"the grader could not send {during} its arguments: "
+                f"{_collapse_whitespace(str(envelope['unreceived']))}"
+            )
 
     def _receive(
         self, request_id: int, during: str, deadline: float | None = None, limit: float | None = None
@@ -651,3 +657,20 @@ def _exit_cause(code: int | None) -> str:
 
 def _collapse_whitespace(text: str) -> str:
     return " ".join(text.split())
+
+
+def _count_nonfinite(found) -> None:
+    """Count as the grader's own the samples that ``add_to_film`` left out in the student's
+    process during a call ([rows, depths], two equal int64 arrays), so that a render's
+    tally of NaN samples (``ptlab.integrators.wavefront.counting_nonfinite``) has them."""
+    from ptlab.integrators.wavefront import count_nonfinite
+
+    if (
+        type(found) is not list
+        or len(found) != 2
+        or not all(isinstance(a, np.ndarray) and a.dtype == np.int64 and a.ndim == 1 for a in found)
+        or len(found[0]) != len(found[1])
+        or len(found[0]) == 0
+    ):
+        raise MalformedError("a count of NaN samples that is not two equal arrays of integers")
+    count_nonfinite(found[0], found[1])

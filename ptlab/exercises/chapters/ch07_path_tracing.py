@@ -150,6 +150,7 @@ def check_direct_light(module) -> str:
     import ptlab
     from ptlab.integrators.path import PathSettings
     from ptlab.integrators.path import direct_light as library_direct_light
+    from ptlab.integrators.wavefront import counting_nonfinite
 
     (direct_light,) = require(module, "direct_light")
     scene = ptlab.load_scene("cornell-box")  # walls, boxes that cast shadows, a small light
@@ -159,7 +160,14 @@ def check_direct_light(module) -> str:
     expected = np.zeros((count, 3))
     library_direct_light(expected, scene, accel, hit, u, PathSettings(strategy="nee"))
     film = np.zeros((count, 3))
-    rays = direct_light(film, scene, accel, hit, u.copy())
+    with counting_nonfinite() as nonfinite:  # (what add_to_film leaves out, in its process too)
+        rays = direct_light(film, scene, accel, hit, u.copy())
+    if nonfinite.count:
+        raise CheckFailed(
+            f"your direct_light produced {nonfinite.count} NaN or infinite samples (add_to_film "
+            f"left them out), the first at shading point {nonfinite.first_row}: a division by "
+            f"a distance, a cosine or a pdf of 0?"
+        )
     if not isinstance(rays, int | np.integer) or not 0 <= rays <= count:
         raise CheckFailed(
             f"direct_light must return the number of shadow rays it traced (an int "
