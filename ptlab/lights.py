@@ -2,7 +2,7 @@
 
 Next-event estimation picks a point ``y`` on the lights and turns the pdf of that choice
 from area into solid angle (GAMES101 lecture 16, "sampling the light"; pbrt-v4 section
-12.2). A triangle is chosen with probability proportional to its power, area x mean(Le)
+12.4). A triangle is chosen with probability proportional to its power, area x mean(Le)
 (pbrt-v4's ``PowerLightSampler``), then a uniform point on it, so a point on triangle i has
 the area density
 

@@ -1,6 +1,6 @@
 """Warping uniform random numbers into directions and points.
 
-Each warp maps ``u`` in [0, 1)^2 to a sample with a known density (pbrt-v4, chapter A.5;
+Each warp maps ``u`` in [0, 1)^2 to a sample with a known density (pbrt-v4, section A.5;
 GAMES101 lecture 15/16):
 
 * ``uniform_hemisphere``: pdf = 1 / (2 pi) per steradian (the homework's sampler);

@@ -36,7 +36,8 @@ def test_every_chapter_has_its_page_in_both_languages(found):
         ), page
 
 
-#: Terms the Chinese pages must not use, with the GAMES101 lectures' term that replaces each.
+#: Terms the Chinese pages must not use, with the term that replaces each: the GAMES101 lectures'
+#: or, where they have none, the usual one (Owen 置乱 for scrambling), one term per concept.
 NOT_THE_LECTURES_TERMS = {
     "层次包围体": "层次包围盒",
     "克莱姆法则": "克拉默法则",
@@ -44,6 +45,9 @@ NOT_THE_LECTURES_TERMS = {
     "个独立的遍": "轮次",
     "每遍": "每个轮次",
     "白白": "不费任何代价",
+    "扰动": "置乱（scrambling，如 Owen 置乱）",
+    "辐亮度": "辐射亮度",
+    "对光源采样": "光源采样",
 }
 
 
@@ -67,3 +71,5 @@ def test_chinese_pages_use_the_lectures_terms_and_chinese_quotes(page):
     assert "throughput" not in prose or "吞吐量" in prose, "throughput is 路径吞吐量"
     passes = re.findall(r"[\u4e00-\u9fff，。（] *pass\b", prose)
     assert not passes, f"a render pass is 轮次: {passes}"
+    films = re.findall(r"(?<![（A-Za-z])film(?![A-Za-z_])", prose)
+    assert not films, "the film is 胶片 (胶片（film）where it is new)"

@@ -4,7 +4,7 @@ Known answers come from the laws themselves: the mirror direction makes equal an
 the normal, Snell's law eta_i sin(theta_i) = eta_t sin(theta_t) bends the refracted ray
 (GAMES101 lecture 13; pbrt-v4 section 9.3), and the Fresnel reflectance of unpolarised light
 is the mean of the squared amplitude ratios r_parallel and r_perpendicular (pbrt-v4 section
-9.3.6; Hecht, Optics, section 4.6), which is ((eta - 1) / (eta + 1))^2 at normal incidence,
+9.3.5; Hecht, Optics, section 4.6), which is ((eta - 1) / (eta + 1))^2 at normal incidence,
 1 at grazing incidence and 1 beyond the critical angle (total internal reflection). They are
 computed here from first principles, in float64, independently of the library.
 
