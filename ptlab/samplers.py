@@ -182,30 +182,37 @@ class Sampler:
         raise ValueError(f"count must be 1 or 2, got {count}")
 
     def _get_per_row(self, keys: np.ndarray, dims: np.ndarray, count: int) -> np.ndarray:
-        """``get`` with a dimension per row, a run of rows with one dimension at a time.
+        """``get`` with a dimension per row: each patterned dimension's rows in one call
+        (there are few of them: ``PATTERNED_DIMENSIONS``), and all the independent rows in
+        one more (a hash takes its dimension per row as well as one for all).
 
-        A batch kept full by path regeneration is a few such runs: the paths that entered it
-        together stay together, in order, and are at one depth (``ptlab.integrators.path``).
-        Rows in any other order are grouped by dimension first.
+        In a batch kept full by path regeneration, the paths that entered it together stay
+        together, in order, and are at one depth: each group is then a run of rows, taken as
+        a slice, without copying (``_rows_where``).
         """
-        ends = np.flatnonzero(dims[1:] != dims[:-1]) + 1
-        if len(ends) > 64:  # (not runs: gather each dimension's rows)
-            out = np.empty((len(keys), count), dtype=np.float32, order="F")
-            for dim in np.unique(dims):
-                rows = np.flatnonzero(dims == dim)
-                out[rows] = self.get(keys.take(rows), int(dim), count)
-            return out
-        starts = [0, *ends.tolist()]
-        stops = [*starts[1:], len(keys)]
-        out = np.empty((len(keys), count), dtype=np.float32, order="F")
-        for a, b in zip(starts, stops, strict=True):
-            # (``get``'s choice, written straight into the rows: one copy fewer.)
-            dim, run = int(dims[a]), keys[a:b]
-            patterned = dim < PATTERNED_DIMENSIONS
+        if dims.min() >= PATTERNED_DIMENSIONS:  # (every row independent: one call, no copy)
             if count == 1:
-                out[a:b, 0] = self.one(run, dim) if patterned else independent_one(run, dim)
+                return independent_one(keys, dims)[:, None]
+            return np.stack(independent_pair(keys, dims)).T
+        out = np.empty((len(keys), count), dtype=np.float32, order="F")
+        patterned = dims < PATTERNED_DIMENSIONS
+        # The patterned dimensions present (a count per value: faster than np.unique).
+        present = np.flatnonzero(np.bincount(dims[patterned], minlength=PATTERNED_DIMENSIONS))
+        groups: list[tuple[np.ndarray, int | None]] = [(dims == d, int(d)) for d in present]
+        groups.append((~patterned, None))
+        for mask, dim in groups:
+            rows = _rows_where(mask)
+            if isinstance(rows, slice) and rows.start == rows.stop:
+                continue
+            run = keys[rows]
+            if dim is None:  # (the independent rows, each with its own dimension)
+                values = independent_one(run, dims[rows]) if count == 1 else independent_pair(run, dims[rows])
             else:
-                out[a:b, 0], out[a:b, 1] = self.pair(run, dim) if patterned else independent_pair(run, dim)
+                values = self.one(run, dim) if count == 1 else self.pair(run, dim)
+            if count == 1:
+                out[rows, 0] = values
+            else:
+                out[rows, 0], out[rows, 1] = values
         return out
 
     def one(self, keys: np.ndarray, dim: int) -> np.ndarray:
@@ -215,6 +222,16 @@ class Sampler:
     def pair(self, keys: np.ndarray, dim: int) -> tuple[np.ndarray, np.ndarray]:
         """Two (N,) float32 arrays, dimensions ``dim`` and ``dim + 1``, stratified together."""
         raise NotImplementedError
+
+
+def _rows_where(mask: np.ndarray) -> slice | np.ndarray:
+    """The rows where ``mask`` holds: a slice when they are one run (no copy), else indices."""
+    rows = np.flatnonzero(mask)
+    if len(rows) == 0:
+        return slice(0, 0)
+    if rows[-1] - rows[0] + 1 == len(rows):
+        return slice(int(rows[0]), int(rows[-1]) + 1)
+    return rows
 
 
 def sample_hash(keys: np.ndarray, dim: int | np.ndarray) -> np.ndarray:

@@ -109,7 +109,7 @@ HEURISTICS = ("power", "balance")
 #: below 10k (``ptlab bench --tail``; docs/performance.md).
 BATCH_PATHS = 2**18
 #: A batch with fewer live paths than this takes new camera paths, up to ``BATCH_PATHS``.
-REFILL_BELOW = BATCH_PATHS // 2
+REFILL_BELOW = BATCH_PATHS // 8
 
 
 def trace_paths(
