@@ -377,6 +377,31 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
     assert "speed-up of 2 workers over 1" in out
 
 
+def test_bench_tail_times_bounces_of_batches_kept_full_and_run_dry(capsys):
+    import ptlab.integrators.path as path_module
+    import ptlab.rendering.jobs as jobs_module
+
+    before = path_module.surface_hit, jobs_module.trace_paths, path_module.BATCH_PATHS
+    args = ["bench", "--tail", "--res", "96", "--spp", "4", "--repeat", "1", "--estimator", "default"]
+    assert main(args) == 0
+    out = capsys.readouterr().out
+    rows = {
+        line.split()[0] + " " + line.split()[1]: line.split()
+        for line in out.splitlines()
+        if "kept full" in line or "run dry" in line
+    }
+    full, dry = rows["kept full"], rows["run dry"]
+    # 96 x 96 x 4 = 36 864 paths: run dry, one batch dwindles from 36 864 paths, so its
+    # bounces below 30 000 are most of them; kept full, the same (one group, one batch).
+    assert int(dry[3]) > 5
+    for row in (full, dry):
+        shares = [float(cell.rstrip("%")) for cell in row[4:7]]
+        assert 0 <= shares[0] <= shares[1] <= shares[2] <= 100  # (fewer paths: a subset)
+    assert re.search(r"time kept full / run dry: median \d\.\d{3}", out)
+    # Nothing of the measurement is left in the library's modules.
+    assert (path_module.surface_hit, jobs_module.trace_paths, path_module.BATCH_PATHS) == before
+
+
 @pytest.mark.subprocess
 def test_bench_accuracy_compares_samplers_against_a_reference(capsys, tmp_path, monkeypatch):
     monkeypatch.setenv("PTLAB_CACHE", str(tmp_path))
