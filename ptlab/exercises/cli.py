@@ -50,7 +50,8 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         "--lang",
         choices=LANGUAGES,
         help="the language of the score table and its messages: en (English) or zh (中文) "
-        "(default: the locale's: zh where the first of LC_ALL, LC_MESSAGES and LANG that is set starts with 'zh')",
+        "(default: the locale's: zh where the first of LC_ALL, LC_MESSAGES and LANG that is "
+        "set starts with 'zh')",
     )
     add_student_user_argument(graded)
 
