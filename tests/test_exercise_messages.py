@@ -5,8 +5,13 @@ the Chinese track gets a Chinese table (``ptlab exercise check --lang zh``)."""
 from __future__ import annotations
 
 import ast
+import json
+import os
 import re
+import shutil
 import string
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -163,3 +168,38 @@ def test_a_wrong_answer_graded_in_chinese_gets_a_chinese_table_and_hints(tmp_pat
         assert not ENGLISH.search(r.message), r.message
     messages = {r.name: r.message for r in result.results}
     assert "忽略了 u" in messages["jittered rays"], messages
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_check_speaks_the_locales_language(tmp_path):
+    """``ptlab exercise check`` as a program, on the untouched exercise file of chapter 4
+    (every check fails at once) with LANG=zh_CN.UTF-8 and no --lang: the Chinese table,
+    the language kept in the JSON."""
+    path = tmp_path / chapter("4").template.name
+    shutil.copyfile(chapter("4").template, path)
+    environment = {k: v for k, v in os.environ.items() if k not in ("LC_ALL", "LC_MESSAGES")}
+    environment["LANG"] = "zh_CN.UTF-8"
+    command = [sys.executable, "-m", "ptlab", "exercise", "check", "4", str(path), "--json", "out.json"]
+    done = subprocess.run(command, env=environment, cwd=tmp_path, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1, done.stderr
+    table = done.stdout
+    assert "第 4 章：包围盒：slab 测试" in table, table
+    assert "slab_test 还没有写：它仍然抛出 NotImplementedError" in table, table
+    assert "“进入包围盒”通过之前不计分" in table, table
+    assert not ENGLISH.search(table.split("\n", 1)[1]), table  # (the first line holds the path)
+    result = json.loads((tmp_path / "out.json").read_text(encoding="utf-8"))
+    assert result["lang"] == "zh"
+    assert result["checks"][0]["name"] == "entering a box"  # (a key: the same in every language)
+
+
+def test_lang_is_an_option_of_check_and_grade_all_only_with_the_catalogues_languages():
+    from ptlab.cli import build_parser
+
+    parser = build_parser()
+    for action in ("check", "grade-all"):
+        args = parser.parse_args(["exercise", action, "4", "x", "--lang", "zh"])
+        assert args.lang == "zh"
+        assert parser.parse_args(["exercise", action, "4", "x"]).lang is None  # (the locale's)
+    with pytest.raises(SystemExit):
+        parser.parse_args(["exercise", "check", "4", "x.py", "--lang", "fr"])

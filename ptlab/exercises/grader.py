@@ -326,9 +326,10 @@ def run_check(
 
 def described(error: StudentError) -> str:
     """One line for the student of an exception their code raised: the error, its message and
-    where it came from (``StudentError.describe``, in the active language). A verdict of
-    the harness's (an argument changed, a library answer called) keeps its own words."""
-    if type(error) is not StudentError or error.type_name == "LibraryAnswerCalled":
+    where it came from (``StudentError.describe``, in the active language; the error's
+    class is named after the student's, a subclass of ``StudentError``). A verdict of the
+    harness's (an argument changed, a library answer called) keeps its own words."""
+    if type(error).describe is not StudentError.describe or error.type_name == "LibraryAnswerCalled":
         return error.describe()
     place = error.where or text("grader.outside_place")
     if error.not_implemented:
