@@ -35,7 +35,7 @@ MESSAGES: dict[str, str] = {
     "grader.and": " and ",
     "grader.not_graded_until_one": "not graded until {names} passes",
     "grader.not_graded_until": "not graded until {names} pass",
-    "grader.gated_says": "{not_graded}; {name} says: {message}",
+    "grader.gated_says": "{not_graded}; '{name}' says: {message}",
     "grader.gated_passes": "{not_graded}; by itself it passes: {message}",
     "grader.gated_fails": "{not_graded}; by itself it fails: {message}",
     # What the student's functions return (chapter.py, finite.py).

@@ -32,7 +32,7 @@ MESSAGES: dict[str, str] = {
     "grader.and": "和",
     "grader.not_graded_until_one": "{names}通过之前不计分",
     "grader.not_graded_until": "{names}都通过之前不计分",
-    "grader.gated_says": "{not_graded}；{name}的说明：{message}",
+    "grader.gated_says": "{not_graded}；“{name}”的说明：{message}",
     "grader.gated_passes": "{not_graded}；单看这一项，它通过了：{message}",
     "grader.gated_fails": "{not_graded}；单看这一项，它也未通过：{message}",
     # What the student's functions return (chapter.py, finite.py).
