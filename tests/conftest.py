@@ -89,6 +89,16 @@ def pytest_runtest_setup(item) -> None:
 
 
 @pytest.fixture(autouse=True)
+def _graders_speak_english():
+    """The tests read the graders' English messages, whatever this machine's locale
+    (``ptlab.exercises.messages``); a test of another language sets it itself."""
+    from ptlab.exercises.messages import language
+
+    with language("en"):
+        yield
+
+
+@pytest.fixture(autouse=True)
 def marked_if_it_starts_processes(request):
     """Fail a test that started a process (its fixtures included) without the ``subprocess``
     marker, so that ``-m "not subprocess"`` and the marker's promise stay true."""

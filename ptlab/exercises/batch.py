@@ -53,6 +53,7 @@ from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import Chapter
 from ptlab.exercises.grader import OVERALL_SLACK, overall_limit, table_message
+from ptlab.exercises.messages import LANGUAGES, active_language
 from ptlab.exercises.progress import private_state
 from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, student_user
 from ptlab.untrusted.intake import MAX_BYTES
@@ -289,11 +290,13 @@ def grade_all(
     progress: bool = False,
     user: str | None = None,
     seed: int | None = None,
+    lang: str | None = None,
 ) -> dict[str, dict]:
     """Grade every submission in ``folder`` the grader's record does not vouch for (see the
     module docstring); all rows by student. ``user``: whom the students' code runs as
     (``--student-user``); ``seed``: the grading seed of every student (None: a fresh one
-    each, in the row's ``grading_seed``)."""
+    each, in the row's ``grading_seed``); ``lang``: the language of the messages (None: the
+    active one, ``ptlab.exercises.messages``)."""
     student_user(user)  # (an unknown user, or one that cannot run ptlab: before anything)
     make_undumpable()
     import_nothing_from_here()
@@ -313,7 +316,7 @@ def grade_all(
             file=sys.stderr,
         )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
-    runner = _Runner(chapter, timeout_scale, limit, user, workers, seed)
+    runner = _Runner(chapter, timeout_scale, limit, user, workers, seed, lang or active_language())
     with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
         runner.guard = guard
         futures = {pool.submit(runner.grade, w): w for w in todo}
@@ -345,9 +348,10 @@ class _Runner:
         user: str | None = None,
         workers: int = 1,
         seed: int | None = None,
+        lang: str = "en",
     ):
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
-        self.user, self.seed = user, seed
+        self.user, self.seed, self.lang = user, seed, lang
         self.slots: queue.SimpleQueue[int] | None = None
         base = student_user(user)
         if base is not None and workers > 1:
@@ -399,6 +403,8 @@ class _Runner:
             str(work.file),
             "--timeout-scale",
             repr(self.timeout_scale),
+            "--lang",
+            self.lang,
         ]
         if self.user is not None:
             command += ["--student-user", self.user]
@@ -469,6 +475,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--student-user")
     parser.add_argument("--slot", type=int, default=0, help="the uid of the pool's slot (see _Runner)")
     parser.add_argument("--grading-seed", type=int)
+    parser.add_argument("--lang", choices=LANGUAGES)
     parser.add_argument(
         "--own-folder", action="store_true", help="the Python files beside FILE are the student's too"
     )
@@ -481,6 +488,7 @@ def main(argv: list[str] | None = None) -> int:
         user=args.student_user if user is None else pool_user(user, args.slot),
         with_folder=args.own_folder,
         seed=args.grading_seed,
+        lang=args.lang,
     )
     print(json.dumps(result.as_dict()))
     return 0

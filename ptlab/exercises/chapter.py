@@ -25,6 +25,7 @@ from types import ModuleType
 
 import numpy as np
 
+from ptlab.exercises.messages import aside, text
 from ptlab.untrusted import Arguments, Rules, copied_answer, library_answer
 
 #: The exercises package: templates/ and solutions/ are beside this file.
@@ -198,11 +199,9 @@ def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndar
     not have ``shape`` or holds NaN or infinite values (``nan_hint`` says what may cause them)."""
     result = np.asarray(value, dtype=np.float64)
     if result.shape != tuple(shape):
-        raise CheckFailed(
-            f"{name} must return an array of shape {tuple(shape)}, yours has shape {result.shape}"
-        )
+        raise CheckFailed(text("array.shape", name=name, expected=tuple(shape), shape=result.shape))
     if not np.isfinite(result).all():
-        raise CheckFailed(f"{name} returned NaN or infinite values" + (f" ({nan_hint})" if nan_hint else ""))
+        raise CheckFailed(text("array.not_finite", name=name, hint=aside(nan_hint)))
     return result
 
 
@@ -226,16 +225,12 @@ def require(module: ModuleType, *names: str) -> list[Callable]:
     file holds a copy of ptlab's answers with the names changed (``ptlab.untrusted.copies``)."""
     missing = [name for name in names if not callable(getattr(module, name, None))]
     if missing:
-        raise CheckFailed(
-            f"your file has no function {', '.join(missing)} (keep the names of the exercise file)"
-        )
+        raise CheckFailed(text("require.missing", names=", ".join(missing)))
     for name in names:
         origin = library_answer(module, name)
         if origin is not None:
-            raise CheckFailed(
-                f"{name}: this is ptlab's own answer ({origin}), not yours: write it in your file"
-            )
+            raise CheckFailed(text("require.library_answer", name=name, origin=origin))
     copied = copied_answer(module)
     if copied is not None:
-        raise CheckFailed(f"your file holds {copied}: write your own")
+        raise CheckFailed(text("require.copied", copied=copied))
     return [getattr(module, name) for name in names]

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
+from ptlab.exercises.messages import LANGUAGES
 from ptlab.untrusted.shown import print_verdict, relay, shown
 from ptlab.untrusted.student_user import add_student_user_argument, student_user
 
@@ -44,6 +45,13 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         help="the seed the checks draw their inputs from (default: a fresh one each time, "
         "recorded in the table, the JSON and the CSV; give a recorded one to reproduce "
         "that verdict exactly)",
+    )
+    graded.add_argument(
+        "--lang",
+        choices=LANGUAGES,
+        help="the language of the score table and its messages: en (English) or zh (中文) "
+        "(default: the locale's: zh where the first of LC_ALL, LC_MESSAGES and LANG that is "
+        "set starts with 'zh')",
     )
     add_student_user_argument(graded)
 
@@ -209,6 +217,7 @@ def _check(args) -> int:
         on_output=relay("    | "),
         user=args.student_user,
         seed=args.grading_seed,
+        lang=args.lang,
     )
     # grade() has ended every process of the student's code: nothing can change what follows.
     print_verdict(result.table())  # (a reader gone away changes nothing below, nor the exit code)
@@ -307,6 +316,7 @@ def _grade_all(args) -> int:
         progress=sys.stderr.isatty(),
         user=args.student_user,
         seed=args.grading_seed,
+        lang=args.lang,
     )
     full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
     print(f"{len(rows)} students in {csv_path}: {full} with full marks")

@@ -19,8 +19,15 @@ from collections.abc import Callable
 import numpy as np
 
 from ptlab.exercises.chapter import CheckFailed, checked_array
+from ptlab.exercises.messages import aside, text
 
 CHANNELS = ("red", "green", "blue")
+
+
+def channel_name(channel: int) -> str:
+    """Colour ``channel`` (0, 1, 2) in words, in the active language."""
+    return text(f"channel.{CHANNELS[channel]}")
+
 
 #: ``where(index, shape)``: the place of element ``index`` of an array of ``shape``, in words.
 Where = Callable[[tuple[int, ...], tuple[int, ...]], str]
@@ -28,17 +35,17 @@ Where = Callable[[tuple[int, ...], tuple[int, ...]], str]
 
 def at_row(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
     """ "row 17 of 500" of an (N,) array, "row 17 of 500, column 2" of an (N, K) one."""
-    place = f"row {index[0]} of {shape[0]}"
-    return place + "".join(f", column {i}" for i in index[1:])
+    place = text("at_row", row=index[0], rows=shape[0])
+    return place + "".join(text("at_column", column=i) for i in index[1:])
 
 
 def at_pixel(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
     """ "pixel (x=5, y=3) (red)" of an (H, W, 3) picture, with "in pass 2 of 12" (counted
     from 1) for (passes, H, W, 3) pass images (``ptlab.exercises.renders.pass_images``)."""
     *passes, y, x, channel = index
-    place = f"pixel (x={x}, y={y}) ({CHANNELS[channel]}; x=0, y=0 is the top left)"
+    place = text("at_pixel", x=x, y=y, channel=channel_name(channel))
     if passes:
-        place += f" in pass {passes[0] + 1} of {shape[0]}"
+        place += text("in_pass", number=passes[0] + 1, passes=shape[0])
     return place
 
 
@@ -57,9 +64,9 @@ def require_finite(values, what: str, where: Where = at_row, hint: str = "") -> 
     kind = "NaN" if np.isnan(value) else ("inf" if value > 0 else "-inf")
     others = int(bad.sum()) - 1
     raise CheckFailed(
-        f"{what} has {kind} at {where(index, values.shape)}"
-        + (f" and {others} more NaN or infinite values" if others else "")
-        + (f" ({hint})" if hint else "")
+        text("not_finite", what=what, kind=kind, where=where(index, values.shape))
+        + (text("not_finite.more", others=others) if others else "")
+        + aside(hint)
     )
 
 
@@ -68,5 +75,5 @@ def finite_array(value, name: str, shape: tuple, nan_hint: str = "", where: Wher
     returned, as float64 of ``shape``), saying where the first NaN or infinity is."""
     result = np.asarray(value, dtype=np.float64)
     if result.shape == tuple(shape):
-        require_finite(result, f"what {name} returned", where, nan_hint)
+        require_finite(result, text("returned", name=name), where, nan_hint)
     return checked_array(result, name, shape, nan_hint)

@@ -22,12 +22,14 @@ returns, and so before any result is written.
 from __future__ import annotations
 
 import time
+import unicodedata
 from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from ptlab.errors import PtlabError
 from ptlab.exercises.chapter import CheckFailed, active_grading_seed, grading_seed, new_grading_seed
+from ptlab.exercises.messages import check_name, language, text
 from ptlab.untrusted import (
     ImportFailed,
     ProcessGuard,
@@ -49,7 +51,6 @@ from ptlab.untrusted.shown import shown, shown_line
 OVERALL_SLACK = 60.0
 #: The longest message a check reports (the rest is cut off).
 MAX_MESSAGE = 1000
-TIMEOUT_HINT = "an endless loop, or a Python loop over every ray?"
 
 
 def overall_limit(chapter, timeout_scale: float = 1.0) -> float:
@@ -79,6 +80,8 @@ class Grade:
             whether the file changed since.
         grading_seed: the seed every check drew its inputs from (fresh for each grading:
             ``--grading-seed`` grades again with the same inputs, for the same verdict).
+        lang: the language of the messages and of the table ("en", "zh";
+            ``ptlab.exercises.messages``).
     """
 
     chapter: int
@@ -87,6 +90,7 @@ class Grade:
     results: list[CheckResult]
     sha256: str = ""
     grading_seed: int = 0
+    lang: str = "en"
 
     @property
     def score(self) -> int:
@@ -111,25 +115,48 @@ class Grade:
             full_marks=self.full_marks,
             sha256=self.sha256,
             grading_seed=self.grading_seed,
+            lang=self.lang,
             checks=[asdict(r) for r in self.results],
         )
 
     def table(self) -> str:
-        """The score table, one row per check, as a course autograder prints it."""
-        width = max(len(r.name) for r in self.results)
-        lines = [f"Chapter {self.chapter}: {self.title}  ({shown(self.file)})", ""]
-        lines.append(f"  {'check':{width}}  {'points':>7}  verdict  message")
-        for r in self.results:
-            verdict = "pass" if r.passed else "FAIL"
+        """The score table, one row per check, as a course autograder prints it, in the
+        grading's language (its headings and the checks' names; the messages already are)."""
+        with language(self.lang):
+            return self._table()
+
+    def _table(self) -> str:
+        names = [check_name(self.chapter, r.name) for r in self.results]
+        width = max(display_width(name) for name in [text("table.check"), text("table.total"), *names])
+        title = text(f"ch{self.chapter:02d}.title")
+        lines = [text("table.chapter", number=self.chapter, title=title, file=shown(self.file)), ""]
+        check, points, verdict = text("table.check"), text("table.points"), text("table.verdict")
+        points = padded(points, 7, right=True)
+        lines.append(f"  {padded(check, width)}  {points}  {padded(verdict, 7)}  {text('table.message')}")
+        for name, r in zip(names, self.results, strict=True):
+            verdict = text("table.pass") if r.passed else text("table.fail")
             message = table_message(r.message)
-            lines.append(f"  {r.name:{width}}  {r.points:>3}/{r.max_points:<3}  {verdict:7}  {message}")
+            score = f"{r.points:>3}/{r.max_points:<3}"
+            lines.append(f"  {padded(name, width)}  {score}  {padded(verdict, 7)}  {message}")
         # (on the total's line: the table keeps a line per check, and two more)
+        full_marks = text("table.full_marks") if self.full_marks else ""
         lines.append(
-            f"  {'total':{width}}  {self.score:>3}/{self.max_score:<3}  "
-            f"{'full marks  ' if self.full_marks else ''}grading seed {self.grading_seed} "
-            f"(--grading-seed {self.grading_seed} grades again with the same inputs)"
+            f"  {padded(text('table.total'), width)}  {self.score:>3}/{self.max_score:<3}  "
+            + text("table.seed", full_marks=full_marks, seed=self.grading_seed)
         )
         return "\n".join(lines)
+
+
+def display_width(line: str) -> int:
+    """How many columns ``line`` takes on a terminal: wide (Chinese) characters take two."""
+    return sum(2 if unicodedata.east_asian_width(c) in "WF" else 1 for c in line)
+
+
+def padded(line: str, width: int, right: bool = False) -> str:
+    """``line`` padded with spaces to ``width`` columns (``display_width``), on the right or,
+    with ``right``, on the left."""
+    spaces = " " * max(0, width - display_width(line))
+    return spaces + line if right else line + spaces
 
 
 def grade(
@@ -142,6 +169,7 @@ def grade(
     with_folder: bool = True,
     library_answer: bool = False,
     seed: int | None = None,
+    lang: str | None = None,
 ) -> Grade:
     """Run every check of ``chapter`` (a ``ptlab.exercises.Chapter``) on the file ``path``.
 
@@ -160,11 +188,21 @@ def grade(
             (``ptlab.exercises.chapter.grading_rng``); None: a fresh one, so that no answer
             computed beforehand for known inputs can be replayed. A recorded seed gives the
             same inputs again.
+        lang: the language of the messages ("en", "zh"; ``ptlab.exercises.messages``);
+            None: the active one (``--lang``, else the locale's).
 
     Raises:
         PtlabError: no such file, or no such ``user`` (or one that cannot run ptlab).
     """
-    path = Path(path)
+    with language(lang) as lang:
+        return _grade(
+            chapter, Path(path), timeout_scale, echo, on_output, user, with_folder, library_answer, seed, lang
+        )
+
+
+def _grade(
+    chapter, path, timeout_scale, echo, on_output, user, with_folder, library_answer, seed, lang
+) -> Grade:
     if not path.is_file():
         raise PtlabError(f"{path}: no such file")
     if library_answer and path.resolve() != chapter.solution.resolve():
@@ -196,25 +234,32 @@ def grade(
                     0,
                     check.points,
                     False,
-                    f"not run: grading reached its overall limit of {overall:.0f} s",
+                    text("grader.overall_limit", seconds=overall),
                     0.0,
                 )
             elif unmet and not check.quick:  # (a render: its message is not worth the wait)
-                message = f"{not_graded_until(unmet)}; '{unmet[0].name}' says: {unmet[0].message}"
+                message = text(
+                    "grader.gated_says",
+                    not_graded=not_graded_until(chapter.number, unmet),
+                    name=check_name(chapter.number, unmet[0].name),
+                    message=unmet[0].message,
+                )
                 result = CheckResult(check.name, 0, check.points, False, table_message(message), 0.0)
             else:
                 result, hung = run_check(
                     check, taken, min(check.timeout * timeout_scale, left), guard, on_output, rules, user
                 )
                 if hung:  # every later check would wait as long again for nothing
-                    taken = f"not run: {result.message}"
+                    taken = text("grader.not_run", message=result.message)
                 if unmet:
-                    result = gated(result, unmet)
+                    result = gated(chapter.number, result, unmet)
             earlier[check.name] = result
             if echo is not None:
-                echo(f"  {'pass' if result.passed else 'FAIL'}  {result.name} ({result.seconds:.1f} s)")
+                verdict = text("table.pass") if result.passed else text("table.fail")
+                name = check_name(chapter.number, result.name)
+                echo(f"  {verdict}  {name} ({result.seconds:.1f} s)")
             results.append(result)
-    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed)
+    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed, lang)
 
 
 def _import_what_checks_use(rules) -> None:
@@ -258,19 +303,17 @@ def run_check(
     except CheckFailed as failure:
         message = str(failure)
     except StudentError as error:
-        message = error.describe()
+        message = described(error)
     except ImportFailed as failure:
         message, hung = str(failure), failure.kind == "import timeout"
     except SubmissionFailed as failure:
         message = str(failure)
         if failure.kind == "timeout":
-            message = (
-                f"took longer than {timeout:.3g} s and was stopped, in {failure.during} ({TIMEOUT_HINT})"
-            )
+            message = text("grader.timeout", seconds=timeout, during=failure.during)
     except PtlabError as error:
         message = str(error)
     except Exception as error:  # the checks' code failed on what the student's code returned
-        message = f"{type(error).__name__}: {error} (raised outside your file)"
+        message = text("grader.outside", error_type=type(error).__name__, error=error)
     return CheckResult(
         check.name,
         check.points if passed else 0,
@@ -281,18 +324,34 @@ def run_check(
     ), hung
 
 
-def not_graded_until(unmet: list[CheckResult]) -> str:
+def described(error: StudentError) -> str:
+    """One line for the student of an exception their code raised: the error, its message and
+    where it came from (``StudentError.describe``, in the active language; the error's
+    class is named after the student's, a subclass of ``StudentError``). A verdict of the
+    harness's (an argument changed, a library answer called) keeps its own words."""
+    if type(error).describe is not StudentError.describe or error.type_name == "LibraryAnswerCalled":
+        return error.describe()
+    place = error.where or text("grader.outside_place")
+    if error.not_implemented:
+        return text("grader.not_written", name=f"{error} " if str(error) else "", place=place)
+    return text("grader.student_error", error_type=error.type_name, error=error, place=place)
+
+
+def not_graded_until(chapter: int, unmet: list[CheckResult]) -> str:
     """Why a check scores nothing: the checks of the core behaviour it builds on failed."""
-    names = " and ".join(f"'{r.name}'" for r in unmet)
-    return f"not graded until {names} pass{'es' if len(unmet) == 1 else ''}"
+    names = text("grader.and").join(text("quoted", name=check_name(chapter, r.name)) for r in unmet)
+    return text("grader.not_graded_until_one" if len(unmet) == 1 else "grader.not_graded_until", names=names)
 
 
-def gated(result: CheckResult, unmet: list[CheckResult]) -> CheckResult:
+def gated(chapter: int, result: CheckResult, unmet: list[CheckResult]) -> CheckResult:
     """``result`` of a check whose requirements ``unmet`` failed: no points, and a message
     that says why and what the check found by itself (a property a trivial answer may
     share, so it earns nothing alone)."""
-    verdict = "passes" if result.passed else "fails"
-    message = f"{not_graded_until(unmet)}; by itself it {verdict}: {result.message}"
+    message = text(
+        "grader.gated_passes" if result.passed else "grader.gated_fails",
+        not_graded=not_graded_until(chapter, unmet),
+        message=result.message,
+    )
     return replace(result, points=0, passed=False, message=table_message(message))
 
 

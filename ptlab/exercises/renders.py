@@ -26,7 +26,8 @@ from types import ModuleType
 import numpy as np
 
 from ptlab.exercises.chapter import CheckFailed, grading_seed_for
-from ptlab.exercises.finite import CHANNELS, at_pixel, require_finite
+from ptlab.exercises.finite import at_pixel, channel_name, require_finite
+from ptlab.exercises.messages import aside, text
 
 #: The chance that a right answer fails the mean test of a render comparison, at most
 #: (Bonferroni over every region and colour, and over the two standard errors each is
@@ -67,9 +68,6 @@ NOISE_FALSE_ALARM = 1e-4
 #: The image is cut into GRID x GRID regions for the comparison.
 GRID = 4
 
-ROWS = ("top", "upper middle", "lower middle", "bottom")
-COLUMNS = ("left", "centre left", "centre right", "right")
-
 #: The picture of ``check_render_through`` without passes: the Cornell box's normals. The
 #: normals view is deterministic: the same closest hits give the same picture. Its seed (the
 #: pixels' jitter) is stream NORMALS_STREAM of the grading seed.
@@ -97,7 +95,8 @@ def check_render_through(
     in: the same picture? -> a note saying how close, or ``CheckFailed``.
 
     Args:
-        yours: the student's code in the messages: "your rays", "your BVH".
+        yours: the student's code in the messages: "your rays", "your BVH" (in the active
+            language: ``ptlab.exercises.messages.text``).
         passes: None for the normals view (``NORMALS_VIEW``), compared pixel by pixel: it
             must be finite and differ from the library's by at most ``NORMALS_TOLERANCE``
             on average. Else the ``pass_images`` settings of a path-traced render (res,
@@ -128,27 +127,21 @@ def check_render_through(
         with plugged(hooks, **replacements):
             student = pass_images(scene, backend=backend, **passes)
         return compare_renders(
-            student, library, f"the path-traced Cornell box through {yours}", hint, passes["spp_per_pass"]
+            student, library, text("render.path_traced", yours=yours), hint, passes["spp_per_pass"]
         )
     options = dict(NORMALS_VIEW, seed=grading_seed_for(NORMALS_STREAM), workers=1, backend=backend)
     library = ptlab.render(scene, **options)
     with plugged(hooks, **replacements):
         student = ptlab.render(scene, **options)
-    what = f"the Cornell box's normals seen through {yours}"
+    what = text("render.normals", yours=yours)
     require_finite(student, what, at_pixel, hint=nan_hint)
     missing = (student.max(axis=2) == 0) & (library.max(axis=2) > 0)
     if missing_hint and missing.mean() > MISSING_TOLERANCE:
-        raise CheckFailed(
-            f"through {yours} the camera sees nothing in {missing.mean():.0%} of "
-            f"the pixels where the library sees a wall ({missing_hint})"
-        )
+        raise CheckFailed(text("render.missing", yours=yours, share=missing.mean(), hint=missing_hint))
     difference = np.abs(student - library).mean()
     if not difference <= NORMALS_TOLERANCE:
-        raise CheckFailed(
-            f"{what} differ from the library's by {difference:.4f} on average"
-            + (f" ({hint})" if hint else "")
-        )
-    return f"the Cornell box seen through {yours} matches"
+        raise CheckFailed(text("render.normals_differ", what=what, difference=difference) + aside(hint))
+    return text("render.normals_match", yours=yours)
 
 
 def replace_materials(scene, replace: Callable):
@@ -220,11 +213,7 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
     )
     if result.nonfinite:  # (left out of the image, which therefore looks fine: say so)
         x, y, depth = result.first_nonfinite or (-1, -1, -1)
-        raise CheckFailed(
-            f"your code produced {result.nonfinite} NaN or infinite samples (left out of "
-            f"the image); the first at pixel (x={x}, y={y}), depth {depth}: a division by a "
-            f"pdf or a distance of 0?"
-        )
+        raise CheckFailed(text("render.nonfinite", count=result.nonfinite, x=x, y=y, depth=depth))
     return np.stack(images)
 
 
@@ -242,21 +231,18 @@ def compare_renders(
     failure of the mean only; ``spp`` (the samples per pixel of a pass) to a failure of the
     noise.
     """
-    require_finite(student, f"{what}: your render", at_pixel)
+    require_finite(student, text("render.yours", what=what), at_pixel)
     student_regions, library_regions = regions_of(student), regions_of(library)
     noise = noise_verdict(student_regions.sum(axis=-1), library_regions.sum(axis=-1), spp)
     difference = mean_verdict(student_regions, library_regions)
     if noise is None and difference is None:
         overall = student_regions.mean() / max(library_regions.mean(), 1e-12)
         threshold = mean_threshold(len(library), student_regions[0].size)
-        return (
-            f"{what}: every region within {threshold:.1f} standard errors of the "
-            f"library's, no noisier than a right answer (whole image {overall:.3f}x as "
-            f"bright)"
-        )
+        return text("render.matches", what=what, threshold=threshold, overall=overall)
     if noise is None:
-        raise CheckFailed(f"{what}: {difference}" + (f" ({hint})" if hint else ""))
-    raise CheckFailed(f"{what}: {noise}" + (f"; and {difference}" if difference else ""))
+        raise CheckFailed(text("render.differs", what=what, difference=difference) + aside(hint))
+    also = text("render.and", difference=difference) if difference else ""
+    raise CheckFailed(text("render.differs", what=what, difference=noise) + also)
 
 
 def mean_threshold(passes: int, tests: int) -> float:
@@ -328,12 +314,15 @@ def mean_verdict(student: np.ndarray, library: np.ndarray) -> str | None:
     worst = np.unravel_index(np.argmax(score), score.shape)
     ratio = student.mean(axis=0)[worst] / max(expected[worst], 1e-12)
     overall = student.mean() / max(library.mean(), 1e-12)
-    return (
-        f"{int(wrong.sum())} of {mean.size} regions and colours differ from the library's "
-        f"picture beyond the noise; the worst, {describe_region(*worst)}, is "
-        f"{'brighter' if mean[worst] > 0 else 'darker'} ({ratio:.2f}x, "
-        f"{min(t[worst], 999):.0f} standard errors off; a right answer stays within "
-        f"{threshold:.1f}); the whole image is {overall:.2f}x as bright"
+    return text(
+        "render.mean_brighter" if mean[worst] > 0 else "render.mean_darker",
+        wrong=int(wrong.sum()),
+        tests=mean.size,
+        region=describe_region(*worst),
+        ratio=ratio,
+        t=min(t[worst], 999),
+        threshold=threshold,
+        overall=overall,
     )
 
 
@@ -375,33 +364,37 @@ def noise_verdict(student: np.ndarray, library: np.ndarray, spp: int | None = No
     total = student_variance.sum() / library_variance.sum()
     low = float(ordered[half - 1])  # the half-th smallest
     if low < 1 / (CLEAN_RATIO * chance):
-        return (
-            f"too clean for {spp or 'its'} samples per pixel: this is not a render of these "
-            f"samples (your passes' variance is {low:.3g} times the library's at the same "
-            f"samples per pixel in half the picture's {regions} regions, {total:.3g} times "
-            f"over the whole picture, where a right answer's is at least 1/{CLEAN_RATIO:g} "
-            f"of it, with chance at least {1 / (CLEAN_RATIO * chance):.3g}: this test fails a "
-            f"right answer with probability at most {NOISE_FALSE_ALARM:g})"
+        return text(
+            "render.too_clean",
+            spp=spp or text("render.its"),
+            low=low,
+            regions=regions,
+            total=total,
+            clean_ratio=CLEAN_RATIO,
+            bound=1 / (CLEAN_RATIO * chance),
+            false_alarm=NOISE_FALSE_ALARM,
         )
     if median <= NOISE_RATIO * chance:
         return None
-    return (
-        f"too noisy: your passes' variance is {median:.3g} times the library's at the same "
-        f"samples per pixel in half the picture's {regions} regions ({total:.3g} times over "
-        f"the whole picture), where a right answer's is at most {NOISE_RATIO:g} times "
-        f"(with chance, at most {NOISE_RATIO * chance:.3g}: this test fails a right answer "
-        f"with probability at most {NOISE_FALSE_ALARM:g})"
+    return text(
+        "render.too_noisy",
+        median=median,
+        regions=regions,
+        total=total,
+        noise_ratio=NOISE_RATIO,
+        bound=NOISE_RATIO * chance,
+        false_alarm=NOISE_FALSE_ALARM,
     )
 
 
 def describe_region(row: int, column: int, channel: int) -> str:
     """Region (row, column) of the GRID x GRID cut, in words: "the red of the top left region"."""
-    return f"the {CHANNELS[channel]} of {region_name(row, column)}"
+    return text("region.channel", channel=channel_name(channel), region=region_name(row, column))
 
 
 def region_name(row: int, column: int) -> str:
     """Region (row, column) of the GRID x GRID cut, in words: "the top left region"."""
-    return f"the {ROWS[row]} {COLUMNS[column]} region"
+    return text(f"region.{row}.{column}")
 
 
 def regions_of(image: np.ndarray) -> np.ndarray:

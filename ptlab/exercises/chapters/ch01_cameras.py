@@ -16,6 +16,7 @@ import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
 from ptlab.exercises.finite import require_finite
+from ptlab.exercises.messages import aside, text
 
 
 def _camera():
@@ -46,19 +47,17 @@ def _rays(module, camera, width, height, pixel_x, pixel_y, u):
         copy.deepcopy(camera), width, height, pixel_x.copy(), pixel_y.copy(), np.array(u, dtype=np.float32)
     )
     if not (isinstance(result, tuple) and len(result) == 2):
-        raise CheckFailed("generate_rays must return two arrays: (origins, dirs)")
+        raise CheckFailed(text("ch01.two_arrays"))
     origins, dirs = (np.asarray(a, dtype=np.float64) for a in result)
     n = len(pixel_x)
     if origins.shape != (n, 3) or dirs.shape != (n, 3):
-        raise CheckFailed(
-            f"expected origins and dirs of shape ({n}, 3), got {origins.shape} and {dirs.shape}"
-        )
+        raise CheckFailed(text("ch01.shapes", n=n, origins=origins.shape, dirs=dirs.shape))
 
     def ray(index, shape) -> str:
-        return f"row {index[0]} (the ray through pixel x={pixel_x[index[0]]}, y={pixel_y[index[0]]})"
+        return text("ch01.row", row=index[0], x=pixel_x[index[0]], y=pixel_y[index[0]])
 
-    require_finite(origins, "the origin array generate_rays returned", ray)
-    require_finite(dirs, "the direction array generate_rays returned", ray)
+    require_finite(origins, text("ch01.origins"), ray)
+    require_finite(dirs, text("ch01.dirs"), ray)
     return origins, dirs
 
 
@@ -67,14 +66,13 @@ def check_centre_ray(module) -> str:
     width, height = _size(2, even=False)
     origins, dirs = _rays(module, camera, width, height, [width // 2], [height // 2], [[0.5, 0.5]])
     if not np.allclose(origins[0], camera.position, atol=1e-5):
-        raise CheckFailed(f"the ray should start at the eye {camera.position}, not {origins[0]}")
+        raise CheckFailed(text("ch01.eye", eye=camera.position, yours=origins[0]))
     if not np.allclose(dirs[0], camera.forward, atol=1e-5):
         raise CheckFailed(
-            f"the ray through the image's centre should go along forward "
-            f"{np.round(camera.forward, 4)}, not {np.round(dirs[0], 4)}"
+            text("ch01.centre", forward=np.round(camera.forward, 4), yours=np.round(dirs[0], 4))
         )
     _require_fan(module, camera)
-    return "the centre ray goes along forward, and the corners' rays fan out from it"
+    return text("ch01.centre_ok")
 
 
 def _require_fan(module, camera) -> None:
@@ -92,11 +90,7 @@ def _require_fan(module, camera) -> None:
     spread = np.arccos(np.clip(unit @ unit.T, -1, 1))[np.triu_indices(4, 1)]
     # A tenth of the pinhole's angles: a wrong field of view passes, the same ray everywhere does not.
     if not (np.all(off_forward >= want / 10) and np.all(spread >= want.min() / 10)):
-        raise CheckFailed(
-            "the rays through the four corner pixels should fan out from the centre ray, "
-            "each its own way; yours go (nearly) the same way as it or as each other "
-            "(a direction must depend on its pixel)"
-        )
+        raise CheckFailed(text("ch01.fan"))
 
 
 def check_unit_length(module) -> str:
@@ -114,10 +108,8 @@ def check_unit_length(module) -> str:
     length = np.linalg.norm(dirs, axis=1)
     worst = np.argmax(np.abs(length - 1))
     if not abs(length[worst] - 1) <= 1e-5:
-        raise CheckFailed(
-            f"directions must have length 1; one has length {length[worst]:.4f} (normalise them)"
-        )
-    return "every direction has length 1"
+        raise CheckFailed(text("ch01.length", length=length[worst]))
+    return text("ch01.length_ok")
 
 
 def check_field_of_view(module) -> str:
@@ -130,37 +122,30 @@ def check_field_of_view(module) -> str:
     top_angle = math.acos(np.clip(dirs[0] @ camera.forward, -1, 1))
     if not abs(top_angle - half_fov) <= 1e-4:
         raise CheckFailed(
-            f"the top edge should be fov_y / 2 = {math.degrees(half_fov):.2f} "
-            f"degrees off forward, yours is {math.degrees(top_angle):.2f}"
-            f"{_field_of_view_hint(top_angle, camera.fov_y, width / height)}"
+            text("ch01.top_edge", expected=math.degrees(half_fov), yours=math.degrees(top_angle))
+            + _field_of_view_hint(top_angle, camera.fov_y, width / height)
         )
     expected_side = math.atan(math.tan(half_fov) * width / height)
     side_angle = math.acos(np.clip(dirs[1] @ camera.forward, -1, 1))
     if not abs(side_angle - expected_side) <= 1e-4:
         raise CheckFailed(
-            f"the left edge should be atan(tan(fov_y / 2) * width / height) = "
-            f"{math.degrees(expected_side):.2f} degrees off forward, yours is "
-            f"{math.degrees(side_angle):.2f} (the aspect ratio?)"
+            text("ch01.left_edge", expected=math.degrees(expected_side), yours=math.degrees(side_angle))
         )
-    return "the image spans fov_y vertically, times the aspect ratio across"
+    return text("ch01.fov_ok")
 
 
 def _field_of_view_hint(top_angle: float, fov_y: float, aspect: float) -> str:
     """Which typical mistake gives the top edge the angle ``top_angle`` (radians), if one does."""
     half = math.radians(fov_y) / 2
     mistakes = {
-        "fov_y is in degrees: math.tan takes radians (math.radians(fov_y))": math.atan(
-            abs(math.tan(fov_y / 2))
-        ),
-        "tan(fov_y / 2) reaches the top edge: the whole fov_y is twice that": math.atan(math.tan(2 * half)),
-        "the aspect ratio (width / height) widens x, not y": math.atan(math.tan(half) * aspect),
-        "the aspect ratio (width / height) widens x; y is not divided by it": math.atan(
-            math.tan(half) / aspect
-        ),
+        "ch01.hint.degrees": math.atan(abs(math.tan(fov_y / 2))),
+        "ch01.hint.whole_fov": math.atan(math.tan(2 * half)),
+        "ch01.hint.aspect_on_y": math.atan(math.tan(half) * aspect),
+        "ch01.hint.aspect_divides_y": math.atan(math.tan(half) / aspect),
     }
     for hint, angle in mistakes.items():
         if abs(top_angle - angle) <= 1e-4:
-            return f" ({hint})"
+            return aside(text(hint))
     return ""
 
 
@@ -169,19 +154,16 @@ def check_orientation(module) -> str:
     width, height = _size(5, even=True)
     _, dirs = _rays(module, camera, width, height, [0], [0], [[0.0, 0.0]])
     if not dirs[0] @ camera.up > 0:
-        hint = "rows go down, y up"
+        hint = text("ch01.hint.rows_down")
         if math.tan(camera.fov_y / 2) < 0:  # (degrees taken as radians can turn tan negative)
             _, top = _rays(module, camera, width, height, [width // 2], [0], [[0.0, 0.0]])
             below = math.acos(np.clip(top[0] @ camera.forward, -1, 1))
             if abs(below - math.atan(abs(math.tan(camera.fov_y / 2)))) <= 1e-4:
-                hint = (
-                    f"tan({camera.fov_y / 2:g}) < 0 turns the image over: fov_y is in degrees, "
-                    "and math.tan takes radians (math.radians(fov_y))"
-                )
-        raise CheckFailed(f"pixel (0, 0) should be at the top of the image ({hint})")
+                hint = text("ch01.hint.turned_over", half=camera.fov_y / 2)
+        raise CheckFailed(text("ch01.top", hint=hint))
     if not dirs[0] @ camera.right < 0:
-        raise CheckFailed("pixel (0, 0) should be on the left of the image (x grows to the right)")
-    return "pixel (0, 0) is the top-left corner"
+        raise CheckFailed(text("ch01.left"))
+    return text("ch01.orientation_ok")
 
 
 def check_known_rays(module) -> str:
@@ -197,10 +179,10 @@ def check_known_rays(module) -> str:
     worst = np.abs(dirs - expected).max()
     if not worst <= 1e-4:
         raise CheckFailed(
-            f"rays through jittered points differ from the pinhole model's by up "
-            f"to {worst:.4f}{_jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u)}"
+            text("ch01.jittered", worst=worst)
+            + _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u)
         )
-    return "200 jittered rays match the pinhole model"
+    return text("ch01.jittered_ok")
 
 
 def _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u) -> str:
@@ -209,16 +191,16 @@ def _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u) -> str:
     from ptlab.camera import generate_rays
 
     mistakes = {
-        "u is ignored: the ray goes through the pixel's centre; the point is pixel + u": np.full_like(u, 0.5),
-        "u is added, and half a pixel more: the point is pixel + u, u already spans the pixel": u + 0.5,
-        "u[:, 0] goes with x and u[:, 1] with y": u[:, ::-1],
-        "the point is pixel + u, not pixel - u": -u,
+        "ch01.hint.u_ignored": np.full_like(u, 0.5),
+        "ch01.hint.extra_half": u + 0.5,
+        "ch01.hint.u_swapped": u[:, ::-1],
+        "ch01.hint.u_subtracted": -u,
     }
     for hint, changed in mistakes.items():
         _, wrong = generate_rays(camera, width, height, pixel_x, pixel_y, changed.astype(np.float32))
         if np.abs(dirs - wrong).max() <= 1e-4:
-            return f" ({hint})"
-    return " (is u added to the pixel coordinates, and nothing else?)"
+            return aside(text(hint))
+    return aside(text("ch01.hint.jitter"))
 
 
 def check_render(module) -> str:
@@ -230,10 +212,10 @@ def check_render(module) -> str:
         return (np.asfortranarray(origins, dtype=np.float32), np.asfortranarray(dirs, dtype=np.float32))
 
     return check_render_through(
-        "your rays",
+        text("ch01.yours"),
         ptlab.rendering.jobs,
         dict(generate_rays=student_rays),
-        nan_hint="rays too long for float32, the renderer's precision?",
+        nan_hint=text("ch01.nan_hint"),
     )
 
 

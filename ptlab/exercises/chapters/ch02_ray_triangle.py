@@ -20,6 +20,7 @@ import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import require_finite
+from ptlab.exercises.messages import aside, text
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
 #: direction that sees its front face (det > 0; the opposite direction sees its back).
@@ -63,28 +64,25 @@ def _call(module, origins, dirs, v0, e1, e2):
     with np.errstate(all="ignore"):  # NaN and inf are judged below, not warned about
         result = ray_triangle(origins, dirs, v0, e1, e2)
     if not (isinstance(result, tuple) and len(result) == 3):
-        raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
+        raise CheckFailed(text("ch02.three_arrays"))
     t, u, v = (np.asarray(a, dtype=np.float64) for a in result)
     if t.shape != (n,) or u.shape != (n,) or v.shape != (n,):
-        raise CheckFailed(
-            f"expected t, u and v of shape ({n},), got {t.shape}, {u.shape} and "
-            f"{v.shape} (one answer per ray)"
-        )
+        raise CheckFailed(text("ch02.shapes", n=n, t=t.shape, u=u.shape, v=v.shape))
     _require_finite_hits(t, u, v)
     return t, u, v
 
 
-def _require_finite_hits(t: np.ndarray, u: np.ndarray, v: np.ndarray, during: str = "") -> None:
+def _require_finite_hits(t: np.ndarray, u: np.ndarray, v: np.ndarray, bvh: bool = False) -> None:
     """Fail if t is NaN for a ray (a miss is inf), or u or v is NaN or infinite for a ray
-    that hits (finite t), naming the first such ray."""
+    that hits (finite t), naming the first such ray (``bvh``: of those traced through the BVH)."""
 
     def ray(index, shape) -> str:
-        return f"ray {index[0]} of the {shape[0]} {during}".rstrip()
+        return text("ch02.ray_of_bvh" if bvh else "ch02.ray_of", ray=index[0], rays=shape[0])
 
-    require_finite(np.where(np.isinf(t), 0.0, t), "t", ray, hint="a division by det = 0? misses must be inf")
+    require_finite(np.where(np.isinf(t), 0.0, t), "t", ray, hint=text("ch02.hint.det_zero"))
     hits = np.isfinite(t)
     for name, value in (("u", u), ("v", v)):
-        require_finite(np.where(hits, value, 0.0), f"{name} of a ray that hits", ray)
+        require_finite(np.where(hits, value, 0.0), text("ch02.of_a_hit", name=name), ray)
 
 
 def _aimed(triangle, uv, t, dirs):
@@ -106,7 +104,8 @@ def _edges(triangle, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def _expect_hits(module, triangle, uv, t, dirs, what: str, barycentrics: bool = False) -> int:
     """The student's hits at known (t, u, v): each must hit at ``t`` or, with
     ``barycentrics``, have (u, v) = ``uv`` where it hits (a miss is the hit checks' to
-    report). A failure names the first one off."""
+    report). A failure names the first one off. ``what``: the id of their description."""
+    what = text(what)
     t_want = np.broadcast_to(np.asarray(t, dtype=np.float64), len(uv))
     t_got, u_got, v_got = _call(module, *_aimed(triangle, uv, t_want, dirs))
     for i, (u_want, v_want) in enumerate(uv):
@@ -116,21 +115,19 @@ def _expect_hits(module, triangle, uv, t, dirs, what: str, barycentrics: bool = 
                 continue
             hint = ""
             if np.allclose((u_got[i], v_got[i]), (v_want, u_want), rtol=1e-5, atol=1e-6):
-                hint = " (u and v swapped: u goes with e1 = v1 - v0)"
+                hint = aside(text("ch02.hint.uv_swapped"))
             elif np.isclose(u_got[i] + v_got[i], 1 - u_want - v_want, atol=1e-6):
-                hint = " (u, v should weigh v1 and v2; 1 - u - v weighs v0)"
-            raise CheckFailed(
-                f"{what}: the ray at (t, u, v) = {_fmt(want)} hits at (u, v) = {_fmt(got[1:])}{hint}"
-            )
+                hint = aside(text("ch02.hint.uv_weights"))
+            raise CheckFailed(text("ch02.hits_at_uv", what=what, want=_fmt(want), got=_fmt(got[1:])) + hint)
         if np.isclose(t_got[i], t_want[i], rtol=1e-5, atol=1e-6):
             continue
         if not np.isfinite(t_got[i]):
             raise CheckFailed(
-                f"{what}: the ray at (t, u, v) = {_fmt(want)} should hit, yours "
-                f"misses (t = {t_got[i]}){_miss_hint(triangle, dirs, t_want[i])}"
+                text("ch02.misses", what=what, want=_fmt(want), t=t_got[i])
+                + _miss_hint(triangle, dirs, t_want[i])
             )
-        hint = " (t has the wrong sign)" if np.isclose(t_got[i], -t_want[i], rtol=1e-5) else ""
-        raise CheckFailed(f"{what}: the ray at (t, u, v) = {_fmt(want)} hits at t = {t_got[i]:.4g}{hint}")
+        hint = aside(text("ch02.hint.t_sign")) if np.isclose(t_got[i], -t_want[i], rtol=1e-5) else ""
+        raise CheckFailed(text("ch02.hits_at_t", what=what, want=_fmt(want), t=t_got[i]) + hint)
     return len(uv)
 
 
@@ -139,9 +136,9 @@ def _miss_hint(triangle, direction, t: float) -> str:
     v0, v1, v2 = (np.asarray(p, dtype=np.float64) for p in triangle)
     det = np.dot(v1 - v0, np.cross(direction, v2 - v0))
     if t < 0:
-        return " (the triangle is behind the origin: return its negative t all the same)"
+        return aside(text("ch02.hint.behind"))
     if det < 0:
-        return " (the ray sees the triangle's back face, det < 0: do not cull it)"
+        return aside(text("ch02.hint.back_face"))
     return ""
 
 
@@ -150,29 +147,27 @@ def _fmt(values) -> str:
 
 
 #: Rays aimed at known points of the triangles: (triangle, (u, v) of each ray, t, direction,
-#: what they are). Those hitting the front face from in front, those hitting it from behind
+#: the id of what they are). Those hitting the front face from in front, those hitting it from behind
 #: (negative t), and those hitting the back face (det < 0).
 FRONT_HITS = (
-    (UNIT, ((0.25, 0.5), (0.1, 0.1), (0.6, 0.3)), 1.0, UNIT_FRONT, "the unit triangle, rays along -z"),
-    (SLANTED, ((0.2, 0.3), (0.7, 0.1), (0.05, 0.9)), (2.5, 0.5, 7.0), SLANTED_FRONT, "a slanted triangle"),
+    (UNIT, ((0.25, 0.5), (0.1, 0.1), (0.6, 0.3)), 1.0, UNIT_FRONT, "ch02.unit_triangle"),
+    (SLANTED, ((0.2, 0.3), (0.7, 0.1), (0.05, 0.9)), (2.5, 0.5, 7.0), SLANTED_FRONT, "ch02.slanted_triangle"),
 )
-BEHIND_HITS = (
-    (UNIT, ((0.25, 0.5), (0.6, 0.2)), -1.0, UNIT_FRONT, "the unit triangle 1 unit behind the origin"),
-)
+BEHIND_HITS = ((UNIT, ((0.25, 0.5), (0.6, 0.2)), -1.0, UNIT_FRONT, "ch02.behind_triangle"),)
 BACK_HITS = (
     (
         UNIT,
         ((0.25, 0.5), (0.6, 0.2)),
         1.0,
         tuple(np.negative(UNIT_FRONT)),
-        "the unit triangle from below (its back face: det < 0)",
+        "ch02.unit_back",
     ),
     (
         SLANTED,
         ((0.2, 0.3),),
         2.0,
         tuple(np.negative(SLANTED_FRONT)),
-        "the slanted triangle from its back (det < 0)",
+        "ch02.slanted_back",
     ),
 )
 
@@ -181,73 +176,58 @@ def check_known_hits(module) -> str:
     n = sum(_expect_hits(module, *case) for case in FRONT_HITS)
     t, _, _ = _call(module, *_aimed(UNIT, [(0.25, 0.5)], 0.5, (0, 0, -2)))
     if not np.isclose(t[0], 0.5, rtol=1e-5):
-        raise CheckFailed(
-            f"with the direction (0, 0, -2), twice as long, the hit 1 unit away "
-            f"is at t = 0.5, yours says t = {t[0]:.4g} (t is in units of |d|: "
-            f"do not normalise d)"
-        )
-    return f"{n + 1} rays hit at the expected t"
+        raise CheckFailed(text("ch02.long_direction", t=t[0]))
+    return text("ch02.known_ok", n=n + 1)
 
 
 def check_edges(module) -> str:
     eps = 0.01
     # (u, v) just outside and just inside each edge, and two far away.
     outside = {
-        "the edge v0-v2 (u < 0)": (-eps, 0.5),
-        "the edge v0-v1 (v < 0)": (0.5, -eps),
-        "the edge v1-v2 (u + v > 1)": (0.5, 0.5 + eps),
-        "v1's corner": (1.2, -0.1),
-        "the far side of v1-v2": (1.5, 1.5),
+        "ch02.edge.v0_v2": (-eps, 0.5),
+        "ch02.edge.v0_v1": (0.5, -eps),
+        "ch02.edge.v1_v2": (0.5, 0.5 + eps),
+        "ch02.edge.v1_corner": (1.2, -0.1),
+        "ch02.edge.far_side": (1.5, 1.5),
     }
     inside = [(eps, 0.5), (0.5, eps), (0.5, 0.5 - eps), (0.3, 0.3)]
     for triangle, dirs in ((UNIT, UNIT_FRONT), (SLANTED, SLANTED_FRONT)):
         t, _, _ = _call(module, *_aimed(triangle, list(outside.values()), 2.0, dirs))
         for (edge, uv), t_i in zip(outside.items(), t, strict=True):
             if np.isfinite(t_i):
-                test = "u + v <= 1" if "u + v" in edge else "u >= 0 and v >= 0"
-                raise CheckFailed(
-                    f"the ray through (u, v) = {uv}, outside {edge}, should miss "
-                    f"(t = inf); yours hits at t = {t_i:.4g} (is {test} tested?)"
-                )
-        n_inside = _expect_hits(module, triangle, inside, 2.0, dirs, "just inside an edge")
-    return f"rays 0.01 outside each edge miss, {n_inside} just inside hit, for two triangles"
+                test = "u + v <= 1" if edge == "ch02.edge.v1_v2" else "u >= 0 and v >= 0"
+                raise CheckFailed(text("ch02.outside", uv=uv, edge=text(edge), t=t_i, test=test))
+        n_inside = _expect_hits(module, triangle, inside, 2.0, dirs, "ch02.just_inside")
+    return text("ch02.edges_ok", n=n_inside)
 
 
 def check_parallel(module) -> str:
     cases = {
-        "above the triangle's plane": ((0.25, 0.5, 1.0), (1.0, 0.0, 0.0)),
-        "in the triangle's plane": ((0.25, 0.5, 0.0), (1.0, 1.0, 0.0)),
-        "in the plane, crossing the triangle": ((-1.0, 0.2, 0.0), (1.0, 0.0, 0.0)),
+        "ch02.parallel.above": ((0.25, 0.5, 1.0), (1.0, 0.0, 0.0)),
+        "ch02.parallel.in_plane": ((0.25, 0.5, 0.0), (1.0, 1.0, 0.0)),
+        "ch02.parallel.crossing": ((-1.0, 0.2, 0.0), (1.0, 0.0, 0.0)),
     }
     origins, dirs = (np.array(a, dtype=np.float64) for a in zip(*cases.values(), strict=True))
     t, _, _ = _call(module, origins, dirs, *_edges(UNIT, len(cases)))
     for what, t_i in zip(cases, t, strict=True):
         if t_i != np.inf:
-            raise CheckFailed(
-                f"a ray {what} has det = 0 and must miss with t = inf; yours "
-                f"gives t = {t_i:.4g} (guard the division by det)"
-            )
-    return "rays parallel to the triangle, in its plane included, miss with t = inf"
+            raise CheckFailed(text("ch02.parallel", what=text(what), t=t_i))
+    return text("ch02.parallel_ok")
 
 
 def check_behind(module) -> str:
     ((triangle, uv, t_want, dirs, _),) = BEHIND_HITS
     t, _, _ = _call(module, *_aimed(triangle, uv, t_want, dirs))
     if not np.all(np.isfinite(t)):
-        raise CheckFailed(
-            "a triangle behind the ray's origin must still come back as a hit "
-            "with negative t (here t = -1); yours returns inf. Keeping only "
-            "tmin < t < tmax is the BVH's job: it needs tmin to skip the "
-            "surface a ray starts on"
-        )
+        raise CheckFailed(text("ch02.behind_inf"))
     if not np.allclose(t, t_want, rtol=1e-5):
-        raise CheckFailed(f"the triangle 1 unit behind the origin should give t = -1, yours gives {_fmt(t)}")
-    return "triangles behind the origin come back with t = -1"
+        raise CheckFailed(text("ch02.behind_t", t=_fmt(t)))
+    return text("ch02.behind_ok")
 
 
 def check_both_faces(module) -> str:
     n = sum(_expect_hits(module, *case) for case in BACK_HITS)
-    return f"{n} rays hit the back faces (no culling: det < 0 is a hit too)"
+    return text("ch02.faces_ok", n=n)
 
 
 def _random_cases(n: int = 2000):
@@ -272,17 +252,12 @@ def check_many(module) -> str:
         hint = ""
         if inside[i]:
             hint = _miss_hint((v0[i], v0[i] + e1[i], v0[i] + e2[i]), d[i], tuv[i, 0])
-        raise CheckFailed(
-            f"{wrong.sum()} of {n} random rays {'miss' if inside[i] else 'hit'} "
-            f"where they should not, e.g. ray {i}, whose (t, u, v) is "
-            f"{_fmt(tuv[i])}{hint}"
-        )
+        wrongly = "ch02.random_miss" if inside[i] else "ch02.random_hit"
+        raise CheckFailed(text(wrongly, wrong=wrong.sum(), n=n, ray=i, tuv=_fmt(tuv[i])) + hint)
     error = np.abs(t[inside] - tuv[inside, 0]) / np.maximum(1, np.abs(tuv[inside, 0]))
     if error.max() > 1e-6:
-        raise CheckFailed(
-            f"t of random rays is off by up to {error.max():.2g}{_error_hint('t', error.max())}"
-        )
-    return f"{n} random rays and triangles hit and miss, at the t of a direct linear solve"
+        raise CheckFailed(text("ch02.random_t", error=error.max()) + _error_hint("t", error.max()))
+    return text("ch02.many_ok", n=n)
 
 
 def check_barycentrics(module) -> str:
@@ -296,10 +271,9 @@ def check_barycentrics(module) -> str:
             swapped = np.allclose(u[hits], tuv[hits, 2], atol=1e-6) and np.allclose(
                 v[hits], tuv[hits, 1], atol=1e-6
             )
-            raise CheckFailed(
-                f"{name} of random hits is off by up to {error:.2g}{_error_hint(name, error, swapped)}"
-            )
-    return f"(u, v) of {n} aimed rays and {hits.sum()} random hits are their barycentrics"
+            hint = _error_hint(name, error, swapped)
+            raise CheckFailed(text("ch02.random_uv", name=name, error=error) + hint)
+    return text("ch02.barycentrics_ok", n=n, hits=hits.sum())
 
 
 #: Errors up to this are small numerical slips (computing these rays in float32 is off by up
@@ -310,21 +284,12 @@ SMALL_ERROR = 1e-4
 def _error_hint(name: str, error: float, swapped: bool = False) -> str:
     """Why the student's ``name`` (t, u or v) of random hits is off by ``error``."""
     if error <= SMALL_ERROR:
-        return (
-            " (a small error, more than rounding: an epsilon added to det or t, or a "
-            "computation in lower precision? Keep the dtype you are given, float64 here, "
-            "and divide by det itself)"
-        )
+        return aside(text("ch02.hint.small_error"))
     if swapped:
-        return (
-            ": u and v are swapped (u weighs v1 and goes with e1 = v1 - v0, the lecture's b1 = s1 . s / det)"
-        )
+        return text("ch02.hint.swapped")
     if name == "t":
-        return ": not rounding but a wrong formula: t = (s2 . e2) / det"
-    return (
-        ": not rounding but wrong barycentrics: u = (s1 . s) / det weighs v1, "
-        "v = (s2 . d) / det weighs v2, and 1 - u - v weighs v0"
-    )
+        return text("ch02.hint.t_formula")
+    return text("ch02.hint.uv_formula")
 
 
 def check_render(module) -> str:
@@ -337,22 +302,19 @@ def check_render(module) -> str:
         with np.errstate(all="ignore"):
             result = ray_triangle(origins, dirs, v0, e1, e2)
         if not (isinstance(result, tuple) and len(result) == 3):
-            raise CheckFailed("ray_triangle must return three arrays: (t, u, v)")
+            raise CheckFailed(text("ch02.three_arrays"))
         t, u, v = (np.array(a, dtype=np.float32) for a in result)
         if t.shape != (len(origins),) or u.shape != t.shape or v.shape != t.shape:
-            raise CheckFailed(
-                f"given {len(origins)} rays as float32 (N, 3) arrays, your t, u, "
-                f"v have shapes {t.shape}, {u.shape}, {v.shape}"
-            )
-        _require_finite_hits(t, u, v, "traced through the BVH")
+            raise CheckFailed(text("ch02.render_shapes", n=len(origins), t=t.shape, u=u.shape, v=v.shape))
+        _require_finite_hits(t, u, v, bvh=True)
         return t, u, v
 
     return check_render_through(
-        "your intersections",
+        text("ch02.yours"),
         ptlab.accel.numpy_bvh,
         dict(ray_triangle=student_ray_triangle),
         passes=dict(RENDER, seed=grading_seed_for(RENDER_SEED)),
-        hint="wrong hit points from u, v, or missing triangles?",
+        hint=text("ch02.hint.render"),
     )
 
 

@@ -30,6 +30,7 @@ import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import at_pixel, finite_array, require_finite
+from ptlab.exercises.messages import aside, text
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -59,7 +60,7 @@ def _call(function, name: str, *args, shape) -> np.ndarray:
         function(*copy.deepcopy(args)),
         name,
         shape,
-        nan_hint="a square root of a negative number? clamp with np.maximum(0, ...)",
+        nan_hint=text("ch03.hint.sqrt"),
     )
 
 
@@ -94,38 +95,22 @@ def check_reflect(module) -> str:
     n = _normal(30)
     straight = _call(reflect, "reflect", n.copy(), n.copy(), shape=(1, 3))
     if np.allclose(straight, -n, atol=1e-6):
-        raise CheckFailed(
-            "reflect(n, n) gave -n: the result must point away from the surface, "
-            "like wo (GAMES101's reflect(I, N) takes the incoming ray I, which "
-            "points toward the surface; here wo = -I)"
-        )
+        raise CheckFailed(text("ch03.reflect_minus_n"))
     if not np.allclose(straight, n, atol=1e-6):
-        raise CheckFailed(
-            f"at normal incidence the mirror sends the ray straight back: "
-            f"reflect(n, n) must be n = {np.round(n[0], 4)}, not {np.round(straight[0], 4)}"
-        )
+        raise CheckFailed(text("ch03.reflect_normal", n=np.round(n[0], 4), yours=np.round(straight[0], 4)))
     wo, n = _random_cases(31)
     expected = 2 * np.sum(wo * n, axis=1, keepdims=True) * n - wo
     wi = _call(reflect, "reflect", wo, n, shape=wo.shape)
     if np.allclose(wi, -expected, atol=1e-5):
-        raise CheckFailed(
-            "your reflected directions point into the surface: wo and the result "
-            "both point away from it (2 (wo . n) n - wo), where GAMES101's "
-            "reflect(I, N) = I - 2 (I . N) N works with the incoming direction I"
-        )
+        raise CheckFailed(text("ch03.reflect_into"))
     if not np.allclose(wi, expected, atol=1e-5):
         cos_in, cos_out = np.sum(wo * n, axis=1), np.sum(wi * n, axis=1)
         if not np.allclose(np.linalg.norm(wi, axis=1), 1, atol=1e-5):
-            raise CheckFailed("the reflected directions must be unit vectors")
+            raise CheckFailed(text("ch03.reflect_unit"))
         if not np.allclose(cos_in, cos_out, atol=1e-5):
-            raise CheckFailed(
-                "the reflected direction must make the same angle with n as wo (wi . n = wo . n)"
-            )
-        raise CheckFailed(
-            "the reflected direction must lie in the plane of wo and n, on the "
-            "other side of n: wi = 2 (wo . n) n - wo"
-        )
-    return "normal incidence and 500 random directions reflect as 2 (wo . n) n - wo"
+            raise CheckFailed(text("ch03.reflect_angle"))
+        raise CheckFailed(text("ch03.reflect_plane"))
+    return text("ch03.reflect_ok")
 
 
 # -- refract ----------------------------------------------------------------------------------
@@ -152,9 +137,7 @@ def check_refract(module) -> str:
         straight = _call(refract, "refract", n.copy(), n.copy(), eta, shape=(1, 3))
         if not np.allclose(straight, -n, atol=1e-6):
             raise CheckFailed(
-                f"at normal incidence light goes straight through: refract(n, n, "
-                f"{eta:.3f}) must be -n = {np.round(-n[0], 4)}, not {np.round(straight[0], 4)} "
-                f"(the refracted ray leaves on the *other* side of the surface)"
+                text("ch03.refract_normal", eta=eta, n=np.round(-n[0], 4), yours=np.round(straight[0], 4))
             )
     # Leaving glass first: with eta taken the wrong way up, it bends the wrong way there
     # (entering, it would be totally reflected, which says less).
@@ -162,30 +145,17 @@ def check_refract(module) -> str:
         wo = _directions(np.radians([degrees]), n[0])
         wt = _call(refract, "refract", wo, n.copy(), eta, shape=(1, 3))
         if not np.isclose(np.linalg.norm(wt), 1, atol=1e-5):
-            raise CheckFailed(
-                f"the refracted direction must be a unit vector; at {degrees:.1f} "
-                f"degrees with eta {eta:.3f} its length is {np.linalg.norm(wt):.4f}"
-            )
+            raise CheckFailed(text("ch03.refract_unit", degrees=degrees, eta=eta, length=np.linalg.norm(wt)))
         sin_i = math.sin(math.radians(degrees))
         sin_t = math.sqrt(max(0.0, 1 - (wt[0] @ n[0]) ** 2))
         if not math.isclose(sin_t, sin_i / eta, abs_tol=1e-5):
-            hint = (
-                " (you used eta the wrong way up: here eta is the index beyond the surface "
-                "over the index on wo's side, eta_t / eta_i, where the homework's refract "
-                "works with etai / etat)"
-                if math.isclose(sin_t, min(1.0, sin_i * eta), abs_tol=1e-4)
-                else ""
-            )
+            inverted = math.isclose(sin_t, min(1.0, sin_i * eta), abs_tol=1e-4)
+            hint = aside(text("ch03.hint.eta_inverted")) if inverted else ""
             raise CheckFailed(
-                f"Snell's law: at {degrees:.1f} degrees with eta = {eta:.3f}, "
-                f"sin(theta_t) must be sin(theta_i) / eta = {sin_i / eta:.4f}, yours is "
-                f"{sin_t:.4f}{hint}"
+                text("ch03.snell", degrees=degrees, eta=eta, expected=sin_i / eta, yours=sin_t) + hint
             )
         if not wt[0] @ n[0] < 0:
-            raise CheckFailed(
-                "the refracted direction must go through the surface (wt . n < 0): "
-                "it points away from the surface on the other side"
-            )
+            raise CheckFailed(text("ch03.refract_through"))
     wo, n = _random_cases(32)
     for eta in (glass, 1 / glass, np.where(np.arange(len(wo)) % 2, glass, 1 / glass)):
         column = eta[:, None] if np.ndim(eta) else eta
@@ -194,15 +164,9 @@ def check_refract(module) -> str:
         wt = _call(refract, "refract", wo, n, eta, shape=wo.shape)
         ok = np.all(np.abs(wt - expected) < 1e-5, axis=1) | ~refracts
         if not ok.all():
-            per_row = " (eta given as an (N,) array, one per row: use eta[:, None])" if np.ndim(eta) else ""
-            raise CheckFailed(
-                f"{(~ok).sum()} of {ok.size} random directions refract differently "
-                f"from Snell's law{per_row}: wt = -wo / eta + (cos_i / eta - cos_t) n"
-            )
-    return (
-        "normal incidence, Snell's law entering and leaving glass and diamond, and 1500 "
-        "random directions (eta a float or one per row)"
-    )
+            per_row = aside(text("ch03.hint.per_row_column")) if np.ndim(eta) else ""
+            raise CheckFailed(text("ch03.refract_random", wrong=(~ok).sum(), n=ok.size, per_row=per_row))
+    return text("ch03.refract_ok")
 
 
 # -- Fresnel ---------------------------------------------------------------------------------
@@ -232,16 +196,10 @@ def check_fresnel(module) -> str:
         normal = _call(fresnel, "fresnel", np.array([1.0]), eta, shape=(1,))[0]
         expected = ((eta - 1) / (eta + 1)) ** 2
         if not math.isclose(normal, expected, abs_tol=1e-6):
-            raise CheckFailed(
-                f"at normal incidence F = ((eta - 1) / (eta + 1))^2 = {expected:.5f} "
-                f"for eta = {eta:.3f}; yours is {normal:.5f}"
-            )
+            raise CheckFailed(text("ch03.fresnel_normal", expected=expected, eta=eta, yours=normal))
     grazing = _call(fresnel, "fresnel", np.array([1e-4]), glass, shape=(1,))[0]
     if not grazing >= 0.99:
-        raise CheckFailed(
-            f"at grazing incidence (cos_theta_i -> 0) everything is reflected, "
-            f"F -> 1; yours is {grazing:.4f} at cos_theta_i = 1e-4"
-        )
+        raise CheckFailed(text("ch03.fresnel_grazing", yours=grazing))
     cos_i = np.sort(rng.uniform(0.02, 1, 200))
     for eta in (glass, 1 / glass, diamond, rng.uniform(1.1, 2.0, 200)):
         expected = fresnel_reference(cos_i, eta)
@@ -252,24 +210,18 @@ def check_fresnel(module) -> str:
             schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
             hint = ""
             if np.abs(F - schlick).max() < 1e-4:
-                hint = (
-                    " (that is Schlick's approximation; write the Fresnel equations "
-                    "themselves, as the homework's fresnel does)"
-                )
+                hint = aside(text("ch03.hint.schlick"))
             elif np.abs(F - fresnel_reference(cos_i, 1 / np.asarray(eta))).max() < 1e-5:
-                hint = (
-                    " (you used eta the wrong way up: eta here is eta_t / eta_i, the "
-                    "index beyond the surface over the index on the light's side)"
-                )
+                hint = aside(text("ch03.hint.fresnel_eta_inverted"))
             elif np.ndim(eta):
-                hint = " (eta given as an (N,) array, one per row)"
+                hint = aside(text("ch03.hint.per_row"))
             angle = math.degrees(math.acos(cos_i[worst]))
             eta_here = eta[worst] if np.ndim(eta) else eta
             raise CheckFailed(
-                f"F at {angle:.1f} degrees with eta = {eta_here:.3f} must be "
-                f"{expected[worst]:.5f}, yours is {F[worst]:.5f}{hint}"
+                text("ch03.fresnel", angle=angle, eta=eta_here, expected=expected[worst], yours=F[worst])
+                + hint
             )
-    return "F(0) = ((eta - 1) / (eta + 1))^2, F -> 1 at grazing, the Fresnel equations at 200 angles"
+    return text("ch03.fresnel_ok")
 
 
 def check_total_internal_reflection(module) -> str:
@@ -283,19 +235,14 @@ def check_total_internal_reflection(module) -> str:
     if not np.abs(F - 1).max() <= 1e-6:
         bad = int(np.argmax(np.abs(F - 1)))
         raise CheckFailed(
-            f"leaving glass (eta = 1 / {glass:.3f}) beyond the critical angle "
-            f"{critical:.1f} degrees, all light is reflected: F must be 1, yours is "
-            f"{F[bad]:.4f} at {degrees[bad]:.1f} degrees (sin(theta_t) = sin(theta_i) / "
-            f"eta > 1 has no solution: return 1 there)"
+            text("ch03.tir", glass=glass, critical=critical, yours=F[bad], degrees=degrees[bad])
         )
     n = _unit(rng.normal(size=(len(degrees), 3)))  # (no row repeats n)
     wo = np.concatenate(
         [_directions(np.radians(d)[None], normal) for d, normal in zip(degrees, n, strict=True)]
     )
     _call(refract, "refract", wo, n, eta, shape=wo.shape)
-    return (
-        f"beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract returns no NaN"
-    )
+    return text("ch03.tir_ok", critical=critical)
 
 
 # -- the render ------------------------------------------------------------------------------
@@ -412,18 +359,14 @@ def check_render(module) -> str:
     seed = grading_seed_for(3)
     expected = whitted_image(scene, seed=seed)
     image = whitted_image(scene, reflect, refract, fresnel, seed=seed)
-    require_finite(image, "the render", at_pixel)
+    require_finite(image, text("ch03.the_render"), at_pixel)
     # Float rounding may send a ray that grazes an edge to the other side of it: allow a few
     # pixels to differ, none of the others by more than 0.1%.
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
     if close.mean() < 0.98:
         ratio = image.mean() / expected.mean()
-        raise CheckFailed(
-            f"the Whitted render of the Cornell box with a mirror and a glass sphere "
-            f"differs from the library's in {(~close).sum()} of {close.size} pixels "
-            f"(yours is {ratio:.3f}x as bright)"
-        )
-    return f"the Whitted render with a mirror and a glass sphere matches ({close.mean():.1%} of pixels)"
+        raise CheckFailed(text("ch03.render", wrong=(~close).sum(), n=close.size, ratio=ratio))
+    return text("ch03.render_ok", share=close.mean())
 
 
 CHAPTER = Chapter(

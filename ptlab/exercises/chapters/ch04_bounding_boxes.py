@@ -17,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.messages import text
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))  # the square z = 1, 0 <= x, y <= 1
@@ -57,47 +58,35 @@ def _slab(module, origins, dirs, box_min, box_max, tmin=0.0, tmax=np.inf):
 def _checked(result, n: int) -> tuple[np.ndarray, np.ndarray]:
     """The student's (hit, t_enter) as arrays of shape (n,), or a clear failure."""
     if not (isinstance(result, tuple) and len(result) == 2):
-        raise CheckFailed("slab_test must return two arrays: (hit, t_enter)")
+        raise CheckFailed(text("ch04.two_arrays"))
     hit, t_enter = np.asarray(result[0]), np.asarray(result[1])
     if hit.shape != (n,) or t_enter.shape != (n,):
-        raise CheckFailed(
-            f"expected hit and t_enter of shape ({n},), got {hit.shape} and "
-            f"{t_enter.shape} (one answer per ray)"
-        )
+        raise CheckFailed(text("ch04.shapes", n=n, hit=hit.shape, t_enter=t_enter.shape))
     if hit.dtype != bool:
-        raise CheckFailed(
-            f"hit must be a bool array, not {hit.dtype} (a comparison such as t_enter <= t_exit gives one)"
-        )
+        raise CheckFailed(text("ch04.bool", dtype=hit.dtype))
     nan = np.flatnonzero(hit & np.isnan(t_enter))
     if len(nan):
-        raise CheckFailed(
-            f"t_enter is NaN for {len(nan)} rays that hit, the first in row "
-            f"{nan[0]} of {n}: 0 * inf somewhere (a ray parallel to a slab, "
-            f"starting on its plane)?"
-        )
+        raise CheckFailed(text("ch04.nan", count=len(nan), row=nan[0], n=n))
     return hit, t_enter
 
 
 def _expect(module, cases, what: str, box=UNIT_BOX, **limits) -> int:
-    """Each case (origin, dir, hit, t_enter or None) against the student's answer."""
+    """Each case (origin, dir, hit, t_enter or None) against the student's answer; ``what``:
+    the id of what the cases are."""
+    what = text(what)
     origins, dirs, want_hit, want_t = zip(*cases, strict=True)
     hit, t_enter = _slab(module, origins, dirs, *box, **limits)
     for i, (o, d) in enumerate(zip(origins, dirs, strict=True)):
         if hit[i] != want_hit[i]:
-            verdict = "hits" if want_hit[i] else "misses"
-            raise CheckFailed(
-                f"{what}: the ray from {list(o)} along {list(d)} {verdict} the "
-                f"box {[list(c) for c in box]}, yours says it "
-                f"{'misses' if want_hit[i] else 'hits'}"
-            )
+            verdict = "ch04.should_hit" if want_hit[i] else "ch04.should_miss"
+            raise CheckFailed(text(verdict, what=what, o=list(o), d=list(d), box=[list(c) for c in box]))
         if (
             want_hit[i]
             and want_t[i] is not None
             and not np.isclose(t_enter[i], want_t[i], rtol=1e-5, atol=1e-6)
         ):
             raise CheckFailed(
-                f"{what}: the ray from {list(o)} along {list(d)} enters the box "
-                f"at t = {want_t[i]}, yours says t_enter = {t_enter[i]:.6g}"
+                text("ch04.enters_at", what=what, o=list(o), d=list(d), t=want_t[i], yours=t_enter[i])
             )
     return len(cases)
 
@@ -112,9 +101,9 @@ def check_entering(module) -> str:
             ((-1, -1, 0.5), (1, 1.5, 0), True, 1.0),  # slanted: x enters last
             ((-0.5, 0.25, -1), (1, 0.25, 2), True, 0.5),  # slanted: x and z tie
         ],
-        "a ray entering the box",
+        "ch04.entering",
     )
-    return f"{n} rays enter the unit box where they should"
+    return text("ch04.entering_ok", n=n)
 
 
 def check_backwards(module) -> str:
@@ -127,12 +116,9 @@ def check_backwards(module) -> str:
             ((2, 2, 2), (-1, -1, -1), True, 1.0),  # into the far corner
             ((1.5, -0.5, 0.5), (-1, 1, 0), True, 0.5),
         ],
-        "a ray going down an axis",
+        "ch04.backwards",
     )
-    return (
-        f"{n} rays with negative direction components enter where they should (the "
-        f"near plane is box_max there)"
-    )
+    return text("ch04.backwards_ok", n=n)
 
 
 def check_misses(module) -> str:
@@ -144,7 +130,7 @@ def check_misses(module) -> str:
             ((-1, 0.5, 0.5), (-1, 0, 0), False, None),  # the box is behind
             ((3, 0.5, 0.5), (1, 0, 0), False, None),  # behind, on the other side
         ],
-        "a ray missing the box",
+        "ch04.missing",
     )
     n += _expect(
         module,
@@ -152,16 +138,16 @@ def check_misses(module) -> str:
             ((-1, 0.5, 0.5), (1, 0, 0), False, None),  # enters at 1 > tmax
             ((-1, 0.5, 0.5), (1, 0, 0), True, 1.0),
         ],
-        "with tmax = [0.9, 1.5]",
+        "ch04.with_tmax",
         tmax=np.array([0.9, 1.5], np.float32),
     )
     n += _expect(
         module,
         [((-1, 0.5, 0.5), (1, 0, 0), False, None)],  # leaves at 2 < tmin
-        "with tmin = 2.5",
+        "ch04.with_tmin",
         tmin=2.5,
     )
-    return f"{n} rays miss or hit as [tmin, tmax] says, boxes behind the origin included"
+    return text("ch04.misses_ok", n=n)
 
 
 def check_inside(module) -> str:
@@ -172,15 +158,15 @@ def check_inside(module) -> str:
             ((0.5, 0.5, 0.5), (0, 0, -1), True, 0.0),
             ((0.1, 0.9, 0.2), (-1, 0, 0), True, 0.0),
         ],
-        "a ray starting inside the box (tmin = 0)",
+        "ch04.inside",
     )
     n += _expect(
         module,
         [((-1, 0.5, 0.5), (1, 0, 0), True, 1.5), ((0.5, 0.5, 0.5), (0, 1, 0), True, 0.25)],
-        "with tmin = [1.5, 0.25]",
+        "ch04.with_tmins",
         tmin=np.array([1.5, 0.25], np.float32),
     )
-    return f"{n} rays that start inside (or whose tmin lies inside) enter at tmin"
+    return text("ch04.inside_ok", n=n)
 
 
 def check_parallel(module) -> str:
@@ -193,7 +179,7 @@ def check_parallel(module) -> str:
             ((0.5, -0.5, -1), (0, 0, 1), False, None),
             ((0.5, 1.5, 0.5), (0, -1, 0), True, 0.5),
         ],
-        "a ray parallel to two slabs (inv_dirs = ±inf)",
+        "ch04.parallel",
     )
     n += _expect(
         module,
@@ -203,9 +189,9 @@ def check_parallel(module) -> str:
             ((0.5, 0, 3), (0, 0, -1), True, 2.0),
             ((-1, 0, 0.5), (1, -0.0, 0), True, 1.0),  # -0.0: inv_dirs = -inf
         ],
-        "a ray along a face of the box (its origin on a slab's plane: 0 * inf = NaN)",
+        "ch04.on_face",
     )
-    return f"{n} rays parallel to slabs, on their planes included, are right"
+    return text("ch04.parallel_ok", n=n)
 
 
 def check_flat(module) -> str:
@@ -220,10 +206,10 @@ def check_flat(module) -> str:
             ((0.5, 0.5, 2), (0, 0, 1), False, None),  # behind
             ((-1, 0.5, 1), (1, 0, 0), True, 1.0),  # in its plane
         ],
-        "a flat box (the square z = 1, 0 <= x, y <= 1)",
+        "ch04.flat",
         box=FLAT_BOX,
     )
-    return f"{n} rays meet a box of zero thickness right: there t_enter == t_exit, and that is a hit"
+    return text("ch04.flat_ok", n=n)
 
 
 def check_render(module) -> str:
@@ -238,11 +224,11 @@ def check_render(module) -> str:
         return _checked(result, len(origins))
 
     return check_render_through(
-        "your slab test",
+        text("ch04.yours"),
         ptlab.accel.numpy_bvh,
         dict(slab_test=student_slab_test),
-        hint="boxes missed?",
-        missing_hint="flat boxes around the axis-aligned walls missed?",
+        hint=text("ch04.hint.render"),
+        missing_hint=text("ch04.hint.missing"),
     )
 
 

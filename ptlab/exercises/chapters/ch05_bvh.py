@@ -20,6 +20,7 @@ import copy
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.messages import aside, check_name, text
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test
@@ -158,16 +159,10 @@ def _checked_split_costs(split_costs):
                 dtype=np.float64,
             )
         if cost.shape != (b - 1, k, 3):
-            raise CheckFailed(
-                f"split_costs must return (B - 1, K, 3) = {(b - 1, k, 3)} costs "
-                f"(one per split plane, node and axis), not {cost.shape}"
-            )
+            raise CheckFailed(text("ch05.costs_shape", expected=(b - 1, k, 3), shape=cost.shape))
         _require_no_nan(cost)
         if not np.isinf(cost[empty]).all():
-            raise CheckFailed(
-                "a split with no triangle on one side must cost inf: it does not "
-                "divide the node (and the build could pick it forever)"
-            )
+            raise CheckFailed(text("ch05.empty_inf"))
         return cost
 
     return checked
@@ -178,11 +173,7 @@ def _require_no_nan(cost: np.ndarray) -> None:
     nan = np.argwhere(np.isnan(cost))
     if len(nan):
         plane, node, axis = nan[0]
-        raise CheckFailed(
-            f"split_costs returned NaN for {len(nan)} splits, the first plane "
-            f"{plane} along {'xyz'[axis]} of node {node}: 0 * inf from the box of "
-            f"an empty side (its bounds are inf, -inf)? Such splits must cost inf"
-        )
+        raise CheckFailed(text("ch05.costs_nan", count=len(nan), plane=plane, axis="xyz"[axis], node=node))
 
 
 def _checked_best_split(best_split):
@@ -191,28 +182,23 @@ def _checked_best_split(best_split):
         must_split, single = size > max_leaf_size, size < 2
         result = best_split(cost.copy(), size.copy(), max_leaf_size)
         if not (isinstance(result, tuple) and len(result) == 3):
-            raise CheckFailed("best_split must return three arrays: (split_bin, split_axis, make_leaf)")
+            raise CheckFailed(text("ch05.three_arrays"))
         split_bin, split_axis, make_leaf = (np.asarray(a) for a in result)
         if not split_bin.shape == split_axis.shape == make_leaf.shape == (k,):
-            raise CheckFailed(
-                f"best_split must return three ({k},) arrays, one entry per node, "
-                f"not {split_bin.shape}, {split_axis.shape}, {make_leaf.shape}"
-            )
+            shapes = (split_bin.shape, split_axis.shape, make_leaf.shape)
+            raise CheckFailed(text("ch05.split_shapes", k=k, shapes=", ".join(map(str, shapes))))
         if split_bin.dtype.kind not in "iu" or split_axis.dtype.kind not in "iu":
-            raise CheckFailed("split_bin and split_axis must be integer arrays")
+            raise CheckFailed(text("ch05.integers"))
         if make_leaf.dtype != bool:
-            raise CheckFailed("make_leaf must be a bool array")
+            raise CheckFailed(text("ch05.leaf_bool"))
         if not (
             np.all((split_bin >= 0) & (split_bin < planes)) and np.all((split_axis >= 0) & (split_axis < 3))
         ):
-            raise CheckFailed(f"split_bin must lie in 0..{planes - 1} and split_axis in 0..2")
+            raise CheckFailed(text("ch05.split_range", last=planes - 1))
         if np.any(make_leaf & must_split):
-            raise CheckFailed(
-                f"a node of more than max_leaf_size = {max_leaf_size} triangles "
-                f"was made a leaf: such nodes must be split"
-            )
+            raise CheckFailed(text("ch05.must_split", max_leaf_size=max_leaf_size))
         if np.any(~make_leaf & single):
-            raise CheckFailed("a node of one triangle must be a leaf: it cannot be split")
+            raise CheckFailed(text("ch05.single_leaf"))
         return split_bin.astype(np.intp), split_axis.astype(np.intp), make_leaf
 
     return checked
@@ -223,22 +209,17 @@ def _checked_child_order(child_order):
         first_child = first_child.copy()  # the grader's own, for the test below
         result = child_order(first_child.copy(), axis.copy(), dirs.copy())
         if not (isinstance(result, tuple) and len(result) == 2):
-            raise CheckFailed("child_order must return two arrays: (near, far)")
+            raise CheckFailed(text("ch05.two_arrays"))
         near, far = (np.asarray(a) for a in result)
         if near.shape != first_child.shape or far.shape != first_child.shape:
             raise CheckFailed(
-                f"child_order must return near and far of shape "
-                f"{first_child.shape}, not {near.shape} and {far.shape}"
+                text("ch05.order_shapes", expected=first_child.shape, near=near.shape, far=far.shape)
             )
         if not np.all(
             ((near == first_child) & (far == first_child + 1))
             | ((near == first_child + 1) & (far == first_child))
         ):
-            raise CheckFailed(
-                "near and far must be the node's two children, first_child and "
-                "first_child + 1, one each: a child left out is a part of the "
-                "scene no ray can hit"
-            )
+            raise CheckFailed(text("ch05.both_children"))
         return near.astype(np.intp), far.astype(np.intp)
 
     return checked
@@ -315,6 +296,7 @@ def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost: flo
 
 
 def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
+    """Fail where ``got`` is not ``want`` (``what``: what the costs are, in words)."""
     finite = np.isfinite(want)
     with np.errstate(invalid="ignore"):
         bad = finite & ~(np.abs(got - want) < 1e-4 * np.abs(want))
@@ -323,13 +305,20 @@ def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
         hint = ""
         ratio = got[plane, node, axis] / want[plane, node, axis]
         if np.isclose(got[plane, node, axis] - want[plane, node, axis], 0.5, rtol=1e-3):
-            hint = " (traversal_cost left out?)"
+            hint = aside(text("ch05.hint.traversal_cost"))
         elif abs(ratio - 1) < 0.6:
-            hint = " (are the sides' areas those of the union of their bins' boxes?)"
+            hint = aside(text("ch05.hint.union"))
         raise CheckFailed(
-            f"{what}: plane {plane} along axis {'xyz'[axis]} of node {node} should "
-            f"cost {want[plane, node, axis]:.4f}, yours {got[plane, node, axis]:.4f}"
-            f"{hint}"
+            text(
+                "ch05.cost",
+                what=what,
+                plane=plane,
+                axis="xyz"[axis],
+                node=node,
+                want=want[plane, node, axis],
+                yours=got[plane, node, axis],
+            )
+            + hint
         )
 
 
@@ -339,7 +328,7 @@ def check_split_costs(module) -> str:
     want = _expected_costs(*example, traversal_cost=0.5)
     got = split_costs(*example, traversal_cost=0.5)
     _compare_costs(got, want, "0.5 + (N_L S_L + N_R S_R) / S")
-    return "the SAH costs of the 24 candidate splits of two nodes are right"
+    return text("ch05.costs_ok")
 
 
 def check_empty_sides(module) -> str:
@@ -349,18 +338,16 @@ def check_empty_sides(module) -> str:
     with np.errstate(all="ignore"):
         got = np.asarray(split_costs(*copy.deepcopy(example), traversal_cost=1.0), dtype=np.float64)
     if got.shape != want.shape:
-        raise CheckFailed(f"split_costs must return (B - 1, K, 3) = {want.shape} costs, not {got.shape}")
+        raise CheckFailed(text("ch05.costs_shape", expected=want.shape, shape=got.shape))
     for plane, node, axis in np.argwhere(np.isinf(want)):
         value = got[plane, node, axis]
         if value != np.inf:
             raise CheckFailed(
-                f"plane {plane} along {'xyz'[axis]} of node {node} has no triangle "
-                f"on one side and must cost inf (it does not divide the node); "
-                f"yours gives {value}"
-                + (" (0 * inf: the empty side's box has bounds inf, -inf)" if np.isnan(value) else "")
+                text("ch05.empty_side", plane=plane, axis="xyz"[axis], node=node, value=value)
+                + (aside(text("ch05.hint.zero_inf")) if np.isnan(value) else "")
             )
-    _compare_costs(got, want, "the splits that do divide the nodes")
-    return "a flat node's splits along its flat axis, with an empty side, cost inf; the others are right"
+    _compare_costs(got, want, text("ch05.dividing"))
+    return text("ch05.empty_ok")
 
 
 def check_best_split(module) -> str:
@@ -386,24 +373,21 @@ def check_best_split(module) -> str:
     want_leaf = list(want_leaf)
     if list(make_leaf) != want_leaf:
         node = int(np.flatnonzero(make_leaf != want_leaf)[0])
-        rule = (
-            "a node of at most max_leaf_size triangles becomes a leaf when its cheapest "
-            "split costs at least N, the cost of testing all N"
-        )
-        raise CheckFailed(
-            f"node {node} ({size[node]} triangles, cheapest split "
-            f"{cost[:, node].min()}) should {'' if want_leaf[node] else 'not '}be "
-            f"a leaf: {rule}"
-        )
+        should = "ch05.should_be_leaf" if want_leaf[node] else "ch05.should_not_be_leaf"
+        raise CheckFailed(text(should, node=node, size=size[node], cheapest=cost[:, node].min()))
     for node, want in sorted(wants.items()):
         if (split_bin[node], split_axis[node]) != want:
             raise CheckFailed(
-                f"node {node}: the cheapest split is plane {want[0]} along "
-                f"{'xyz'[want[1]]}, yours is plane {split_bin[node]} along "
-                f"{'xyz'[split_axis[node]] if 0 <= split_axis[node] < 3 else '?'} "
-                f"(the minimum over planes and axes both)"
+                text(
+                    "ch05.cheapest",
+                    node=node,
+                    plane=want[0],
+                    axis="xyz"[want[1]],
+                    yours=split_bin[node],
+                    your_axis="xyz"[split_axis[node]] if 0 <= split_axis[node] < 3 else "?",
+                )
             )
-    return "the cheapest split over planes and axes, and leaves where splitting does not pay"
+    return text("ch05.best_ok")
 
 
 def check_child_order(module) -> str:
@@ -418,14 +402,9 @@ def check_child_order(module) -> str:
     wrong = np.flatnonzero(near != want)
     if wrong.size:
         i = wrong[0]
-        going = "up" if dirs[i, axis[i]] > 0 else "down"
-        raise CheckFailed(
-            f"a ray with direction {dirs[i].tolist()} goes {going} the split axis "
-            f"{'xyz'[axis[i]]}, so it meets the {'low' if going == 'up' else 'high'} "
-            f"child {want[i]} first; yours says {near[i]} (the sign of the "
-            f"direction along the node's split axis decides)"
-        )
-    return "the near child is the one on the side the ray comes from"
+        going = "ch05.going_up" if dirs[i, axis[i]] > 0 else "ch05.going_down"
+        raise CheckFailed(text(going, d=dirs[i].tolist(), axis="xyz"[axis[i]], want=want[i], yours=near[i]))
+    return text("ch05.order_ok")
 
 
 # -- the pieces inside the BVH ------------------------------------------------------------
@@ -451,27 +430,20 @@ def check_closest_hits(module) -> str:
     if wrong.any():
         i = np.flatnonzero(wrong)[0]
         what = (
-            "misses"
+            text("ch05.misses")
             if not hits.hit[i]
-            else f"finds a farther hit, at t = {hits.t[i]:.4g}"
+            else text("ch05.farther", t=hits.t[i])
             if hits.t[i] > t_want[i]
-            else f"reports t = {hits.t[i]:.4g}"
+            else text("ch05.reports", t=hits.t[i])
         )
-        raise CheckFailed(
-            f"{wrong.sum()} of {len(dirs)} rays get another closest hit than brute "
-            f"force: e.g. a ray that should hit at t = {t_want[i]:.4g} {what} "
-            f"(is every child visited?)"
-        )
+        raise CheckFailed(text("ch05.closest", wrong=wrong.sum(), n=len(dirs), t=t_want[i], what=what))
     hit_t = t_all[np.arange(len(dirs)), np.where(hits.hit, hits.prim, 0)]
     if not np.array_equal(hit_t[hits.hit], hits.t[hits.hit]):
-        raise CheckFailed("some rays report a triangle that their t does not belong to")
+        raise CheckFailed(text("ch05.wrong_triangle"))
     want_occluded = (t_all < tmax[:, None]).any(axis=1)
     if not np.array_equal(occluded, want_occluded):
-        raise CheckFailed(
-            f"{np.count_nonzero(occluded != want_occluded)} of {len(dirs)} shadow "
-            f"rays get another answer than brute force"
-        )
-    return f"{len(dirs)} rays get brute force's closest hit and shadow-ray answer ({hits.hit.mean():.0%} hit)"
+        raise CheckFailed(text("ch05.shadow", wrong=np.count_nonzero(occluded != want_occluded), n=len(dirs)))
+    return text("ch05.closest_ok", n=len(dirs), share=hits.hit.mean())
 
 
 def check_tree_quality(module) -> str:
@@ -487,25 +459,14 @@ def check_tree_quality(module) -> str:
         choice_bad = with_choice > library * (1 + SAH_TOLERANCE)
         causes = []
         if choice_bad or not costs_bad:
-            causes.append(
-                f"With the library's split_costs, your best_split builds a tree of "
-                f"{with_choice:.2f}: a node of at most max_leaf_size triangles becomes "
-                f"a leaf only when its cheapest split costs at least N, and the "
-                f"cheapest split is the minimum over planes and axes (see 'best "
-                f"split')"
-            )
+            causes.append(text("ch05.choice_bad", cost=with_choice, check=check_name(5, "best split")))
         if costs_bad:
-            causes.append(
-                f"With the library's best_split, your split_costs builds a tree of "
-                f"{with_costs:.2f}: do the costs weigh each side's count by its "
-                f"surface area? (a median split ignores the areas)"
-            )
+            causes.append(text("ch05.costs_bad", cost=with_costs))
         raise CheckFailed(
-            f"your tree's SAH cost is {student:.2f} expected triangle tests per "
-            f"ray, the library's {library:.2f} ({student / library - 1:.0%} more): "
-            f"it finds the right hits, more slowly. {'. '.join(causes)}"
+            text("ch05.tree", student=student, library=library, more=student / library - 1)
+            + text("ch05.sentences").join(causes)
         )
-    return f"your tree's SAH cost is {student:.2f}, the library's {library:.2f}"
+    return text("ch05.tree_ok", student=student, library=library)
 
 
 def _tree_cost(tris: np.ndarray, **pieces) -> float:
@@ -538,23 +499,15 @@ def check_traversal_order(module) -> str:
             bvh.intersect(origins, dirs)
     student = entered[0]
     if not student <= library * (1 + VISIT_TOLERANCE):
-        raise CheckFailed(
-            f"rays along a row of eight balls enter {student / len(dirs):.0f} boxes "
-            f"each with your child order, {library / len(dirs):.0f} with the "
-            f"library's: visit the near child first, so its hit culls the far "
-            f"child's boxes"
-        )
-    return (
-        f"rays along a row of balls enter {student / len(dirs):.0f} boxes each (library: "
-        f"{library / len(dirs):.0f})"
-    )
+        raise CheckFailed(text("ch05.order", student=student / len(dirs), library=library / len(dirs)))
+    return text("ch05.traversal_ok", student=student / len(dirs), library=library / len(dirs))
 
 
 def check_render(module) -> str:
     import ptlab.accel.numpy_bvh as numpy_bvh
     from ptlab.exercises.renders import check_render_through
 
-    return check_render_through("your BVH", numpy_bvh, _pieces(module, *PIECES))
+    return check_render_through(text("ch05.yours"), numpy_bvh, _pieces(module, *PIECES))
 
 
 CHAPTER = Chapter(

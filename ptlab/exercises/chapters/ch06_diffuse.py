@@ -26,6 +26,7 @@ from ptlab.exercises.chapter import (
     student_file,
 )
 from ptlab.exercises.finite import finite_array
+from ptlab.exercises.messages import aside, check_name, text
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 from ptlab.grading.probes import Turned
 from ptlab.rendering.sizes import SPP_PER_PASS
@@ -100,36 +101,33 @@ def check_eval(module) -> str:
     ratio = f / expected
     if not np.allclose(f, expected, rtol=1e-4, atol=0):
         if np.allclose(ratio, math.pi, rtol=1e-3):
-            raise CheckFailed(
-                "eval returns the albedo; a Lambertian f_r is albedo / pi (else the "
-                "surface reflects pi times more light than it receives)"
-            )
+            raise CheckFailed(text("ch06.eval_albedo"))
         if np.allclose(ratio, cos_theta_i[:, None], rtol=1e-3):
-            raise CheckFailed(
-                "eval includes cos(theta_i); f_r is albedo / pi alone: the "
-                "renderer multiplies by the cosine itself"
-            )
+            raise CheckFailed(text("ch06.eval_cosine"))
         if np.allclose(ratio, ratio[:1], rtol=1e-4):
             raise CheckFailed(
-                f"eval is a constant, but not albedo / pi: yours is "
-                f"{np.round(f[0], 4)} for albedo {ALBEDO}, expected "
-                f"{np.round(expected, 4)}"
+                text(
+                    "ch06.eval_constant",
+                    yours=np.round(f[0], 4),
+                    albedo=ALBEDO,
+                    expected=np.round(expected, 4),
+                )
             )
         raise CheckFailed(
-            f"a Lambertian f_r is albedo / pi = {np.round(expected, 4)} for every "
-            f"pair of directions above the surface; yours varies "
-            f"(from {np.round(f.min(axis=0), 4)} to {np.round(f.max(axis=0), 4)})"
+            text(
+                "ch06.eval_varies",
+                expected=np.round(expected, 4),
+                low=np.round(f.min(axis=0), 4),
+                high=np.round(f.max(axis=0), 4),
+            )
         )
     below_i = _call(material, "eval", wo, -wi, n)
     below_o = _call(material, "eval", -wo, wi, n)
     if np.abs(below_i).max() > 0:
-        raise CheckFailed(
-            "eval must be 0 when wi is below the surface (wi . n < 0): a "
-            "reflective surface sends no light through itself"
-        )
+        raise CheckFailed(text("ch06.wi_below"))
     if np.abs(below_o).max() > 0:
-        raise CheckFailed("eval must be 0 when wo is below the surface (wo . n < 0)")
-    return "f_r = albedo / pi above the surface, 0 below"
+        raise CheckFailed(text("ch06.wo_below"))
+    return text("ch06.eval_ok")
 
 
 def check_sample(module) -> str:
@@ -148,24 +146,14 @@ def check_sample(module) -> str:
         wi = _call(material, "sample", wo, n, u)
         length = np.linalg.norm(wi, axis=1)
         if np.abs(length - 1).max() > 1e-4:
-            raise CheckFailed(
-                f"sample must return unit vectors; one has length "
-                f"{length[np.argmax(np.abs(length - 1))]:.4f} (normalise it)"
-            )
+            raise CheckFailed(text("ch06.sample_unit", length=length[np.argmax(np.abs(length - 1))]))
         cos_theta = wi @ normal
         if (cos_theta < -1e-6).any():
             share = np.mean(cos_theta < 0)
-            raise CheckFailed(
-                f"{share:.0%} of the directions sampled around n = "
-                f"{np.round(normal, 3)} are below the surface (wi . n < 0): build "
-                f"the local frame around n (ptlab.sampling.to_world), not around +z"
-            )
+            raise CheckFailed(text("ch06.sample_below", share=share, n=np.round(normal, 3)))
         if np.ptp(cos_theta) < 0.1 or np.ptp(wi, axis=0).max() < 0.1:
-            raise CheckFailed(
-                "sample returns (almost) the same direction for every u: it must "
-                "turn the uniform numbers u into directions"
-            )
-    return f"unit directions in the normal's hemisphere, for {len(normals)} normals"
+            raise CheckFailed(text("ch06.sample_constant"))
+    return text("ch06.sample_ok", n=len(normals))
 
 
 def _sphere_integral(function, n: np.ndarray, rows: int = 400, cols: int = 64) -> float:
@@ -187,23 +175,17 @@ def check_pdf_normalisation(module) -> str:
     total = _sphere_integral(lambda w: _call(material, "pdf", wos, w, ns, width=None), n)
     below = _call(material, "pdf", wos, -ns, ns, width=None)
     if np.abs(below).max() > 0:
-        raise CheckFailed("pdf must be 0 below the surface (wi . n < 0): sample never goes there")
+        raise CheckFailed(text("ch06.pdf_below"))
     if abs(total - 1) > 2e-3:
         hint = ""
         if abs(total - 0.5) < 0.01:
-            hint = (
-                " (off by 2: 1/(4 pi) is the uniform density of the whole sphere, the "
-                "hemisphere's is 1/(2 pi); cos/(2 pi) is half the cosine density cos/pi)"
-            )
+            hint = aside(text("ch06.hint.half"))
         elif abs(total - 2) < 0.02:
-            hint = " (2x too big: the hemisphere's uniform density is 1/(2 pi), not 1/pi)"
+            hint = aside(text("ch06.hint.double"))
         elif abs(total - 1 / math.pi) < 0.01 or abs(total - math.pi) < 0.03:
-            hint = " (a factor pi: the cosine density is cos(theta) / pi)"
-        raise CheckFailed(
-            f"your pdf integrates to {total:.4f} over the sphere; a probability "
-            f"density must integrate to 1{hint}"
-        )
-    return f"the pdf integrates to {total:.4f} over the sphere, 0 below the surface"
+            hint = aside(text("ch06.hint.pi"))
+        raise CheckFailed(text("ch06.pdf_total", total=total) + hint)
+    return text("ch06.pdf_ok", total=total)
 
 
 #: Pairs of directions on which the harness's points first compare the material's eval with
@@ -222,10 +204,15 @@ def reflects_as_expected(material, expected_eval: Callable, seed: int, what: str
     expected = np.asarray(expected_eval(wo, wi, n), dtype=np.float64)
     if np.allclose(f, expected, rtol=1e-3, atol=1e-9):
         return
-    black = " (it reflects nothing: eval is 0 everywhere)" if not np.abs(f).max() > 0 else ""
+    black = aside(text("ch06.hint.black")) if not np.abs(f).max() > 0 else ""
     raise CheckFailed(
-        f"the harness's points need the eval the chapter asks for (the reflectance{what}), but yours "
-        f"differs from it by up to {np.abs(f - expected).max():.3g}{black}: see the eval check"
+        text(
+            "ch06.harness_eval",
+            what=what,
+            error=np.abs(f - expected).max(),
+            black=black,
+            check=check_name(6, "eval"),
+        )
     )
 
 
@@ -234,7 +221,8 @@ def run_harness(
 ) -> str:
     """``ptlab.grading.check_material`` on the student's material; a ``CheckFailed`` that
     names each failed check with its hint (checks that failed alike, said once), ``what``
-    the material was and the ``ptlab grade`` command that prints the whole table. With
+    the material was (a phrase after "the reflectance", in the active language: "" for
+    chapter 6's) and the ``ptlab grade`` command that prints the whole table. With
     ``expected_eval``, the material's eval must first be it (``reflects_as_expected``), and
     a warning of the harness (a material reflecting nothing) fails too."""
     from ptlab.grading import check_material
@@ -246,19 +234,22 @@ def run_harness(
     if report.passed and expected_eval is not None and report.warned:
         names = ", ".join(report.warned)
         hints = "; ".join(c.hint for c in report.checks if c.verdict == "warn")
-        raise CheckFailed(f"the material harness warns of {names}{what}: {hints}")
+        raise CheckFailed(text("ch06.harness_warns", names=names, what=what, hints=hints))
     if report.passed:
-        return (
-            f"every check of ptlab.grading.check_material passes{what} ({HARNESS_SAMPLES:,} samples per wo)"
-        )
+        return text("ch06.harness_ok", what=what, samples=HARNESS_SAMPLES)
     by_hint: dict[str, list[str]] = {}
     for c in report.checks:
         if not c.passed:
             by_hint.setdefault(c.hint or c.statistic, []).append(c.name)
     failures = "; ".join(f"{', '.join(names)}: {hint}" for hint, names in by_hint.items())
     raise CheckFailed(
-        f"the material harness failed {', '.join(report.failed)}{what}. {failures} "
-        f"(see the whole table with: {grade_command})"
+        text(
+            "ch06.harness_failed",
+            failed=", ".join(report.failed),
+            what=what,
+            failures=failures,
+            command=grade_command,
+        )
     )
 
 
@@ -335,9 +326,8 @@ def check_render(module) -> str:
     return compare_renders(
         student,
         library,
-        "the Cornell box with your material",
-        hint="brighter: each bounce carries too much light, from a pdf too "
-        "small or an f_r too big; darker: too little",
+        text("ch06.yours"),
+        hint=text("ch06.hint.render"),
         spp=render_options(seed)["spp_per_pass"],
     )
 

@@ -39,7 +39,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
-from ptlab.exercises.finite import CHANNELS, at_pixel, at_row, require_finite
+from ptlab.exercises.finite import at_pixel, at_row, channel_name, require_finite
+from ptlab.exercises.messages import aside, check_name, text
 
 if TYPE_CHECKING:
     from ptlab.accel import Accelerator
@@ -163,68 +164,45 @@ def check_direct_light(module) -> str:
     with counting_nonfinite() as nonfinite:  # (what add_to_film leaves out, in its process too)
         rays = direct_light(film, scene, accel, hit, u.copy())
     if nonfinite.count:
-        raise CheckFailed(
-            f"your direct_light produced {nonfinite.count} NaN or infinite samples (add_to_film "
-            f"left them out), the first at shading point {nonfinite.first_row}: a division by "
-            f"a distance, a cosine or a pdf of 0?"
-        )
+        raise CheckFailed(text("ch07.direct_nonfinite", count=nonfinite.count, row=nonfinite.first_row))
     if not isinstance(rays, int | np.integer) or not 0 <= rays <= count:
-        raise CheckFailed(
-            f"direct_light must return the number of shadow rays it traced (an int "
-            f"from 0 to {count}), not {rays!r}"
-        )
-    require_finite(
-        film,
-        "the light direct_light added",
-        _at_path,
-        hint="a division by a distance or pdf of 0? add_to_film drops such rows, but they should not arise",
-    )
+        raise CheckFailed(text("ch07.rays_count", count=count, rays=repr(rays)))
+    require_finite(film, text("ch07.direct_added"), _at_path, hint=text("ch07.hint.direct_nan"))
     if (film < 0).any():
-        raise CheckFailed(
-            "direct_light added negative light: clamp both cosines at 0 (a light "
-            "behind the surface, or a surface behind the light, gives nothing)"
-        )
+        raise CheckFailed(text("ch07.negative"))
     lit = expected.max(axis=1) > 0
     dark = lit & (film.max(axis=1) == 0)
     if not dark.mean() <= 0.5 * lit.mean():
-        raise CheckFailed(
-            f"{dark.sum()} of {lit.sum()} shading points that see the light got no "
-            f"direct light: the shadow rays are blocked, most likely by the surface "
-            f"they start on (shadow acne) or by the light itself; start them at "
-            f"hit.p + hit.offset * hit.n, aim at light.points + light.offset * "
-            f"light.normals, and stop at tmax = 1 - SHADOW_EPSILON"
-        )
+        raise CheckFailed(text("ch07.blocked", dark=dark.sum(), lit=lit.sum()))
     close = np.isclose(film, expected, rtol=2e-3, atol=1e-6).all(axis=1)
     if close.mean() < 0.99:
         ratio = film[lit].sum(axis=0) / expected[lit].sum(axis=0)
         hint = _ratio_hint(float(np.mean(ratio)))
         raise CheckFailed(
-            f"{(~close).sum()} of {len(close)} paths got other direct light than "
-            f"the library's from the same light samples (yours is {np.mean(ratio):.3f}x "
-            f"the library's in total{hint})"
+            text("ch07.direct", wrong=(~close).sum(), n=len(close), ratio=np.mean(ratio), hint=hint)
         )
-    return f"{close.sum()} of {len(close)} paths get the library's direct light from the same light samples"
+    return text("ch07.direct_ok", right=close.sum(), n=len(close))
 
 
 def _at_path(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
     """Where in a film of one row per path (``first_hits``) a value is: "path 17 (red)"."""
-    return f"path {index[0]} of {shape[0]} ({CHANNELS[index[1]]})"
+    return text("ch07.at_path", path=index[0], paths=shape[0], channel=channel_name(index[1]))
 
 
 def _ratio_hint(ratio: float) -> str:
     """A likely cause of a constant factor between the student's light and the library's."""
     for factor, cause in [
-        (math.pi, "f_r is albedo / pi: use the material's eval, not its albedo"),
-        (1 / math.pi, "a stray 1 / pi"),
-        (2.0, "a factor 2: the pdf?"),
-        (0.5, "a factor 1/2: the pdf?"),
+        (math.pi, "ch07.hint.albedo"),
+        (1 / math.pi, "ch07.hint.stray_pi"),
+        (2.0, "ch07.hint.factor_2"),
+        (0.5, "ch07.hint.factor_half"),
     ]:
         if abs(ratio / factor - 1) < 0.02:
-            return f": {cause}"
+            return text("ch07.cause", cause=text(cause))
     if ratio > 1.5:
-        return ": is the division by |x - x'|^2 or by pdf_area missing?"
+        return text("ch07.cause", cause=text("ch07.hint.division"))
     if ratio < 0.7:
-        return ": many shadow rays blocked, or a cosine too many?"
+        return text("ch07.cause", cause=text("ch07.hint.blocked"))
     return ""
 
 
@@ -235,11 +213,7 @@ def check_russian_roulette(module) -> str:
     _check_roulette_rule(russian_roulette)
     albedo, le = furnace_parameters()
     mean, error = _furnace_with_roulette(russian_roulette, albedo, le)
-    return (
-        f"paths survive with probability p_rr, survivors' throughput / p_rr; with p_rr = 0.8 "
-        f"the furnace averages {mean:.4f} +- {error:.4f}, the radiance is "
-        f"{furnace_radiance(None, albedo, le)[1]}: unbiased"
-    )
+    return text("ch07.roulette_ok", mean=mean, error=error, radiance=furnace_radiance(None, albedo, le)[1])
 
 
 def _check_roulette_rule(russian_roulette) -> None:
@@ -250,39 +224,29 @@ def _check_roulette_rule(russian_roulette) -> None:
     for p_rr in (0.8, 0.3):
         result = russian_roulette(throughput.copy(order="F"), p_rr, u.copy())
         if not (isinstance(result, tuple) and len(result) == 2):
-            raise CheckFailed("russian_roulette must return two arrays: (survive, throughput)")
+            raise CheckFailed(text("ch07.roulette_arrays"))
         survive, new = np.asarray(result[0]), np.asarray(result[1], dtype=np.float64)
         if survive.shape != (count,) or survive.dtype != bool:
-            raise CheckFailed(
-                f"survive must be an ({count},) bool array, not {survive.dtype} of shape {survive.shape}"
-            )
+            raise CheckFailed(text("ch07.survive", count=count, dtype=survive.dtype, shape=survive.shape))
         if new.shape != (count, 3):
-            raise CheckFailed(f"the throughput must keep its shape ({count}, 3), not {new.shape}")
+            raise CheckFailed(text("ch07.throughput_shape", count=count, shape=new.shape))
         again = np.asarray(russian_roulette(throughput.copy(order="F"), p_rr, u.copy())[0])
         if not np.array_equal(again, survive):
-            raise CheckFailed(
-                "the same u gave other survivors: decide with the u you are given "
-                "(survive = u < p_rr), not with random numbers of your own (the "
-                "image must be the same for the same seed)"
-            )
+            raise CheckFailed(text("ch07.same_u"))
         # Binomial: 6 standard deviations, a false alarm of 2e-9.
         spread = 6 * math.sqrt(p_rr * (1 - p_rr) / count)
         if not abs(survive.mean() - p_rr) <= spread:
-            raise CheckFailed(
-                f"with p_rr = {p_rr}, {survive.mean():.1%} of the paths survived; "
-                f"each path must go on with probability p_rr (u < p_rr)"
-            )
+            raise CheckFailed(text("ch07.survivors", p_rr=p_rr, share=survive.mean()))
         kept = new[survive]
         expected = throughput[survive].astype(np.float64) / p_rr
         if not np.allclose(kept, expected, rtol=1e-5):
             factor = float(np.median(kept / throughput[survive]))
             hint = (
-                " (you left it unchanged: the survivors must carry the light of the paths "
-                "that stopped, or the image comes out too dark)"
+                text("ch07.hint.unchanged")
                 if abs(factor - 1) < 1e-4
-                else f" (yours is multiplied by {factor:.3f})"
+                else text("ch07.hint.factor", factor=factor)
             )
-            raise CheckFailed(f"a surviving path's throughput must be divided by p_rr = {p_rr}{hint}")
+            raise CheckFailed(text("ch07.divide", p_rr=p_rr) + aside(hint))
 
 
 def check_scatter(module) -> str:
@@ -301,51 +265,28 @@ def check_scatter(module) -> str:
     paths = _check_paths(scatter(scene, hit, u.copy(), survive.copy()), len(hit.prim))
     missing = np.setdiff1d(expected.pixel, paths.pixel)
     if len(missing):
-        raise CheckFailed(
-            f"{len(missing)} surviving paths are missing from the next bounce; keep "
-            f"every path that survived the roulette"
-        )
+        raise CheckFailed(text("ch07.missing", count=len(missing)))
     extra = np.setdiff1d(paths.pixel, expected.pixel)
     if len(extra) and (paths.throughput[np.isin(paths.pixel, extra)] > 0).any():
-        raise CheckFailed(
-            f"{len(extra)} paths that lost the roulette (survive False) still go "
-            f"on: drop them (keep the rows np.flatnonzero(survive))"
-        )
+        raise CheckFailed(text("ch07.extra", count=len(extra)))
     order = np.argsort(paths.pixel)
     rows = order[np.isin(paths.pixel[order], expected.pixel)]
     dirs, throughput = paths.dirs[rows], paths.throughput[rows]
     origins = paths.origins[rows]
     if not np.allclose(dirs, expected.dirs, atol=1e-4):
-        raise CheckFailed(
-            "the new directions are not the material's samples: wi = "
-            "shade(hit, 'sample', hit.wo, hit.n, u), with the u you are given"
-        )
+        raise CheckFailed(text("ch07.directions"))
     if not np.allclose(throughput, expected.throughput, rtol=2e-3, atol=1e-6):
         ratio = float(np.median(throughput / expected.throughput))
         hint = _ratio_hint(ratio) if abs(ratio - 1) > 0.02 else ""
-        raise CheckFailed(
-            f"the new throughput is not throughput * f_r * cos(theta_i) / pdf "
-            f"(yours is {ratio:.3f}x the library's, median over paths{hint})"
-        )
+        raise CheckFailed(text("ch07.throughput", ratio=ratio, hint=hint))
     if paths.sees_emission[rows].any():
-        raise CheckFailed(
-            "after a diffuse bounce sees_emission must be False (hit.delta): the "
-            "light the next ray finds was already counted by direct_light, and "
-            "counting its emission again is double counting (too bright)"
-        )
+        raise CheckFailed(text("ch07.sees_emission"))
     again = accel.intersect(origins, dirs).prim
     acne = np.mean(again == own)
     if not acne <= 1e-3:
-        raise CheckFailed(
-            f"{acne:.1%} of the new rays hit the triangle they start on (self-"
-            f"intersection, 'acne'): start them hit.offset off the surface, on the "
-            f"side wi goes to (hit.p + side * hit.offset * hit.n)"
-        )
+        raise CheckFailed(text("ch07.acne", share=acne))
     _check_pdf_near_zero(scatter)
-    return (
-        f"{len(rows)} surviving paths bounce like the library's (same wi, f_r cos / pdf, "
-        f"no self-intersection); a direction with pdf 0 ends its path, never NaN"
-    )
+    return text("ch07.scatter_ok", n=len(rows))
 
 
 def _check_paths(paths, count: int):
@@ -353,17 +294,15 @@ def _check_paths(paths, count: int):
     fields = ("origins", "dirs", "throughput", "pixel", "sees_emission")
     missing = [name for name in fields if not hasattr(paths, name)]
     if missing:
-        raise CheckFailed(
-            f"scatter must return a ptlab.integrators.wavefront.Paths (missing {', '.join(missing)})"
-        )
+        raise CheckFailed(text("ch07.paths_missing", missing=", ".join(missing)))
     rows = len(paths.pixel)
     if rows > count:
-        raise CheckFailed(f"scatter returned {rows} paths for {count} hits")
+        raise CheckFailed(text("ch07.paths_count", rows=rows, count=count))
     for name in ("origins", "dirs", "throughput"):
         value = np.asarray(getattr(paths, name))
         if value.shape != (rows, 3):
-            raise CheckFailed(f"Paths.{name} must have shape ({rows}, 3), not {value.shape}")
-        require_finite(value, f"Paths.{name}", at_row, hint="a division by a pdf of 0?")
+            raise CheckFailed(text("ch07.paths_shape", name=name, rows=rows, shape=value.shape))
+        require_finite(value, f"Paths.{name}", at_row, hint=text("ch07.hint.pdf_zero"))
     return paths
 
 
@@ -438,20 +377,16 @@ def _check_pdf_near_zero(scatter) -> None:
         paths = scatter(furnace_scene(), hit, u.copy(), np.ones(count, dtype=bool))
     fields = ("origins", "dirs", "throughput", "pixel")
     if any(not hasattr(paths, name) for name in fields):
-        raise CheckFailed("scatter must return a ptlab.integrators.wavefront.Paths")
+        raise CheckFailed(text("ch07.paths"))
     throughput = np.asarray(paths.throughput, dtype=np.float64)
     bad = ~np.isfinite(throughput).all(axis=1)
     if bad.any():
-        raise CheckFailed(
-            f"{bad.sum()} paths whose sampled direction has pdf 0 got a NaN or "
-            f"infinite throughput (0 / 0): where the pdf is 0 (or tiny), the weight "
-            f"f_r cos / pdf must be 0 and the path should end"
-        )
+        raise CheckFailed(text("ch07.pdf_zero_nan", count=bad.sum()))
     going_on = np.isin(np.asarray(paths.pixel), np.flatnonzero(failed))
     if (throughput[going_on] > 0).any():
-        raise CheckFailed("paths whose sampled direction has pdf 0 go on with light: their weight must be 0")
+        raise CheckFailed(text("ch07.pdf_zero_light"))
     if not (throughput[~going_on] > 0).all():
-        raise CheckFailed("paths whose sampled direction has a proper pdf lost their light")
+        raise CheckFailed(text("ch07.pdf_lost"))
 
 
 # -- whole renders ------------------------------------------------------------------------
@@ -481,13 +416,6 @@ def _render(scene, trace_paths=None, **options) -> np.ndarray:
 
 
 #: What a black light misses, in the messages of ``check_light_not_black``.
-ADD_THE_EMISSION = (
-    "A camera ray that hits a light adds its emission (the homework's castRay "
-    "forgets it; in ptlab, add scene.emission of the hit triangle where "
-    "hit.sees_emission, facing the ray: hit.front)"
-)
-
-
 def check_light_not_black(module) -> str:
     import ptlab
 
@@ -497,53 +425,30 @@ def check_light_not_black(module) -> str:
     furnace = _render(
         furnace_scene(albedo, le), trace_paths, spp=1, res=8, max_depth=0, rr=0.8, seed=grading_seed_for(77)
     )
-    require_finite(furnace, "with max_depth 0, your furnace image", at_pixel)
+    require_finite(furnace, text("ch07.furnace_depth_0"), at_pixel)
     if np.abs(furnace).max() == 0:
-        raise CheckFailed(
-            f"the light is black: in the furnace every camera ray hits a wall "
-            f"that glows Le = {le:.4f}, yet with max_depth 0 (emission only) your image "
-            f"is black. {ADD_THE_EMISSION}"
-        )
+        raise CheckFailed(text("ch07.black_furnace", le=le) + text("ch07.add_the_emission"))
     if not np.allclose(furnace, le, rtol=1e-5):
-        raise CheckFailed(
-            f"with max_depth 0 a path adds only the emission its camera ray sees: "
-            f"the furnace must be Le = {le:.4f} in every pixel, yours ranges from "
-            f"{furnace.min():.4f} to {furnace.max():.4f} (stop at depth == max_depth "
-            f"before direct light)"
-        )
+        raise CheckFailed(text("ch07.emission_only", le=le, low=furnace.min(), high=furnace.max()))
     scene = ptlab.load_scene("cornell-box")
     light = scene.materials[scene.material_names.index("light")].emission
     options = dict(spp=4, res=64, seed=grading_seed_for(7), rr=0.8)
     expected = _render(scene, max_depth=0, **options)
     image = _render(scene, trace_paths, max_depth=0, **options)
-    require_finite(image, "with max_depth 0, your Cornell box", at_pixel)
+    require_finite(image, text("ch07.cornell_depth_0"), at_pixel)
     on_light = np.all(np.abs(expected - light) <= 1e-5 * light, axis=2)  # every sample saw Le
     sees = expected.max(axis=2) > 0
     seen = image[on_light]
     if np.abs(seen).max() == 0:
-        raise CheckFailed(
-            f"the light is black: pixels that see only the light must show its Le "
-            f"= {np.round(light, 2)}. {ADD_THE_EMISSION}"
-        )
+        raise CheckFailed(text("ch07.black_light", le=np.round(light, 2)) + text("ch07.add_the_emission"))
     if not np.allclose(image[sees], expected[sees], rtol=1e-4, atol=1e-4):
         ratio = float(np.median(seen / light, axis=0).mean())
-        raise CheckFailed(
-            f"with max_depth 0 (emission only), pixels that see the light should "
-            f"show Le = {np.round(light, 2)} (times the share of their samples "
-            f"that hit it); yours are {ratio:.3f}x that"
-        )
+        raise CheckFailed(text("ch07.light_pixels", le=np.round(light, 2), ratio=ratio))
     full = _render(scene, trace_paths, **options)
-    require_finite(full, "with all bounces, your Cornell box", at_pixel)
+    require_finite(full, text("ch07.cornell_all"), at_pixel)
     if not (full[on_light] >= light * (1 - 1e-4)).all():
-        raise CheckFailed(
-            f"with all bounces the pixels on the light fall below its Le = "
-            f"{np.round(light, 2)}: the emission must be added once, whatever "
-            f"max_depth is"
-        )
-    return (
-        f"emission only, the furnace is Le everywhere and the {on_light.sum()} Cornell pixels "
-        f"that see only the light show its Le; with all bounces, no less"
-    )
+        raise CheckFailed(text("ch07.light_below", le=np.round(light, 2)))
+    return text("ch07.light_ok", n=on_light.sum())
 
 
 def check_one_sided_lights(module) -> str:
@@ -555,28 +460,23 @@ def check_one_sided_lights(module) -> str:
     options = dict(spp=2, res=24, seed=grading_seed_for(78), max_depth=0, rr=0.8)
     expected = _render(scene, **options)
     image = _render(scene, trace_paths, **options)
-    require_finite(image, "with max_depth 0, your furnace image", at_pixel)
+    require_finite(image, text("ch07.furnace_depth_0"), at_pixel)
     behind = expected.max(axis=2) == 0  # every sample of the pixel saw a back face
     in_front = np.all(expected == np.float32(le), axis=2)
     if np.abs(image[behind]).max(initial=0) > 0:
-        raise CheckFailed(
-            f"{np.count_nonzero(image[behind].max(axis=1) > 0)} of {behind.sum()} "
-            f"pixels that see emitting triangles from behind glow (up to "
-            f"{image[behind].max():.3g}; they must be black): lights emit from "
-            f"their front face only, so add the emission a camera ray sees only "
-            f"where it hits the front face (hit.sees_emission & hit.front)"
-        )
+        glowing = np.count_nonzero(image[behind].max(axis=1) > 0)
+        raise CheckFailed(text("ch07.behind_glow", glowing=glowing, n=behind.sum(), most=image[behind].max()))
     if not np.allclose(image, expected, rtol=1e-5, atol=1e-7):
         seen = float(image[in_front].mean()) if in_front.any() else 0.0
         raise CheckFailed(
-            f"with max_depth 0, pixels that see emitting triangles from the front "
-            f"must show Le = {le:.4f}, yours average {seen:.4g}"
-            + (" (no emission at all: see 'light not black')" if seen == 0 else "")
+            text("ch07.front_le", le=le, seen=seen)
+            + (
+                aside(text("ch07.hint.no_emission", check=check_name(7, "light not black")))
+                if seen == 0
+                else ""
+            )
         )
-    return (
-        f"emission only, the {behind.sum()} pixels that see lights from behind are black and "
-        f"the {in_front.sum()} that see them from the front show Le"
-    )
+    return text("ch07.one_sided_ok", behind=behind.sum(), front=in_front.sum())
 
 
 #: The furnace renders (``furnace_images``): 16 x 16, 8 independent passes of 8 samples
@@ -603,17 +503,13 @@ def furnace_radiance(
 ) -> tuple[float, str]:
     """(value, formula): the radiance everywhere in the furnace of ``albedo`` and
     ``emission`` for paths of at most ``max_depth`` bounces (None: no limit),
-    Le (1 + a + ... + a^max_depth)."""
+    Le (1 + a + ... + a^max_depth). The formula is in the active language."""
     a, le = albedo, emission
-    given = f"with Le = {le:.4f}, a = {a:.4f}"
     if max_depth is None:
         value = le / (1 - a)
-        return value, f"Le / (1 - a) = {value:.4f} ({given})"
+        return value, text("ch07.radiance", value=value, le=le, a=a)
     value = le * (1 - a ** (max_depth + 1)) / (1 - a)
-    return value, (
-        f"Le (1 + a + ... + a^{max_depth}) = {value:.4f} for paths of at most "
-        f"{max_depth} bounces ({given}; Le / (1 - a) = {le / (1 - a):.4f} with no limit)"
-    )
+    return value, text("ch07.radiance_depth", depth=max_depth, value=value, le=le, a=a, limit=le / (1 - a))
 
 
 #: The furnace test passes within FURNACE_T standard errors of the library's passes' mean,
@@ -645,7 +541,7 @@ def furnace_verdict(
     from ptlab.exercises.renders import NOISE_RATIO, noise_verdict, regions_of
 
     expected, formula = expected
-    require_finite(student, f"{what}: your furnace image", at_pixel)
+    require_finite(student, text("ch07.your_furnace", what=what), at_pixel)
     means, library_means = (images[..., 0].mean(axis=(1, 2)) for images in (student, library))
     passes = len(means)
     mean = float(means.mean())
@@ -654,35 +550,20 @@ def furnace_verdict(
         FURNACE_T * math.sqrt(NOISE_RATIO) * float(library_means.std(ddof=1)) / math.sqrt(passes)
         + FURNACE_FLOOR * expected
     )
-    averages = (
-        f"your furnace image averages {mean:.4f} +- {standard_error:.4f} (mean and "
-        f"standard error of {passes} independent passes), where the radiance "
-        f"everywhere is {formula}"
-    )
+    averages = text("ch07.averages", mean=mean, error=standard_error, passes=passes, formula=formula)
     spp = FURNACE_RENDER["spp_per_pass"]
     noise = noise_verdict(regions_of(student)[..., 0], regions_of(library)[..., 0], spp)
     if noise is not None:
-        raise CheckFailed(f"{what}: {noise}; {averages}")
+        raise CheckFailed(text("ch07.furnace_noise", what=what, noise=noise, averages=averages))
     if abs(mean - expected) <= allowed:
         return mean, standard_error
     if mean > expected:
-        hint = (
-            "too bright: is emission added on every hit *and* by direct_light (double "
-            "counting)? After a diffuse bounce, only direct_light counts the light: add a "
-            "hit's emission only where hit.sees_emission is True (camera rays, and after "
-            "a mirror or glass)"
-        )
+        hint = text("ch07.hint.too_bright")
     elif emission_only is not None and np.abs(emission_only()).max() == 0:
-        hint = (
-            "too dark: with max_depth 0 your furnace is black, so the emission that camera "
-            "rays see is missing (the black light)"
-        )
+        hint = text("ch07.hint.black_light")
     else:
-        hint = (
-            "too dark: light is lost at some bounce (shadow rays blocked by the surface "
-            "they start on? the throughput?)"
-        )
-    raise CheckFailed(f"{what}: {averages}: {hint}")
+        hint = text("ch07.hint.too_dark")
+    raise CheckFailed(text("ch07.furnace", what=what, averages=averages, hint=hint))
 
 
 #: The furnace without roulette: every path makes FURNACE_DEPTH bounces (rr 1), where the
@@ -701,10 +582,10 @@ def check_furnace(module) -> str:
         student,
         library,
         expected,
-        f"without Russian roulette, at most {FURNACE_DEPTH} bounces",
+        text("ch07.no_roulette", depth=FURNACE_DEPTH),
         lambda: furnace_images(trace_paths, passes=2, max_depth=0, **settings),
     )
-    return f"your furnace averages {mean:.4f} +- {error:.4f}; the radiance is {expected[1]}"
+    return text("ch07.furnace_ok", mean=mean, error=error, radiance=expected[1])
 
 
 def roulette_furnace_images(
@@ -729,7 +610,7 @@ def _furnace_with_roulette(russian_roulette, albedo: float, le: float) -> tuple[
     library = roulette_furnace_images(seed=seed, albedo=albedo, emission=le)
     student = roulette_furnace_images(russian_roulette, seed, albedo, le)
     expected = furnace_radiance(None, albedo, le)
-    return furnace_verdict(student, library, expected, "with your roulette at p_rr = 0.8")
+    return furnace_verdict(student, library, expected, text("ch07.your_roulette"))
 
 
 #: The Cornell box render (``cornell_passes``): 32 x 32, 12 passes of 8 samples per pixel
@@ -755,9 +636,7 @@ def check_cornell(module) -> str:
     seed = grading_seed_for(CORNELL_SEED)
     library = cornell_passes(seed=seed)
     student = cornell_passes(trace_paths, seed)
-    return compare_renders(
-        student, library, "the Cornell box with your trace_paths", spp=CORNELL_RENDER["spp_per_pass"]
-    )
+    return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])
 
 
 CHAPTER = Chapter(

@@ -27,6 +27,7 @@ import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import at_pixel, require_finite
+from ptlab.exercises.messages import check_name, text
 from ptlab.untrusted import submission_of
 
 if TYPE_CHECKING:
@@ -80,40 +81,37 @@ def check_tiles(module) -> str:
         tiles = list(make_tiles(width, height, size))
         where = f"make_tiles({width}, {height}, {size})"
         if not tiles:
-            raise CheckFailed(f"{where} returned no tiles")
+            raise CheckFailed(text("ch08.no_tiles", where=where))
         covered = np.zeros((height, width), dtype=int)
         for position, tile in enumerate(tiles):
             if not all(hasattr(tile, name) for name in ("index", "x0", "y0", "x1", "y1")):
-                raise CheckFailed(f"{where}: tiles must be ptlab.rendering.jobs.Tile(index, x0, y0, x1, y1)")
+                raise CheckFailed(text("ch08.tile_type", where=where))
             if tile.index != position:
-                raise CheckFailed(
-                    f"{where}: tile {position} of the list has index {tile.index}; "
-                    f"number the tiles 0, 1, 2, ... in list order (a tile's index "
-                    f"is its place in the list)"
-                )
+                raise CheckFailed(text("ch08.index", where=where, position=position, index=tile.index))
             if not (0 <= tile.x0 < tile.x1 <= width and 0 <= tile.y0 < tile.y1 <= height):
                 raise CheckFailed(
-                    f"{where}: tile {tile.index} spans columns {tile.x0}..{tile.x1 - 1} "
-                    f"and rows {tile.y0}..{tile.y1 - 1}, outside the {width} x "
-                    f"{height} image or empty (x1 and y1 are one past the last "
-                    f"pixel: clip them with min(x0 + size, width))"
+                    text(
+                        "ch08.outside",
+                        where=where,
+                        index=tile.index,
+                        x0=tile.x0,
+                        x1=tile.x1 - 1,
+                        y0=tile.y0,
+                        y1=tile.y1 - 1,
+                        width=width,
+                        height=height,
+                    )
                 )
             if tile.x1 - tile.x0 > size or tile.y1 - tile.y0 > size:
-                raise CheckFailed(f"{where}: tile {tile.index} is larger than {size} x {size}")
+                raise CheckFailed(text("ch08.larger", where=where, index=tile.index, size=size))
             covered[tile.y0 : tile.y1, tile.x0 : tile.x1] += 1
         if (covered == 0).any():
             y, x = np.argwhere(covered == 0)[0]
-            raise CheckFailed(
-                f"{where}: pixel (x={x}, y={y}) is in no tile (the last, smaller "
-                f"tiles at the right and bottom edges?)"
-            )
+            raise CheckFailed(text("ch08.in_no_tile", where=where, x=x, y=y))
         if (covered > 1).any():
             y, x = np.argwhere(covered > 1)[0]
-            raise CheckFailed(
-                f"{where}: pixel (x={x}, y={y}) is in {covered[y, x]} tiles: it "
-                f"would be rendered, and added to the image, more than once"
-            )
-    return f"every pixel in exactly one tile, for {len(cases)} image and tile sizes"
+            raise CheckFailed(text("ch08.in_tiles", where=where, x=x, y=y, count=covered[y, x]))
+    return text("ch08.tiles_ok", n=len(cases))
 
 
 # -- one tile's job ---------------------------------------------------------------------------
@@ -122,14 +120,11 @@ def check_tiles(module) -> str:
 def _tile_result(render_tile, setup, tile, spp: int) -> tuple[np.ndarray, int]:
     result = render_tile(setup, tile, spp)
     if not (isinstance(result, tuple) and len(result) == 2):
-        raise CheckFailed("render_tile must return two things: (sums, os.getpid())")
+        raise CheckFailed(text("ch08.tile_result"))
     sums, pid = np.asarray(result[0]), result[1]
     height, width = tile.y1 - tile.y0, tile.x1 - tile.x0
     if sums.shape != (height, width, 3):
-        raise CheckFailed(
-            f"render_tile must return the tile's sums as a ({height}, {width}, 3) "
-            f"array (rows, columns, colour), not {sums.shape}"
-        )
+        raise CheckFailed(text("ch08.sums_shape", height=height, width=width, shape=sums.shape))
     return sums, pid
 
 
@@ -155,42 +150,23 @@ def check_tile_job(module) -> str:
     ).sums
     setup = _setup(_scene())
     sums, pid = _tile_result(render_tile, setup, first, 4)
-    require_finite(sums, "the tile's sums", at_pixel_of(first))
+    require_finite(sums, text("ch08.sums"), at_pixel_of(first))
     here = submission_of(module).pid
     if pid != here:
-        raise CheckFailed(
-            f"render_tile must return the pid of the process that ran it "
-            f"(os.getpid()); it returned {pid!r}, this process is {here}"
-        )
+        raise CheckFailed(text("ch08.pid", pid=repr(pid), here=here))
     _tile_result(render_tile, setup, second, 4)
     again, _ = _tile_result(render_tile, setup, first, 4)
     if not np.array_equal(again, sums):
-        raise CheckFailed(
-            "the same tile rendered again, after another tile in the same "
-            "process, gives other sums: its random numbers depend on what the "
-            "process did before (one generator per process, or a global one?). "
-            "Take every random number from setup.sampler, by the paths' keys "
-            "sampler.keys(pixel ids, sample indices)"
-        )
+        raise CheckFailed(text("ch08.again"))
     # The library sums each path's radiance first, then a pixel's paths (a film row per path,
     # ``run_job``); a film row per pixel, as the template has it, adds the same numbers in
     # another order: equal to float64 rounding (1e-16), where other random numbers, a
     # path lost or counted twice differ by whole samples.
     if not np.allclose(sums, expected, rtol=1e-12, atol=0):
         if np.abs(sums).max() == 0:
-            raise CheckFailed(
-                "the tile's sums are empty: return the film the tile's paths "
-                "were traced into, reshaped to (h, w, 3)"
-            )
-        raise CheckFailed(
-            "the tile's sums are not the library's: a tile's job takes every "
-            "random number from setup.sampler: keys = sampler.keys(pixel_y * "
-            "setup.width + pixel_x, sample index) for paths in sample-major order, "
-            "the camera jitter sampler.get(keys, BounceUniforms.PIXEL, 2), then "
-            "trace_paths with the same sampler (as ptlab.rendering.jobs.run_job "
-            "does)"
-        )
-    return "a tile's sums are the library's, and the same whatever the process rendered before"
+            raise CheckFailed(text("ch08.empty"))
+        raise CheckFailed(text("ch08.not_library"))
+    return text("ch08.tile_ok")
 
 
 # -- the pool -----------------------------------------------------------------------------------
@@ -206,10 +182,7 @@ def importable(module: ModuleType) -> ModuleType:
     imported = submission_of(module).import_by_file_name()
     if isinstance(imported, str):
         name = submission_of(module).path.stem
-        raise CheckFailed(
-            f"another module is called {name!r} too ({imported}): rename your "
-            f"file, e.g. to 08_parallel.py, so that worker processes import yours"
-        )
+        raise CheckFailed(text("ch08.name_taken", name=repr(name), imported=imported))
     return imported
 
 
@@ -220,20 +193,13 @@ def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
     finally:
         submission_of(module).end_started_processes()  # workers left behind
     if not (isinstance(result, tuple) and len(result) == 2):
-        raise CheckFailed("render_parallel must return two things: (image, pids)")
+        raise CheckFailed(text("ch08.parallel_result"))
     image, pids = np.asarray(result[0]), set(result[1])
     if image.shape != (RES[1], RES[0], 3):
-        raise CheckFailed(
-            f"the image must have shape (height, width, 3) = ({RES[1]}, {RES[0]}, 3), not {image.shape}"
-        )
-    require_finite(image, "the image", at_pixel)
+        raise CheckFailed(text("ch08.image_shape", height=RES[1], width=RES[0], shape=image.shape))
+    require_finite(image, text("ch08.image"), at_pixel)
     if np.abs(image).max() == 0:
-        raise CheckFailed(
-            "the image is black: the tiles' sums never reached it. Each worker "
-            "has its own copy of anything you pass it, so writing into an "
-            "image there changes nothing here: return each tile's sums and add "
-            "them into the image in the main process"
-        )
+        raise CheckFailed(text("ch08.black"))
     return image, pids
 
 
@@ -252,18 +218,9 @@ def check_parallel(module) -> str:
         if len(workers) >= 2:
             break
     if len(workers) < 2:
-        where = (
-            "in this process only (threads, or no pool at all? threads share one "
-            "process, where Python runs one of them at a time)"
-            if not workers
-            else f"in one process only (pid {min(workers)})"
-        )
-        raise CheckFailed(
-            f"with workers=2 every tile was rendered {where}: submit each tile's "
-            f"job to a pool of 2 processes (concurrent.futures.ProcessPoolExecutor "
-            f"or multiprocessing.Pool) and collect what each job returns"
-        )
-    return f"the tiles were rendered by {len(workers)} worker processes"
+        where = text("ch08.this_process") if not workers else text("ch08.one_process", pid=min(workers))
+        raise CheckFailed(text("ch08.not_parallel", where=where))
+    return text("ch08.parallel_ok", n=len(workers))
 
 
 def check_worker_count(module) -> str:
@@ -272,14 +229,8 @@ def check_worker_count(module) -> str:
     one, _ = _render(module, workers=1)
     if not np.array_equal(one, two):
         differ = np.any(one != two, axis=2)
-        raise CheckFailed(
-            f"the image with 2 workers differs from the one with 1 worker in "
-            f"{differ.sum()} of {differ.size} pixels: the random numbers depend on "
-            f"which process renders which tile, or in which order. Take them from "
-            f"setup.sampler, by pixel and sample: never a generator (or sampler) "
-            f"made per worker, and none shared between jobs"
-        )
-    return "the image is the same, bit for bit, with 1 and 2 workers"
+        raise CheckFailed(text("ch08.workers", wrong=differ.sum(), n=differ.size))
+    return text("ch08.workers_ok")
 
 
 def check_library(module) -> str:
@@ -292,11 +243,7 @@ def check_library(module) -> str:
     empty = image.max(axis=2) == 0
     if empty.any():
         y, x = np.argwhere(empty)[0]
-        raise CheckFailed(
-            f"{empty.sum()} pixels are black, e.g. (x={x}, y={y}): some tiles "
-            f"were never rendered or added (the last, smaller tiles at the right "
-            f"and bottom edges?)"
-        )
+        raise CheckFailed(text("ch08.black_pixels", count=empty.sum(), x=x, y=y))
     if not np.array_equal(image, expected):
         ratio = float(image.mean() / expected.mean())
         differ = np.any(image != expected, axis=2)
@@ -307,25 +254,15 @@ def check_library(module) -> str:
         share = float(doubled.mean())
         if share > DOUBLED_SHARE and 0.5 * share < ratio - 1 < 1.5 * share:
             y, x = np.argwhere(doubled)[0]
-            hint = (
-                f"{doubled.sum()} pixels, e.g. (x={x}, y={y}), are about twice as bright as "
-                f"the library's: they were rendered and added twice, by tiles that overlap "
-                f"(x1 and y1 are one past a tile's last pixel; see 'tiles')"
-            )
+            hint = text("ch08.hint.doubled", count=doubled.sum(), x=x, y=y, check=check_name(8, "tiles"))
         elif abs(ratio - 1) > 0.05:
-            hint = "divide the sums by spp once, at the end"
+            hint = text("ch08.hint.spp")
         else:
-            hint = (
-                "the same seed must give the library's random numbers: setup.sampler's, "
-                "keyed by each path's pixel in the whole image and its sample index, and "
-                "float64 sums divided by spp, then float32"
-            )
+            hint = text("ch08.hint.sampler")
         raise CheckFailed(
-            f"your image differs from the library's (same seed, tile size {TILE}, "
-            f"one pass) in {differ.sum()} of {differ.size} pixels and is "
-            f"{ratio:.3f}x as bright: {hint}"
+            text("ch08.library", tile=TILE, wrong=differ.sum(), n=differ.size, ratio=ratio, hint=hint)
         )
-    return f"the image is the library's, bit for bit (seed {_seed()}, {TILE} x {TILE} tiles)"
+    return text("ch08.library_ok", seed=_seed(), tile=TILE)
 
 
 CHAPTER = Chapter(

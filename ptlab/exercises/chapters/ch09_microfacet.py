@@ -29,6 +29,7 @@ from ptlab.exercises.chapter import (
 )
 from ptlab.exercises.chapters.ch06_diffuse import probe, random_pairs, render_spp_per_pass, run_harness
 from ptlab.exercises.finite import finite_array
+from ptlab.exercises.messages import aside, text
 from ptlab.exercises.renders import compare_renders, pass_images, replace_materials
 from ptlab.rendering.sizes import SPP_PER_PASS
 
@@ -63,21 +64,14 @@ def check_d(module) -> str:
         if not math.isclose(at_normal, expected, rel_tol=1e-4):
             hint = ""
             if math.isclose(at_normal, 1 / (math.pi * alpha), rel_tol=1e-3):
-                hint = " (alpha where alpha^2 belongs?)"
+                hint = aside(text("ch09.hint.alpha"))
             elif math.isclose(at_normal, 1 / (alpha * alpha), rel_tol=1e-3):
-                hint = " (the pi in the denominator is missing)"
-            raise CheckFailed(
-                f"D(cos_theta_h = 1, alpha = {alpha}) should be 1 / (pi alpha^2) "
-                f"= {expected:.5g}, yours is {at_normal:.5g}{hint}"
-            )
+                hint = aside(text("ch09.hint.pi"))
+            raise CheckFailed(text("ch09.d_normal", alpha=alpha, expected=expected, yours=at_normal) + hint)
         total = float(np.trapezoid(_values(D, mu, alpha, shape=mu.shape) * mu * 2 * math.pi, x))
         if abs(total - 1) > 1e-3:
-            raise CheckFailed(
-                f"with alpha = {alpha} the integral of D(h) cos(theta_h) over the "
-                f"hemisphere is {total:.4f}, not 1: D is not normalised (compare "
-                f"your formula with alpha^2 / (pi ((n.h)^2 (alpha^2 - 1) + 1)^2))"
-            )
-    return f"D is normalised and D(n) = 1 / (pi alpha^2) for alpha = {', '.join(map(str, alphas))}"
+            raise CheckFailed(text("ch09.d_integral", alpha=alpha, total=total))
+    return text("ch09.d_ok", alphas=", ".join(map(str, alphas)))
 
 
 def check_g(module) -> str:
@@ -89,22 +83,13 @@ def check_g(module) -> str:
         expected = library.G1(cos_theta, alpha)
         g1 = _values(G1, cos_theta, alpha, shape=cos_theta.shape)
         if not math.isclose(g1[0], 1.0, rel_tol=1e-6):
-            raise CheckFailed(
-                f"G1 at normal incidence (cos_theta = 1) must be 1 (no facet is "
-                f"hidden), yours is {g1[0]:.5g} for alpha = {alpha}"
-            )
+            raise CheckFailed(text("ch09.g1_normal", yours=g1[0], alpha=alpha))
         if (g1 < 0).any() or (g1 > 1 + 1e-9).any():
-            raise CheckFailed(
-                f"G1 is a fraction of the microfacets, in [0, 1]; yours reaches "
-                f"{g1.max():.4g} / {g1.min():.4g} for alpha = {alpha}"
-            )
+            raise CheckFailed(text("ch09.g1_range", high=g1.max(), low=g1.min(), alpha=alpha))
         worst = np.argmax(np.abs(g1 - expected) / expected)
         if not abs(g1[worst] - expected[worst]) <= 1e-4 * expected[worst]:
             raise CheckFailed(
-                f"G1(cos_theta = {cos_theta[worst]:.3g}, alpha = {alpha}) is "
-                f"{g1[worst]:.5g}, Smith's masking for GGX gives "
-                f"{expected[worst]:.5g}: 1 / (1 + Lambda) with Lambda = "
-                f"(sqrt(1 + alpha^2 tan^2(theta)) - 1) / 2"
+                text("ch09.g1", cos=cos_theta[worst], alpha=alpha, yours=g1[worst], expected=expected[worst])
             )
     rng = grading_rng(91)
     cos_o, cos_i = rng.uniform(0.02, 1, 200), rng.uniform(0.02, 1, 200)
@@ -113,18 +98,12 @@ def check_g(module) -> str:
     if not np.allclose(g2, expected, rtol=1e-4):
         separable = library.G1(cos_o, 0.4) * library.G1(cos_i, 0.4)
         if np.allclose(g2, separable, rtol=1e-4):
-            raise CheckFailed(
-                "your G2 is G1(wo) G1(wi), the separable form; this chapter uses "
-                "the height-correlated 1 / (1 + Lambda(wo) + Lambda(wi)) (Heitz 2014, "
-                "eq. 99), which the render is compared with"
-            )
+            raise CheckFailed(text("ch09.g2_separable"))
         worst = np.argmax(np.abs(g2 - expected))
         raise CheckFailed(
-            f"G2(cos_o = {cos_o[worst]:.3f}, cos_i = {cos_i[worst]:.3f}, alpha = 0.4) "
-            f"is {g2[worst]:.5g}, the height-correlated Smith G2 gives "
-            f"{expected[worst]:.5g}"
+            text("ch09.g2", cos_o=cos_o[worst], cos_i=cos_i[worst], yours=g2[worst], expected=expected[worst])
         )
-    return "G1 is Smith's masking (1 at the normal, in [0, 1]); G2 is height-correlated"
+    return text("ch09.g_ok")
 
 
 def check_fresnel(module) -> str:
@@ -134,20 +113,12 @@ def check_fresnel(module) -> str:
     expected = f0 + (1 - f0) * (1 - cos_theta[2:, None]) ** 5
     F = _values(fresnel_schlick, cos_theta, f0, shape=(4, 3))  # noqa: N806
     if not np.allclose(F[0], f0, rtol=1e-6):
-        raise CheckFailed(
-            f"at normal incidence (cos_theta = 1) F must be F0 = {GOLD}, yours is {np.round(F[0], 4)}"
-        )
+        raise CheckFailed(text("ch09.f_normal", f0=GOLD, yours=np.round(F[0], 4)))
     if not np.allclose(F[1], 1.0, rtol=1e-6):
-        raise CheckFailed(
-            f"at grazing incidence (cos_theta = 0) F must be 1 (every material is "
-            f"a mirror there), yours is {np.round(F[1], 4)}"
-        )
+        raise CheckFailed(text("ch09.f_grazing", yours=np.round(F[1], 4)))
     if not np.allclose(F[2:], expected, rtol=1e-6):
-        raise CheckFailed(
-            f"F(cos_theta = 0.5) should be F0 + (1 - F0)(1 - 0.5)^5 = "
-            f"{np.round(expected[0], 5)}, yours is {np.round(F[2], 5)}"
-        )
-    return "F(0 degrees) = F0, F(90 degrees) = 1, F0 + (1 - F0)(1 - cos)^5 between"
+        raise CheckFailed(text("ch09.f_half", expected=np.round(expected[0], 5), yours=np.round(F[2], 5)))
+    return text("ch09.f_ok")
 
 
 def _metal(module, f0=GOLD, alpha=0.3, sampling="ggx"):
@@ -165,13 +136,12 @@ def check_eval(module) -> str:
     f = _values(material.eval, wo, wi, n, shape=wo.shape)
     if not np.allclose(f, expected, rtol=1e-4, atol=1e-9):
         raise CheckFailed(
-            f"eval differs from the GGX BRDF for gold (alpha 0.3) by up to "
-            f"{np.abs(f - expected).max():.3g}: {_eval_hint(f, wo, wi, n, 0.3)}"
+            text("ch09.eval", error=np.abs(f - expected).max(), hint=_eval_hint(f, wo, wi, n, 0.3))
         )
     below = _values(material.eval, wo, -wi, n, shape=wo.shape)
     if np.abs(below).max() > 0:
-        raise CheckFailed("eval must be 0 when wi is below the surface: a metal does not let light through")
-    return "f_r = D G2 F / (4 cos_theta_o cos_theta_i) for 2000 pairs of directions, 0 below"
+        raise CheckFailed(text("ch09.eval_below"))
+    return text("ch09.eval_ok")
 
 
 def _eval_hint(f: np.ndarray, wo, wi, n, alpha: float) -> str:
@@ -186,41 +156,28 @@ def _eval_hint(f: np.ndarray, wo, wi, n, alpha: float) -> str:
     f0 = np.asarray(GOLD)
     D, G2, F = library.D(cos_h, alpha), library.G2(cos_o, cos_i, alpha), library.F_schlick(cos_d, f0)  # noqa: N806
     rest = (D * G2 / (4 * cos_o * cos_i))[:, None]
-    at = "Schlick's F takes the angle between the light and the facet's normal h: F(wi . h) (= F(wo . h))"
     mistakes = [
-        (F * rest * cos_i[:, None], "eval includes cos(theta_i); the renderer multiplies by it itself"),
-        (4 * F * rest, "yours is 4x the right value: the 4 of 4 cos_theta_o cos_theta_i is missing"),
-        (F * rest / 4, "yours is 1/4 of the right value: a 4 too many in the denominator"),
-        (library.F_schlick(cos_i, f0) * rest, f"F is evaluated at n . wi; {at}"),
-        (library.F_schlick(cos_o, f0) * rest, f"F is evaluated at n . wo; {at}"),
-        (library.F_schlick(cos_h, f0) * rest, f"F is evaluated at n . h; {at}"),
-        (
-            np.broadcast_to(f0, F.shape) * rest,
-            "F is F0 at every angle: Schlick's F rises to 1 at grazing angles, F0 + (1 - F0)(1 - wi . h)^5",
-        ),
-        (rest * np.ones(3), "F is missing (the metal's colour F0 never enters)"),
+        (F * rest * cos_i[:, None], "ch09.hint.cosine"),
+        (4 * F * rest, "ch09.hint.four_missing"),
+        (F * rest / 4, "ch09.hint.four_more"),
+        (library.F_schlick(cos_i, f0) * rest, "ch09.hint.f_at_wi"),
+        (library.F_schlick(cos_o, f0) * rest, "ch09.hint.f_at_wo"),
+        (library.F_schlick(cos_h, f0) * rest, "ch09.hint.f_at_h"),
+        (np.broadcast_to(f0, F.shape) * rest, "ch09.hint.f_constant"),
+        (rest * np.ones(3), "ch09.hint.f_missing"),
         (
             F * rest * (library.G1(cos_o, alpha) * library.G1(cos_i, alpha) / G2)[:, None],
-            "G is G1(wo) G1(wi), the separable form; use the height-correlated G2",
+            "ch09.hint.g_separable",
         ),
-        (
-            F * rest * (library.G1(cos_o, alpha) / G2)[:, None],
-            "G is G1(wo) alone: the shadowing of wi is missing; use G2(wo, wi)",
-        ),
-        (F * rest / G2[:, None], "G is missing: multiply by G2(wo, wi)"),
-        (
-            F * rest * (library.D(cos_h, alpha * alpha) / D)[:, None],
-            "D has alpha^4 where alpha^2 belongs (alpha squared twice?)",
-        ),
-        (
-            F * rest * (library.D(cos_h, math.sqrt(alpha)) / D)[:, None],
-            "D has alpha where alpha^2 belongs: alpha^2 / (pi ((n . h)^2 (alpha^2 - 1) + 1)^2)",
-        ),
+        (F * rest * (library.G1(cos_o, alpha) / G2)[:, None], "ch09.hint.g1_alone"),
+        (F * rest / G2[:, None], "ch09.hint.g_missing"),
+        (F * rest * (library.D(cos_h, alpha * alpha) / D)[:, None], "ch09.hint.alpha4"),
+        (F * rest * (library.D(cos_h, math.sqrt(alpha)) / D)[:, None], "ch09.hint.alpha1"),
     ]
     for value, hint in mistakes:
         if np.allclose(f, value, rtol=1e-3, atol=1e-9):
-            return hint
-    return "f_r = D G2 F / (4 cos_theta_o cos_theta_i), with h = normalize(wo + wi) and F(wi . h)"
+            return text(hint, at=text("ch09.hint.schlick_angle"))
+    return text("ch09.hint.formula")
 
 
 def _harness(module, sampling: str, alpha: float) -> str:
@@ -231,7 +188,7 @@ def _harness(module, sampling: str, alpha: float) -> str:
     return run_harness(
         material,
         grading_seed_for(90),
-        f" for a white metal (F0 = 1) with alpha {alpha} and sampling {sampling!r}",
+        text("ch09.white_metal", alpha=alpha, sampling=repr(sampling)),
         f"ptlab grade {student_file(module)}:GGXMetal --args {arguments}",
         expected_eval=Microfacet((1.0, 1.0, 1.0), alpha=alpha).eval,
     )
@@ -301,16 +258,13 @@ def _render(module, sampling: str) -> str:
     student = render_passes(
         sampling, lambda f0, alpha: _metal(module, f0, alpha, sampling), seed, spp_per_pass=spp_per_pass
     )
-    what = "hemisphere sampling" if sampling == "hemisphere" else "your importance sampling"
-    hint = (
-        "is eval right at every angle?"
-        if sampling == "hemisphere"
-        else "is pdf the density of the directions sample returns, the Jacobian 1 / (4 |wo . h|) included?"
-    )
+    hemisphere = sampling == "hemisphere"
+    what = text("ch09.hemisphere_sampling" if hemisphere else "ch09.importance_sampling")
+    hint = text("ch09.hint.eval_angles" if hemisphere else "ch09.hint.jacobian")
     return compare_renders(
         student,
         library,
-        f"the rough metals of cornell-box-microfacet with {what}",
+        text("ch09.yours", what=what),
         hint,
         render_options(seed)["spp_per_pass"],
     )

@@ -16,6 +16,7 @@ import numpy as np
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
 from ptlab.exercises.finite import at_pixel, require_finite
+from ptlab.exercises.messages import aside, check_name, text
 
 
 def _weights(function, pdf, other, *heuristic) -> np.ndarray:
@@ -25,23 +26,14 @@ def _weights(function, pdf, other, *heuristic) -> np.ndarray:
         weight = np.asarray(function(pdf.copy(), other.copy(), *heuristic), dtype=np.float64)
     name = function.__name__ + (f"(..., {heuristic[0]!r})" if heuristic else "")
     if weight.shape != pdf.shape:
-        raise CheckFailed(
-            f"{name} must return one weight per sample, shape {pdf.shape}; yours has shape {weight.shape}"
-        )
+        raise CheckFailed(text("ch10.shape", name=name, expected=pdf.shape, shape=weight.shape))
     if np.isnan(weight).any():
         bad = np.flatnonzero(np.isnan(weight))[0]
-        hint = (
-            " (0 / 0: where both pdfs are 0 the sample cannot happen; give it weight 0)"
-            if pdf[bad] == 0 and other[bad] == 0
-            else ""
-        )
-        raise CheckFailed(f"{name} returned NaN for pdf = {pdf[bad]:g}, other = {other[bad]:g}{hint}")
+        hint = aside(text("ch10.hint.both_zero")) if pdf[bad] == 0 and other[bad] == 0 else ""
+        raise CheckFailed(text("ch10.nan", name=name, pdf=pdf[bad], other=other[bad]) + hint)
     if np.isinf(weight).any():
         bad = np.flatnonzero(np.isinf(weight))[0]
-        raise CheckFailed(
-            f"{name} returned {weight[bad]:g} for pdf = {pdf[bad]:g}, other = "
-            f"{other[bad]:g}: a weight lies between 0 and 1"
-        )
+        raise CheckFailed(text("ch10.inf", name=name, weight=weight[bad], pdf=pdf[bad], other=other[bad]))
     return weight
 
 
@@ -60,10 +52,17 @@ def _known_values(function, cases, formula: str) -> str:
     if len(wrong):
         k = wrong[0]
         raise CheckFailed(
-            f"{function.__name__}(pdf = {pdf[k]:g}, other = {other[k]:g}) should be "
-            f"{formula} = {expected[k]:.4g}, yours is {weight[k]:.4g}"
+            text(
+                "ch10.known",
+                name=function.__name__,
+                pdf=pdf[k],
+                other=other[k],
+                formula=formula,
+                expected=expected[k],
+                yours=weight[k],
+            )
         )
-    return f"{len(cases)} known values, {formula}"
+    return text("ch10.known_ok", n=len(cases), formula=formula)
 
 
 def check_balance(module) -> str:
@@ -106,33 +105,31 @@ def check_sum_to_one(module) -> str:
         if not abs(total[worst] - 1) <= 1e-5:
             hint = ""
             if np.allclose(total, 2, atol=1e-5):
-                hint = (
-                    ": both strategies weighted 1, so every light path found by both is "
-                    "counted twice (double counting)"
-                )
+                hint = text("ch10.hint.both_one")
             elif np.allclose(total, 0, atol=1e-5):
-                hint = ": both weighted 0, so light found by either is lost"
+                hint = text("ch10.hint.both_zero_weights")
             raise CheckFailed(
-                f"with heuristic={heuristic!r}, the weights of the two strategies "
-                f"for one sample (pdf_light = {pdf_light[worst]:.4g}, pdf_bsdf = "
-                f"{pdf_bsdf[worst]:.4g}) add up to {total[worst]:.4g}, not 1{hint}"
+                text(
+                    "ch10.sum",
+                    heuristic=repr(heuristic),
+                    pdf_light=pdf_light[worst],
+                    pdf_bsdf=pdf_bsdf[worst],
+                    total=total[worst],
+                    hint=hint,
+                )
             )
         if not np.allclose(light, expected, rtol=1e-4, atol=1e-6):
             other_heuristic = "balance" if heuristic == "power" else "power"
             if np.allclose(light, _heuristic(heuristic, pdf_bsdf, pdf_light), rtol=1e-4, atol=1e-6):
-                hint = (
-                    f"yours is the {heuristic} heuristic of (other, pdf): the densities are "
-                    f"passed on in the wrong order, so each strategy gets the other's weight. "
-                    f"mis_weight(pdf, other) is the weight of the strategy that drew the "
-                    f"sample with density pdf, and grows with it (the chapter's pitfall "
-                    f'"The argument order")'
-                )
+                hint = text("ch10.hint.order", heuristic=text(f"ch10.{heuristic}"))
             elif np.allclose(light, _heuristic(other_heuristic, pdf_light, pdf_bsdf), rtol=1e-4, atol=1e-6):
-                hint = f"yours is the {other_heuristic} heuristic: is the heuristic argument passed on?"
+                hint = text("ch10.hint.other_heuristic", heuristic=text(f"ch10.{other_heuristic}"))
             else:
-                hint = "yours sums to 1 but gives other values"
-            raise CheckFailed(f"mis_weight(..., {heuristic!r}) should be the {heuristic} heuristic; {hint}")
-    return "the two strategies' weights add up to 1 for 1000 random pairs, both heuristics"
+                hint = text("ch10.hint.other_values")
+            raise CheckFailed(
+                text("ch10.heuristic", name=repr(heuristic), heuristic=text(f"ch10.{heuristic}"), hint=hint)
+            )
+    return text("ch10.sum_ok")
 
 
 def _heuristic(name: str, pdf: np.ndarray, other: np.ndarray) -> np.ndarray:
@@ -152,24 +149,27 @@ def check_zero_pdfs(module) -> str:
         wrong = np.flatnonzero(~(np.abs(weight - expected) <= 1e-6))
         if len(wrong):
             k = wrong[0]
-            why = (
-                "the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for "
-                "a light sample), so this one must count it fully"
+            why = text(
+                "ch10.why.other_zero"
                 if other[k] == 0 and pdf[k] > 0
-                else "this strategy cannot draw the sample, so its weight is 0"
+                else "ch10.why.this_zero"
                 if pdf[k] == 0 and other[k] > 0
-                else "a sample neither strategy can draw gets weight 0"
+                else "ch10.why.both_zero"
             )
             if np.array_equal(weight[:2], expected[1::-1]):
-                why += (
-                    " (yours gives these weights to the other strategy: are pdf and other "
-                    "passed on in the wrong order?)"
-                )
+                why += aside(text("ch10.hint.swapped"))
             raise CheckFailed(
-                f"mis_weight(pdf = {pdf[k]:g}, other = {other[k]:g}, {heuristic!r}) "
-                f"should be {expected[k]:g}, yours is {weight[k]:g}: {why}"
+                text(
+                    "ch10.zero",
+                    pdf=pdf[k],
+                    other=other[k],
+                    heuristic=repr(heuristic),
+                    expected=expected[k],
+                    yours=weight[k],
+                    why=why,
+                )
             )
-    return "weight 1 when the other pdf is 0, 0 when this one is, 0 (not NaN) when both are"
+    return text("ch10.zero_ok")
 
 
 def render_options(seed: int) -> dict:
@@ -212,7 +212,7 @@ def check_render(module) -> str:
     library = regions_of(ptlab.render(scene, **options).astype(np.float64))
     with plugged(ptlab.integrators.path, mis_weight=checked_mis_weight):
         image = ptlab.render(scene, **options)
-    require_finite(image, "veach-mis with your MIS weights", at_pixel)
+    require_finite(image, text("ch10.yours"), at_pixel)
     student = regions_of(image.astype(np.float64))
     difference = np.abs(student - library)
     allowed = TOLERANCE * (library + 0.1 * library.mean())
@@ -221,16 +221,15 @@ def check_render(module) -> str:
         worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
         ratio = student[worst] / max(library[worst], 1e-12)
         raise CheckFailed(
-            f"veach-mis with your MIS weights differs from the library's render "
-            f"along the very same paths: {describe_region(*worst)} is "
-            f"{ratio:.3f}x the library's, the whole image {overall:.3f}x "
-            f"(brighter: light counted by both strategies; darker: by neither; "
-            f"else each strategy's weight is off, see 'weights sum to 1')"
+            text(
+                "ch10.render",
+                region=describe_region(*worst),
+                ratio=ratio,
+                overall=overall,
+                check=check_name(10, "weights sum to 1"),
+            )
         )
-    return (
-        f"veach-mis with your MIS weights matches the library's render along the same "
-        f"paths (whole image {overall:.6f}x)"
-    )
+    return text("ch10.render_ok", overall=overall)
 
 
 CHAPTER = Chapter(
