@@ -102,7 +102,10 @@ def check_tiles(module) -> str:
                         height=height,
                     )
                 )
-            if tile.x1 - tile.x0 > size or tile.y1 - tile.y0 > size:
+            w, h = tile.x1 - tile.x0, tile.y1 - tile.y0
+            if max(w, h) == size + 1:  # (an end one past the last pixel, counted once more)
+                raise CheckFailed(text("ch08.one_larger", where=where, index=tile.index, w=w, h=h, size=size))
+            if w > size or h > size:
                 raise CheckFailed(text("ch08.larger", where=where, index=tile.index, size=size))
             covered[tile.y0 : tile.y1, tile.x0 : tile.x1] += 1
         if (covered == 0).any():

@@ -434,6 +434,8 @@ MESSAGES: dict[str, str] = {
     "ch08.index": "{where}: tile {position} of the list has index {index}; number the tiles 0, 1, 2, ... in list order (a tile's index is its place in the list)",
     "ch08.outside": "{where}: tile {index} spans columns {x0}..{x1} and rows {y0}..{y1}, outside the {width} x {height} image or empty (x1 and y1 are one past the last pixel: clip them with min(x0 + size, width))",
     "ch08.larger": "{where}: tile {index} is larger than {size} x {size}",
+    "ch08.one_larger": "{where}: tile {index} is {w} x {h} pixels, one more than {size}: its "
+    "neighbours overlap it. x1 and y1 are one past a tile's last pixel, x1 = min(x0 + size, width)",
     "ch08.in_no_tile": "{where}: pixel (x={x}, y={y}) is in no tile (the last, smaller tiles at the right and bottom edges?)",
     "ch08.in_tiles": "{where}: pixel (x={x}, y={y}) is in {count} tiles: it would be rendered, and added to the image, more than once",
     "ch08.tiles_ok": "every pixel in exactly one tile, for {n} image and tile sizes",

@@ -428,6 +428,8 @@ MESSAGES: dict[str, str] = {
     "ch08.index": "{where}：列表中第 {position} 个图块的 index 是 {index}；请按列表顺序给图块编号 0, 1, 2, ...（图块的 index 就是它在列表中的位置）",
     "ch08.outside": "{where}：图块 {index} 覆盖第 {x0}..{x1} 列、第 {y0}..{y1} 行，超出了 {width} x {height} 的图像，或者是空的（x1 和 y1 是最后一个像素之后的位置：用 min(x0 + size, width) 截断）",
     "ch08.larger": "{where}：图块 {index} 大于 {size} x {size}",
+    "ch08.one_larger": "{where}：图块 {index} 是 {w} x {h} 像素，比 {size} 多一：它和相邻的图块重叠。"
+    "x1 和 y1 是图块最后一个像素的下一个，x1 = min(x0 + size, width)",
     "ch08.in_no_tile": "{where}：像素 (x={x}, y={y}) 不在任何图块中（右边缘和下边缘处最后那些较小的图块？）",
     "ch08.in_tiles": "{where}：像素 (x={x}, y={y}) 在 {count} 个图块中：它会被渲染并累加到图像中不止一次",
     "ch08.tiles_ok": "对 {n} 组图像与图块尺寸，每个像素都恰好在一个图块中",
