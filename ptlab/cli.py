@@ -341,7 +341,7 @@ def _render(args) -> int:
         on_pass=_Preview(out, args.preview_every, args.exposure),
         command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
     )
-    with _StopOnSignal() as signals, warnings.catch_warnings():
+    with _StopOnSignal(args.whole_process) as signals, warnings.catch_warnings():
         # (A render stopped before its first pass: _interrupted says so in its own words.)
         warnings.filterwarnings("ignore", "the render stopped before any tile", RuntimeWarning)
         stop = signals.requested.is_set
@@ -463,8 +463,14 @@ class _StopOnSignal:
 
     The render then ends the jobs in flight and keeps the passes done; a second Ctrl-C
     interrupts it at once, but once ``holding`` (the render over) it waits for the image to be
-    written. ``exit_code`` is then 128 + the first signal's number.
+    written. ``exit_code`` is then 128 + the first signal's number. If ``whole_process`` (the
+    command is this process), a stopped command leaves these signals ignored: only its exit
+    is left, which a later one would cut short (a traceback from an exit hook, or death by
+    the signal once Python has reset its handlers).
     """
+
+    def __init__(self, whole_process: bool = False):
+        self.whole_process = whole_process
 
     def __enter__(self) -> _StopOnSignal:
         self.requested = threading.Event()
@@ -483,8 +489,9 @@ class _StopOnSignal:
         self.requested.set()
 
     def __exit__(self, *exc) -> None:
+        ignore = self.whole_process and self.requested.is_set()
         for signum, handler in self.previous.items():
-            signal.signal(signum, handler)
+            signal.signal(signum, signal.SIG_IGN if ignore else handler)
 
 
 class _Preview:
@@ -677,11 +684,13 @@ def _start_workers_early(argv: list[str]) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
+    whole_process = argv is None
     argv = sys.argv[1:] if argv is None else argv
     command = next((word for word in argv if not word.startswith("-")), None)
     if command == "render":
         _start_workers_early(argv)
     args = build_parser(command if command in COMMANDS else None).parse_args(argv)
+    args.whole_process = whole_process  # (not a caller's, such as a test's, in its process)
     if args.command == "grade":
         from ptlab.grading.cli import run_grade as handler
     elif args.command == "exercise":

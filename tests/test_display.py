@@ -126,3 +126,28 @@ def test_a_terminal_that_reports_no_columns_still_gets_a_bar(tmp_path):
     # character.
     assert b"sample/s]" in output
     assert "█████".encode() in output
+
+
+@pytest.mark.slow  # (a kernel starts: about 4 s)
+@pytest.mark.subprocess
+def test_progress_in_a_notebook_shows_the_image_refreshed_after_each_pass(tmp_path):
+    """One picture below the cell, updated in place: after the last pass it is the render."""
+    import base64
+
+    import nbformat
+    from nbclient import NotebookClient
+
+    code = (
+        "import numpy as np, ptlab\n"
+        "image = ptlab.render('cornell-box', spp=3, res=16, workers=1, spp_per_pass=1, progress=True)\n"
+        "np.save('image.npy', image)"
+    )
+    notebook = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(code)])
+    NotebookClient(
+        notebook, timeout=120, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    ).execute()
+    shown = [output for output in notebook.cells[0].outputs if "image/png" in output.get("data", {})]
+    assert len(shown) == 1, notebook.cells[0].outputs
+    (tmp_path / "shown.png").write_bytes(base64.b64decode(shown[0]["data"]["image/png"]))
+    shown_bytes = np.round(read_image(tmp_path / "shown.png")[0] * 255)  # (a PNG reads back as its codes)
+    assert np.array_equal(shown_bytes, encode_srgb8(np.load(tmp_path / "image.npy")))

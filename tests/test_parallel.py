@@ -386,3 +386,40 @@ def test_a_guarded_script_still_uses_the_fork_server(tmp_path):
     )
     result = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
     assert result.stdout.split() == ["forkserver", "fork"], result.stderr
+
+
+def test_a_ctrl_c_inside_the_pools_bookkeeping_waits_until_it_is_done():
+    # A KeyboardInterrupt raised inside concurrent.futures can leave a future's lock taken,
+    # and the pool's thread then waits for it forever (the rare hang of a second Ctrl-C).
+    from ptlab.rendering.scheduler import signals_held
+
+    def two_ctrl_cs_then(finished: list[bool]) -> None:
+        with signals_held():
+            signal.raise_signal(signal.SIGINT)
+            signal.raise_signal(signal.SIGINT)
+            finished.append(True)
+
+    before = signal.getsignal(signal.SIGINT)
+    finished: list[bool] = []
+    with pytest.raises(KeyboardInterrupt):
+        two_ctrl_cs_then(finished)
+    assert finished == [True]
+    assert signal.getsignal(signal.SIGINT) is before
+
+
+@pytest.mark.parametrize("whole_process", [True, False])
+def test_a_stopped_ptlab_render_ignores_later_signals_only_as_its_own_process(whole_process):
+    # Once stopped, `ptlab render` has only its exit left, which a late Ctrl-C would cut short
+    # (a traceback from an exit hook, or death by SIGINT); a caller's process gets its handlers back.
+    from ptlab.cli import _StopOnSignal
+
+    before = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        with _StopOnSignal(whole_process) as signals:
+            signal.raise_signal(signal.SIGTERM)
+        assert signals.exit_code == 143
+        for signum, handler in before.items():
+            assert signal.getsignal(signum) is (signal.SIG_IGN if whole_process else handler)
+    finally:
+        for signum, handler in before.items():
+            signal.signal(signum, handler)

@@ -1,8 +1,8 @@
 """The progress of a render: samples done, samples per second, time left.
 
-On a terminal, a bar (tqdm); in a Jupyter notebook, tqdm's notebook bar (``tqdm.auto``);
-where standard error is a file or a pipe (a CI log, a script's output), one line per pass
-finished; with ``--quiet``, nothing.
+On a terminal, a bar (tqdm); in a Jupyter notebook, tqdm's notebook bar (``tqdm.auto``) and
+the image so far, refreshed after each pass; where standard error is a file or a pipe (a CI
+log, a script's output), one line per pass finished; with ``--quiet``, nothing.
 """
 
 from __future__ import annotations
@@ -43,6 +43,8 @@ class ProgressBar:
         # Lines per pass where there is neither: a file or a pipe would get a bar's every
         # redraw, carriage returns and all.
         self.lines = not quiet and not in_notebook and not on_terminal
+        self.pictures = not quiet and in_notebook
+        self.picture = None  # (the notebook's display of the image, once a pass is done)
         if in_notebook:
             from tqdm.auto import tqdm as bar_class
         else:
@@ -65,9 +67,24 @@ class ProgressBar:
         self.bar.update(film.samples - self.bar.n)
         done = int(film.passes_done.min())
         self.bar.set_description(f"pass {min(done + 1, self.passes)}/{self.passes}")
-        if self.lines and done > self.passes_shown:
+        if done > self.passes_shown:
             self.passes_shown = done
-            print(self.line(film.samples), file=sys.stderr, flush=True)
+            if self.lines:
+                print(self.line(film.samples), file=sys.stderr, flush=True)
+            elif self.pictures:
+                self.show(film)
+
+    def show(self, film: Film) -> None:
+        """Show the image so far below the notebook's cell, in place of the last pass's."""
+        from IPython.display import Image, display
+
+        from ptlab.rendering.display import png_bytes
+
+        picture = Image(data=png_bytes(film.image()))
+        if self.picture is None:
+            self.picture = display(picture, display_id=True)
+        else:
+            self.picture.update(picture)
 
     def line(self, samples: int) -> str:
         """``pass 2/8: 25% of 1.05 M samples, 0.41 M samples/s, 12 s left``."""

@@ -17,6 +17,8 @@ from collections import deque
 from collections.abc import Callable, Iterator
 from concurrent.futures import FIRST_COMPLETED, Executor, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
+from contextlib import contextmanager
+from typing import Any
 
 from ptlab.accel import make_accelerator
 from ptlab.errors import PtlabError
@@ -68,16 +70,19 @@ def _run_on_executor(
         while pending or in_flight:
             if stop():
                 return
-            while pending and len(in_flight) < window:
-                group = pending.popleft()
-                in_flight[submit(group)] = group
-            done, _ = wait(in_flight, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
-            for future in done:
-                del in_flight[future]
-                yield from future.result()
+            with signals_held():  # (the futures' bookkeeping; the caller's code runs outside)
+                while pending and len(in_flight) < window:
+                    group = pending.popleft()
+                    in_flight[submit(group)] = group
+                done, _ = wait(in_flight, timeout=POLL_SECONDS, return_when=FIRST_COMPLETED)
+                for future in done:
+                    del in_flight[future]
+                results = [result for future in done for result in future.result()]
+            yield from results
     finally:
-        for future in in_flight:
-            future.cancel()
+        with signals_held():
+            for future in in_flight:
+                future.cancel()
 
 
 def _submitter(pool: Executor, token: str) -> Callable[[list[Job]], Future]:
@@ -131,22 +136,41 @@ def _run_on_process_pool(
 
 
 def _close_pool(pool: ProcessPoolExecutor, kill: bool) -> None:
-    """Shut ``pool`` down, first ending its workers if ``kill``. A Ctrl-C meanwhile is held
-    until the pool is closed, then delivered: a pool left half shut down would make the
-    interpreter's exit wait for its thread forever."""
-    holding = threading.current_thread() is threading.main_thread()
-    held: list[int] = []
-    if holding:
-        previous = signal.signal(signal.SIGINT, lambda signum, frame: held.append(signum))
-    try:
+    """Shut ``pool`` down, first ending its workers if ``kill``, with signals held: a pool
+    left half shut down would make the interpreter's exit wait for its thread forever."""
+    with signals_held():
         if kill:
             _kill_workers(pool)
         pool.shutdown(wait=True, cancel_futures=True)
+
+
+#: The signals whose Python handlers ``signals_held`` holds back.
+HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@contextmanager
+def signals_held() -> Iterator[None]:
+    """Hold Ctrl-C and SIGTERM back while the block runs, then deliver them.
+
+    Their Python handlers raise (KeyboardInterrupt, or ``ptlab render``'s second Ctrl-C)
+    between any two bytecodes: inside ``concurrent.futures.wait`` that can leave a future's
+    lock taken, and the pool's thread, which needs it to record the future's end, then waits
+    forever, and with it the pool's shutdown and the interpreter's exit."""
+    if threading.current_thread() is not threading.main_thread():
+        yield  # (only the main thread runs signal handlers)
+        return
+    held: list[int] = []
+    previous: dict[signal.Signals, Any] = {}
+    try:
+        for signum in HELD_SIGNALS:
+            if callable(signal.getsignal(signum)):  # (SIG_DFL and SIG_IGN never raise)
+                previous[signum] = signal.signal(signum, lambda number, frame: held.append(number))
+        yield
     finally:
-        if holding:
-            signal.signal(signal.SIGINT, previous)
-            if held:
-                signal.raise_signal(signal.SIGINT)
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+        for number in dict.fromkeys(held):
+            signal.raise_signal(number)
 
 
 def _kill_workers(pool: ProcessPoolExecutor) -> None:
