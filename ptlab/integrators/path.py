@@ -164,8 +164,10 @@ def trace_paths(
             paths = hit.paths.take(np.zeros(0, dtype=np.intp))
             continue
         u = BounceUniforms(sampler, hit.sample, hit.depth)  # this bounce's random numbers
+        if ending.any():  # (a batch at several depths: these find no more light)
+            hit.throughput = np.where(ending[:, None], np.float32(0), hit.throughput)
         if sampled_lights(scene, settings).any():
-            rays += direct_light(film, scene, accel, hit, u.light(), settings, ending=ending)
+            rays += direct_light(film, scene, accel, hit, u.light(), settings)
         going_on = np.ones(len(hit.prim), dtype=bool) & ~ending
         if np.any(hit.depth >= settings.roulette_starts):
             going_on = going_on & russian_roulette(hit, settings, u.roulette())
@@ -218,7 +220,6 @@ def direct_light(
     hit: SurfaceHit,
     u: np.ndarray,
     settings: PathSettings,
-    ending: np.ndarray | None = None,
 ) -> int:
     """Next-event estimation: one light sample and one shadow ray per path.
 
@@ -229,8 +230,7 @@ def direct_light(
     / pdf (times the MIS weight with ``"mis"``; 1 for a point light, which BSDF sampling
     cannot find). For a point on a light triangle, Li = Le and pdf = pdf_area |x - x'|^2 /
     cos(theta'): the homework's Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_area.
-    ``ending``: (N,) bool, the paths that end at this vertex (at the most bounces), which take
-    no light sample. Returns the shadow rays.
+    Returns the shadow rays.
     """
     sampled = sampled_lights(scene, settings)
     light, kind = scene.light_sampler.sample_li(hit.p, u, sampled)
@@ -238,10 +238,7 @@ def direct_light(
     # Points that do not face their light sample exchange no light and need no shadow ray (a
     # third of them in the Cornell box: docs/performance.md; a light seen from behind has pdf
     # 0). Nor do mirrors and glass, whose f_r is 0 for any direction but the one they choose.
-    usable = (cos_theta > 0) & (light.pdf > 0) & ~hit.delta
-    if ending is not None:
-        usable &= ~ending
-    usable = np.flatnonzero(usable)
+    usable = np.flatnonzero((cos_theta > 0) & (light.pdf > 0) & ~hit.delta)
     visible = sees(accel, hit, usable, take_rows(light.target, usable))
     weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
     if settings.strategy == "mis":
@@ -317,8 +314,8 @@ def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> 
         survival = np.minimum(np.maximum(np.maximum(t[:, 0], t[:, 1]), t[:, 2]), 1.0)
     else:
         survival = np.float32(settings.rr)
-    if isinstance(hit.depth, np.ndarray):  # (paths at several depths: some may be too young)
-        survival = np.where(hit.depth >= settings.roulette_starts, survival, np.float32(1))
+    # (Paths not yet at the start survive: one depth for all, or several in one batch.)
+    survival = np.where(np.asarray(hit.depth) >= settings.roulette_starts, survival, np.float32(1))
     survive = u < survival
     hit.throughput /= np.where(survive, survival, np.float32(1))[:, None]
     return survive
