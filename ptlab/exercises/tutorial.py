@@ -24,8 +24,11 @@ _started = time.time()
 
 
 def in_notebook() -> bool:
-    """Whether this runs in a Jupyter kernel."""
-    return "ipykernel" in sys.modules
+    """Whether this runs in a Jupyter kernel: IPython's shell there is a ``ZMQInteractiveShell``.
+    (Not "ipykernel was imported": a program that talks to kernels imports it too.)"""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    return type(shell).__name__ == "ZMQInteractiveShell"
 
 
 def tutorial_options(
