@@ -30,6 +30,13 @@ def take_rows(a: np.ndarray, index: np.ndarray) -> np.ndarray:
     return a.T.take(index, axis=1).T
 
 
+def concatenate_rows(arrays: list[np.ndarray]) -> np.ndarray:
+    """(N, K) arrays one after the other (or (N,) ones), keeping the column-major layout."""
+    if arrays[0].ndim == 1:
+        return np.concatenate(arrays)
+    return np.concatenate([a.T for a in arrays], axis=1).T
+
+
 def columns(a: np.ndarray) -> np.ndarray:
     """An (N, K) array in column-major layout (a no-op when it already is)."""
     return np.asfortranarray(a)

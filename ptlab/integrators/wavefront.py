@@ -27,7 +27,7 @@ import numpy as np
 
 from ptlab.accel.base import Accelerator
 from ptlab.scene import Scene
-from ptlab.vectors import dot, take_rows
+from ptlab.vectors import concatenate_rows, dot, take_rows
 
 #: A shadow ray stops this fraction short of the (offset) light point (pbrt's ShadowEpsilon).
 SHADOW_EPSILON = 1e-4
@@ -84,18 +84,15 @@ def joined(first: Paths, second: Paths) -> Paths:
         b = np.zeros(count_b, np.float32) if b is None else b
         return np.concatenate([a, b])
 
-    def rows(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-        return np.concatenate([a.T, b.T], axis=1).T if a.ndim == 2 else np.concatenate([a, b])
-
     return Paths(
-        origins=rows(first.origins, second.origins),
-        dirs=rows(first.dirs, second.dirs),
-        throughput=rows(first.throughput, second.throughput),
-        pixel=rows(first.pixel, second.pixel),
-        sees_emission=rows(first.sees_emission, second.sees_emission),
-        sample=rows(first.sample, second.sample),
+        origins=concatenate_rows([first.origins, second.origins]),
+        dirs=concatenate_rows([first.dirs, second.dirs]),
+        throughput=concatenate_rows([first.throughput, second.throughput]),
+        pixel=concatenate_rows([first.pixel, second.pixel]),
+        sees_emission=concatenate_rows([first.sees_emission, second.sees_emission]),
+        sample=concatenate_rows([first.sample, second.sample]),
         pdf=both(first.pdf, second.pdf, len(first), len(second)),
-        depth=rows(first.depths(), second.depths()),
+        depth=concatenate_rows([first.depths(), second.depths()]),
     )
 
 

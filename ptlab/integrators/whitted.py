@@ -55,7 +55,7 @@ from ptlab.materials.dielectric import Dielectric
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scattering import fresnel_dielectric, reflect, refract
 from ptlab.scene import Scene
-from ptlab.vectors import dot, take_rows, vec3
+from ptlab.vectors import concatenate_rows, dot, take_rows, vec3
 
 #: Direct light by light sampling only, and emission counted where the ray may see it: the
 #: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with); the
@@ -185,11 +185,6 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
         sees_emission=np.ones(len(rows), dtype=bool),
         sample=hit.sample.take(rows),
     )
-
-
-def concatenate_rows(arrays: list[np.ndarray]) -> np.ndarray:
-    """(N, 3) arrays one after the other, in the column-major layout of ``ptlab.vectors``."""
-    return np.concatenate([a.T for a in arrays], axis=1).T
 
 
 def batches(paths: Paths, size: int):
