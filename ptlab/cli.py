@@ -145,6 +145,11 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         "(options given must agree with it; --spp may raise its samples)",
     )
     render.add_argument(
+        "--spp-map",
+        metavar="FILE",
+        help="also write the samples each pixel got: a heat map (.png) or the counts (.exr)",
+    )
+    render.add_argument(
         "--preview-every",
         type=float,
         metavar="SECONDS",
@@ -170,6 +175,9 @@ _RENDER_OPTIONS = (
     "rr",
     "rr_depth",
     "max_depth",
+    "target_error",
+    "max_spp",
+    "time_limit",
 )
 
 
@@ -312,6 +320,7 @@ def _render(args) -> int:
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
     from ptlab.rendering import RenderOptions, pass_schedule, render_result, resolution
+    from ptlab.rendering.display import write_spp_map
     from ptlab.rendering.executors import dask_executor
     from ptlab.rendering.progress import ProgressBar
     from ptlab.rendering.settings import check_workers
@@ -332,7 +341,13 @@ def _render(args) -> int:
     if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
     check_workers(options.workers)  # (before the scene's work: a bad --workers fails at once)
-    progress = ProgressBar(width * height * options.spp, len(pass_schedule(options.spp)), quiet=args.quiet)
+    spp_map = check_output_path(args.spp_map) if args.spp_map else None
+    progress = ProgressBar(
+        width * height * options.spp,
+        len(pass_schedule(options.spp)),
+        quiet=args.quiet,
+        target=options.target_error,
+    )
     run = dict(
         options=options,
         checkpoint=checkpoint,
@@ -361,6 +376,8 @@ def _render(args) -> int:
         if not result.complete:
             return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
         _write(out, result, args.exposure)
+        if spp_map is not None:
+            write_spp_map(spp_map, result.counts)
     if not (result.image > 0).any() and options.integrator in ("path", "whitted"):
         print(
             "ptlab: warning: the image is black: no camera ray saw or received any light "
@@ -368,9 +385,29 @@ def _render(args) -> int:
             file=sys.stderr,
         )
     if not args.quiet:
-        print(f"{width}x{height}, {result.spp} spp, {result.seconds:.2f} s, " + _how(result, options))
-        print(f"wrote {out.resolve()}")
+        print(f"{width}x{height}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
+        if options.target_error is not None:
+            print(_target_said(result, options))
+        print(f"wrote {out.resolve()}" + (f" and {spp_map.resolve()}" if spp_map is not None else ""))
     return 0
+
+
+def _spp_said(result) -> str:
+    """``16 spp``, or where pixels differ, ``16-837 spp (mean 92.2)``."""
+    if result.spp == result.spp_max:
+        return f"{result.spp} spp"
+    return f"{result.spp}-{result.spp_max} spp (mean {result.spp_mean:.1f})"
+
+
+def _target_said(result, options) -> str:
+    """The line after a render to a target error: the estimate, and why it stopped."""
+    estimate = result.relmse_estimate
+    said = f"estimated relMSE {estimate:.4g}, target {options.target_error:g}"
+    if result.target_reached:
+        return said + ": reached"
+    if result.settings.get("target_end") == "time limit":
+        return said + f": not reached within the time limit, {options.time_limit:g} s (--time-limit)"
+    return said + f": not reached with at most {result.settings['max_spp']} spp per pixel (--max-spp)"
 
 
 def _how(result, options) -> str:
@@ -432,6 +469,9 @@ def _write(out: Path, result, exposure: float = 0.0) -> None:
     )
     if result.spp_max != result.spp:
         metadata["spp_max"] = result.spp_max
+        metadata["spp_mean"] = round(result.spp_mean, 3)
+    if result.relmse_estimate is not None:
+        metadata["relmse_estimate"] = result.relmse_estimate
     image = result.image
     if result.settings["integrator"] == "depth" and out.suffix.lower() == ".png":
         # Distances do not fit in [0, 1]: scale the farthest to white (the EXR keeps them).

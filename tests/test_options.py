@@ -94,6 +94,25 @@ BAD = [
     (dict(sampler=["sobol"]), "sampler ['sobol']: choose one of independent, stratified, sobol"),
     (dict(tile_size=4), "tile size 4: must be an integer from 8 to 4096"),
     (dict(spp_per_pass=0), "spp per pass 0: must be a positive integer"),
+    (dict(target_error=0), "target error 0: must be a number above 0"),
+    (dict(target_error=float("inf")), "target error inf: must be a number above 0"),
+    (dict(target_error="low"), "target error 'low': must be a number above 0"),
+    (dict(target_error=0.01, max_spp=0), "max spp 0: must be an integer from 1 to 1048576"),
+    (dict(target_error=0.01, time_limit=-2), "time limit -2: must be a number above 0"),
+    (
+        dict(max_spp=64),
+        "max spp and time limit bound a render to a target error: give target_error too",
+    ),
+    (
+        dict(target_error=0.01, spp=15),
+        "spp 15: with a target error, the first pass's samples per pixel must be even "
+        "(half of them measure the other half's error)",
+    ),
+    (
+        dict(target_error=0.01, sampler="stratified"),
+        "sampler 'stratified' lays out a fixed number of samples per pixel; a render to a "
+        "target error adds samples as it goes: use sobol or independent",
+    ),
     (
         dict(integrator="whitted", strategy="mis"),
         "strategy 'mis' / heuristic 'power': these choose how the path integrator finds light; "

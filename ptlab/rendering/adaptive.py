@@ -7,16 +7,26 @@ relMSE (``ptlab.measure.metrics``) falls to E. This module is that estimate and 
 as functions of the film alone: per pixel, the sums of the samples, of their squares, and
 their count.
 
-**The estimate.** A pixel's value is the mean of its n samples; its variance is
-sigma^2 / n, and the samples' unbiased variance s^2 estimates sigma^2 (s^2 is unbiased
-whatever the samples' distribution, so the mean of s^2 / n over many pixels is an honest
-figure even where single pixels are wildly off). The relMSE divides each pixel's squared
-error by (R + 0.01)^2, and the reference R is unknown. The pixel's own mean would do, but
-not where the noise is heavy-tailed: a pixel that caught a firefly has a mean far above R,
-and would divide its large variance by its own large mean, hiding exactly the noise that
-matters. So the denominator is the median of the 3 x 3 pixels' means
-(``REFERENCE_WINDOW``), which one firefly cannot move and which keeps an edge's two sides
-apart (a step edge is its own median).
+**The estimate.** A pixel's value is the mean of its n samples. Were the samples
+independent, the samples' unbiased variance s^2 over n would estimate the variance of that
+mean (``variance_of_mean``). ptlab's samplers are not independent on purpose: sobol spreads a
+pixel's samples so evenly that its error is about half of s^2 / n (docs/samplers.md), and
+s^2 / n would then call the image twice as noisy as it is. So a render to a noise target
+draws each pixel's even and odd samples as two independent sequences (each as well spread as
+the whole), and the two halves' means, A and B, are two independent estimates of the pixel.
+Since E[(A - B)^2] = 2 Var(A) and the pixel's mean (A + B) / 2 has Var(A) / 2,
+(A - B)^2 / 4 is an unbiased estimate of the variance of the pixel's mean, whatever the
+sampler (``variance_of_mean_from_halves``; the two "half buffers" of Rousselle, Knaus and
+Zwicker 2012, and of Cycles' adaptive sampling). One pixel's estimate has a single degree
+of freedom, so it is never trusted alone: the image's estimate is a mean over every pixel,
+and the allocation below pools neighbours.
+
+The relMSE divides each pixel's squared error by (R + 0.01)^2, and the reference R is
+unknown. The pixel's own mean would do, but not where the noise is heavy-tailed: a pixel
+that caught a firefly has a mean far above R, and would divide its large variance by its own
+large mean, hiding exactly the noise that matters. So the denominator is the median of the
+3 x 3 pixels' means (``REFERENCE_WINDOW``), which one firefly cannot move and which keeps an
+edge's two sides apart (a step edge is its own median).
 
 **Where the samples go.** The image's relMSE is the mean over pixels of v_i / n_i, with v_i
 a pixel's relative variance per sample, s^2 / (R + 0.01)^2 averaged over the channels. For a
@@ -46,14 +56,23 @@ POOL_RADIUS = 3
 
 
 def variance_of_mean(sums: np.ndarray, squares: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(H, W, 3) the estimated variance of each pixel's mean: s^2 / n, with s^2 the unbiased
-    sample variance (n - 1 below), from the per-pixel sums of the samples (H, W, 3), of their
-    squares (H, W, 3), and their counts (H, W). 0 where a pixel has fewer than 2 samples."""
+    """(H, W, 3) the estimated variance of each pixel's mean for *independent* samples:
+    s^2 / n, with s^2 the unbiased sample variance (n - 1 below), from the per-pixel sums of
+    the samples (H, W, 3), of their squares (H, W, 3), and their counts (H, W). 0 where a
+    pixel has fewer than 2 samples. (Too high for sobol's samples: module docstring.)"""
     n = np.asarray(counts, np.float64)[..., None]
     safe = np.maximum(n, 2.0)
     # sum (x - mean)^2 = sum x^2 - (sum x)^2 / n, never below 0 (rounding)
     deviations = np.maximum(squares - sums * sums / np.maximum(n, 1.0), 0.0)
     return np.where(n >= 2, deviations / ((safe - 1.0) * safe), 0.0)
+
+
+def variance_of_mean_from_halves(differences: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """(H, W, 3) the estimated variance of each pixel's mean from its two independent halves
+    (module docstring): with D the even samples' sum less the odd samples' sum and n the
+    count (even), A - B = 2 D / n, and the variance of the mean is (A - B)^2 / 4 = (D / n)^2."""
+    n = np.maximum(np.asarray(counts, np.float64), 1.0)[..., None]
+    return (differences / n) ** 2
 
 
 def reference_estimate(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -63,20 +82,22 @@ def reference_estimate(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     return median_filter(means, size=(REFERENCE_WINDOW, REFERENCE_WINDOW, 1), mode="nearest")
 
 
-def relative_variance(sums: np.ndarray, squares: np.ndarray, counts: np.ndarray) -> np.ndarray:
-    """(H, W) each pixel's relative variance per sample, v = s^2 / (R + 0.01)^2 averaged over
-    the channels (so that the pixel's relMSE is v / n)."""
-    n = np.asarray(counts, np.float64)
+def relative_variance(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """(H, W) each pixel's relative variance per sample, v = n var / (R + 0.01)^2 averaged
+    over the channels (so that the pixel's relMSE is v / n), from ``variance`` (H, W, 3), the
+    variance of each pixel's mean (``variance_of_mean_from_halves``, or ``variance_of_mean``
+    for independent samples)."""
+    n = np.asarray(counts, np.float64)[..., None]
     reference = reference_estimate(sums, counts)
-    per_sample = variance_of_mean(sums, squares, counts) * n[..., None]
-    return (per_sample / (reference + RELMSE_EPSILON) ** 2).mean(axis=-1)
+    return (n * variance / (reference + RELMSE_EPSILON) ** 2).mean(axis=-1)
 
 
-def estimated_relmse(sums: np.ndarray, squares: np.ndarray, counts: np.ndarray) -> float:
+def estimated_relmse(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> float:
     """The image's relMSE as its own samples estimate it: the mean over pixels and channels
-    of the variance of the pixel's mean over (R + 0.01)^2 (``reference_estimate`` for R)."""
+    of ``variance``, the variance of each pixel's mean, over (R + 0.01)^2
+    (``reference_estimate`` for R)."""
     reference = reference_estimate(sums, counts)
-    return float(np.mean(variance_of_mean(sums, squares, counts) / (reference + RELMSE_EPSILON) ** 2))
+    return float(np.mean(variance / (reference + RELMSE_EPSILON) ** 2))
 
 
 def pooled(values: np.ndarray, radius: int = POOL_RADIUS) -> np.ndarray:
@@ -85,11 +106,12 @@ def pooled(values: np.ndarray, radius: int = POOL_RADIUS) -> np.ndarray:
     return uniform_filter(np.asarray(values, np.float64), size=2 * radius + 1, mode="reflect")
 
 
-def allocation_weights(sums: np.ndarray, squares: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def allocation_weights(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """(H, W) what each pixel's share of new samples is proportional to: sqrt of its relative
     variance per sample, pooled over its neighbourhood (``pooled``), so that n_i grows as
     sigma_i / (R_i + 0.01) where the noise is."""
-    return np.sqrt(pooled(relative_variance(sums, squares, counts)))
+    # (A running-sum filter can round a window of zeros to -1e-20: clipped.)
+    return np.sqrt(np.maximum(pooled(relative_variance(variance, sums, counts)), 0.0))
 
 
 def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int) -> np.ndarray:

@@ -19,11 +19,12 @@ from typing import Any
 
 import numpy as np
 
+from ptlab.rendering import adaptive
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
-from ptlab.rendering.options import DEFAULT_RES, RenderOptions, resolution, takes_options
+from ptlab.rendering.options import DEFAULT_MAX_SPP, DEFAULT_RES, RenderOptions, resolution, takes_options
 from ptlab.rendering.scheduler import run_jobs
 from ptlab.rendering.settings import check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
@@ -61,6 +62,10 @@ class RenderResult:
             material or an integrator has a bug.
         first_nonfinite: (x, y, depth) of the first of them (by pass, then tile): the pixel
             to look at, and the bounce; None if there is none.
+        counts: (H, W) int64 samples each pixel has (the same everywhere, but for a render
+            stopped mid-pass, unless the render had a target error).
+        relmse_estimate: the image's relMSE as its own samples estimate it
+            (``ptlab.rendering.adaptive``), for a render to a target error; else None.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
             depth at which Russian roulette started and the workers.
@@ -77,7 +82,22 @@ class RenderResult:
     sampler_seconds: float
     nonfinite: int = 0
     first_nonfinite: tuple[int, int, int] | None = None
+    counts: np.ndarray | None = None
+    relmse_estimate: float | None = None
     settings: dict = field(default_factory=dict)
+
+    @property
+    def spp_mean(self) -> float:
+        """Samples per pixel on average over the image."""
+        return float(self.counts.mean()) if self.counts is not None and self.counts.size else float(self.spp)
+
+    @property
+    def target_reached(self) -> bool | None:
+        """With a target error: whether the estimate fell to it; else None."""
+        target = self.settings.get("target_error")
+        if target is None:
+            return None
+        return self.relmse_estimate is not None and self.relmse_estimate <= target
 
     @property
     def samples_per_second(self) -> float:
@@ -149,12 +169,12 @@ def render_result(
     width, height = options.size
     tiles = make_tiles(width, height, options.tile_size)
     passes = pass_schedule(options.spp, options.spp_per_pass)
-    film = Film(width, height, tiles, passes)
+    film = Film(width, height, tiles, passes, halves=options.target_error is not None)
     record = options.record()
     # Any number of workers may resume a render; the sampler's identity says what of it the
     # image depends on (its name, and for some the spp).
     identity = dict(record, scene=scene_digest(scene), sampler=sampler.identity)
-    del identity["workers"]
+    del identity["workers"], identity["time_limit"]
     if resume is not None:
         load_checkpoint(resume, film, identity)
     samples_at_start = film.samples
@@ -169,35 +189,31 @@ def render_result(
         settings=settings,
         integrator=options.integrator,
         sampler=sampler,
+        halves=options.target_error is not None,
     )
-    first_sample = np.concatenate([[0], np.cumsum(passes)])
-    jobs = [
-        Job(tile, k, n, int(first_sample[k]))
-        for k, n in enumerate(passes)
-        for tile in tiles
-        if k >= film.passes_done[tile.index]
-    ]
-    if executor is None:
+    jobs = _jobs_left(film)
+    pass_ended = _PassEnd(checkpoint, identity, command, on_pass)
+    more = None
+    if options.target_error is not None:
+        more = _NoiseTarget(film, options, start, pass_ended)
+    elif executor is None:
         workers = min(workers, len(jobs))  # a pool for one job would only cost its start-up
     complete_passes = int(film.passes_done.min())
     report, bar = _progress_reports(progress, film)
-    for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False)):
+    for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False), more):
         film.add(result)
         if report is not None:
             report(film)
         if film.passes_done.min() > complete_passes:
             complete_passes = int(film.passes_done.min())
-            if checkpoint is not None:
-                save_checkpoint(checkpoint, film, identity, command)
-            if on_pass is not None:
-                on_pass(film)
+            pass_ended(film)
     if bar is not None:
         bar.close()
     complete = film.complete
     if film.spp_max == 0 and not complete:
         warnings.warn("the render stopped before any tile had a pass: its image is black", RuntimeWarning, 2)
-    if checkpoint is not None and not complete:
-        save_checkpoint(checkpoint, film, identity, command)
+    if not complete:
+        pass_ended.save(film)
     seconds = time.perf_counter() - start
     return RenderResult(
         image=film.image(),
@@ -211,14 +227,124 @@ def render_result(
         sampler_seconds=film.sampler_seconds,
         nonfinite=film.nonfinite,
         first_nonfinite=film.first_nonfinite,
+        counts=film.counts,
+        relmse_estimate=_estimate(film),
         settings=dict(
             record,
             scene=scene.name,
             spp=film.spp,
             rr_depth=settings.roulette_starts,
             workers=workers if executor is None else "executor",
+            **_target_record(more),
         ),
     )
+
+
+def _target_record(noise_target: _NoiseTarget | None) -> dict:
+    """What a render to a target error adds to its settings: its pixels' most samples, and
+    why it ended (``_NoiseTarget.end``)."""
+    if noise_target is None:
+        return {}
+    return {"max_spp": noise_target.most, "target_end": noise_target.end}
+
+
+def _estimate(film: Film) -> float | None:
+    """The film's estimate of its image's relMSE: from its two independent halves, which only
+    a render to a target error has (``RenderSetup.halves``)."""
+    if not film.halves or film.spp < 2:
+        return None
+    variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
+    return adaptive.estimated_relmse(variance, film.sums, film.counts)
+
+
+def _jobs_left(film: Film) -> list[Job]:
+    """The jobs of the fixed passes that the film does not have yet (all of them but in a
+    resumed render), or of the noise-target pass that a resumed render was stopped in."""
+    if film.plan is not None:
+        return plan_jobs(film, len(film.passes))
+    first_sample = np.concatenate([[0], np.cumsum(film.passes)])
+    return [
+        Job(tile, k, n, int(first_sample[k]))
+        for k, n in enumerate(film.passes)
+        for tile in film.tiles
+        if k >= film.passes_done[tile.index]
+    ]
+
+
+@dataclass
+class _PassEnd:
+    """What a render does when a pass over the whole image is done: save the checkpoint,
+    if it keeps one, and call ``on_pass``."""
+
+    checkpoint: str | Path | None
+    identity: dict
+    command: dict | None
+    on_pass: Callable[[Film], None] | None
+
+    def __call__(self, film: Film) -> None:
+        self.save(film)
+        if self.on_pass is not None:
+            self.on_pass(film)
+
+    def save(self, film: Film) -> None:
+        if self.checkpoint is not None:
+            save_checkpoint(self.checkpoint, film, self.identity, self.command)
+
+
+class _NoiseTarget:
+    """A render to a target error: ``run_jobs``' ``more``, called each time a pass over the
+    image has been added whole. It estimates the image's relMSE from the film and, until the
+    estimate is at the target (or no pixel may have more samples, or the time is up), plans
+    the next pass (``ptlab.rendering.adaptive``) and returns its jobs."""
+
+    def __init__(self, film: Film, options: RenderOptions, start: float, pass_ended: _PassEnd):
+        self.film, self.options, self.start, self.pass_ended = film, options, start, pass_ended
+        self.samples_at_start = film.samples
+        self.most = options.max_spp or DEFAULT_MAX_SPP
+        #: Why the render ended: "target", "max spp" or "time limit" (what the last call saw).
+        self.end = ""
+
+    def __call__(self) -> list[Job]:
+        film, target = self.film, self.options.target_error
+        assert target is not None
+        ended = film.plan is not None
+        film.end_plan()
+        variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
+        film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts)
+        if ended:  # (the fixed passes' ends are the render loop's to report)
+            self.pass_ended(film)
+        if film.estimate <= target:
+            self.end = "target"
+            return []
+        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
+        budget = adaptive.pass_budget(weights, film.counts, target, self.most)
+        self.end = "max spp"
+        if self.options.time_limit is not None:  # (at the speed so far)
+            elapsed = time.perf_counter() - self.start
+            rate = (film.samples - self.samples_at_start) / max(elapsed, 1e-9)
+            if rate * (self.options.time_limit - elapsed) < budget:
+                budget, self.end = int(rate * (self.options.time_limit - elapsed)), "time limit"
+        if budget < film.counts.size // 8:  # (less than an eighth of a sample per pixel: done)
+            return []
+        # (In pairs, one sample for each half: ``RenderSetup.halves``.)
+        pairs = adaptive.allocate(weights, film.counts // 2, budget // 2, self.most // 2)
+        film.start_plan(2 * pairs)
+        return plan_jobs(film, len(film.passes))
+
+
+def plan_jobs(film: Film, fixed_passes: int) -> list[Job]:
+    """The jobs of the noise-target pass under way (``Film.plan``) that are not done: one per
+    tile that has samples in it, each pixel going on from the samples it has."""
+    assert film.plan is not None
+    jobs = []
+    for tile in film.tiles:
+        counts = film.plan[tile.y0 : tile.y1, tile.x0 : tile.x1]
+        if not film.plan_done[tile.index] and counts.any():
+            firsts = film.counts[tile.y0 : tile.y1, tile.x0 : tile.x1].copy()
+            jobs.append(
+                Job(tile, fixed_passes + film.adaptive_passes, int(counts.max()), 0, counts.copy(), firsts)
+            )
+    return jobs
 
 
 def _progress_reports(progress, film: Film) -> tuple[Callable[[Film], None] | None, Any]:

@@ -1,7 +1,8 @@
 """Checkpoints: a render's film saved to disk, so that it can be resumed.
 
-A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums, the samples taken
-per tile and the render's identity: its options (``RenderOptions.record``) but the number
+A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums (of the samples and
+of their differences), the samples taken per tile and per pixel, a noise-target pass under way
+(``Film.plan``) and the render's identity: its options (``RenderOptions.record``) but the number
 of workers, with the scene's fingerprint and the sampler's identity. Resuming adds the
 missing passes in the same order an uninterrupted render would, so the finished image is
 bit-identical to one. Settings that change the image (scene, resolution, seed, estimator,
@@ -25,7 +26,9 @@ from ptlab.atomic import path_kind, write_atomically
 from ptlab.errors import PtlabError
 from ptlab.rendering.film import Film
 
-FORMAT_VERSION = 3
+FORMAT_VERSION = 4
+#: Older formats that load: 3 had no differences, counts or plan (a render without a noise target).
+READABLE_VERSIONS = (3, FORMAT_VERSION)
 
 
 def scene_digest(scene) -> str:
@@ -56,6 +59,12 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict, command: dict 
             np.savez(
                 out,
                 sums=film.sums,
+                differences=film.differences,
+                counts=film.counts,
+                plan=film.plan if film.plan is not None else np.zeros((0, 0), np.int64),
+                plan_done=film.plan_done,
+                adaptive_passes=np.int64(film.adaptive_passes),
+                estimate=np.float64(np.nan if film.estimate is None else film.estimate),
                 passes=np.asarray(film.passes, dtype=np.int64),
                 passes_done=film.passes_done,
                 rays=np.int64(film.rays),
@@ -85,9 +94,12 @@ def read_checkpoint(path: str | Path) -> tuple[dict, dict, dict[str, np.ndarray]
             }
             # (checkpoints written before the count was kept have none: 0)
             arrays["nonfinite"] = data["nonfinite"] if "nonfinite" in data else np.int64(0)
+            for name in ("differences", "counts", "plan", "plan_done", "adaptive_passes", "estimate"):
+                if name in data:
+                    arrays[name] = data[name]
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
         raise PtlabError(f"{path}: not a ptlab checkpoint ({error})") from None
-    if not isinstance(saved, dict) or saved.get("format") != FORMAT_VERSION:
+    if not isinstance(saved, dict) or saved.get("format") not in READABLE_VERSIONS:
         version = saved.get("format") if isinstance(saved, dict) else None
         raise PtlabError(f"{path}: checkpoint format {version} is not {FORMAT_VERSION}")
     if not isinstance(command, dict):
@@ -100,7 +112,11 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     saved, _, arrays = read_checkpoint(path)
     for key, value in identity.items():
         # Compared as text: checkpoints written before RenderOptions kept rr_depth as text.
-        if key != "spp" and (key not in saved or str(saved[key]) != str(value)):
+        if key == "spp":
+            continue
+        # (An option newer than a format-3 checkpoint is unset there.)
+        same = str(saved[key]) == str(value) if key in saved else saved.get("format") == 3 and value is None
+        if not same:
             raise PtlabError(
                 f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, this render has {value!r}"
             )
@@ -118,6 +134,22 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
         )
     film.sums[:] = arrays["sums"]
     film.passes_done[:] = arrays["passes_done"]
+    if "counts" in arrays:
+        film.differences[:] = arrays["differences"]
+        film.counts[:] = arrays["counts"]
+        if arrays["plan"].size:
+            film.plan = arrays["plan"].astype(np.int64)
+            film.plan_done[:] = arrays["plan_done"]
+            planned, finished = film.plan, film.plan_done
+            left = [planned[t.y0 : t.y1, t.x0 : t.x1].sum() for t in film.tiles if not finished[t.index]]
+            film.plan_total = film.samples + int(sum(left))
+        film.adaptive_passes = int(arrays["adaptive_passes"])
+        estimate = float(arrays["estimate"])
+        film.estimate = None if np.isnan(estimate) else estimate
+    else:  # (format 3: every pixel of a tile has its passes' samples)
+        spp_after = np.concatenate([[0], np.cumsum(film.passes, dtype=np.int64)])
+        for tile, passes in zip(film.tiles, film.passes_done, strict=True):
+            film.counts[tile.y0 : tile.y1, tile.x0 : tile.x1] = spp_after[passes]
     film.rays = int(arrays["rays"])
     film.query_seconds = float(arrays["query_seconds"])
     film.sampler_seconds = float(arrays["sampler_seconds"])
@@ -126,17 +158,34 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
 
 def _fits(arrays: dict, film: Film) -> bool:
     """Whether a checkpoint's arrays have the shapes and kinds of number this film needs."""
-    expected = {
+    expected: dict[str, tuple[tuple[int, ...], type]] = {
         "sums": (film.sums.shape, np.floating),
         "passes_done": ((len(film.tiles),), np.integer),
         "rays": ((), np.integer),
         "query_seconds": ((), np.floating),
         "sampler_seconds": ((), np.floating),
     }
+    if "counts" in arrays:
+        expected |= {
+            "differences": (film.sums.shape, np.floating),
+            "counts": (film.counts.shape, np.integer),
+            "plan_done": ((len(film.tiles),), np.bool_),
+            "adaptive_passes": ((), np.integer),
+            "estimate": ((), np.floating),
+        }
+        plan = arrays.get("plan")
+        if (
+            plan is None
+            or plan.shape not in ((0, 0), film.counts.shape)
+            or not np.issubdtype(plan.dtype, np.integer)
+        ):
+            return False
+        if np.any(arrays["counts"] < 0) or np.any(plan < 0):
+            return False
     passes = arrays["passes"]
     return (
         all(
-            arrays[name].shape == shape and np.issubdtype(arrays[name].dtype, kind)
+            name in arrays and arrays[name].shape == shape and np.issubdtype(arrays[name].dtype, kind)
             for name, (shape, kind) in expected.items()
         )
         and passes.ndim == 1

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ptlab.image import encode_srgb8, write_image
+from ptlab.image import SRGB_FORMATS, encode_srgb8, write_image
 
 
 def png_bytes(image: np.ndarray, exposure: float = 0.0) -> bytes:
@@ -56,3 +56,21 @@ def show(image, exposure: float = 0.0, out: str | Path = "ptlab-show.png") -> Pa
     figure.figimage(encode_srgb8(linear * np.float32(2.0**exposure)))
     plt.show()
     return None
+
+
+def write_spp_map(path: str | Path, counts: np.ndarray) -> Path:
+    """Write where a render's samples went: (H, W) samples per pixel, as a heat map to a PNG
+    or JPEG (matplotlib's viridis on a log scale, the fewest dark blue, the most yellow) or
+    as the counts themselves, in every channel, to a linear format (``.exr``)."""
+    counts = np.asarray(counts, np.float64)
+    if Path(path).suffix.lower() not in SRGB_FORMATS:
+        return write_image(path, np.repeat(counts[..., None], 3, axis=-1).astype(np.float32))
+    from matplotlib import colormaps
+
+    low, high = np.log2(max(counts.min(), 1.0)), np.log2(max(counts.max(), 1.0))
+    level = (np.log2(np.maximum(counts, 1.0)) - low) / max(high - low, 1e-9)
+    colours = colormaps["viridis"](level)[..., :3]
+    # The colours are meant as they show; write_image encodes linear values to sRGB, so
+    # they go in decoded (the sRGB curve's inverse, IEC 61966-2-1).
+    linear = np.where(colours <= 0.04045, colours / 12.92, ((colours + 0.055) / 1.055) ** 2.4)
+    return write_image(path, linear.astype(np.float32))

@@ -1,9 +1,14 @@
-"""The film: per-pixel sums of radiance in float64, and how many passes each tile has.
+"""The film: per-pixel sums of radiance (and of its square) in float64, each pixel's count of
+samples, and how many passes each tile has.
 
 Jobs finish in any order, but the film adds each tile's passes in pass order (a result
 that arrives early waits in ``pending``), so the float64 sums, and so the image, are the
 same bit for bit whatever the number of workers. Tiles are disjoint, so the order *between*
 tiles does not matter.
+
+A render to a noise target (``ptlab.rendering.adaptive``) adds passes of its own after the
+fixed ones: each gives every pixel its own number of samples (``plan``). Such a pass begins
+only once the one before has been added whole, so it too is added in order.
 """
 
 from __future__ import annotations
@@ -18,8 +23,18 @@ class Film:
 
     Attributes:
         sums: (H, W, 3) float64 radiance summed over every sample taken so far.
+        halves: whether each pixel's even and odd samples are independent halves
+            (``RenderSetup.halves``), as in a render to a target error.
+        differences: (H, W, 3) float64 the sum of the even samples less the sum of the odd
+            ones, where ``halves`` (for the noise estimate, ``ptlab.rendering.adaptive``).
+        counts: (H, W) int64 samples taken so far per pixel.
         passes: samples per pixel of each pass of the render (``ptlab.rendering.pass_schedule``).
         passes_done: (tiles,) passes added for each tile.
+        plan: (H, W) the samples per pixel of the noise-target pass under way, or None.
+        plan_done: (tiles,) which tiles have that pass's samples.
+        adaptive_passes: noise-target passes added whole.
+        estimate: the last estimate of the image's relMSE (None before a noise-target
+            render's first estimate).
         rays, query_seconds, sampler_seconds: work done so far (rays traced, seconds inside
             ray queries and inside the sampler).
         nonfinite: samples that were NaN or infinite and were left out of ``sums``
@@ -27,10 +42,19 @@ class Film:
         first_nonfinite: (x, y, depth) of the first of them, by pass and tile (None if none).
     """
 
-    def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int]):
+    def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int], halves: bool = False):
         self.tiles = tiles
         self.passes = list(passes)
         self.sums = np.zeros((height, width, 3))
+        self.halves = halves
+        self.halves = halves
+        self.differences = np.zeros((height, width, 3))
+        self.counts = np.zeros((height, width), dtype=np.int64)
+        self.plan: np.ndarray | None = None
+        self.plan_total = 0  # (samples once the plan is done)
+        self.plan_done = np.zeros(len(tiles), dtype=bool)
+        self.adaptive_passes = 0
+        self.estimate: float | None = None
         self.passes_done = np.zeros(len(tiles), dtype=np.int64)
         self.rays = 0
         self.query_seconds = 0.0
@@ -42,60 +66,72 @@ class Film:
 
     def add(self, result: JobResult) -> None:
         """Add a job's sums once every earlier pass of its tile has been added."""
+        if result.job.counts is not None:  # (a noise-target pass: the one under way)
+            self._add_sums(result)
+            self.plan_done[result.job.tile.index] = True
+            return
         self.pending[result.job.tile.index, result.job.pass_index] = result
         index = result.job.tile.index
         while (index, int(self.passes_done[index])) in self.pending:
-            ready = self.pending.pop((index, int(self.passes_done[index])))
-            tile = ready.job.tile
-            self.sums[tile.y0 : tile.y1, tile.x0 : tile.x1] += ready.sums
+            self._add_sums(self.pending.pop((index, int(self.passes_done[index]))))
             self.passes_done[index] += 1
-            self.rays += ready.rays
-            self.query_seconds += ready.query_seconds
-            self.sampler_seconds += ready.sampler_seconds
-            self.nonfinite += ready.nonfinite
-            job = (ready.job.pass_index, tile.index)
-            if ready.first_nonfinite is not None and job < self._first_nonfinite_job:
-                self.first_nonfinite, self._first_nonfinite_job = ready.first_nonfinite, job
 
-    @property
-    def tile_spp(self) -> np.ndarray:
-        """(tiles,) samples per pixel in each tile: the spp of its first passes_done passes."""
-        spp_after = np.concatenate([[0], np.cumsum(self.passes, dtype=np.int64)])
-        return spp_after[self.passes_done]
+    def _add_sums(self, ready: JobResult) -> None:
+        tile = ready.job.tile
+        rows, columns = slice(tile.y0, tile.y1), slice(tile.x0, tile.x1)
+        self.sums[rows, columns] += ready.sums
+        self.differences[rows, columns] += ready.differences
+        self.counts[rows, columns] += ready.job.spp if ready.job.counts is None else ready.job.counts
+        self.rays += ready.rays
+        self.query_seconds += ready.query_seconds
+        self.sampler_seconds += ready.sampler_seconds
+        self.nonfinite += ready.nonfinite
+        job = (ready.job.pass_index, tile.index)
+        if ready.first_nonfinite is not None and job < self._first_nonfinite_job:
+            self.first_nonfinite, self._first_nonfinite_job = ready.first_nonfinite, job
+
+    def start_plan(self, plan: np.ndarray) -> None:
+        """Begin a noise-target pass of ``plan`` (H, W) samples per pixel."""
+        self.plan = plan
+        self.plan_total = self.samples + int(plan.sum())
+        self.plan_done[:] = [not plan[t.y0 : t.y1, t.x0 : t.x1].any() for t in self.tiles]
+
+    def end_plan(self) -> None:
+        """The noise-target pass under way has been added whole."""
+        if self.plan is not None:
+            self.plan = None
+            self.adaptive_passes += 1
 
     @property
     def samples(self) -> int:
         """Camera samples (paths) added so far, over the whole image."""
-        return int(
-            sum(
-                int(count) * t.shape[0] * t.shape[1]
-                for t, count in zip(self.tiles, self.tile_spp, strict=True)
-            )
-        )
+        return int(self.counts.sum())
 
     @property
     def spp(self) -> int:
-        """Samples per pixel that every pixel has (the least over tiles)."""
-        return int(self.tile_spp.min()) if len(self.tile_spp) else 0
+        """Samples per pixel that every pixel has (the least over pixels)."""
+        return int(self.counts.min()) if self.counts.size else 0
 
     @property
     def spp_max(self) -> int:
-        """Samples per pixel of the tiles that have the most."""
-        return int(self.tile_spp.max()) if len(self.tile_spp) else 0
+        """Samples per pixel of the pixels that have the most."""
+        return int(self.counts.max()) if self.counts.size else 0
 
     @property
     def complete(self) -> bool:
-        """Every tile has every pass."""
-        return bool(np.all(self.passes_done == len(self.passes)))
+        """Every tile has every pass (and no noise-target pass is under way)."""
+        return bool(np.all(self.passes_done == len(self.passes))) and self.plan is None
 
     def image(self) -> np.ndarray:
-        """(H, W, 3) float32: each pixel's mean radiance (0 where a tile has no sample yet).
+        """(H, W, 3) float32: each pixel's mean radiance (0 where it has no sample yet).
 
         Computed tile by tile, so it needs no float64 temporary the size of the image.
         """
         image = np.zeros(self.sums.shape, dtype=np.float32)
-        for tile, count in zip(self.tiles, self.tile_spp, strict=True):
-            if count > 0:
-                rows, columns = slice(tile.y0, tile.y1), slice(tile.x0, tile.x1)
-                image[rows, columns] = self.sums[rows, columns] / count
+        for tile in self.tiles:
+            rows, columns = slice(tile.y0, tile.y1), slice(tile.x0, tile.x1)
+            counts = self.counts[rows, columns, None]
+            image[rows, columns] = np.divide(
+                self.sums[rows, columns], counts, out=np.zeros((*counts.shape[:2], 3)), where=counts > 0
+            )
         return image

@@ -70,20 +70,37 @@ def pass_sizes(spp: int, spp_per_pass: int) -> list[int]:
 @dataclass(frozen=True)
 class Job:
     """One tile in one pass: ``spp`` samples for each of the tile's pixels, the samples
-    ``first_sample``, ..., ``first_sample + spp - 1`` of each."""
+    ``first_sample``, ..., ``first_sample + spp - 1`` of each.
+
+    A pass of a render to a noise target (``ptlab.rendering.adaptive``) gives each pixel its
+    own number of samples: ``counts`` (tile height, tile width), continuing from each pixel's
+    own ``firsts`` (the samples it already has), and ``spp`` is then the most of them. (Two
+    jobs of one render differ by tile or pass, which is what they are compared by.)
+    """
 
     tile: Tile
     pass_index: int
     spp: int
     first_sample: int = 0
+    counts: np.ndarray | None = field(default=None, compare=False, repr=False)
+    firsts: np.ndarray | None = field(default=None, compare=False, repr=False)
+
+    @property
+    def samples(self) -> int:
+        """Camera samples (paths) of the job."""
+        if self.counts is not None:
+            return int(self.counts.sum())
+        return self.tile.shape[0] * self.tile.shape[1] * self.spp
 
 
 @dataclass
 class JobResult:
-    """What a job sends back: per-pixel radiance sums and counts of its work."""
+    """What a job sends back: per-pixel radiance sums (and the difference of the two halves'
+    sums, for the noise estimate: ``RenderSetup.halves``) and counts of its work."""
 
     job: Job
     sums: np.ndarray  # (tile height, tile width, 3) float64
+    differences: np.ndarray  # (tile height, tile width, 3) float64: even samples' sum - odd's
     rays: int
     query_seconds: float
     sampler_seconds: float = 0.0
@@ -110,6 +127,9 @@ class RenderSetup:
     integrator: str = "path"
     sampler: Sampler | None = None
     token: str = field(default_factory=lambda: uuid.uuid4().hex)
+    #: Draw each pixel's even and odd samples as two independent sequences (a render to a
+    #: noise target measures its error by how the two halves differ: ``ptlab.rendering.adaptive``).
+    halves: bool = False
 
     def __post_init__(self):
         if self.sampler is None:
@@ -128,15 +148,17 @@ class CameraSamples:
     holds whichever paths are left, from one job or the next.
 
     Within a job the samples are in sample-major order: the tile's pixel k is row k, k + n,
-    k + 2 n, ... (n pixels in the tile).
+    k + 2 n, ... (n pixels in the tile). A job with its own count per pixel
+    (``Job.counts``) is in the same order with the pixels that have no more samples left out:
+    first every pixel's first sample, then the second of those that have two, and so on.
     """
 
     def __init__(self, setup: RenderSetup, jobs: list[Job], sampler: TimedSampler):
         self.setup, self.jobs, self.sampler = setup, jobs, sampler
-        sizes = [job.tile.shape[0] * job.tile.shape[1] * job.spp for job in jobs]
         #: Row of each job's first sample, and the total, as in ``np.cumsum``.
-        self.starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.intp)
+        self.starts = np.concatenate([[0], np.cumsum([job.samples for job in jobs])]).astype(np.intp)
         self.handed_out = 0
+        self._orders: dict[int, tuple[np.ndarray, np.ndarray]] = {}
 
     @property
     def count(self) -> int:
@@ -164,6 +186,13 @@ class CameraSamples:
                 continue
             height, width = job.tile.shape
             n_pixels = width * height
+            if job.counts is not None:
+                in_tile, sample_index = self._order(j)
+                in_tile, sample_index = in_tile[start:stop], sample_index[start:stop]
+                pixel_x.append(job.tile.x0 + in_tile % width)
+                pixel_y.append(job.tile.y0 + in_tile // width)
+                index.append(sample_index)
+                continue
             # Whole samples of the tile's pixels (np.tile and np.repeat: integer division is
             # slow), cut to the rows asked for.
             first_sample, last_sample = start // n_pixels, (stop - 1) // n_pixels + 1
@@ -175,7 +204,13 @@ class CameraSamples:
             index.append(np.repeat(np.arange(first_sample, last_sample) + job.first_sample, n_pixels)[cut])
         xs, ys = np.concatenate(pixel_x), np.concatenate(pixel_y)
         setup = self.setup
-        sample = self.sampler.keys(ys * setup.width + xs, np.concatenate(index))
+        pixel, index_in_pixel = ys * setup.width + xs, np.concatenate(index)
+        if setup.halves:
+            # Odd samples are the samples of a pixel that does not exist (its number past the
+            # image's), so their sequence is scrambled on its own, independent of the even ones'.
+            odd = index_in_pixel & 1
+            pixel, index_in_pixel = pixel + odd * (setup.width * setup.height), index_in_pixel >> 1
+        sample = self.sampler.keys(pixel, index_in_pixel)
         jitter = self.sampler.get(sample, BounceUniforms.PIXEL, 2)
         origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, xs, ys, jitter)
         return Paths(
@@ -187,16 +222,46 @@ class CameraSamples:
             sample=sample,
         )
 
-    def sums(self, film: np.ndarray, j: int) -> np.ndarray:
-        """Job ``j``'s per-pixel radiance sums (tile height, tile width, 3) from the per-path
-        ``film``: each pixel's paths added one after the other, in sample order."""
+    def _order(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """For job ``j`` with a count per pixel: each row's pixel in the tile and sample index
+        (the class docstring's order), made once."""
+        if j not in self._orders:
+            job = self.jobs[j]
+            assert job.counts is not None
+            assert job.firsts is not None
+            counts = job.counts.reshape(-1)
+            # (k, pixel) for every k below the pixel's count, k-major: row-major nonzero.
+            k, in_tile = np.nonzero(np.arange(job.spp)[:, None] < counts[None, :])
+            self._orders[j] = (in_tile, job.firsts.reshape(-1)[in_tile] + k)
+        return self._orders[j]
+
+    def sums(self, film: np.ndarray, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Job ``j``'s per-pixel radiance sums, and the sums of its even samples less those of
+        its odd ones (each (tile height, tile width, 3)), from the per-path ``film``: each
+        pixel's paths added one after the other, in sample order."""
         job = self.jobs[j]
         n_pixels = job.tile.shape[0] * job.tile.shape[1]
         rows = film[self.starts[j] : self.starts[j + 1]]
-        total = rows[:n_pixels].copy()
-        for index in range(1, job.spp):
-            total += rows[index * n_pixels : (index + 1) * n_pixels]
-        return total.reshape(*job.tile.shape, 3)
+        total, differences = np.zeros((n_pixels, 3)), np.zeros((n_pixels, 3))
+        blocks: list[tuple[slice | np.ndarray, np.ndarray, np.ndarray | int]]
+        if job.counts is None:
+            blocks = [
+                (slice(None), rows[k * n_pixels : (k + 1) * n_pixels], (job.first_sample + k) & 1)
+                for k in range(job.spp)
+            ]
+        else:  # (the k-th samples of the pixels that have k + 1 or more, in pixel order)
+            having = np.bincount(job.counts.reshape(-1), minlength=job.spp + 1)[::-1].cumsum()[::-1]
+            ends = np.cumsum(having[1:])
+            in_tile, sample_index = self._order(j)
+            blocks = [
+                (in_tile[end - size : end], rows[end - size : end], sample_index[end - size : end, None] & 1)
+                for size, end in zip(having[1:], ends, strict=True)
+            ]
+        for pixels, block, odd in blocks:
+            total[pixels] += block
+            if self.setup.halves:
+                differences[pixels] += np.where(odd, -block, block)
+        return total.reshape(*job.tile.shape, 3), differences.reshape(*job.tile.shape, 3)
 
     def job_of(self, rows: np.ndarray) -> np.ndarray:
         """The job (its place in the list) of each film row ``rows``."""
@@ -235,10 +300,12 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
             for j in range(len(jobs)):
                 paths = camera.paths(camera.starts[j], camera.starts[j + 1])
                 rays += trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
+    sums = [camera.sums(film, j) for j in range(len(jobs))]
     return [
         JobResult(
             job=job,
-            sums=camera.sums(film, j),
+            sums=sums[j][0],
+            differences=sums[j][1],
             # The work of the whole stream, counted with its first job (the film adds it up).
             rays=rays if j == 0 else 0,
             query_seconds=timed.seconds if j == 0 else 0.0,
@@ -283,7 +350,7 @@ def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
     or so). One worker has no one to wait for: its groups are all of the largest size. A
     group holds one pass: a pass is what the film shows, saves and is stopped after.
     """
-    sizes = [job.tile.shape[0] * job.tile.shape[1] * job.spp for job in jobs]
+    sizes = [job.samples for job in jobs]
     left = sum(sizes)
     groups: list[list[Job]] = []
     group: list[Job] = []

@@ -31,12 +31,16 @@ from ptlab.rendering.settings import (
     MAX_WORKERS,
     check_choice,
     check_integer,
+    check_positive_number,
     check_roulette,
     parse_resolution,
 )
 from ptlab.rendering.sizes import DEFAULT_SPP, SPP_PER_PASS, TILE_SIZE
 from ptlab.samplers import DEFAULT_SAMPLER, SAMPLERS
 from ptlab.scene import Scene
+
+#: The most samples a pixel gets in a render to a target error that gives no ``max_spp``.
+DEFAULT_MAX_SPP = 4096
 
 #: The resolution of a render that gives none, of a scene whose file has no ``[render] res``.
 DEFAULT_RES = (512, 512)
@@ -174,6 +178,31 @@ class RenderOptions:
         1,
     )
 
+    target_error: float | None = option(
+        None,
+        "render until the image's estimated relMSE falls to this (e.g. 0.01), spending more "
+        "samples where the image is noisy; --spp is then the first pass's samples per pixel "
+        "(default: --spp everywhere, no estimate)",
+        lambda label, value: check_positive_number(label, value),
+        parse=float,
+        metavar="E",
+    )
+    max_spp: int | None = integer(
+        None,
+        f"with a target error: the most samples any pixel gets (default {DEFAULT_MAX_SPP})",
+        1,
+        MAX_SPP,
+        metavar="N",
+    )
+    time_limit: float | None = option(
+        None,
+        "with a target error: start no pass that would end after SECONDS (default: no limit); "
+        "not part of the image's identity",
+        lambda label, value: check_positive_number(label, value),
+        parse=float,
+        metavar="SECONDS",
+    )
+
     def __post_init__(self):
         for f in fields(self):
             value = getattr(self, f.name)
@@ -181,6 +210,18 @@ class RenderOptions:
                 continue  # left to the scene, the integrator or the machine
             about = f.metadata["about"]
             object.__setattr__(self, f.name, about.check(about.label or f.name.replace("_", " "), value))
+        if self.target_error is None and (self.max_spp, self.time_limit) != (None, None):
+            raise PtlabError("max spp and time limit bound a render to a target error: give target_error too")
+        if self.target_error is not None and self.spp % 2:
+            raise PtlabError(
+                f"spp {self.spp}: with a target error, the first pass's samples per pixel must be even "
+                "(half of them measure the other half's error)"
+            )
+        if self.target_error is not None and self.sampler == "stratified":
+            raise PtlabError(
+                "sampler 'stratified' lays out a fixed number of samples per pixel; a render to a "
+                "target error adds samples as it goes: use sobol or independent"
+            )
         if self.integrator != "path" and (self.strategy, self.heuristic) != (
             PathSettings.strategy,
             PathSettings.heuristic,

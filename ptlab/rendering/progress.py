@@ -32,10 +32,20 @@ class ProgressBar:
         total_samples: camera samples of the whole render.
         passes: passes of the whole render (shown as "pass k/K").
         initial: samples already done (a resumed render).
+        target: a render to this target error: the passes and samples are not known
+            beforehand; the bar shows the estimated error falling toward the target, and its
+            total is the samples of the pass under way.
     """
 
-    def __init__(self, total_samples: int, passes: int, initial: int = 0, quiet: bool = False):
-        self.passes, self.total, self.initial = passes, total_samples, initial
+    def __init__(
+        self,
+        total_samples: int,
+        passes: int,
+        initial: int = 0,
+        quiet: bool = False,
+        target: float | None = None,
+    ):
+        self.passes, self.total, self.initial, self.target = passes, total_samples, initial, target
         self.start = time.monotonic()
         self.passes_shown = 0
         in_notebook = "ipykernel" in sys.modules
@@ -64,6 +74,9 @@ class ProgressBar:
         )
 
     def __call__(self, film: Film) -> None:
+        if self.target is not None:
+            self._toward_target(film)
+            return
         self.bar.update(film.samples - self.bar.n)
         done = int(film.passes_done.min())
         self.bar.set_description(f"pass {min(done + 1, self.passes)}/{self.passes}")
@@ -71,6 +84,26 @@ class ProgressBar:
             self.passes_shown = done
             if self.lines:
                 print(self.line(film.samples), file=sys.stderr, flush=True)
+            elif self.pictures:
+                self.show(film)
+
+    def _toward_target(self, film: Film) -> None:
+        """A render to a target error: "relMSE 0.031 -> 0.01, pass 3" and the pass's samples."""
+        if film.plan is not None and film.plan_total != self.total:
+            self.total = self.bar.total = film.plan_total
+        self.bar.update(film.samples - self.bar.n)
+        done = int(film.passes_done.min()) + film.adaptive_passes
+        estimate = "?" if film.estimate is None else f"{film.estimate:.3g}"
+        self.bar.set_description(f"relMSE {estimate} -> {self.target:g}, pass {done + 1}")
+        if done > self.passes_shown:
+            self.passes_shown = done
+            if self.lines:
+                print(
+                    f"pass {done}: {film.samples / 1e6:.2f} M samples, estimated relMSE {estimate} "
+                    f"(target {self.target:g})",
+                    file=sys.stderr,
+                    flush=True,
+                )
             elif self.pictures:
                 self.show(film)
 

@@ -40,25 +40,43 @@ POLL_SECONDS = 0.1
 
 
 def run_jobs(
-    jobs: list[Job], setup: RenderSetup, workers: int, executor: Executor | None, stop: Callable[[], bool]
+    jobs: list[Job],
+    setup: RenderSetup,
+    workers: int,
+    executor: Executor | None,
+    stop: Callable[[], bool],
+    more: Callable[[], list[Job]] | None = None,
 ) -> Iterator[JobResult]:
-    """Yield each job's result as it finishes (in any order) until done or ``stop()``."""
-    groups = job_groups(jobs, workers)
+    """Yield each job's result as it finishes (in any order) until done or ``stop()``.
+
+    ``more``, if given, is called each time every job so far has finished and its result has
+    been taken (a render to a noise target decides its next pass from the whole film): it
+    returns the next jobs, or none to end. The workers stay up in between.
+    """
+
+    def phases() -> Iterator[list[list[Job]]]:
+        next_jobs = jobs or (more() if more is not None else [])
+        while next_jobs and not stop():
+            yield job_groups(next_jobs, workers)
+            next_jobs = more() if more is not None and not stop() else []
+
     if executor is not None:
-        yield from _run_on_executor(
-            groups,
-            lambda group: executor.submit(run_job_group_in_worker, setup, group),
-            window=2 * workers,
-            stop=stop,
-        )
+        for groups in phases():
+            yield from _run_on_executor(
+                groups,
+                lambda group: executor.submit(run_job_group_in_worker, setup, group),
+                window=2 * workers,
+                stop=stop,
+            )
     elif workers == 1:
         accel = make_accelerator(setup.scene.triangles, setup.backend)
-        for group in groups:
-            if stop():
-                return
-            yield from run_job_group(setup, group, accel)
+        for groups in phases():
+            for group in groups:
+                if stop():
+                    return
+                yield from run_job_group(setup, group, accel)
     else:
-        yield from _run_on_process_pool(groups, setup, workers, stop)
+        yield from _run_on_process_pool(phases(), setup, workers, stop)
 
 
 def _run_on_executor(
@@ -96,23 +114,31 @@ def _submitter(pool: Executor, token: str) -> Callable[[list[Job]], Future]:
 
 
 def _run_on_process_pool(
-    groups: list[list[Job]], setup: RenderSetup, workers: int, stop: Callable[[], bool]
+    phases: Iterator[list[list[Job]]], setup: RenderSetup, workers: int, stop: Callable[[], bool]
 ) -> Iterator[JobResult]:
-    remaining = groups
+    """The groups of each phase in turn on one pool of ``workers`` processes, replaced (and
+    the phase's unfinished groups run again) if a worker dies."""
+    remaining = next(phases, [])
+    if not remaining:
+        return
     for restart in range(MAX_POOL_RESTARTS + 1):
         finished: set[Job] = set()
         pool = process_pool(workers, setup)
         all_done = False
         try:
-            for result in _run_on_executor(
-                remaining,  # (groups)
-                _submitter(pool, setup.token),
-                window=2 * workers,
-                stop=stop,
-            ):
-                finished.add(result.job)
-                yield result
-            all_done = len(finished) == sum(len(group) for group in remaining)
+            while remaining:
+                for result in _run_on_executor(
+                    remaining,
+                    _submitter(pool, setup.token),
+                    window=2 * workers,
+                    stop=stop,
+                ):
+                    finished.add(result.job)
+                    yield result
+                if len(finished) < sum(len(group) for group in remaining):
+                    return  # (stopped)
+                finished, remaining = set(), next(phases, [])
+            all_done = True
             return
         except BrokenProcessPool:
             if stop():  # (asked to stop anyway: no new workers)

@@ -53,6 +53,18 @@ def check_integer(label: str, value: object, low: int, high: int | None = None) 
     raise PtlabError(f"{label} {value!r}: must be {wanted}")
 
 
+def check_positive_number(label: str, value: object) -> float:
+    """``value``, a finite number above 0, as a ``float``."""
+    if not isinstance(value, bool):
+        try:
+            number = float(value)  # type: ignore[arg-type]  # (anything else: the error below)
+        except (TypeError, ValueError):
+            number = float("nan")
+        if 0 < number < float("inf"):
+            return number
+    raise PtlabError(f"{label} {value!r}: must be a number above 0")
+
+
 def check_choice(label: str, value: object, choices: tuple[str, ...]) -> str:
     """``value``, one of the names ``choices``."""
     if not (isinstance(value, str) and value in choices):
