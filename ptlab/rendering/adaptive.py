@@ -26,7 +26,10 @@ unknown. The pixel's own mean would do, but not where the noise is heavy-tailed:
 that caught a firefly has a mean far above R, and would divide its large variance by its own
 large mean, hiding exactly the noise that matters. So the denominator is the median of the
 3 x 3 pixels' means (``REFERENCE_WINDOW``), which one firefly cannot move and which keeps an
-edge's two sides apart (a step edge is its own median).
+edge's two sides apart (a step edge is its own median), or the smaller of the pixel's two
+half means where that is larger: a median would erase a light one pixel wide (the small
+lights of ``veach-mis``), and a pixel that both its halves see bright is bright, where a
+firefly is in one half only.
 
 **Where the samples go.** The image's relMSE is the mean over pixels of v_i / n_i, with v_i
 a pixel's relative variance per sample, s^2 / (R + 0.01)^2 averaged over the channels. For a
@@ -51,6 +54,10 @@ from ptlab.measure.metrics import RELMSE_EPSILON
 
 #: Edge of the window whose median mean stands in for the reference in the denominator.
 REFERENCE_WINDOW = 3
+#: The share of the samples a pass's estimate says are still needed that the pass takes.
+UNDERSHOOT = 0.8
+#: The most a pixel's samples grow in one pass (a pass's estimate of one pixel is noisy).
+GROWTH = 4
 #: Half-width of the window a pixel's relative variance is pooled over (7 x 7 pixels).
 POOL_RADIUS = 3
 
@@ -75,28 +82,39 @@ def variance_of_mean_from_halves(differences: np.ndarray, counts: np.ndarray) ->
     return (differences / n) ** 2
 
 
-def reference_estimate(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def reference_estimate(
+    sums: np.ndarray, counts: np.ndarray, differences: np.ndarray | None = None
+) -> np.ndarray:
     """(H, W, 3) what stands in for the unknown reference R: the median, channel by channel,
-    of the pixel means in a ``REFERENCE_WINDOW``-wide window (module docstring)."""
-    means = sums / np.maximum(np.asarray(counts, np.float64), 1.0)[..., None]
-    return median_filter(means, size=(REFERENCE_WINDOW, REFERENCE_WINDOW, 1), mode="nearest")
+    of the pixel means in a ``REFERENCE_WINDOW``-wide window, or where ``differences`` (the
+    even samples' sum less the odd ones') are given and larger, the smaller of the pixel's
+    two half means, (sum - |difference|) / n (module docstring)."""
+    n = np.maximum(np.asarray(counts, np.float64), 1.0)[..., None]
+    median = median_filter(sums / n, size=(REFERENCE_WINDOW, REFERENCE_WINDOW, 1), mode="nearest")
+    if differences is None:
+        return median
+    return np.maximum(median, (sums - np.abs(differences)) / n)
 
 
-def relative_variance(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def relative_variance(
+    variance: np.ndarray, sums: np.ndarray, counts: np.ndarray, differences: np.ndarray | None = None
+) -> np.ndarray:
     """(H, W) each pixel's relative variance per sample, v = n var / (R + 0.01)^2 averaged
     over the channels (so that the pixel's relMSE is v / n), from ``variance`` (H, W, 3), the
     variance of each pixel's mean (``variance_of_mean_from_halves``, or ``variance_of_mean``
-    for independent samples)."""
+    for independent samples); ``differences`` as for ``reference_estimate``."""
     n = np.asarray(counts, np.float64)[..., None]
-    reference = reference_estimate(sums, counts)
+    reference = reference_estimate(sums, counts, differences)
     return (n * variance / (reference + RELMSE_EPSILON) ** 2).mean(axis=-1)
 
 
-def estimated_relmse(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> float:
+def estimated_relmse(
+    variance: np.ndarray, sums: np.ndarray, counts: np.ndarray, differences: np.ndarray | None = None
+) -> float:
     """The image's relMSE as its own samples estimate it: the mean over pixels and channels
     of ``variance``, the variance of each pixel's mean, over (R + 0.01)^2
     (``reference_estimate`` for R)."""
-    reference = reference_estimate(sums, counts)
+    reference = reference_estimate(sums, counts, differences)
     return float(np.mean(variance / (reference + RELMSE_EPSILON) ** 2))
 
 
@@ -106,18 +124,21 @@ def pooled(values: np.ndarray, radius: int = POOL_RADIUS) -> np.ndarray:
     return uniform_filter(np.asarray(values, np.float64), size=2 * radius + 1, mode="reflect")
 
 
-def allocation_weights(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def allocation_weights(
+    variance: np.ndarray, sums: np.ndarray, counts: np.ndarray, differences: np.ndarray | None = None
+) -> np.ndarray:
     """(H, W) what each pixel's share of new samples is proportional to: sqrt of its relative
     variance per sample, pooled over its neighbourhood (``pooled``), so that n_i grows as
     sigma_i / (R_i + 0.01) where the noise is."""
     # (A running-sum filter can round a window of zeros to -1e-20: clipped.)
-    return np.sqrt(np.maximum(pooled(relative_variance(variance, sums, counts)), 0.0))
+    return np.sqrt(np.maximum(pooled(relative_variance(variance, sums, counts, differences)), 0.0))
 
 
-def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int) -> np.ndarray:
+def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | np.ndarray) -> np.ndarray:
     """(H, W) int64 new samples per pixel, ``budget`` in all, so that each pixel's total
     count comes as close as it can to being proportional to its weight (sqrt(v) for the
-    least relMSE), no pixel going past ``most`` samples.
+    least relMSE), no pixel going past ``most`` samples (less than ``budget`` if the pixels
+    with a weight above 0 have no more room).
 
     Water-filling: the totals are max(n_i, lambda w_i) for the lambda that spends the budget
     (found by bisection); the fractions left by rounding down go, one sample each, to the
@@ -144,9 +165,10 @@ def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int) ->
     share = wanted(high)
     extra = np.floor(share).astype(np.int64)
     left = int(budget - extra.sum())
-    if left > 0:
-        fraction = np.where(extra < room, share - extra, -1.0).ravel()
-        order = np.argsort(-fraction, kind="stable")[:left]
+    if left > 0:  # (only to pixels with a weight and room left: the budget may go unspent)
+        open_ = (extra < room) & (weights > 0)
+        fraction = np.where(open_, share - extra, -1.0).ravel()
+        order = np.argsort(-fraction, kind="stable")[: min(left, int(open_.sum()))]
         np.add.at(extra.reshape(-1), order, 1)
     elif left < 0:  # (the bisection's last step overshot by rounding: take the smallest back)
         fraction = np.where(extra > 0, share - extra, np.inf).ravel()
@@ -155,15 +177,31 @@ def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int) ->
     return extra
 
 
-def pass_budget(weights: np.ndarray, counts: np.ndarray, target: float, most: int) -> int:
-    """How many samples the next pass takes: what the optimal allocation needs to bring the
-    relMSE to ``target`` (all pixels' total T = (sum sqrt v)^2 / (pixels x target), since
-    relMSE = (1 / pixels) sum v_i / n_i), less what the film has, but at least a quarter and
-    at most all of what it has (so that the estimate is renewed before the render has
-    doubled), and no more than the pixels' room below ``most``."""
-    taken = int(np.sum(counts))
-    pixels = weights.size
-    needed = float(np.sum(weights)) ** 2 / (pixels * target) if target > 0 else np.inf
-    budget = min(max(needed - taken, taken / 4), taken)
-    room = int(np.maximum(most - np.asarray(counts, np.int64), 0).sum())
+def pass_budget(weights: np.ndarray, counts: np.ndarray, target: float, most: int | np.ndarray) -> int:
+    """How many samples the next pass takes: the samples that, spent as ``allocate`` spends
+    them (the totals max(n_i, lambda w_i)), bring the predicted relMSE, the mean of
+    w_i^2 / n_i, to ``target``; times ``UNDERSHOOT``, but at least an eighth and at most all
+    of what the film has (so that the estimate is renewed before the render has doubled),
+    and no more than the pixels' room below ``most``."""
+    weights = np.asarray(weights, np.float64)
+    counts = np.asarray(counts, np.int64)
+    taken, room = int(counts.sum()), int(np.maximum(most - counts, 0).sum())
+    variance = weights * weights  # (per sample: w = sqrt(v))
+
+    def totals(scale: float) -> np.ndarray:
+        return np.clip(scale * weights, counts, np.maximum(counts, most))
+
+    def predicted(scale: float) -> float:
+        return float(np.mean(variance / np.maximum(totals(scale), 1)))
+
+    low, high = 0.0, 1.0
+    while predicted(high) > target and high < 1e300 and totals(high).sum() < taken + room:
+        high *= 2
+    for _ in range(60):
+        middle = 0.5 * (low + high)
+        low, high = (middle, high) if predicted(middle) > target else (low, middle)
+    needed = float(totals(high).sum()) - taken
+    # (A little short of the need: the estimate it comes from is itself noisy, and a last
+    # small pass costs less than samples past the target.)
+    budget = min(max(UNDERSHOOT * needed, taken / 8), taken)
     return int(min(np.ceil(budget), room))

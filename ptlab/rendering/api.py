@@ -254,7 +254,7 @@ def _estimate(film: Film) -> float | None:
     if not film.halves or film.spp < 2:
         return None
     variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-    return adaptive.estimated_relmse(variance, film.sums, film.counts)
+    return adaptive.estimated_relmse(variance, film.sums, film.counts, film.differences)
 
 
 def _jobs_left(film: Film) -> list[Job]:
@@ -310,14 +310,16 @@ class _NoiseTarget:
         ended = film.plan is not None
         film.end_plan()
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-        film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts)
+        film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts, film.differences)
         if ended:  # (the fixed passes' ends are the render loop's to report)
             self.pass_ended(film)
         if film.estimate <= target:
             self.end = "target"
             return []
-        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
-        budget = adaptive.pass_budget(weights, film.counts, target, self.most)
+        weights = adaptive.allocation_weights(variance, film.sums, film.counts, film.differences)
+        budget = adaptive.pass_budget(
+            weights, film.counts, target, np.minimum(self.most, adaptive.GROWTH * film.counts)
+        )
         self.end = "max spp"
         if self.options.time_limit is not None:  # (at the speed so far)
             elapsed = time.perf_counter() - self.start
@@ -327,7 +329,10 @@ class _NoiseTarget:
         if budget < film.counts.size // 8:  # (less than an eighth of a sample per pixel: done)
             return []
         # (In pairs, one sample for each half: ``RenderSetup.halves``.)
-        pairs = adaptive.allocate(weights, film.counts // 2, budget // 2, self.most // 2)
+        # (No pixel more than GROWTH times its samples in one pass: one pass's estimate of a
+        # pixel is not trusted with more.)
+        most = np.minimum(self.most, adaptive.GROWTH * film.counts)
+        pairs = adaptive.allocate(weights, film.counts // 2, budget // 2, most // 2)
         film.start_plan(2 * pairs)
         return plan_jobs(film, len(film.passes))
 
