@@ -287,7 +287,8 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
         default="path:bsdf,path:nee,path:mis",
         metavar="LIST",
         help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
-        "whitted, each optionally @SAMPLER, e.g. path:nee@independent "
+        "whitted, each optionally @SAMPLER, e.g. path:nee@independent, and +adaptive to "
+        "render to a ladder of target errors, e.g. path:nee+adaptive "
         "(default path:bsdf,path:nee,path:mis)",
     )
     _add_option(converge, "sampler", help="the sampler of estimators without @SAMPLER")
@@ -302,6 +303,12 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
         metavar="N",
         help="without --reference: render one with path:mis at N spp (default "
         "1024), cached in $PTLAB_CACHE or ~/.cache/ptlab/references",
+    )
+    source.add_argument(
+        "--estimated",
+        action="store_true",
+        help="no reference: chart each render's own estimate of its error (adaptive "
+        "estimators only, e.g. --integrators path:nee+adaptive,path:mis+adaptive)",
     )
     converge.add_argument(
         "--budget", type=float, default=30.0, metavar="SECONDS", help="render time per estimator (default 30)"
@@ -566,7 +573,7 @@ def _converge(args) -> int:
         raise PtlabError(f"--target {args.target}: must be a positive relMSE")
     out_dir = check_writable_folder(args.out or f"converge-{scene.name}")
     cache_dir = None
-    if not args.no_cache and args.reference is None:
+    if not args.no_cache and args.reference is None and not args.estimated:
         try:
             cache_dir = check_writable_folder(default_cache_dir())
         except PtlabError as error:
@@ -585,6 +592,7 @@ def _converge(args) -> int:
         target=args.target,
         echo=echo,
         quiet=args.quiet,
+        estimated=args.estimated,
         workers=check_workers(args.workers),
         backend=args.backend,
     )

@@ -109,7 +109,7 @@ def test_converge_writes_the_table_chart_and_strip(tmp_path, reference_file, cap
     assert "time to reach relMSE 0.01" in text
     with open(out / "convergence.csv") as table:
         rows = list(csv.DictReader(table))
-    assert list(rows[0]) == ["integrator", "spp", "seconds", "rmse", "relmse"]
+    assert list(rows[0]) == ["integrator", "spp", "seconds", "rmse", "relmse", "relmse_estimate"]
     for label in ("path:bsdf", "path:nee"):
         ladder = [r for r in rows if r["integrator"] == label]
         spp = [int(r["spp"]) for r in ladder]

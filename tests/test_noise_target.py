@@ -3,6 +3,8 @@ depend on how it was made (``ptlab.rendering.adaptive``, ``render_result(target_
 
 from __future__ import annotations
 
+import csv
+
 import numpy as np
 import pytest
 
@@ -59,7 +61,9 @@ def test_a_render_stopped_in_a_noise_target_pass_resumes_to_the_same_image(
     def stop() -> bool:  # once a noise-target pass has some of its tiles, not all
         return bool(added) and added[-1].plan is not None and 0 < added[-1].plan_done.mean() < 1
 
-    partial = render_result(cornell, workers=1, checkpoint=checkpoint, progress=added.append, stop=stop, **TARGET)
+    partial = render_result(
+        cornell, workers=1, checkpoint=checkpoint, progress=added.append, stop=stop, **TARGET
+    )
     assert not partial.complete
     resumed = render_result(cornell, workers=1, resume=checkpoint, **TARGET)
     assert resumed.complete
@@ -129,13 +133,12 @@ def test_the_estimate_is_honest_against_an_independent_reference(cornell):
 
 def test_the_command_line_reports_the_estimate_and_writes_the_spp_map(tmp_path, capsys):
     out, spp_map = tmp_path / "box.exr", tmp_path / "spp.png"
-    code = main(
-        ["render", "cornell-box", "--res", "24", "--workers", "1", "--target-error", "0.05"]
-        + ["--out", str(out), "--spp-map", str(spp_map)]
-    )
+    options = ["--res", "24", "--workers", "1", "--target-error", "0.05"]
+    code = main(["render", "cornell-box", *options, "--out", str(out), "--spp-map", str(spp_map)])
     assert code == 0
     printed = capsys.readouterr().out
-    assert "estimated relMSE" in printed and "target 0.05: reached" in printed
+    assert "estimated relMSE" in printed
+    assert "target 0.05: reached" in printed
     image, header = read_image(out)
     assert header["relmse_estimate"] <= 0.05
     assert header["spp"] == 16 < header["spp_max"]
@@ -144,3 +147,24 @@ def test_the_command_line_reports_the_estimate_and_writes_the_spp_map(tmp_path, 
     heat, _ = read_image(spp_map)
     assert heat.shape == image.shape
     assert len(np.unique(heat.reshape(-1, 3), axis=0)) > 2  # (a map, not a flat colour)
+
+
+def test_converge_charts_an_adaptive_estimator_by_its_own_estimate_without_a_reference(tmp_path, capsys):
+    out = tmp_path / "out"
+    arguments = ["converge", "cornell-box", "--integrators", "path:nee+adaptive", "--estimated"]
+    code = main([*arguments, "--res", "24", "--budget", "1", "--workers", "1", "--out", str(out)])
+    assert code == 0
+    assert "time to reach relMSE 0.01 (estimated)" in capsys.readouterr().out
+    with open(out / "convergence.csv") as table:
+        rows = list(csv.DictReader(table))
+    errors = [float(row["relmse"]) for row in rows]
+    assert errors == [float(row["relmse_estimate"]) for row in rows]
+    assert len(rows) >= 2
+    assert errors[-1] < errors[0]  # (targets that halve: each rung below the last)
+    assert sorted(path.name for path in out.iterdir()) == ["convergence.csv", "convergence.png"]
+    code = main(["converge", "cornell-box", "--integrators", "path:nee", "--estimated", "--out", str(out)])
+    assert code == 2
+    assert capsys.readouterr().err == (
+        "ptlab: error: without a reference only adaptive estimators have an error to chart "
+        "(their own estimate): path:nee is not (add +adaptive)\n"
+    )

@@ -34,9 +34,12 @@ def _save(figure, path: Path) -> None:
     write_atomically(path, lambda temporary: figure.savefig(temporary, format="png", dpi=110))
 
 
-def convergence_chart(ladders: list, path: Path, title: str, target: float | None = None) -> None:
+def convergence_chart(
+    ladders: list, path: Path, title: str, target: float | None = None, estimated: bool = False
+) -> None:
     """Write the log-log chart of relMSE against seconds (``ladders``: lists of
-    ``ptlab.measure.converge.Measurement``, one list per estimator)."""
+    ``ptlab.measure.converge.Measurement``, one list per estimator); ``estimated``: the
+    errors are the renders' own estimates, not measured against a reference."""
     plt = _pyplot()
     figure, axes = plt.subplots(figsize=(6.4, 4.6))
     for ladder in ladders:
@@ -64,7 +67,7 @@ def convergence_chart(ladders: list, path: Path, title: str, target: float | Non
     if target is not None:
         axes.axhline(target, color="black", linewidth=0.8, linestyle="--", label=f"relMSE {target:g}")
     axes.set_xlabel("render time (seconds)")
-    axes.set_ylabel("relMSE against the reference")
+    axes.set_ylabel("relMSE as each render estimates it" if estimated else "relMSE against the reference")
     axes.set_title(title, fontsize=10)
     axes.grid(True, which="both", linewidth=0.3, alpha=0.5)
     axes.legend(fontsize=8)

@@ -1,7 +1,9 @@
 """``ptlab converge``: what each estimator buys per second of rendering.
 
 Each estimator (``path:nee``, ``path:bsdf``, ``path:mis``, ...) renders the scene at a
-doubling ladder of samples per pixel, 1, 2, 4, ..., until its time budget is spent; every
+doubling ladder of samples per pixel, 1, 2, 4, ..., until its time budget is spent (an
+adaptive one, ``path:nee+adaptive``, at a halving ladder of target errors, rendering to each
+with ``target_error``: ``ptlab.rendering.adaptive``); every
 render is timed and compared with a reference image (``ptlab.measure.metrics``). The result is a
 table of (estimator, spp, seconds, rmse, relmse) and, from it, the time each estimator needs
 to reach a target error: the honest way to compare methods whose samples cost different
@@ -9,7 +11,8 @@ amounts (an MIS sample traces more rays than a BSDF sample, and is worth more).
 
 The reference is a file the user gives, or a high-spp render with the best estimator,
 ``path:mis``, cached on disk by scene, resolution, spp and seed, and rendered with its own
-seed so that its noise is independent of the ladder's.
+seed so that its noise is independent of the ladder's. Or there is none (``estimated``):
+then only adaptive estimators run, and the error charted is each render's own estimate.
 """
 
 from __future__ import annotations
@@ -35,8 +38,14 @@ from ptlab.rendering.checkpoint import scene_digest
 from ptlab.samplers import SAMPLERS
 from ptlab.scene import Scene
 
-#: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY, either followed by @SAMPLER.
+#: Estimators are named INTEGRATOR or INTEGRATOR:STRATEGY, either followed by @SAMPLER, and
+#: then by +adaptive for a render to each of a ladder of target errors.
 ESTIMATOR_INTEGRATORS = ("path", "whitted")
+ADAPTIVE_SUFFIX = "+adaptive"
+#: An adaptive ladder's targets: the first, then halving; each render's first pass has
+#: ``ADAPTIVE_FIRST_SPP`` samples per pixel.
+ADAPTIVE_FIRST_TARGET = 0.5
+ADAPTIVE_FIRST_SPP = 8
 #: The reference's seed is the ladder's plus this, so that their noise is independent.
 REFERENCE_SEED_OFFSET = 1_000_003
 #: The reference is rendered with the estimator that is best on hard scenes.
@@ -51,6 +60,7 @@ class Estimator:
     integrator: str
     strategy: str = RenderOptions.strategy
     sampler: str = RenderOptions.sampler
+    adaptive: bool = False
 
     def options(self) -> dict:
         """Keyword arguments of ``render_result`` that select this estimator."""
@@ -61,11 +71,12 @@ def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Es
     """``"path:bsdf,path:nee,path:mis@independent"`` -> estimators.
 
     ``path`` alone is ``path`` with the default strategy (``path:nee``); an estimator without
-    ``@SAMPLER`` uses ``sampler``.
+    ``@SAMPLER`` uses ``sampler``; ``+adaptive`` at the end renders to target errors.
     """
     estimators = []
     for label in (part.strip() for part in text.split(",")):
-        method, at, chosen = label.partition("@")
+        adaptive = label.endswith(ADAPTIVE_SUFFIX)
+        method, at, chosen = label.removesuffix(ADAPTIVE_SUFFIX).partition("@")
         if at and chosen not in SAMPLERS:
             raise PtlabError(f"estimator {label!r}: the sampler after @ must be one of {', '.join(SAMPLERS)}")
         integrator, _, strategy = method.partition(":")
@@ -78,7 +89,13 @@ def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Es
             raise PtlabError(f"estimator {label!r}: the strategy must be one of {', '.join(STRATEGIES)}")
         if integrator != "path" and strategy:
             raise PtlabError(f"estimator {label!r}: {integrator} takes no strategy")
-        estimators.append(Estimator(label, integrator, strategy or RenderOptions.strategy, chosen or sampler))
+        if adaptive and (chosen or sampler) == "stratified":
+            raise PtlabError(
+                f"estimator {label!r}: an adaptive render needs sobol or independent, not stratified"
+            )
+        estimators.append(
+            Estimator(label, integrator, strategy or RenderOptions.strategy, chosen or sampler, adaptive)
+        )
     if len({e.label for e in estimators}) != len(estimators):
         raise PtlabError(f"estimators {text!r}: each may appear once")
     return estimators
@@ -86,7 +103,9 @@ def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Es
 
 @dataclass
 class Measurement:
-    """One rung of a ladder: a render of ``spp`` samples, its time and its error."""
+    """One rung of a ladder: a render of ``spp`` samples (an adaptive render's mean, rounded),
+    its time and its error (against the reference; without one, the render's own estimate),
+    and the render's own estimate of its relMSE (adaptive renders only, else None)."""
 
     estimator: str
     spp: int
@@ -94,44 +113,61 @@ class Measurement:
     rmse: float
     relmse: float
     image: np.ndarray
+    estimate: float | None = None
 
 
 def measure_ladder(
     scene: Scene,
     estimator: Estimator,
-    reference: np.ndarray,
+    reference: np.ndarray | None,
     budget: float,
     max_spp: int = 1 << 16,
     echo: Callable[[str], None] = print,
+    res: tuple[int, int] | None = None,
     **render_options,
 ) -> list[Measurement]:
-    """Render at 1, 2, 4, ... spp while the next rung fits in ``budget`` seconds in total.
+    """Render at 1, 2, 4, ... spp (an adaptive estimator: to relMSE 0.5, 0.25, ...) while the
+    next rung fits in ``budget`` seconds in total.
 
     Each rung takes about twice as long as the one before, so the ladder stops when the
     time spent plus twice the last rung's would exceed the budget; the first rung always
-    runs. ``render_options`` go to ``render_result`` (res, seed, workers, backend, ...).
+    runs. ``render_options`` go to ``render_result`` (seed, workers, backend, ...).
+    Without a ``reference`` (``res`` then gives the size), the error is each render's own
+    estimate, which only adaptive renders have.
     """
-    height, width = reference.shape[:2]
-    ladder, spent, spp = [], 0.0, 1
+    if reference is not None:
+        res = (reference.shape[1], reference.shape[0])
+    ladder: list[Measurement] = []
+    spent, rung_index = 0.0, 0
     while True:
-        result = render_result(scene, spp=spp, res=(width, height), **estimator.options(), **render_options)
-        rung = Measurement(
-            estimator.label,
-            spp,
-            result.seconds,
-            rmse(result.image, reference),
-            relmse(result.image, reference),
-            result.image,
-        )
-        ladder.append(rung)
-        echo(
-            f"{rung.estimator:12} {rung.spp:7d} spp {rung.seconds:9.2f} s   "
-            f"rmse {rung.rmse:.4g}   relMSE {rung.relmse:.4g}"
-        )
+        if estimator.adaptive:
+            target = ADAPTIVE_FIRST_TARGET / 2**rung_index
+            rung_options = dict(spp=ADAPTIVE_FIRST_SPP, target_error=target, max_spp=max_spp)
+        else:
+            rung_options = dict(spp=2**rung_index)
+        result = render_result(scene, res=res, **rung_options, **estimator.options(), **render_options)
         spent += result.seconds
+        spp = max(1, round(result.spp_mean))
+        if not ladder or spp != ladder[-1].spp:  # (an easy target may need no more samples)
+            estimate = result.relmse_estimate
+            rung = Measurement(
+                estimator.label,
+                spp,
+                result.seconds,
+                rmse(result.image, reference) if reference is not None else math.nan,
+                relmse(result.image, reference) if reference is not None else float(estimate or math.nan),
+                result.image,
+                estimate,
+            )
+            ladder.append(rung)
+            said = f"   (estimated {estimate:.4g})" if estimate is not None and reference is not None else ""
+            echo(
+                f"{rung.estimator:12} {rung.spp:7d} spp {rung.seconds:9.2f} s   "
+                f"rmse {rung.rmse:.4g}   relMSE {rung.relmse:.4g}{said}"
+            )
         if spp * 2 > max_spp or spent + 2 * result.seconds > budget:
             return ladder
-        spp *= 2
+        rung_index += 1
 
 
 def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool] | None:
@@ -225,12 +261,13 @@ def default_cache_dir() -> Path:
 
 
 def write_csv(path: Path, ladders: list[list[Measurement]]) -> None:
-    """The table: one row per rung, columns integrator, spp, seconds, rmse, relmse."""
+    """The table: one row per rung, columns integrator, spp, seconds, rmse, relmse and the
+    render's own estimate of its relMSE (adaptive estimators; else empty)."""
 
     def write(temporary: str) -> None:
         with open(temporary, "w", newline="") as out:
             table = csv.writer(out)
-            table.writerow(["integrator", "spp", "seconds", "rmse", "relmse"])
+            table.writerow(["integrator", "spp", "seconds", "rmse", "relmse", "relmse_estimate"])
             for ladder in ladders:
                 for rung in ladder:
                     table.writerow(
@@ -240,6 +277,7 @@ def write_csv(path: Path, ladders: list[list[Measurement]]) -> None:
                             f"{rung.seconds:.4f}",
                             f"{rung.rmse:.6g}",
                             f"{rung.relmse:.6g}",
+                            "" if rung.estimate is None else f"{rung.estimate:.6g}",
                         ]
                     )
 
@@ -259,19 +297,30 @@ def run_converge(
     target: float = 0.01,
     echo: Callable[[str], None] = print,
     quiet: bool = False,
+    estimated: bool = False,
     **render_options,
 ) -> list[list[Measurement]]:
     """Measure every estimator's ladder and write the CSV, the chart and the strip.
 
     Writes ``convergence.csv``, ``convergence.png``, ``equal-time.png`` and
     ``reference.exr`` into ``out_dir``, and echoes each estimator's time to reach relMSE
-    ``target``. ``render_options`` (workers, backend, ...) go to every render.
+    ``target``. ``render_options`` (workers, backend, ...) go to every render. With
+    ``estimated``, there is no reference: every estimator must be adaptive, the errors are
+    the renders' own estimates, and there is no strip (it shows errors against a reference).
     """
     from ptlab.measure.charts import convergence_chart, equal_time_strip
 
     if not 0 < budget < math.inf:
         raise PtlabError(f"budget {budget!r}: must be a positive, finite number of seconds")
-    if reference is not None:
+    reference_pixels: np.ndarray | None = None
+    if estimated:
+        fixed = [e.label for e in estimators if not e.adaptive]
+        if fixed:
+            raise PtlabError(
+                f"without a reference only adaptive estimators have an error to chart (their own "
+                f"estimate): {', '.join(fixed)} is not (add {ADAPTIVE_SUFFIX})"
+            )
+    elif reference is not None:
         reference_pixels = load_reference(reference, res)
     else:
         reference_pixels = reference_image(
@@ -280,30 +329,37 @@ def run_converge(
     # Warm up imports and first calls, so that the first rung is not charged for them.
     render_result(scene, spp=1, res=16, workers=1)
     ladders = [
-        measure_ladder(scene, estimator, reference_pixels, budget, echo=echo, seed=seed, **render_options)
+        measure_ladder(
+            scene, estimator, reference_pixels, budget, echo=echo, res=res, seed=seed, **render_options
+        )
         for estimator in estimators
     ]
     out_dir.mkdir(parents=True, exist_ok=True)  # only now: no empty folder on an error
     write_csv(out_dir / "convergence.csv", ladders)
     width, height = res
-    convergence_chart(ladders, out_dir / "convergence.png", f"{scene.name}, {width}x{height}", target)
-    common = equal_time_strip(ladders, reference_pixels, out_dir / "equal-time.png")
-    write_image(out_dir / "reference.exr", reference_pixels)
-    echo(f"time to reach relMSE {target:g}:")
+    title = f"{scene.name}, {width}x{height}" + (", each render's own estimate" if estimated else "")
+    convergence_chart(ladders, out_dir / "convergence.png", title, target, estimated=estimated)
+    written = ["convergence.csv", "convergence.png"]
+    if reference_pixels is not None:
+        common = equal_time_strip(ladders, reference_pixels, out_dir / "equal-time.png")
+        write_image(out_dir / "reference.exr", reference_pixels)
+        written += ["equal-time.png", "reference.exr"]
+    echo(f"time to reach relMSE {target:g}" + (" (estimated)" if estimated else "") + ":")
     for ladder in ladders:
         reached = time_to_reach(ladder, target)
         if reached is None:
-            text = "n/a (already below it at 1 spp, or the error stopped falling)"
+            text = "n/a (already below it at the first rung, or the error stopped falling)"
         else:
             text = f"{reached[0]:.2f} s" + (" (extrapolated with slope -1)" if reached[1] else "")
         echo(f"  {ladder[0].estimator:12} {text}")
     most_spp = max(ladder[-1].spp for ladder in ladders)
-    if reference is None and most_spp * 8 > reference_spp:
+    if reference is None and not estimated and most_spp * 8 > reference_spp:
         echo(
             f"note: the ladder reached {most_spp} spp and the reference has {reference_spp}: "
             f"its noise inflates the last errors; use --reference-spp {most_spp * 16}"
         )
-    echo(f"equal-time strip at about {common:.1f} s")
-    for name in ("convergence.csv", "convergence.png", "equal-time.png", "reference.exr"):
+    if reference_pixels is not None:
+        echo(f"equal-time strip at about {common:.1f} s")
+    for name in written:
         echo(f"wrote {(out_dir / name).resolve()}")
     return ladders

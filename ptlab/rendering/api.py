@@ -168,8 +168,10 @@ def render_result(
 
     width, height = options.size
     tiles = make_tiles(width, height, options.tile_size)
-    passes = pass_schedule(options.spp, options.spp_per_pass)
-    film = Film(width, height, tiles, passes, halves=options.target_error is not None)
+    # (A render to a noise target has only passes of its own, the first of spp everywhere.)
+    adaptive_render = options.target_error is not None
+    passes = [] if adaptive_render else pass_schedule(options.spp, options.spp_per_pass)
+    film = Film(width, height, tiles, passes, halves=adaptive_render)
     record = options.record()
     # Any number of workers may resume a render; the sampler's identity says what of it the
     # image depends on (its name, and for some the spp).
@@ -209,7 +211,8 @@ def render_result(
             pass_ended(film)
     if bar is not None:
         bar.close()
-    complete = film.complete
+    # (A render to a noise target is complete when it decided to end, not stopped before.)
+    complete = film.complete and film.samples > 0 and (more is None or more.end != "")
     if film.spp_max == 0 and not complete:
         warnings.warn("the render stopped before any tile had a pass: its image is black", RuntimeWarning, 2)
     if not complete:
@@ -307,11 +310,14 @@ class _NoiseTarget:
     def __call__(self) -> list[Job]:
         film, target = self.film, self.options.target_error
         assert target is not None
+        if film.samples == 0 and film.plan is None:  # (the first pass: spp everywhere)
+            film.start_plan(np.full(film.counts.shape, self.options.spp, dtype=np.int64))
+            return plan_jobs(film, len(film.passes))
         ended = film.plan is not None
         film.end_plan()
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
         film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts, film.differences)
-        if ended:  # (the fixed passes' ends are the render loop's to report)
+        if ended:
             self.pass_ended(film)
         if film.estimate <= target:
             self.end = "target"
@@ -339,16 +345,16 @@ class _NoiseTarget:
 
 def plan_jobs(film: Film, fixed_passes: int) -> list[Job]:
     """The jobs of the noise-target pass under way (``Film.plan``) that are not done: one per
-    tile that has samples in it, each pixel going on from the samples it has."""
+    plan tile (``Film.plan_tiles``) that has samples in it, each pixel going on from the
+    samples it has."""
     assert film.plan is not None
     jobs = []
-    for tile in film.tiles:
+    for tile in film.plan_tiles:
         counts = film.plan[tile.y0 : tile.y1, tile.x0 : tile.x1]
         if not film.plan_done[tile.index] and counts.any():
             firsts = film.counts[tile.y0 : tile.y1, tile.x0 : tile.x1].copy()
-            jobs.append(
-                Job(tile, fixed_passes + film.adaptive_passes, int(counts.max()), 0, counts.copy(), firsts)
-            )
+            index = fixed_passes + film.adaptive_passes
+            jobs.append(Job(tile, index, int(counts.max()), 0, counts.copy(), firsts))
     return jobs
 
 

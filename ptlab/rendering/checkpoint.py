@@ -141,7 +141,7 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
             film.plan = arrays["plan"].astype(np.int64)
             film.plan_done[:] = arrays["plan_done"]
             planned, finished = film.plan, film.plan_done
-            left = [planned[t.y0 : t.y1, t.x0 : t.x1].sum() for t in film.tiles if not finished[t.index]]
+            left = [planned[t.y0 : t.y1, t.x0 : t.x1].sum() for t in film.plan_tiles if not finished[t.index]]
             film.plan_total = film.samples + int(sum(left))
         film.adaptive_passes = int(arrays["adaptive_passes"])
         estimate = float(arrays["estimate"])
@@ -169,7 +169,7 @@ def _fits(arrays: dict, film: Film) -> bool:
         expected |= {
             "differences": (film.sums.shape, np.floating),
             "counts": (film.counts.shape, np.integer),
-            "plan_done": ((len(film.tiles),), np.bool_),
+            "plan_done": ((len(film.plan_tiles),), np.bool_),
             "adaptive_passes": ((), np.integer),
             "estimate": ((), np.floating),
         }
@@ -189,6 +189,5 @@ def _fits(arrays: dict, film: Film) -> bool:
             for name, (shape, kind) in expected.items()
         )
         and passes.ndim == 1
-        and len(passes) > 0
         and np.issubdtype(passes.dtype, np.integer)
     )

@@ -6,16 +6,21 @@ that arrives early waits in ``pending``), so the float64 sums, and so the image,
 same bit for bit whatever the number of workers. Tiles are disjoint, so the order *between*
 tiles does not matter.
 
-A render to a noise target (``ptlab.rendering.adaptive``) adds passes of its own after the
-fixed ones: each gives every pixel its own number of samples (``plan``). Such a pass begins
-only once the one before has been added whole, so it too is added in order.
+A render to a noise target (``ptlab.rendering.adaptive``) has passes of its own instead: each
+gives every pixel its own number of samples (``plan``), in jobs of ``PLAN_TILE_SIZE`` tiles
+(``plan_tiles``). Such a pass begins only once the one before has been added whole, and its
+jobs have disjoint pixels, so it too is added in the same order whatever the workers.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from ptlab.rendering.jobs import JobResult, Tile
+from ptlab.rendering.jobs import JobResult, Tile, make_tiles
+
+#: Edge of the tiles a noise-target pass is cut into (``Film.plan_tiles``): small enough that
+#: a small image still makes a job for every worker, and the pixels' samples are unequal anyway.
+PLAN_TILE_SIZE = 32
 
 
 class Film:
@@ -31,7 +36,8 @@ class Film:
         passes: samples per pixel of each pass of the render (``ptlab.rendering.pass_schedule``).
         passes_done: (tiles,) passes added for each tile.
         plan: (H, W) the samples per pixel of the noise-target pass under way, or None.
-        plan_done: (tiles,) which tiles have that pass's samples.
+        plan_tiles: the tiles of a noise-target pass's jobs.
+        plan_done: (plan tiles,) which of them have that pass's samples.
         adaptive_passes: noise-target passes added whole.
         estimate: the last estimate of the image's relMSE (None before a noise-target
             render's first estimate).
@@ -52,7 +58,8 @@ class Film:
         self.counts = np.zeros((height, width), dtype=np.int64)
         self.plan: np.ndarray | None = None
         self.plan_total = 0  # (samples once the plan is done)
-        self.plan_done = np.zeros(len(tiles), dtype=bool)
+        self.plan_tiles = make_tiles(width, height, PLAN_TILE_SIZE)
+        self.plan_done = np.zeros(len(self.plan_tiles), dtype=bool)
         self.adaptive_passes = 0
         self.estimate: float | None = None
         self.passes_done = np.zeros(len(tiles), dtype=np.int64)
@@ -94,7 +101,7 @@ class Film:
         """Begin a noise-target pass of ``plan`` (H, W) samples per pixel."""
         self.plan = plan
         self.plan_total = self.samples + int(plan.sum())
-        self.plan_done[:] = [not plan[t.y0 : t.y1, t.x0 : t.x1].any() for t in self.tiles]
+        self.plan_done[:] = [not plan[t.y0 : t.y1, t.x0 : t.x1].any() for t in self.plan_tiles]
 
     def end_plan(self) -> None:
         """The noise-target pass under way has been added whole."""
