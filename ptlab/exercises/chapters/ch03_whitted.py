@@ -24,11 +24,21 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import at_pixel, finite_array, require_finite
 from ptlab.exercises.messages import aside, text
 
@@ -334,10 +344,10 @@ def spheres_scene() -> Scene:
     return Scene(triangles, ids, materials, cornell.camera, "cornell-spheres", names)
 
 
-def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
-    """The Whitted render of ``scene`` in this process, with the given functions (those not
-    None) plugged in where the tracer and the mirror look them up."""
-    import ptlab
+@contextmanager
+def _plugged(reflect=None, refract=None, fresnel=None) -> Iterator[None]:
+    """A ``with`` block in which the Whitted tracer and the mirror use the given functions
+    (those not None)."""
     import ptlab.integrators.whitted as whitted
     import ptlab.materials.mirror as mirror
     from ptlab.exercises.plug import plugged
@@ -348,8 +358,17 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
         if f is not None
     }
     in_mirror = {"reflect": reflect} if reflect is not None else {}
-    options = dict(dict(spp=2, res=48, workers=1), **options)
     with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
+        yield
+
+
+def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
+    """The Whitted render of ``scene`` in this process, with the given functions (those not
+    None) plugged in where the tracer and the mirror look them up."""
+    import ptlab
+
+    options = dict(dict(spp=2, res=48, workers=1), **options)
+    with _plugged(reflect, refract, fresnel):
         return ptlab.render(scene, integrator="whitted", **options)
 
 
@@ -369,6 +388,18 @@ def check_render(module) -> str:
     return text("ch03.render_ok", share=close.mean())
 
 
+def render_yours(module, scene: Scene, options: dict) -> np.ndarray:
+    """``scene`` rendered by the Whitted tracer with the student's ``reflect``, ``refract``
+    and ``fresnel`` (``ptlab exercise render``); a scene without a mirror or glass, which
+    would never call them, is refused."""
+    from ptlab.exercises.side_by_side import render_within
+    from ptlab.materials import Dielectric, Mirror
+
+    if not any(isinstance(m, Mirror | Dielectric) for m in scene.materials):
+        raise CheckFailed(text("ch03.no_mirror_or_glass", scene=scene.name))
+    return render_within(scene, options, _plugged(*require(module, "reflect", "refract", "fresnel")))
+
+
 CHAPTER = Chapter(
     number=3,
     slug="whitted",
@@ -386,4 +417,5 @@ CHAPTER = Chapter(
         ),
         ChapterCheck("render", 3, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours, scene="games101-hw5", options=dict(integrator="whitted")),
 )

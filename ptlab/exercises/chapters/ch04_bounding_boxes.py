@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.exercises.messages import text
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
@@ -212,10 +212,8 @@ def check_flat(module) -> str:
     return text("ch04.flat_ok", n=n)
 
 
-def check_render(module) -> str:
-    import ptlab.accel.numpy_bvh
-    from ptlab.exercises.renders import check_render_through
-
+def _plugged_slab_test(module) -> dict:
+    """The student's ``slab_test``, as the NumPy BVH looks it up, its results checked."""
     (slab_test,) = require(module, "slab_test")
 
     def student_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
@@ -223,13 +221,29 @@ def check_render(module) -> str:
             result = slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax)
         return _checked(result, len(origins))
 
+    return dict(slab_test=student_slab_test)
+
+
+def check_render(module) -> str:
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.renders import check_render_through
+
     return check_render_through(
         text("ch04.yours"),
         ptlab.accel.numpy_bvh,
-        dict(slab_test=student_slab_test),
+        _plugged_slab_test(module),
         hint=text("ch04.hint.render"),
         missing_hint=text("ch04.hint.missing"),
     )
+
+
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered through the student's slab test (``ptlab exercise render``), on the NumPy
+    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_plugged_slab_test(module))
 
 
 CHAPTER = Chapter(
@@ -250,4 +264,5 @@ CHAPTER = Chapter(
         ChapterCheck("flat boxes", 2, check_flat, timeout=30),
         ChapterCheck("render", 2, check_render, timeout=60, requires=("entering a box", "misses")),
     ),
+    render=ChapterRender(render_yours, options=dict(backend="numpy")),
 )

@@ -19,7 +19,7 @@ import copy
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.exercises.messages import aside, check_name, text
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
@@ -510,6 +510,15 @@ def check_render(module) -> str:
     return check_render_through(text("ch05.yours"), numpy_bvh, _pieces(module, *PIECES))
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered through the student's BVH pieces (``ptlab exercise render``), on the NumPy
+    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_pieces(module, *PIECES))
+
+
 CHAPTER = Chapter(
     number=5,
     slug="bvh",
@@ -535,4 +544,5 @@ CHAPTER = Chapter(
         ChapterCheck("traversal order", 1, check_traversal_order, timeout=60),
         ChapterCheck("render", 1, check_render, timeout=60, requires=("near child first",)),
     ),
+    render=ChapterRender(render_yours, options=dict(backend="numpy")),
 )

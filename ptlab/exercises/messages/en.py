@@ -52,6 +52,15 @@ MESSAGES: dict[str, str] = {
     "not_finite": "{what} has {kind} at {where}",
     "not_finite.more": " and {others} more NaN or infinite values",
     # Renders compared with the library's (renders.py).
+    # ptlab exercise render (side_by_side.py).
+    "show.no_render": "chapter {number} has no render: its functions are not used by the renderer",
+    "show.no_file": "{path}: no such file",
+    "show.library": "rendering {scene} at {width}x{height}, {spp} spp, with the library's code",
+    "show.yours": "rendering it again with your functions (in a process of their own)",
+    "show.shape": "your render is an image of shape {shape}, the library's {expected}",
+    "show.nonfinite": "your render had NaN or infinite samples, left out of the image (black or darker there)",
+    "show.summary": "{share:.1%} of the pixels differ from the library's by more than 1% of its mean brightness; yours is {ratio:.3f}x as bright",
+    "show.wrote": "wrote {yours}, {library} and {difference} (red: yours brighter, blue: darker)",
     "render.path_traced": "the path-traced Cornell box through {yours}",
     "render.nonfinite": "your code produced {count} NaN or infinite samples (left out of the image); "
     "the first at pixel (x={x}, y={y}), depth {depth}: a division by a pdf or a distance of 0?",
@@ -225,6 +234,7 @@ MESSAGES: dict[str, str] = {
     "ch03.tir_ok": "beyond the critical angle ({critical:.1f} degrees leaving glass) F = 1, and refract returns no NaN",
     "ch03.the_render": "the render",
     "ch03.render": "the Whitted render of the Cornell box with a mirror and a glass sphere differs from the library's in {wrong} of {n} pixels (yours is {ratio:.3f}x as bright)",
+    "ch03.no_mirror_or_glass": "{scene} has no mirror and no glass, where reflect, refract and fresnel would be used: try games101-hw5",
     "ch03.render_ok": "the Whitted render with a mirror and a glass sphere matches ({share:.1%} of pixels)",
     # Chapter 4: Bounding boxes: the slab test (chapters/ch04_bounding_boxes.py).
     "ch04.title": "Bounding boxes: the slab test",
@@ -343,6 +353,7 @@ MESSAGES: dict[str, str] = {
     "ch06.harness_warns": "the material harness warns of {names}{what}: {hints}",
     "ch06.harness_ok": "every check of ptlab.grading.check_material passes{what} ({samples:,} samples per wo)",
     "ch06.harness_failed": "the material harness failed {failed}{what}. {failures} (see the whole table with: {command})",
+    "ch06.no_diffuse": "{scene} has no diffuse material for your Lambertian to replace: try cornell-box",
     "ch06.yours": "the Cornell box with your material",
     "ch06.hint.render": "brighter: each bounce carries too much light, from a pdf too small or an f_r too big; darker: too little",
     # Chapter 7: Path tracing: the homework's castRay (chapters/ch07_path_tracing.py).
@@ -512,6 +523,7 @@ MESSAGES: dict[str, str] = {
     "ch09.importance_sampling": "your importance sampling",
     "ch09.hint.eval_angles": "is eval right at every angle?",
     "ch09.hint.jacobian": "is pdf the density of the directions sample returns, the Jacobian 1 / (4 |wo . h|) included?",
+    "ch09.no_metal": "{scene} has no microfacet material for your GGXMetal to replace: try cornell-box-microfacet",
     "ch09.yours": "the rough metals of cornell-box-microfacet with {what}",
     # Chapter 10: Multiple importance sampling (chapters/ch10_mis.py).
     "ch10.title": "Multiple importance sampling",

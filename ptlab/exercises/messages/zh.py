@@ -49,6 +49,15 @@ MESSAGES: dict[str, str] = {
     "not_finite": "{what}在{where}处是 {kind}",
     "not_finite.more": "，另有 {others} 个 NaN 或无穷值",
     # Renders compared with the library's (renders.py).
+    # ptlab exercise render（side_by_side.py）。
+    "show.no_render": "第 {number} 章没有渲染：渲染器不会用到这一章的函数",
+    "show.no_file": "{path}：没有这个文件",
+    "show.library": "用库的代码渲染 {scene}：{width}x{height}，每像素 {spp} 个样本",
+    "show.yours": "再用你的函数渲染一遍（你的函数在单独的进程中运行）",
+    "show.shape": "你的渲染结果是形状为 {shape} 的图像，库的是 {expected}",
+    "show.nonfinite": "你的渲染中有 NaN 或无穷大的样本，已排除在图像之外（那里偏黑或偏暗）",
+    "show.summary": "{share:.1%} 的像素与库的结果相差超过其平均亮度的 1%；你的亮度是库的 {ratio:.3f} 倍",
+    "show.wrote": "已写出 {yours}、{library} 和 {difference}（红色：你的更亮，蓝色：更暗）",
     "render.path_traced": "用{yours}路径追踪的 Cornell box",
     "render.nonfinite": "你的代码产生了 {count} 个 NaN 或无穷大的样本（已排除在图像之外）；"
     "第一个在像素 (x={x}, y={y})，深度 {depth}：是不是除以了为 0 的 pdf 或距离？",
@@ -219,6 +228,7 @@ MESSAGES: dict[str, str] = {
     "ch03.tir_ok": "超过临界角（从玻璃射出时为 {critical:.1f} 度）时 F = 1，且 refract 不返回 NaN",
     "ch03.the_render": "渲染结果",
     "ch03.render": "带一个镜面球和一个玻璃球的 Cornell box 的 Whitted 渲染结果与库的结果在 {n} 个像素中有 {wrong} 个不同（你的亮度是库的 {ratio:.3f} 倍）",
+    "ch03.no_mirror_or_glass": "{scene} 中没有镜面也没有玻璃，reflect、refract 和 fresnel 用不上：试试 games101-hw5",
     "ch03.render_ok": "带镜面球和玻璃球的 Whitted 渲染结果一致（{share:.1%} 的像素）",
     # 第 4 章：包围盒：slab 测试
     "ch04.title": "包围盒：slab 测试",
@@ -337,6 +347,7 @@ MESSAGES: dict[str, str] = {
     "ch06.harness_warns": "材质检验对 {names} 给出了警告{what}：{hints}",
     "ch06.harness_ok": "ptlab.grading.check_material 的每项检查都通过{what}（每个 wo {samples:,} 个样本）",
     "ch06.harness_failed": "材质检验中 {failed} 未通过{what}。{failures}（完整的表格见：{command}）",
+    "ch06.no_diffuse": "{scene} 中没有可以换成你的 Lambertian 的漫反射材质：试试 cornell-box",
     "ch06.yours": "用你的材质渲染的 Cornell box",
     "ch06.hint.render": "偏亮：每次弹射带走的光太多，pdf 太小或 f_r 太大；偏暗：太少",
     # 第 7 章：路径追踪：作业中的 castRay
@@ -506,6 +517,7 @@ MESSAGES: dict[str, str] = {
     "ch09.importance_sampling": "你的重要性采样",
     "ch09.hint.eval_angles": "eval 在每个角度上都对吗？",
     "ch09.hint.jacobian": "pdf 是 sample 返回的方向的密度吗，包括雅可比因子 1 / (4 |wo . h|)？",
+    "ch09.no_metal": "{scene} 中没有可以换成你的 GGXMetal 的微表面材质：试试 cornell-box-microfacet",
     "ch09.yours": "用{what}渲染的 cornell-box-microfacet 中的粗糙金属",
     # 第 10 章：多重重要性采样
     "ch10.title": "多重重要性采样",
