@@ -16,6 +16,7 @@ gives the same picture, and the difference is black; elsewhere it shows noise to
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable
 from contextlib import AbstractContextManager
 from dataclasses import dataclass
@@ -40,12 +41,14 @@ DIFFERS = 0.01
 
 @dataclass
 class Pictures:
-    """The two renders of one scene, (H, W, 3) linear RGB each, and how they were made."""
+    """The two renders of one scene, (H, W, 3) linear RGB each, and how they were made;
+    ``nonfinite``: the student's had NaN or infinite samples (left out of its image)."""
 
     yours: np.ndarray
     library: np.ndarray
     scene: str
     options: dict
+    nonfinite: bool = False
 
     def difference(self) -> np.ndarray:
         """(H, W, 3) in [0, 1]: red where the student's pixel is brighter than the
@@ -67,7 +70,8 @@ class Pictures:
     def summary(self) -> str:
         """One line: how much of the picture differs, and how bright the student's is."""
         ratio = float(self.yours.mean()) / max(float(self.library.mean()), 1e-12)
-        return text("show.summary", share=self.differing(), ratio=ratio)
+        summary = text("show.summary", share=self.differing(), ratio=ratio)
+        return summary + (text("show.sentences") + text("show.nonfinite") if self.nonfinite else "")
 
     def write(self, folder: Path, stem: str) -> list[Path]:
         """Write ``stem-yours.png``, ``stem-library.png`` and ``stem-difference.png`` to
@@ -215,7 +219,9 @@ def _render_side_by_side(
             Submission(
                 taken, guard, time_limit=time_limit, on_output=on_output, rules=chapter.rules, user=user
             ) as running,
+            warnings.catch_warnings(record=True) as caught,  # (said in the summary instead)
         ):
+            warnings.simplefilter("always", RuntimeWarning)
             yours = chapter.render.yours(running.module, scene, dict(options, progress=progress))
     except StudentError as error:
         raise CheckFailed(described(error)) from None
@@ -227,4 +233,5 @@ def _render_side_by_side(
     yours = np.asarray(yours, dtype=np.float64)
     if yours.shape != library.shape:
         raise CheckFailed(text("show.shape", shape=yours.shape, expected=library.shape))
-    return Pictures(np.nan_to_num(yours), library.astype(np.float64), scene.name, options)
+    nonfinite = any(issubclass(w.category, RuntimeWarning) and "NaN" in str(w.message) for w in caught)
+    return Pictures(np.nan_to_num(yours), library.astype(np.float64), scene.name, options, nonfinite)

@@ -59,6 +59,7 @@ MESSAGES: dict[str, str] = {
     "show.yours": "rendering it again with your functions (in a process of their own)",
     "show.shape": "your render is an image of shape {shape}, the library's {expected}",
     "show.nonfinite": "your render had NaN or infinite samples, left out of the image (black or darker there)",
+    "show.sentences": "; ",
     "show.summary": "{share:.1%} of the pixels differ from the library's by more than 1% of its mean brightness; yours is {ratio:.3f}x as bright",
     "show.wrote": "wrote {yours}, {library} and {difference} (red: yours brighter, blue: darker)",
     "render.path_traced": "the path-traced Cornell box through {yours}",

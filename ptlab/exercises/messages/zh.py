@@ -56,6 +56,7 @@ MESSAGES: dict[str, str] = {
     "show.yours": "再用你的函数渲染一遍（你的函数在单独的进程中运行）",
     "show.shape": "你的渲染结果是形状为 {shape} 的图像，库的是 {expected}",
     "show.nonfinite": "你的渲染中有 NaN 或无穷大的样本，已排除在图像之外（那里偏黑或偏暗）",
+    "show.sentences": "；",
     "show.summary": "{share:.1%} 的像素与库的结果相差超过其平均亮度的 1%；你的亮度是库的 {ratio:.3f} 倍",
     "show.wrote": "已写出 {yours}、{library} 和 {difference}（红色：你的更亮，蓝色：更暗）",
     "render.path_traced": "用{yours}路径追踪的 Cornell box",
