@@ -343,7 +343,8 @@ def spheres_scene(glass_block: bool = False) -> Scene:
     sphere = icosphere(3)
     parts.append((sphere * 90 + [180, 90, 170], glass))
     if glass_block:
-        parts += [(sphere * 70 + [420, 70, 150], mirror), (read_mesh_triangles(meshes / "tallbox.obj"), glass)]
+        block = read_mesh_triangles(meshes / "tallbox.obj")
+        parts += [(sphere * 70 + [420, 70, 150], mirror), (block, glass)]
     else:
         parts.append((sphere * 100 + [380, 100, 370], mirror))
     triangles = np.concatenate([t for t, _ in parts])
