@@ -272,6 +272,9 @@ MESSAGES: dict[str, str] = {
     "ch04.flat": "a flat box (the square z = 1, 0 <= x, y <= 1)",
     "ch04.flat_ok": "{n} rays meet a box of zero thickness right: there t_enter == t_exit, and that is a hit",
     "ch04.yours": "your slab test",
+    "ch04.hint.swap": "rays going down an axis miss: where inv_dirs < 0 the near plane is box_max, so take t_near = minimum(t0, t1) and t_far = maximum(t0, t1), per axis",
+    "ch04.work": "your slab test lets a camera ray enter {student:.1f} boxes on average in a row of balls seen end on, the library's {library:.1f}: boxes beyond the nearest hit so far are entered too (tmin and tmax ignored? the BVH passes tmax = that hit's t, and the hit must lie within [tmin, tmax])",
+    "ch04.work_ok": "; a row of balls costs {student:.1f} boxes per camera ray (library: {library:.1f})",
     "ch04.hint.render": "boxes missed?",
     "ch04.hint.missing": "flat boxes around the axis-aligned walls missed?",
     # Chapter 5: The BVH: building with the SAH, and traversal (chapters/ch05_bvh.py).

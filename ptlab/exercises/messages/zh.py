@@ -266,6 +266,9 @@ MESSAGES: dict[str, str] = {
     "ch04.flat": "扁平包围盒（正方形 z = 1, 0 <= x, y <= 1）",
     "ch04.flat_ok": "{n} 条光线与厚度为零的包围盒求交正确：此时 t_enter == t_exit，也算命中",
     "ch04.yours": "你的 slab 测试",
+    "ch04.hint.swap": "沿坐标轴负方向的光线错过了包围盒：inv_dirs < 0 时近平面是 box_max，所以要逐轴取 t_near = minimum(t0, t1)、t_far = maximum(t0, t1)",
+    "ch04.work": "沿一排球的方向看过去，你的 slab 测试让每条相机光线平均进入 {student:.1f} 个包围盒，库的是 {library:.1f} 个：比目前最近的交点更远的包围盒也被进入了（忽略了 tmin 和 tmax？BVH 传入的 tmax 就是这个交点的 t，而相交区间必须在 [tmin, tmax] 之内）",
+    "ch04.work_ok": "；沿一排球的方向看过去，每条相机光线进入 {student:.1f} 个包围盒（库：{library:.1f}）",
     "ch04.hint.render": "漏掉了包围盒？",
     "ch04.hint.missing": "漏掉了与坐标轴对齐的墙面周围的扁平包围盒？",
     # 第 5 章：BVH：用 SAH 构建，以及遍历
