@@ -96,16 +96,16 @@ def render_plugged(scene, options: dict, hooks: ModuleType | None = None, **repl
 
 
 def render_with_materials(
-    scene, options: dict, kind: type, material_for: Callable, missing: str
+    scene, options: dict, replaces: Callable, material_for: Callable, missing: str
 ) -> np.ndarray:
-    """``scene`` rendered in this process (one worker) with every material of class ``kind``
-    replaced by ``material_for(material)`` (``ptlab.exercises.renders.replace_materials``);
+    """``scene`` rendered in this process (one worker) with every material ``m`` for which
+    ``replaces(m)`` replaced by ``material_for(m)`` (``ptlab.exercises.renders.replace_materials``);
     ``CheckFailed`` with ``missing`` if the scene has none."""
     from ptlab.exercises.renders import replace_materials
 
-    if not any(isinstance(m, kind) for m in scene.materials):
+    if not any(replaces(m) for m in scene.materials):
         raise CheckFailed(missing)
-    replaced = replace_materials(scene, lambda m: material_for(m) if isinstance(m, kind) else None)
+    replaced = replace_materials(scene, lambda m: material_for(m) if replaces(m) else None)
     return render_plugged(replaced, options)
 
 

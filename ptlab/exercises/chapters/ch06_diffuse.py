@@ -335,13 +335,17 @@ def check_render(module) -> str:
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
     """``scene`` rendered with the student's ``Lambertian`` in place of every diffuse
-    material, of the same albedo (``ptlab exercise render``)."""
+    material of one albedo, of the same albedo (``ptlab exercise render``); a textured one
+    (games101-hw5's checkerboard) stays the library's: the exercise's takes a colour."""
     from ptlab.exercises.side_by_side import render_with_materials
     from ptlab.materials import Diffuse
 
+    def replaces(material) -> bool:
+        return isinstance(material, Diffuse) and not material.textured
+
     probe(_material(module))
     missing = text("ch06.no_diffuse", scene=scene.name)
-    return render_with_materials(scene, options, Diffuse, lambda m: _material(module, m.albedo), missing)
+    return render_with_materials(scene, options, replaces, lambda m: _material(module, m.albedo), missing)
 
 
 CHAPTER = Chapter(

@@ -288,7 +288,11 @@ def render_yours(module, scene, options: dict) -> np.ndarray:
     probe(_metal(module))
     missing = text("ch09.no_metal", scene=scene.name)
     return render_with_materials(
-        scene, options, Microfacet, lambda m: _metal(module, m.f0, m.alpha, "ggx"), missing
+        scene,
+        options,
+        lambda m: isinstance(m, Microfacet),
+        lambda m: _metal(module, m.f0, m.alpha, "ggx"),
+        missing,
     )
 
 

@@ -366,7 +366,7 @@ MESSAGES: dict[str, str] = {
     "ch06.harness_warns": "the material harness warns of {names}{what}: {hints}",
     "ch06.harness_ok": "every check of ptlab.grading.check_material passes{what} ({samples:,} samples per wo)",
     "ch06.harness_failed": "the material harness failed {failed}{what}. {failures} (see the whole table with: {command})",
-    "ch06.no_diffuse": "{scene} has no diffuse material for your Lambertian to replace: try cornell-box",
+    "ch06.no_diffuse": "{scene} has no diffuse material of one colour for your Lambertian to replace: try cornell-box",
     "ch06.yours": "the Cornell box with your material",
     "ch06.hint.render": "brighter: each bounce carries too much light, from a pdf too small or an f_r too big; darker: too little",
     # Chapter 7: Path tracing: the homework's castRay (chapters/ch07_path_tracing.py).

@@ -360,7 +360,7 @@ MESSAGES: dict[str, str] = {
     "ch06.harness_warns": "材质检验对 {names} 给出了警告{what}：{hints}",
     "ch06.harness_ok": "ptlab.grading.check_material 的每项检查都通过{what}（每个 wo {samples:,} 个样本）",
     "ch06.harness_failed": "材质检验中 {failed} 未通过{what}。{failures}（完整的表格见：{command}）",
-    "ch06.no_diffuse": "{scene} 中没有可以换成你的 Lambertian 的漫反射材质：试试 cornell-box",
+    "ch06.no_diffuse": "{scene} 中没有可以换成你的 Lambertian 的单色漫反射材质：试试 cornell-box",
     "ch06.yours": "用你的材质渲染的 Cornell box",
     "ch06.hint.render": "偏亮：每次弹射带走的光太多，pdf 太小或 f_r 太大；偏暗：太少",
     # 第 7 章：路径追踪：作业中的 castRay
