@@ -74,3 +74,16 @@ def test_every_chapter_says_what_its_render_shows():
     for found in all_chapters():
         assert found.render is not None, found.number
         assert found.render.scene in builtin_scene_names()
+
+
+def test_a_chapter_without_a_render_says_so_in_one_line(tmp_path):
+    from dataclasses import replace
+
+    from ptlab.errors import PtlabError
+    from ptlab.exercises.side_by_side import render_side_by_side
+
+    without = replace(chapter(8), render=None)
+    with pytest.raises(
+        PtlabError, match=r"^chapter 8 has no render: its functions are not used by the renderer$"
+    ):
+        render_side_by_side(without, WRONG / "08_right_own_code.py", lang="en")
