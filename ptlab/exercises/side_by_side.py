@@ -85,14 +85,11 @@ class Pictures:
 def render_plugged(scene, options: dict, hooks: ModuleType | None = None, **replacements) -> np.ndarray:
     """``ptlab.render(scene, **options)`` in this process (one worker), with each of
     ``replacements`` plugged into ``hooks`` (``ptlab.exercises.plug.plugged``)."""
-    import ptlab
+    from contextlib import nullcontext
+
     from ptlab.exercises.plug import plugged
 
-    options = dict(options, workers=1)
-    if hooks is None:
-        return ptlab.render(scene, **options)
-    with plugged(hooks, **replacements):
-        return ptlab.render(scene, **options)
+    return render_within(scene, options, nullcontext() if hooks is None else plugged(hooks, **replacements))
 
 
 def render_with_materials(
