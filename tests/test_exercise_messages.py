@@ -37,6 +37,7 @@ MODULES = [
     HERE / "grader.py",
     HERE / "finite.py",
     HERE / "renders.py",
+    HERE / "side_by_side.py",
     *sorted((HERE / "chapters").glob("ch*.py")),
 ]
 #: The messages that are names, the same in Chinese: functions and formulas' names.

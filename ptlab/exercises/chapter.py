@@ -22,11 +22,15 @@ from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
 from types import ModuleType
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ptlab.exercises.messages import aside, text
 from ptlab.untrusted import Arguments, Rules, copied_answer, library_answer
+
+if TYPE_CHECKING:
+    from ptlab.scene import Scene
 
 #: The exercises package: templates/ and solutions/ are beside this file.
 HERE = Path(__file__).parent
@@ -115,6 +119,25 @@ class ChapterCheck:
 
 
 @dataclass(frozen=True)
+class ChapterRender:
+    """What ``ptlab exercise render`` renders for a chapter (``ptlab.exercises.side_by_side``).
+
+    Attributes:
+        yours: ``yours(module, scene, options) -> (H, W, 3) image``: ``scene`` rendered in
+            this process with the functions of ``module`` (the stand-in for the student's
+            module) in place of the library's; ``options``: ``ptlab.render``'s keywords,
+            ``progress`` among them.
+        scene: the built-in scene rendered when the command names none.
+        options: what both renders take beyond the command's options (an integrator, the
+            backend that calls the student's pieces).
+    """
+
+    yours: Callable[[ModuleType, Scene, dict], np.ndarray]
+    scene: str = "cornell-box"
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
 class Chapter:
     """One chapter of the progression.
 
@@ -130,6 +153,8 @@ class Chapter:
             every other argument of the exercise's functions is read-only.
         scratch: {function: the arguments it may change for its own use}.
         programs: the student's code may start programs (its worker processes).
+        render: how ``ptlab exercise render`` renders a scene with the chapter's functions;
+            None for a chapter whose functions no render calls.
     """
 
     number: int
@@ -141,6 +166,7 @@ class Chapter:
     writes: dict[str, tuple[str, ...]] = field(default_factory=dict)
     scratch: dict[str, tuple[str, ...]] = field(default_factory=dict)
     programs: bool = False
+    render: ChapterRender | None = None
 
     def __post_init__(self) -> None:
         earlier: set[str] = set()

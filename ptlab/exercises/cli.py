@@ -1,10 +1,12 @@
-"""``ptlab exercise start | check | list | docs | grade-all``: the exercises from the command line.
+"""``ptlab exercise start | check | render | list | docs | grade-all``: the exercises from the
+command line.
 
 ptlab exercise list                    # the chapters, and which are passed (and where)
 ptlab exercise start 1                 # copies 01_cameras.py into this folder
 ptlab exercise docs 1                  # chapter 1's page (--zh: in Chinese), its tutorial
 ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full marks
 ptlab exercise check 1 01_cameras.py --json result.json
+ptlab exercise render 3 03_whitted.py  # games101-hw5 through your code, the library's, the difference
 ptlab exercise grade-all 1 submissions/ --csv grades.csv --workers 2   # a whole class
 """
 
@@ -25,8 +27,8 @@ from ptlab.untrusted.student_user import add_student_user_argument, student_user
 
 
 def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
-    """Add ``start``, ``check``, ``list``, ``docs`` and ``grade-all`` to the ``ptlab exercise``
-    subparser."""
+    """Add ``start``, ``check``, ``render``, ``list``, ``docs`` and ``grade-all`` to the
+    ``ptlab exercise`` subparser."""
     actions = parser.add_subparsers(dest="action", required=True, parser_class=type(parser))
     # What check and grade-all share (a parent of their parsers).
     graded = argparse.ArgumentParser(add_help=False)
@@ -80,6 +82,8 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         help="also write the result as JSON to OUT (removed at the start, written when every check is done)",
     )
 
+    _add_render_arguments(actions)
+
     listing = actions.add_parser(
         "list",
         help="list the chapters and which you have passed",
@@ -130,11 +134,65 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     )
 
 
+def _add_render_arguments(actions) -> None:
+    """``ptlab exercise render``'s parser."""
+    from ptlab.exercises import all_chapters
+    from ptlab.exercises.side_by_side import DEFAULT_SPP, DEFAULT_WIDTH, TIME_LIMIT
+
+    scenes = ", ".join(f"{c.number}: {c.render.scene}" for c in all_chapters() if c.render is not None)
+    render = actions.add_parser(
+        "render",
+        help="render a scene with your functions, beside the library's render of it",
+        description="Render a scene twice with the same seed: with the library's code, then "
+        "with FILE's functions in its place (FILE runs in a process of its own, as 'check' "
+        "runs it; what it prints is shown after '|'). Write DIR/NN-SCENE-yours.png, "
+        "-library.png and -difference.png (red where yours is brighter, blue where darker) "
+        "and print the share of pixels that differ. A right answer that draws the "
+        "library's random numbers gives the library's picture; one that draws its own "
+        f"differs by noise. The scenes by default: {scenes}. Exit 0 when the pictures are "
+        "written, 1 if FILE's code failed, 2 on a bad option.",
+    )
+    render.add_argument("chapter", metavar="NN", help="the chapter number")
+    render.add_argument("file", metavar="FILE", help="your exercise file")
+    render.add_argument(
+        "--scene", help="a built-in scene (ptlab scenes) or a scene file (default: the chapter's)"
+    )
+    render.add_argument(
+        "--res",
+        metavar="WxH",
+        help=f"resolution, N or WxH (default {DEFAULT_WIDTH} wide at the scene's aspect ratio)",
+    )
+    render.add_argument("--spp", type=int, metavar="K", help=f"samples per pixel (default {DEFAULT_SPP})")
+    render.add_argument(
+        "--seed", type=_seed, default=0, metavar="N", help="the seed of both renders (default 0)"
+    )
+    render.add_argument(
+        "--out", metavar="DIR", default=".", help="where to write the pictures (default here)"
+    )
+    render.add_argument(
+        "--time-limit",
+        type=float,
+        default=TIME_LIMIT,
+        metavar="S",
+        help=f"seconds your code may take for its render (default {TIME_LIMIT:.0f})",
+    )
+    render.add_argument("--quiet", action="store_true", help="no progress bars")
+    render.add_argument(
+        "--lang", choices=LANGUAGES, help="the language of the messages (default: the locale's)"
+    )
+    add_student_user_argument(render)
+
+
 def run_exercise(args: argparse.Namespace) -> int:
     """The handler of ``ptlab exercise``."""
-    return {"start": _start, "check": _check, "list": _list, "docs": _docs, "grade-all": _grade_all}[
-        args.action
-    ](args)
+    return {
+        "start": _start,
+        "check": _check,
+        "render": _render,
+        "list": _list,
+        "docs": _docs,
+        "grade-all": _grade_all,
+    }[args.action](args)
 
 
 def _start(args) -> int:
@@ -226,6 +284,45 @@ def _check(args) -> int:
         write_atomically(args.json, lambda temporary: Path(temporary).write_text(text))
     remember(result)
     return 0 if result.full_marks else 1
+
+
+def _render(args) -> int:
+    from ptlab.exercises import chapter
+    from ptlab.exercises.chapter import CheckFailed
+    from ptlab.exercises.grader import table_message
+    from ptlab.exercises.messages import language, text
+    from ptlab.exercises.side_by_side import render_side_by_side
+
+    found = chapter(args.chapter)
+    out = Path(args.out)
+    if out.exists() and not out.is_dir():
+        raise PtlabError(f"--out {out}: exists and is not a folder")
+    if not 0 < args.time_limit <= 86400:
+        raise PtlabError(f"--time-limit {args.time_limit}: must be in (0, 86400] seconds")
+    with language(args.lang):
+        try:
+            pictures = render_side_by_side(
+                found,
+                Path(args.file),
+                args.scene,
+                args.res,
+                args.spp,
+                args.seed,
+                progress=not args.quiet,
+                user=args.student_user,
+                on_output=relay("    | "),
+                say=None if args.quiet else (lambda line: print(line, file=sys.stderr, flush=True)),
+                time_limit=args.time_limit,
+            )
+        except CheckFailed as failure:  # (one line, whatever the student's code said)
+            print(f"{shown(Path(args.file))}: {table_message(str(failure))}", file=sys.stderr)
+            return 1
+        out.mkdir(parents=True, exist_ok=True)
+        paths = pictures.write(out, f"{found.number:02d}-{pictures.scene}")
+        print(pictures.summary())
+        yours, library, difference = map(shown, paths)
+        print(text("show.wrote", yours=yours, library=library, difference=difference))
+    return 0
 
 
 def _remove_old_result(path: Path) -> None:

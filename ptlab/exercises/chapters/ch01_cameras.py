@@ -14,7 +14,7 @@ import math
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.exercises.finite import require_finite
 from ptlab.exercises.messages import aside, text
 
@@ -203,20 +203,31 @@ def _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u) -> str:
     return aside(text("ch01.hint.jitter"))
 
 
-def check_render(module) -> str:
-    import ptlab.rendering.jobs
-    from ptlab.exercises.renders import check_render_through
+def _plugged_rays(module) -> dict:
+    """The student's ``generate_rays``, as the renderer looks it up in ``ptlab.rendering.jobs``."""
 
     def student_rays(camera, width, height, pixel_x, pixel_y, u):
         origins, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
         return (np.asfortranarray(origins, dtype=np.float32), np.asfortranarray(dirs, dtype=np.float32))
 
+    return dict(generate_rays=student_rays)
+
+
+def check_render(module) -> str:
+    import ptlab.rendering.jobs
+    from ptlab.exercises.renders import check_render_through
+
     return check_render_through(
-        text("ch01.yours"),
-        ptlab.rendering.jobs,
-        dict(generate_rays=student_rays),
-        nan_hint=text("ch01.nan_hint"),
+        text("ch01.yours"), ptlab.rendering.jobs, _plugged_rays(module), nan_hint=text("ch01.nan_hint")
     )
+
+
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered through the student's rays (``ptlab exercise render``)."""
+    import ptlab.rendering.jobs
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.rendering.jobs, **_plugged_rays(module))
 
 
 CHAPTER = Chapter(
@@ -235,4 +246,5 @@ CHAPTER = Chapter(
         ChapterCheck("jittered rays", 2, check_known_rays, timeout=30),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours),
 )

@@ -18,7 +18,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import require_finite
 from ptlab.exercises.messages import aside, text
 
@@ -292,10 +300,8 @@ def _error_hint(name: str, error: float, swapped: bool = False) -> str:
     return text("ch02.hint.uv_formula")
 
 
-def check_render(module) -> str:
-    import ptlab.accel.numpy_bvh
-    from ptlab.exercises.renders import check_render_through
-
+def _plugged_ray_triangle(module) -> dict:
+    """The student's ``ray_triangle``, as the NumPy BVH looks it up, its results checked."""
     (ray_triangle,) = require(module, "ray_triangle")
 
     def student_ray_triangle(origins, dirs, v0, e1, e2):
@@ -309,12 +315,30 @@ def check_render(module) -> str:
         _require_finite_hits(t, u, v, bvh=True)
         return t, u, v
 
+    return dict(ray_triangle=student_ray_triangle)
+
+
+def check_render(module) -> str:
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.renders import check_render_through
+
     return check_render_through(
         text("ch02.yours"),
         ptlab.accel.numpy_bvh,
-        dict(ray_triangle=student_ray_triangle),
+        _plugged_ray_triangle(module),
         passes=dict(RENDER, seed=grading_seed_for(RENDER_SEED)),
         hint=text("ch02.hint.render"),
+    )
+
+
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered through the student's ray_triangle (``ptlab exercise render``), on the NumPy
+    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(
+        scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_plugged_ray_triangle(module)
     )
 
 
@@ -337,4 +361,5 @@ CHAPTER = Chapter(
         ChapterCheck("barycentrics", 1, check_barycentrics, timeout=30, requires=("known hits",)),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours, options=dict(backend="numpy")),
 )

@@ -11,9 +11,10 @@ computed here from first principles, in float64, independently of the library.
 Then the student's three functions go into the Whitted ray tracer (``ptlab.integrators.whitted``
 imports them by name with ``from ... import``, so that is where they are plugged in, and
 ``ptlab.materials.mirror`` for the mirror's ``reflect``), which renders the Cornell box's
-walls with a mirror sphere and a glass sphere. Whitted's tracer spends no random numbers on
-mirrors and glass, so with the same seed the two images must agree pixel for pixel, up to
-float rounding: a deterministic check.
+walls with a mirror sphere, a glass sphere and a glass block (``check_scene``: in the block
+total internal reflection shows, which a sphere never has). Whitted's tracer spends no
+random numbers on mirrors and glass, so with the same seed the two images must agree pixel
+for pixel, up to float rounding: a deterministic check.
 
 The normals, angles, indices of refraction and the render's seed come from the grading seed
 (``ptlab.exercises.chapter.grading_rng``), new for each grading: answers stored for known
@@ -24,13 +25,23 @@ from __future__ import annotations
 
 import copy
 import math
+from collections.abc import Iterator
+from contextlib import contextmanager
 from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import at_pixel, finite_array, require_finite
-from ptlab.exercises.messages import aside, text
+from ptlab.exercises.messages import aside, check_name, text
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -208,15 +219,18 @@ def check_fresnel(module) -> str:
             worst = int(np.argmax(np.abs(F - expected)))
             schlick_r0 = ((eta - 1) / (eta + 1)) ** 2
             schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
+            eta_here = eta[worst] if np.ndim(eta) else eta
             hint = ""
-            if np.abs(F - schlick).max() < 1e-4:
+            if eta_here < 1 and 1 - cos_i[worst] ** 2 >= eta_here**2:  # sin(theta_t) >= 1 there
+                critical = math.degrees(math.asin(eta_here))
+                hint = aside(text("ch03.hint.fresnel_tir", critical=critical))
+            elif np.abs(F - schlick).max() < 1e-4:
                 hint = aside(text("ch03.hint.schlick"))
             elif np.abs(F - fresnel_reference(cos_i, 1 / np.asarray(eta))).max() < 1e-5:
                 hint = aside(text("ch03.hint.fresnel_eta_inverted"))
             elif np.ndim(eta):
                 hint = aside(text("ch03.hint.per_row"))
             angle = math.degrees(math.acos(cos_i[worst]))
-            eta_here = eta[worst] if np.ndim(eta) else eta
             raise CheckFailed(
                 text("ch03.fresnel", angle=angle, eta=eta_here, expected=expected[worst], yours=F[worst])
                 + hint
@@ -308,9 +322,11 @@ def icosphere(subdivisions: int = 2) -> np.ndarray:
     return triangles
 
 
-def spheres_scene() -> Scene:
+def spheres_scene(glass_block: bool = False) -> Scene:
     """The Cornell box's walls and light (its two boxes left out) with a mirror sphere at the
-    back on the left and a glass sphere (eta 1.5) at the front on the right."""
+    back on the left and a glass sphere (eta 1.5) at the front on the right; with
+    ``glass_block``, the tall box in glass at the back on the left, and the mirror sphere,
+    smaller, in front of it."""
     import ptlab
     from ptlab.materials import Dielectric, Mirror
     from ptlab.meshes import read_mesh_triangles
@@ -323,21 +339,41 @@ def spheres_scene() -> Scene:
         for name, material in (("floor", "white"), ("left", "red"), ("right", "green"), ("light", "light"))
     ]
     materials = [*list(cornell.materials), Mirror(), Dielectric(eta=GLASS)]
+    mirror, glass = len(materials) - 2, len(materials) - 1
     sphere = icosphere(3)
-    parts += [
-        (sphere * 100 + [380, 100, 370], len(materials) - 2),
-        (sphere * 90 + [180, 90, 170], len(materials) - 1),
-    ]
+    parts.append((sphere * 90 + [180, 90, 170], glass))
+    if glass_block:
+        block = read_mesh_triangles(meshes / "tallbox.obj")
+        parts += [(sphere * 70 + [420, 70, 150], mirror), (block, glass)]
+    else:
+        parts.append((sphere * 100 + [380, 100, 370], mirror))
     triangles = np.concatenate([t for t, _ in parts])
     ids = np.concatenate([np.full(len(t), k) for t, k in parts])
     names = [*list(cornell.material_names), "mirror", "glass"]
-    return Scene(triangles, ids, materials, cornell.camera, "cornell-spheres", names)
+    name = "cornell-glass-block" if glass_block else "cornell-spheres"
+    return Scene(triangles, ids, materials, cornell.camera, name, names)
 
 
-def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
-    """The Whitted render of ``scene`` in this process, with the given functions (those not
-    None) plugged in where the tracer and the mirror look them up."""
-    import ptlab
+def check_scene() -> Scene:
+    """The render check's scene: ``spheres_scene`` with the glass block, seen from closer.
+
+    A ray leaves a sphere at the angle it entered at, below the critical angle, so a sphere
+    shows no total internal reflection (an answer without it changed 0.1% of the pixels);
+    inside a block, rays meet the sides far beyond the critical angle. From this camera an
+    answer whose fresnel gives 0 or less than 1 there differs from the library's in about
+    10% of the 48 x 48 pixels (measured for three seeds), five times the check's allowance.
+    """
+    from ptlab.camera import Camera
+
+    scene = spheres_scene(glass_block=True)
+    scene.camera = Camera.look_at((278, 273, -300), (340, 165, 380), fov_y=40)
+    return scene
+
+
+@contextmanager
+def _plugged(reflect=None, refract=None, fresnel=None) -> Iterator[None]:
+    """A ``with`` block in which the Whitted tracer and the mirror use the given functions
+    (those not None)."""
     import ptlab.integrators.whitted as whitted
     import ptlab.materials.mirror as mirror
     from ptlab.exercises.plug import plugged
@@ -348,14 +384,23 @@ def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **opti
         if f is not None
     }
     in_mirror = {"reflect": reflect} if reflect is not None else {}
-    options = dict(dict(spp=2, res=48, workers=1), **options)
     with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
+        yield
+
+
+def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
+    """The Whitted render of ``scene`` in this process, with the given functions (those not
+    None) plugged in where the tracer and the mirror look them up."""
+    import ptlab
+
+    options = dict(dict(spp=2, res=48, workers=1), **options)
+    with _plugged(reflect, refract, fresnel):
         return ptlab.render(scene, integrator="whitted", **options)
 
 
 def check_render(module) -> str:
     reflect, refract, fresnel = require(module, "reflect", "refract", "fresnel")
-    scene = spheres_scene()
+    scene = check_scene()
     seed = grading_seed_for(3)
     expected = whitted_image(scene, seed=seed)
     image = whitted_image(scene, reflect, refract, fresnel, seed=seed)
@@ -365,8 +410,33 @@ def check_render(module) -> str:
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
     if close.mean() < 0.98:
         ratio = image.mean() / expected.mean()
-        raise CheckFailed(text("ch03.render", wrong=(~close).sum(), n=close.size, ratio=ratio))
+        raise CheckFailed(
+            text("ch03.render", wrong=(~close).sum(), n=close.size, ratio=ratio) + _render_hint(fresnel)
+        )
     return text("ch03.render_ok", share=close.mean())
+
+
+def _render_hint(fresnel) -> str:
+    """What may make the render differ: light let out of the glass block beyond the critical
+    angle, if ``fresnel`` is not 1 there (leaving glass at 50 to 85 degrees); else nothing."""
+    degrees = np.array([50.0, 65.0, 85.0])
+    with np.errstate(all="ignore"):
+        F = np.asarray(fresnel(np.cos(np.radians(degrees)), 1 / GLASS), dtype=np.float64)  # noqa: N806
+    if F.shape == degrees.shape and np.all(np.abs(F - 1) <= 1e-6):
+        return ""
+    return aside(text("ch03.hint.render_tir", check=check_name(3, "total internal reflection")))
+
+
+def render_yours(module, scene: Scene, options: dict) -> np.ndarray:
+    """``scene`` rendered by the Whitted tracer with the student's ``reflect``, ``refract``
+    and ``fresnel`` (``ptlab exercise render``); a scene without a mirror or glass, which
+    would never call them, is refused."""
+    from ptlab.exercises.side_by_side import render_within
+    from ptlab.materials import Dielectric, Mirror
+
+    if not any(isinstance(m, Mirror | Dielectric) for m in scene.materials):
+        raise CheckFailed(text("ch03.no_mirror_or_glass", scene=scene.name))
+    return render_within(scene, options, _plugged(*require(module, "reflect", "refract", "fresnel")))
 
 
 CHAPTER = Chapter(
@@ -386,4 +456,5 @@ CHAPTER = Chapter(
         ),
         ChapterCheck("render", 3, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours, scene="games101-hw5", options=dict(integrator="whitted")),
 )

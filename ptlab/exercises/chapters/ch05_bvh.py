@@ -19,7 +19,7 @@ import copy
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
+from ptlab.exercises.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.exercises.messages import aside, check_name, text
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
@@ -295,19 +295,70 @@ def _expected_costs(count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost: flo
     return cost
 
 
-def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
-    """Fail where ``got`` is not ``want`` (``what``: what the costs are, in words)."""
+def _merged_costs(count, bin_lo, bin_hi, node_lo, node_hi, traversal_cost: float, merge_lo, merge_hi):
+    """The SAH costs with each side's box merged from its bins' boxes by the ufuncs
+    ``merge_lo`` and ``merge_hi``, running over the bins from each end, empty ones
+    (bounds inf, -inf) included: a vectorised ``split_costs``, right with ``np.minimum``
+    and ``np.maximum``, and a typical mistake's costs with others."""
+
+    def half_area(lo, hi):
+        e = np.maximum(hi - lo, 0)
+        return e[..., 0] * e[..., 1] + e[..., 1] * e[..., 2] + e[..., 2] * e[..., 0]
+
+    def side(reverse: bool):
+        lo, hi, n = (a[::-1] if reverse else a for a in (bin_lo, bin_hi, count))
+        area = half_area(merge_lo.accumulate(lo, axis=0), merge_hi.accumulate(hi, axis=0))
+        n = np.cumsum(n, axis=0)
+        return (area[::-1][1:], n[::-1][1:]) if reverse else (area[:-1], n[:-1])
+
+    (left_area, left_n), (right_area, right_n) = side(False), side(True)
+    node_area = half_area(np.asarray(node_lo, np.float64), np.asarray(node_hi, np.float64))
+    with np.errstate(all="ignore"):
+        cost = traversal_cost + (left_n * left_area + right_n * right_area) / node_area[:, None]
+    return np.where((left_n == 0) | (right_n == 0), np.inf, cost)
+
+
+#: The mistakes in the bounds of a split's sides that the SAH checks name: a lower bound
+#: merged with maximum, or an upper bound with minimum, as ``_merged_costs`` has them.
+MERGE_MISTAKES = {
+    "ch05.hint.merge_hi": (np.minimum, np.minimum),
+    "ch05.hint.merge_lo": (np.maximum, np.maximum),
+}
+
+
+def _cost_mistake(got: np.ndarray, example: tuple, traversal_cost: float) -> str:
+    """The hint for the mistake whose costs ``got`` are (every finite one of them within
+    rounding), of ``MERGE_MISTAKES`` and ``traversal_cost`` left out (0) or hard-coded
+    (the homework's 1); "" for none."""
+    mistakes = [
+        (hint, _merged_costs(*example, traversal_cost, *merges)) for hint, merges in MERGE_MISTAKES.items()
+    ]
+    mistakes += [
+        ("ch05.hint.traversal_cost", _merged_costs(*example, c_trav, np.minimum, np.maximum))
+        for c_trav in (0.0, 1.0)
+        if c_trav != traversal_cost
+    ]
+    for hint, costs in mistakes:
+        finite = np.isfinite(costs) & np.isfinite(got)
+        if finite.any() and np.allclose(got[finite], costs[finite], rtol=1e-4):
+            return text(hint)
+    return ""
+
+
+def _compare_costs(got: np.ndarray, example: tuple, traversal_cost: float, what: str) -> None:
+    """Fail where ``got`` are not the SAH costs of the binned ``example``
+    (``_binned_example``) with ``traversal_cost`` (``what``: what the costs are, in words)."""
+    want = _expected_costs(*example, traversal_cost=traversal_cost)
     finite = np.isfinite(want)
     with np.errstate(invalid="ignore"):
         bad = finite & ~(np.abs(got - want) < 1e-4 * np.abs(want))
     if bad.any():
         plane, node, axis = np.argwhere(bad)[0]
-        hint = ""
+        hint = _cost_mistake(got, example, traversal_cost)
         ratio = got[plane, node, axis] / want[plane, node, axis]
-        if np.isclose(got[plane, node, axis] - want[plane, node, axis], 0.5, rtol=1e-3):
-            hint = aside(text("ch05.hint.traversal_cost"))
-        elif abs(ratio - 1) < 0.6:
-            hint = aside(text("ch05.hint.union"))
+        if not hint and abs(ratio - 1) < 0.6:
+            hint = text("ch05.hint.union")
+        hint = aside(hint)
         raise CheckFailed(
             text(
                 "ch05.cost",
@@ -325,9 +376,8 @@ def _compare_costs(got: np.ndarray, want: np.ndarray, what: str) -> None:
 def check_split_costs(module) -> str:
     split_costs = _pieces(module, "split_costs")["split_costs"]
     example = _binned_example(stream=1)
-    want = _expected_costs(*example, traversal_cost=0.5)
     got = split_costs(*example, traversal_cost=0.5)
-    _compare_costs(got, want, "0.5 + (N_L S_L + N_R S_R) / S")
+    _compare_costs(got, example, 0.5, "0.5 + (N_L S_L + N_R S_R) / S")
     return text("ch05.costs_ok")
 
 
@@ -346,7 +396,7 @@ def check_empty_sides(module) -> str:
                 text("ch05.empty_side", plane=plane, axis="xyz"[axis], node=node, value=value)
                 + (aside(text("ch05.hint.zero_inf")) if np.isnan(value) else "")
             )
-    _compare_costs(got, want, text("ch05.dividing"))
+    _compare_costs(got, example, 1.0, text("ch05.dividing"))
     return text("ch05.empty_ok")
 
 
@@ -386,8 +436,26 @@ def check_best_split(module) -> str:
                     yours=split_bin[node],
                     your_axis="xyz"[split_axis[node]] if 0 <= split_axis[node] < 3 else "?",
                 )
+                + aside(_layout_mistake(best_split) or text("ch05.hint.both"))
             )
     return text("ch05.best_ok")
+
+
+def _layout_mistake(best_split) -> str:
+    """The hint for costs flattened in one layout and the index decoded in the other, if
+    ``best_split`` (``_checked_best_split``'s) picks so in a node whose cheapest split is
+    plane 1 along z of 4 planes; else "". (With 4 planes, not 3, the two layouts' mix-ups
+    differ from each other and from plane and axis swapped.)"""
+    planes, plane, axis = 4, 1, 2
+    cost = np.full((planes, 1, 3), 50.0)
+    cost[plane, 0, axis] = 5.0
+    split_bin, split_axis, _ = best_split(cost, np.array([10]), 4)
+    yours = (int(split_bin[0]), int(split_axis[0]))
+    if yours == divmod(axis * planes + plane, 3):  # axis-major index, decoded plane-major
+        return text("ch05.hint.axis_major")
+    if yours == tuple(reversed(divmod(plane * 3 + axis, planes))):  # and the other way round
+        return text("ch05.hint.plane_major")
+    return ""
 
 
 def check_child_order(module) -> str:
@@ -459,9 +527,14 @@ def check_tree_quality(module) -> str:
         choice_bad = with_choice > library * (1 + SAH_TOLERANCE)
         causes = []
         if choice_bad or not costs_bad:
-            causes.append(text("ch05.choice_bad", cost=with_choice, check=check_name(5, "best split")))
+            layout = _layout_mistake(pieces["best_split"])
+            choice = "ch05.choice_bad_because" if layout else "ch05.choice_bad"
+            causes.append(text(choice, cost=with_choice, check=check_name(5, "best split"), hint=layout))
         if costs_bad:
-            causes.append(text("ch05.costs_bad", cost=with_costs))
+            example = _binned_example(stream=1)
+            mistake = _cost_mistake(pieces["split_costs"](*copy.deepcopy(example), 0.5), example, 0.5)
+            costs = "ch05.costs_bad_because" if mistake else "ch05.costs_bad"
+            causes.append(text(costs, cost=with_costs, hint=mistake))
         raise CheckFailed(
             text("ch05.tree", student=student, library=library, more=student / library - 1)
             + text("ch05.sentences").join(causes)
@@ -510,6 +583,15 @@ def check_render(module) -> str:
     return check_render_through(text("ch05.yours"), numpy_bvh, _pieces(module, *PIECES))
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered through the student's BVH pieces (``ptlab exercise render``), on the NumPy
+    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
+    import ptlab.accel.numpy_bvh
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_pieces(module, *PIECES))
+
+
 CHAPTER = Chapter(
     number=5,
     slug="bvh",
@@ -535,4 +617,5 @@ CHAPTER = Chapter(
         ChapterCheck("traversal order", 1, check_traversal_order, timeout=60),
         ChapterCheck("render", 1, check_render, timeout=60, requires=("near child first",)),
     ),
+    render=ChapterRender(render_yours, options=dict(backend="numpy")),
 )

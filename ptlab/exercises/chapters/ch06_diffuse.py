@@ -19,6 +19,7 @@ import numpy as np
 from ptlab.exercises.chapter import (
     Chapter,
     ChapterCheck,
+    ChapterRender,
     CheckFailed,
     grading_rng,
     grading_seed_for,
@@ -332,6 +333,21 @@ def check_render(module) -> str:
     )
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered with the student's ``Lambertian`` in place of every diffuse
+    material of one albedo, of the same albedo (``ptlab exercise render``); a textured one
+    (games101-hw5's checkerboard) stays the library's: the exercise's takes a colour."""
+    from ptlab.exercises.side_by_side import render_with_materials
+    from ptlab.materials import Diffuse
+
+    def replaces(material) -> bool:
+        return isinstance(material, Diffuse) and not material.textured
+
+    probe(_material(module))
+    missing = text("ch06.no_diffuse", scene=scene.name)
+    return render_with_materials(scene, options, replaces, lambda m: _material(module, m.albedo), missing)
+
+
 CHAPTER = Chapter(
     number=6,
     slug="diffuse",
@@ -347,4 +363,5 @@ CHAPTER = Chapter(
         ChapterCheck("material harness", 3, check_harness, timeout=60, requires=("sample",)),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours),
 )

@@ -38,7 +38,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import at_pixel, at_row, channel_name, require_finite
 from ptlab.exercises.messages import aside, check_name, text
 
@@ -639,6 +647,14 @@ def check_cornell(module) -> str:
     return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered by the student's ``trace_paths`` (``ptlab exercise render``)."""
+    import ptlab.rendering.jobs
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.rendering.jobs, trace_paths=_student_loop(module))
+
+
 CHAPTER = Chapter(
     number=7,
     slug="path_tracing",
@@ -659,4 +675,5 @@ CHAPTER = Chapter(
         ChapterCheck("white furnace", 2, check_furnace, timeout=60),
         ChapterCheck("Cornell box", 2, check_cornell, timeout=60),
     ),
+    render=ChapterRender(render_yours, options=dict(rr=CORNELL_RENDER["rr"])),  # (the homework's p_rr)
 )

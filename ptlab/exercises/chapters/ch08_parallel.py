@@ -25,7 +25,15 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import at_pixel, require_finite
 from ptlab.exercises.messages import check_name, text
 from ptlab.untrusted import submission_of
@@ -189,15 +197,20 @@ def importable(module: ModuleType) -> ModuleType:
     return imported
 
 
-def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
+def _render_parallel(module, scene: Scene, spp: int, res: tuple, seed: int, workers: int) -> tuple:
+    """The student's ``render_parallel(scene, ...)``: (image, the pids that rendered it)."""
     (render_parallel,) = require(module, "render_parallel")
     try:
-        result = render_parallel(_scene(), spp, RES, seed=_seed(), workers=workers, tile_size=TILE)
+        result = render_parallel(scene, spp, res, seed=seed, workers=workers, tile_size=TILE)
     finally:
         submission_of(module).end_started_processes()  # workers left behind
     if not (isinstance(result, tuple) and len(result) == 2):
         raise CheckFailed(text("ch08.parallel_result"))
-    image, pids = np.asarray(result[0]), set(result[1])
+    return np.asarray(result[0]), set(result[1])
+
+
+def _render(module, workers: int, spp: int = SPP) -> tuple[np.ndarray, set]:
+    image, pids = _render_parallel(module, _scene(), spp, RES, _seed(), workers)
     if image.shape != (RES[1], RES[0], 3):
         raise CheckFailed(text("ch08.image_shape", height=RES[1], width=RES[0], shape=image.shape))
     require_finite(image, text("ch08.image"), at_pixel)
@@ -268,6 +281,13 @@ def check_library(module) -> str:
     return text("ch08.library_ok", seed=_seed(), tile=TILE)
 
 
+def render_yours(module, scene: Scene, options: dict) -> np.ndarray:
+    """``scene`` rendered by the student's ``render_parallel`` on two workers (``ptlab
+    exercise render``; its own progress, if any: the library's bar is not in it)."""
+    image, _ = _render_parallel(importable(module), scene, options["spp"], options["res"], options["seed"], 2)
+    return image
+
+
 CHAPTER = Chapter(
     number=8,
     slug="parallel",
@@ -291,4 +311,5 @@ CHAPTER = Chapter(
         ChapterCheck("any worker count", 2, check_worker_count, timeout=90),
         ChapterCheck("matches the library", 2, check_library, timeout=60),
     ),
+    render=ChapterRender(render_yours),
 )

@@ -21,6 +21,7 @@ import numpy as np
 from ptlab.exercises.chapter import (
     Chapter,
     ChapterCheck,
+    ChapterRender,
     CheckFailed,
     grading_rng,
     grading_seed_for,
@@ -278,6 +279,23 @@ def check_render_importance(module) -> str:
     return _render(module, "ggx")
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered with the student's ``GGXMetal`` (importance sampled) in place of
+    every microfacet material, of the same f0 and alpha (``ptlab exercise render``)."""
+    from ptlab.exercises.side_by_side import render_with_materials
+    from ptlab.materials import Microfacet
+
+    probe(_metal(module))
+    missing = text("ch09.no_metal", scene=scene.name)
+    return render_with_materials(
+        scene,
+        options,
+        lambda m: isinstance(m, Microfacet),
+        lambda m: _metal(module, m.f0, m.alpha, "ggx"),
+        missing,
+    )
+
+
 CHAPTER = Chapter(
     number=9,
     slug="microfacet",
@@ -304,4 +322,5 @@ CHAPTER = Chapter(
         ),
         ChapterCheck("render (importance)", 1, check_render_importance, timeout=60),
     ),
+    render=ChapterRender(render_yours, scene="cornell-box-microfacet"),
 )

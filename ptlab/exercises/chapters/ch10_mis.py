@@ -14,7 +14,15 @@ from __future__ import annotations
 
 import numpy as np
 
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, grading_seed_for, require
+from ptlab.exercises.chapter import (
+    Chapter,
+    ChapterCheck,
+    ChapterRender,
+    CheckFailed,
+    grading_rng,
+    grading_seed_for,
+    require,
+)
 from ptlab.exercises.finite import at_pixel, require_finite
 from ptlab.exercises.messages import aside, check_name, text
 
@@ -192,12 +200,8 @@ def veach_scene():
 TOLERANCE = 1e-3
 
 
-def check_render(module) -> str:
-    import ptlab
-    import ptlab.integrators.path
-    from ptlab.exercises.plug import plugged
-    from ptlab.exercises.renders import describe_region, regions_of
-
+def _checked_mis_weight(module):
+    """The student's ``mis_weight``, as the path tracer looks it up, its weights checked."""
     (mis_weight,) = require(module, "mis_weight")
     _weights(mis_weight, np.array([1.0, 2.0]), np.array([1.0, 0.5]), "power")  # fail fast
 
@@ -207,6 +211,16 @@ def check_render(module) -> str:
         pdf, other = np.broadcast_arrays(pdf, other)
         return _weights(mis_weight, pdf, other, heuristic).astype(np.float32)
 
+    return checked_mis_weight
+
+
+def check_render(module) -> str:
+    import ptlab
+    import ptlab.integrators.path
+    from ptlab.exercises.plug import plugged
+    from ptlab.exercises.renders import describe_region, regions_of
+
+    checked_mis_weight = _checked_mis_weight(module)
     scene = veach_scene()
     options = render_options(grading_seed_for(10))
     library = regions_of(ptlab.render(scene, **options).astype(np.float64))
@@ -232,6 +246,15 @@ def check_render(module) -> str:
     return text("ch10.render_ok", overall=overall)
 
 
+def render_yours(module, scene, options: dict) -> np.ndarray:
+    """``scene`` rendered with MIS weighted by the student's ``mis_weight`` (``ptlab
+    exercise render``)."""
+    import ptlab.integrators.path
+    from ptlab.exercises.side_by_side import render_plugged
+
+    return render_plugged(scene, options, ptlab.integrators.path, mis_weight=_checked_mis_weight(module))
+
+
 CHAPTER = Chapter(
     number=10,
     slug="mis",
@@ -245,4 +268,5 @@ CHAPTER = Chapter(
         ChapterCheck("zero and delta pdfs", 2, check_zero_pdfs, timeout=30),
         ChapterCheck("render", 2, check_render, timeout=60),
     ),
+    render=ChapterRender(render_yours, scene="veach-mis", options=dict(strategy="mis")),
 )
