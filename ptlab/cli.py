@@ -212,13 +212,20 @@ def _inspect(args) -> int:
             raise PtlabError(f"{out}: folder {Path(out).parent} does not exist")
     if args.plot is not None and Path(args.plot).suffix.lower() != ".png":
         raise PtlabError(f"--plot {args.plot}: give a .png file")
-    found = inspect_pixel(load_scene(args.scene), pixel, options=options)
+    scene = load_scene(args.scene)
+    found = inspect_pixel(scene, pixel, options=options)
     print(found.table(args.sample))
     if args.json is not None:
         found.write_json(args.json)
         print(f"wrote {Path(args.json).resolve()}")
     if args.plot is not None:
-        found.plot(args.plot)
+        from dataclasses import replace
+
+        from ptlab.rendering import render
+
+        # The picture beside the paths: the image, with a few samples (it only shows where).
+        preview = render(scene, options=replace(options, spp=min(options.spp, 4), workers=None))
+        found.plot(args.plot, scene, preview)
         print(f"wrote {Path(args.plot).resolve()}")
     return 0
 

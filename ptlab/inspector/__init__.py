@@ -75,12 +75,18 @@ class PixelInspection:
 
         return table(self, sample)
 
-    def plot(self, path: str | Path, image: np.ndarray | None = None) -> None:
-        """Draw the paths from above and from the side, beside ``image`` with the pixel
-        marked, into ``path`` (a .png; ``ptlab.inspector.plot``)."""
+    def plot(
+        self, path: str | Path, scene: Scene | str | None = None, image: np.ndarray | None = None
+    ) -> None:
+        """Draw the paths in ``scene`` (default: the scene of that name) from above and from
+        the side, beside ``image`` with the pixel marked if given, into ``path`` (a .png;
+        ``ptlab.inspector.plot``)."""
         from ptlab.inspector.plot import plot
+        from ptlab.scene_file import load_scene
 
-        plot(self, path, image)
+        if not isinstance(scene, Scene):
+            scene = load_scene(scene or self.scene)
+        plot(self, path, scene, image)
 
 
 def parse_pixel(text: str) -> tuple[int, int]:
@@ -145,7 +151,9 @@ def inspect_pixel(
         pixel=(x, y),
         value=pixel_value(contributions, passes),
         samples=[
-            Sample(k, [float(c) for c in contribution], recorder.vertices_of.get(k, []), recorder.sky_of.get(k))
+            Sample(
+                k, [float(c) for c in contribution], recorder.vertices_of.get(k, []), recorder.sky_of.get(k)
+            )
             for k, contribution in enumerate(contributions)
         ],
         options=dict(options.record(), scene=scene.name),

@@ -245,7 +245,9 @@ class Recorder:
         for i, k in enumerate(rows):
             if vertices:
                 cos_theta = float(np.dot(wi[i], hit.n[k]))
-                vertices[k].split.append(BsdfSample(wi=_vec(wi[i]), cos_theta=cos_theta, weight=_vec(weight[i])))
+                vertices[k].split.append(
+                    BsdfSample(wi=_vec(wi[i]), cos_theta=cos_theta, weight=_vec(weight[i]))
+                )
 
     def sky(self, paths, rows: np.ndarray, radiance: np.ndarray) -> None:
         """The sky seen by the rays ``rows`` of ``paths`` that escaped (``add_sky``): given to

@@ -40,7 +40,9 @@ def table(found: PixelInspection, sample: int | None = None) -> str:
         shown = found.samples
     for s in shown:
         lines += sample_lines(s)
-    lines.append(f"pixel value {vec(found.value)}: the mean of the {len(found.samples)} samples' contributions")
+    lines.append(
+        f"pixel value {vec(found.value)}: the mean of the {len(found.samples)} samples' contributions"
+    )
     return "\n".join(lines)
 
 
