@@ -202,10 +202,11 @@ class Recorder:
             vertex.light = LightSample(contribution=_vec(radiance[k]))
 
     def roulette(self, hit, survival, survive: np.ndarray) -> None:
-        """``russian_roulette``'s survival probabilities and outcomes."""
-        survival = np.broadcast_to(np.asarray(survival, dtype=np.float64), survive.shape)
+        """``russian_roulette``'s survival probabilities (None: not known, a student's) and
+        outcomes."""
+        odds = None if survival is None else np.broadcast_to(np.asarray(survival, np.float64), survive.shape)
         for k, vertex in enumerate(self._at(hit)):
-            vertex.roulette = Roulette(float(survival[k]), bool(survive[k]))
+            vertex.roulette = Roulette(None if odds is None else float(odds[k]), bool(survive[k]))
 
     def bsdf(self, hit, wi, weight, pdf, throughput, survive) -> None:
         """``scatter``'s sampled directions, with f_r, pdf and cos at them (asked of the
