@@ -550,5 +550,5 @@ MESSAGES: dict[str, str] = {
     "inspect.differs": "sample {sample}, depth {depth}: your {quantity} {yours}, the library's {expected}",
     "inspect.differs_sample": "sample {sample}: your {quantity} {yours}, the library's {expected} (every vertex the same up to there)",
     "inspect.not_run": "could not compare: {message}",
-    "inspect.suggest": "; to see where, vertex by vertex: ptlab exercise inspect {chapter} YOUR_FILE --pixel {x},{y} (the pixel that differs most)",
+    "inspect.suggest": "; to see where, vertex by vertex: ptlab exercise inspect {chapter} YOUR_FILE --pixel {x},{y} --seed {seed} (the pixel that differs most)",
 }
