@@ -207,7 +207,7 @@ def _inspect(args) -> int:
 
     pixel = parse_pixel(args.pixel)
     options = RenderOptions(**{name: getattr(args, name) for name in _INSPECT_OPTIONS}, workers=1)
-    for out, suffix in ((args.json, ".json"), (args.plot, ".png")):
+    for out, _suffix in ((args.json, ".json"), (args.plot, ".png")):
         if out is not None and not Path(out).parent.is_dir():
             raise PtlabError(f"{out}: folder {Path(out).parent} does not exist")
     if args.plot is not None and Path(args.plot).suffix.lower() != ".png":

@@ -37,7 +37,7 @@ def pixels_to_test(image: np.ndarray) -> list[tuple[int, int]]:
 
 
 @pytest.mark.parametrize(
-    "scene, options",
+    ("scene", "options"),
     [
         ("cornell-box", dict(strategy="nee")),
         ("veach-mis", dict(strategy="mis")),
@@ -106,16 +106,17 @@ def test_parse_pixel_and_bounds():
 
 def test_cli_prints_json_and_one_sample(tmp_path, capsys):
     out = tmp_path / "pixel.json"
-    code = main(
-        ["inspect", "cornell-box", "--res", "24", "--spp", "3", "--seed", "3", "--pixel", "12,14"]
-        + ["--sample", "1", "--json", str(out)]
-    )
+    options = ["--res", "24", "--spp", "3", "--seed", "3", "--pixel", "12,14"]
+    code = main(["inspect", "cornell-box", *options, "--sample", "1", "--json", str(out)])
     assert code == 0
     printed = capsys.readouterr().out
-    assert "sample 1" in printed and "sample 0\n" not in printed
-    assert "depth 0" in printed and "pixel value" in printed
+    assert "sample 1" in printed
+    assert "sample 0\n" not in printed
+    assert "depth 0" in printed
+    assert "pixel value" in printed
     data = json.loads(out.read_text())
-    assert len(data["value"]) == 3 and len(data["samples"]) == 3
+    assert len(data["value"]) == 3
+    assert len(data["samples"]) == 3
     vertex = data["samples"][0]["vertices"][0]
     for name in ("depth", "position", "triangle", "material", "normal", "front", "wo", "light", "throughput"):
         assert name in vertex

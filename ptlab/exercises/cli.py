@@ -134,7 +134,7 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
 
 
 def _add_inspect(actions) -> None:
-    """``ptlab exercise inspect NN FILE --pixel X,Y`` (``ptlab.inspector.exercise``)."""
+    """``ptlab exercise inspect NN FILE --pixel X,Y`` (``ptlab.exercises.inspection``)."""
     inspect = actions.add_parser(
         "inspect",
         help="compare your functions with the library's at one pixel, vertex by vertex",
@@ -146,7 +146,10 @@ def _add_inspect(actions) -> None:
     inspect.add_argument("chapter", metavar="NN", help="the chapter number")
     inspect.add_argument("file", metavar="FILE", help="your exercise file")
     inspect.add_argument(
-        "--pixel", required=True, metavar="X,Y", help="the pixel of the render check's image: X from the left, Y from the top"
+        "--pixel",
+        required=True,
+        metavar="X,Y",
+        help="the pixel of the render check's image: X from the left, Y from the top",
     )
     inspect.add_argument("--seed", type=int, default=0, help="the render's seed (default 0)")
     inspect.add_argument(
@@ -174,9 +177,9 @@ def run_exercise(args: argparse.Namespace) -> int:
 
 def _inspect(args) -> int:
     from ptlab.exercises import chapter
+    from ptlab.exercises.inspection import INSPECTED, difference_dict, inspect_file, message
     from ptlab.exercises.messages import language, text
     from ptlab.inspector import parse_pixel
-    from ptlab.inspector.exercise import INSPECTED, difference_dict, inspect_file, message
     from ptlab.rendering.settings import parse_resolution
 
     found = chapter(args.chapter)
@@ -197,7 +200,9 @@ def _inspect(args) -> int:
         difference, failed = inspect_file(
             found.number, path, pixel, args.seed, args.sampling, user=args.student_user
         )
-        line = text("inspect.not_run", message=failed) if failed else message(difference, pixel, options["spp"])
+        line = (
+            text("inspect.not_run", message=failed) if failed else message(difference, pixel, options["spp"])
+        )
     print_verdict(line)
     if args.json:
         result = dict(

@@ -9,14 +9,13 @@ shadow ray was blocked), and a short stub where a ray escaped the scene.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from ptlab.measure.charts import _pyplot, _save
+from ptlab.atomic import write_atomically
 
 if TYPE_CHECKING:
-    from ptlab.inspector import PixelInspection
     from ptlab.inspector.records import Sample
     from ptlab.scene import Scene
 
@@ -24,12 +23,16 @@ if TYPE_CHECKING:
 VIEWS = (("from above (x, z)", 0, 2), ("from the side (z, y)", 2, 1))
 
 
-def plot(found: PixelInspection, path: str | Path, scene: Scene, image: np.ndarray | None = None) -> None:
+def plot(found: Any, path: str | Path, scene: Scene, image: np.ndarray | None = None) -> None:
     """Write the picture of ``found``'s paths in ``scene`` to ``path`` (.png), beside ``image``
     (linear RGB, (H, W, 3)) with the pixel marked, if given."""
+    import matplotlib
+
     from ptlab.image import encode_srgb8
 
-    plt = _pyplot()
+    matplotlib.use("Agg")  # (files only: no display needed)
+    import matplotlib.pyplot as plt
+
     panels = 3 if image is not None else 2
     figure, axes = plt.subplots(1, panels, figsize=(5.2 * panels, 5.2))
     if image is not None:
@@ -65,7 +68,7 @@ def plot(found: PixelInspection, path: str | Path, scene: Scene, image: np.ndarr
         fontsize=9,
     )
     figure.tight_layout()
-    _save(figure, Path(path))
+    write_atomically(Path(path), lambda temporary: figure.savefig(temporary, format="png", dpi=110))
     plt.close(figure)
 
 

@@ -4,12 +4,11 @@ the BSDF sample, the throughput after)."""
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 from ptlab.errors import PtlabError
 
 if TYPE_CHECKING:
-    from ptlab.inspector import PixelInspection
     from ptlab.inspector.records import Sample, Vertex
 
 
@@ -23,7 +22,7 @@ def vec(v: list[float] | None) -> str:
     return "-" if v is None else "(" + ", ".join(number(x) for x in v) + ")"
 
 
-def table(found: PixelInspection, sample: int | None = None) -> str:
+def table(found: Any, sample: int | None = None) -> str:
     """Every sample's vertices (or only sample ``sample``'s), then the pixel's value."""
     options = found.options
     x, y = found.pixel
@@ -75,7 +74,11 @@ def vertex_lines(v: Vertex) -> list[str]:
             lines.append(f"{pad}light:    adds {vec(light.contribution)}")
         else:
             mis = "" if light.mis_weight is None else f", MIS weight {number(light.mis_weight)}"
-            seen = {True: "visible", False: "blocked", None: "no shadow ray (faces away)"}[light.visible]
+            seen = {
+                True: "visible",
+                False: "blocked",
+                None: "no shadow ray (the light is behind the surface or faces away)",
+            }[light.visible]
             lines.append(
                 f"{pad}light:    {light.light} at {vec(light.point)}, pdf {number(light.pdf or 0)}, "
                 f"{seen}{mis}: adds {vec(light.contribution)}"
@@ -85,16 +88,12 @@ def vertex_lines(v: Vertex) -> list[str]:
         lines.append(f"{pad}roulette: survival {number(v.roulette.survival or 0)}, {outcome}")
     if v.bsdf is not None:
         b = v.bsdf
-        lines.append(
-            f"{pad}bsdf:     wi {vec(b.wi)}"
-            + (
-                f", f {vec(b.f)}, pdf {number(b.pdf or 0)}, cos {number(b.cos_theta or 0)}, weight {vec(b.weight)}"
-                if b.f is not None
-                else ""
-            )
+        values = (
+            "" if b.f is None else f", f {vec(b.f)}, pdf {number(b.pdf or 0)}, cos {number(b.cos_theta or 0)}"
         )
-    for ray in v.split:
-        lines.append(f"{pad}next ray: wi {vec(ray.wi)}, weight {vec(ray.weight)}")
+        weight = "" if b.weight is None else f", weight {vec(b.weight)}"
+        lines.append(f"{pad}bsdf:     wi {vec(b.wi)}{values}{weight}")
+    lines += [f"{pad}next ray: wi {vec(ray.wi)}, weight {vec(ray.weight)}" for ray in v.split]
     if v.sky is not None:
         lines.append(f"{pad}escaped:  sky adds {vec(v.sky)}")
     if v.throughput is not None:

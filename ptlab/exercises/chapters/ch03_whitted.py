@@ -364,7 +364,7 @@ def check_render(module) -> str:
     # pixels to differ, none of the others by more than 0.1%.
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
     if close.mean() < 0.98:
-        from ptlab.inspector.exercise import suggestion
+        from ptlab.exercises.inspect_command import suggestion
 
         ratio = image.mean() / expected.mean()
         raise CheckFailed(

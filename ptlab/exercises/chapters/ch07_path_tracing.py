@@ -639,7 +639,7 @@ def check_cornell(module) -> str:
     try:
         return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])
     except CheckFailed as failure:
-        from ptlab.inspector.exercise import suggestion
+        from ptlab.exercises.inspect_command import suggestion
 
         raise CheckFailed(str(failure) + suggestion(7, student, library, seed)) from None
 

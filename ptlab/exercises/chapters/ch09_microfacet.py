@@ -270,7 +270,7 @@ def _render(module, sampling: str) -> str:
             render_options(seed)["spp_per_pass"],
         )
     except CheckFailed as failure:
-        from ptlab.inspector.exercise import suggestion
+        from ptlab.exercises.inspect_command import suggestion
 
         raise CheckFailed(str(failure) + suggestion(9, student, library, seed)) from None
 

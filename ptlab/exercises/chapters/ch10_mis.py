@@ -219,7 +219,7 @@ def check_render(module) -> str:
     allowed = TOLERANCE * (library + 0.1 * library.mean())
     overall = student.mean() / library.mean()
     if not (difference <= allowed).all():
-        from ptlab.inspector.exercise import suggestion
+        from ptlab.exercises.inspect_command import suggestion
 
         worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
         ratio = student[worst] / max(library[worst], 1e-12)

@@ -197,7 +197,9 @@ def _plug_ch07_pieces(module) -> ExitStack:
     def bounce(scene, hit, u, survive, with_pdf=False):
         paths = scatter(scene, hit, u, survive)
         # (The exercise's Paths need not say their depth: one more than their vertex's.)
-        depth_of = dict(zip(hit.pixel.tolist(), np.broadcast_to(hit.depth, hit.pixel.shape).tolist(), strict=True))
+        depth_of = dict(
+            zip(hit.pixel.tolist(), np.broadcast_to(hit.depth, hit.pixel.shape).tolist(), strict=True)
+        )
         paths.depth = np.array([depth_of[int(p)] + 1 for p in paths.pixel], dtype=np.intp)
         if (rec := recorder()) is not None:
             rec.next_paths(hit, paths)
@@ -231,15 +233,30 @@ def _compare_ch09(module, scene, pixel, options) -> Difference | None:
 
     sampling = options.pop("metal_sampling")
     library = inspect_pixel(scene, pixel, **options)
-    metals = {name: m for name, m in zip(scene.material_names, scene.materials, strict=True) if isinstance(m, Microfacet)}
+    metals = {
+        name: m
+        for name, m in zip(scene.material_names, scene.materials, strict=True)
+        if isinstance(m, Microfacet)
+    }
     found: list[Difference] = []
     for name, metal in metals.items():
-        at = [(s.index, v) for s in library.samples for v in s.vertices if v.material == name and v.bsdf is not None]
+        at = [
+            (s.index, v)
+            for s in library.samples
+            for v in s.vertices
+            if v.material == name and v.bsdf is not None
+        ]
         if not at:
             continue
-        wo, wi, n = (np.array([getattr(v, f) if f != "wi" else v.bsdf.wi for _, v in at], np.float32) for f in ("wo", "wi", "normal"))
+        wo, wi, n = (
+            np.array([getattr(v, f) if f != "wi" else v.bsdf.wi for _, v in at], np.float32)
+            for f in ("wo", "wi", "normal")
+        )
         student = _metal(module, metal.f0, metal.alpha, sampling)
-        yours = {"bsdf.f": np.asarray(student.eval(wo, wi, n), np.float64), "bsdf.pdf": np.asarray(student.pdf(wo, wi, n), np.float64)}
+        yours = {
+            "bsdf.f": np.asarray(student.eval(wo, wi, n), np.float64),
+            "bsdf.pdf": np.asarray(student.pdf(wo, wi, n), np.float64),
+        }
         expected = {"bsdf.f": metal.eval(wo, wi, n), "bsdf.pdf": _reference_pdf(metal, sampling, wo, wi, n)}
         for k, (sample, v) in enumerate(at):
             for quantity in ("bsdf.f", "bsdf.pdf"):
@@ -306,7 +323,9 @@ def _quiet() -> Iterator[None]:
         yield
 
 
-def compare_pixel(number: int, module, pixel: tuple[int, int], seed: int = 0, sampling: str = "ggx") -> Difference | None:
+def compare_pixel(
+    number: int, module, pixel: tuple[int, int], seed: int = 0, sampling: str = "ggx"
+) -> Difference | None:
     """The first difference between the student's ``module`` (a ``Submission``'s stand-in)
     and the library at ``pixel`` of chapter ``number``'s render (``INSPECTED``)."""
     inspected = INSPECTED[number]
@@ -315,20 +334,6 @@ def compare_pixel(number: int, module, pixel: tuple[int, int], seed: int = 0, sa
         options["metal_sampling"] = sampling
     with _quiet():
         return inspected.compare(module, inspected.scene(), pixel, options)
-
-
-def suggestion(number: int, student: np.ndarray, library: np.ndarray, seed: int) -> str:
-    """What a failing render check of chapter ``number`` adds: the ``ptlab exercise inspect``
-    command for the pixel where the student's image differs most from the library's
-    (``student``, ``library``: (H, W, 3) images or (passes, H, W, 3) of a render of seed
-    ``seed``, whose first samples the command traces again)."""
-    from ptlab.exercises.messages import text
-
-    if student.ndim == 4:
-        student, library = student.mean(axis=0), library.mean(axis=0)
-    difference = np.nan_to_num(np.abs(np.asarray(student, np.float64) - library), nan=np.inf).sum(axis=2)
-    y, x = np.unravel_index(int(np.argmax(difference)), difference.shape)
-    return text("inspect.suggest", chapter=number, x=int(x), y=int(y), seed=seed)
 
 
 def difference_dict(found: Difference | None) -> dict | None:
@@ -353,7 +358,12 @@ def message(found: Difference | None, pixel: tuple[int, int], samples: int) -> s
     x, y = pixel
     if found is None:
         return text("inspect.agree", x=x, y=y, samples=samples)
-    values = dict(sample=found.sample, quantity=found.quantity, yours=shown_value(found.yours), expected=shown_value(found.expected))
+    values = dict(
+        sample=found.sample,
+        quantity=found.quantity,
+        yours=shown_value(found.yours),
+        expected=shown_value(found.expected),
+    )
     if found.depth is None:
         return text("inspect.differs_sample", **values)
     return text("inspect.differs", depth=found.depth, **values)
