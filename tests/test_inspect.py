@@ -12,7 +12,7 @@ import pytest
 import ptlab
 from ptlab.cli import main
 from ptlab.errors import PtlabError
-from ptlab.inspector import inspect_pixel, parse_pixel
+from ptlab.inspector import LightSample, inspect_pixel, parse_pixel
 
 #: Small renders: 24 x 24, 6 spp in passes of 4 and 2 (two passes: the value adds them up).
 OPTIONS = dict(res=24, spp=6, seed=3, workers=1, spp_per_pass=4)
@@ -46,6 +46,7 @@ def pixels_to_test(image: np.ndarray) -> list[tuple[int, int]]:
 )
 def test_value_is_the_rendered_pixel(scene, options):
     options = dict(OPTIONS, **options)
+    scene = ptlab.load_scene(scene)  # (once: games101-hw5's meshes take a while to read)
     image = ptlab.render(scene, **options)
     for x, y in pixels_to_test(image):
         found = inspect_pixel(scene, (x, y), **options)
@@ -94,6 +95,15 @@ def test_vertices_follow_the_path():
                 throughput = np.array(v.throughput)
                 checked += 1
     assert checked > 3
+
+
+def test_the_api_is_at_the_top_and_plots(tmp_path):
+    found = ptlab.inspect_pixel("cornell-box", (12, 14), res=24, spp=2, workers=1)
+    assert isinstance(found.samples[0].vertices[0].light, LightSample)
+    out = tmp_path / "paths.png"
+    found.plot(out, image=ptlab.render("cornell-box", res=24, spp=1, workers=1))
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    assert out.stat().st_size > 10_000  # (three panels, not an empty figure)
 
 
 def test_parse_pixel_and_bounds():

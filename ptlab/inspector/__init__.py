@@ -17,7 +17,9 @@ pixel sample (``--debugstart``) in a debugger; this explains it.
 
 from __future__ import annotations
 
+import inspect
 import json
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -97,6 +99,16 @@ def parse_pixel(text: str) -> tuple[int, int]:
     return int(parts[0]), int(parts[1])
 
 
+def _pixel_after_scene(function: Callable) -> Callable:
+    """``takes_options`` shows the scene and then the options: put ``pixel`` back between them."""
+    signature = inspect.signature(function)
+    scene, *options = signature.parameters.values()
+    pixel = inspect.Parameter("pixel", inspect.Parameter.POSITIONAL_OR_KEYWORD, annotation="tuple[int, int]")
+    function.__signature__ = signature.replace(parameters=[scene, pixel, *options])  # type: ignore[attr-defined]
+    return function
+
+
+@_pixel_after_scene
 @takes_options
 def inspect_pixel(
     scene: Scene | str, pixel: tuple[int, int], *args, options: RenderOptions | None = None, **keywords: Any

@@ -216,8 +216,8 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
 
 
 #: The inspector's recorder (``ptlab.inspector``), None when off. The integrators ask for it
-#: once per step of a bounce, never per ray: while off it costs one lookup a step
-#: (docs/performance.md, "The inspector's recorder").
+#: once per step of a bounce, never per ray: while off it costs a lookup of about 60 ns a
+#: step, some 160 of them in a 256 x 256 x 16 render (README, "One pixel, vertex by vertex").
 _recorder: ContextVar = ContextVar("recorder", default=None)
 
 
