@@ -65,6 +65,14 @@ def test_a_right_answer_agrees_and_a_black_light_differs_at_the_lamp(tmp_path, c
     assert capsys.readouterr().out.startswith("sample 0: your contribution (2.5")
 
 
+@pytest.mark.subprocess
+def test_eta_the_wrong_way_up_bends_the_first_refracted_ray_wrong(tmp_path, capsys):
+    path = tmp_path / "03_whitted.py"
+    shutil.copyfile(WRONG / "03_wrong_eta_inverted.py", path)
+    assert main(["exercise", "inspect", "3", str(path), "--pixel", "30,35"]) == 1  # the glass sphere
+    assert capsys.readouterr().out.startswith("sample 0, depth 0: your refracted ray wi (")
+
+
 def _inspection(*vertices: Vertex, contribution=(1.0, 1.0, 1.0)) -> PixelInspection:
     return PixelInspection(
         "scene", (0, 0), list(contribution), [Sample(0, list(contribution), list(vertices))]
