@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
+    from ptlab.inspector import inspect_pixel
     from ptlab.rendering.api import RenderResult, render, render_result
     from ptlab.rendering.display import show
     from ptlab.rendering.options import RenderOptions
@@ -31,6 +32,7 @@ __all__ = [
     "RenderResult",
     "Scene",
     "__version__",
+    "inspect_pixel",
     "load_scene",
     "render",
     "render_result",
@@ -41,6 +43,7 @@ __all__ = [
 _HOMES = {
     "Scene": "ptlab.scene",
     "load_scene": "ptlab.scene_file",
+    "inspect_pixel": "ptlab.inspector",
     "RenderResult": "ptlab.rendering.api",
     "render": "ptlab.rendering.api",
     "render_result": "ptlab.rendering.api",

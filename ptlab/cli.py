@@ -1,6 +1,7 @@
 """The ``ptlab`` command.
 
     ptlab render cornell-box --spp 16 --res 512 --out cornell.exr
+    ptlab inspect cornell-box --res 64 --spp 4 --pixel 32,20 --plot paths.png
     ptlab bench
     ptlab converge cornell-box --integrators path:bsdf,path:nee,path:mis --budget 30
     ptlab grade my_material.py:MyMaterial
@@ -35,7 +36,7 @@ class _Parser(argparse.ArgumentParser):
 
 
 #: The commands, as ``main`` finds the one it is given.
-COMMANDS = ("render", "bench", "converge", "grade", "exercise", "scenes")
+COMMANDS = ("render", "inspect", "bench", "converge", "grade", "exercise", "scenes")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -47,6 +48,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
     commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
     _add_render(commands, _shared_arguments())
+    _add_inspect(commands)
     _add_bench(commands)
     _add_converge(commands, _shared_arguments())
     grade = commands.add_parser(
@@ -179,6 +181,61 @@ _RENDER_OPTIONS = (
     "max_spp",
     "time_limit",
 )
+
+
+def _add_inspect(commands) -> None:
+    inspect = commands.add_parser(
+        "inspect",
+        help="one pixel's paths, vertex by vertex, as render traces them",
+        description="Trace every sample of one pixel exactly as 'ptlab render' does with the "
+        "same options, and print each sample's vertices (the hit, the light sample, Russian "
+        "roulette, the BSDF sample, the throughput), its contribution, and the pixel's value.",
+    )
+    inspect.add_argument("scene", help="built-in scene name or path to a scene .toml")
+    inspect.add_argument(
+        "--pixel", required=True, metavar="X,Y", help="the pixel: X from the left, Y from the top"
+    )
+    inspect.add_argument("--sample", type=int, metavar="K", help="print only sample K (0, 1, ...)")
+    inspect.add_argument("--json", metavar="FILE", help="also write everything to FILE as JSON")
+    inspect.add_argument(
+        "--plot", metavar="FILE.png", help="draw the paths from above and from the side (matplotlib)"
+    )
+    for name in _INSPECT_OPTIONS:
+        _add_option(inspect, name)
+
+
+#: The render options that ``ptlab inspect`` takes: ``render``'s that change the pixel.
+_INSPECT_OPTIONS = tuple(name for name in _RENDER_OPTIONS if name != "workers")
+
+
+def _inspect(args) -> int:
+    from ptlab.inspector import inspect_pixel, parse_pixel
+    from ptlab.rendering import RenderOptions
+    from ptlab.scene_file import load_scene
+
+    pixel = parse_pixel(args.pixel)
+    options = RenderOptions(**{name: getattr(args, name) for name in _INSPECT_OPTIONS}, workers=1)
+    for out, _suffix in ((args.json, ".json"), (args.plot, ".png")):
+        if out is not None and not Path(out).parent.is_dir():
+            raise PtlabError(f"{out}: folder {Path(out).parent} does not exist")
+    if args.plot is not None and Path(args.plot).suffix.lower() != ".png":
+        raise PtlabError(f"--plot {args.plot}: give a .png file")
+    scene = load_scene(args.scene)
+    found = inspect_pixel(scene, pixel, options=options)
+    print(found.table(args.sample))
+    if args.json is not None:
+        found.write_json(args.json)
+        print(f"wrote {Path(args.json).resolve()}")
+    if args.plot is not None:
+        from dataclasses import replace
+
+        from ptlab.rendering import render
+
+        # The picture beside the paths: the image, with a few samples (it only shows where).
+        preview = render(scene, options=replace(options, spp=min(options.spp, 4), workers=None))
+        found.plot(args.plot, scene, preview)
+        print(f"wrote {Path(args.plot).resolve()}")
+    return 0
 
 
 def _add_bench(commands) -> None:
@@ -744,7 +801,13 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "exercise":
         from ptlab.exercises.cli import run_exercise as handler
     else:
-        handler = {"render": _render, "bench": _bench, "converge": _converge, "scenes": _scenes}[args.command]
+        handler = {
+            "render": _render,
+            "inspect": _inspect,
+            "bench": _bench,
+            "converge": _converge,
+            "scenes": _scenes,
+        }[args.command]
     try:
         code = handler(args)
         sys.stdout.flush()

@@ -34,7 +34,7 @@ LAYERS = [
         ],
     ),
     ("integrators", ["ptlab.integrators"]),
-    ("rendering", ["ptlab.rendering", "ptlab"]),
+    ("rendering", ["ptlab.rendering", "ptlab", "ptlab.inspector"]),
     ("tools", ["ptlab.measure", "ptlab.untrusted", "ptlab.grading"]),
     ("exercises", ["ptlab.exercises"]),
     ("command line", ["ptlab.cli", "ptlab.__main__"]),

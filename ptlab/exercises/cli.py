@@ -8,6 +8,7 @@ ptlab exercise check 1 01_cameras.py   # the score table; exit 0 only on full ma
 ptlab exercise check 1 01_cameras.py --json result.json
 ptlab exercise render 3 03_whitted.py  # games101-hw5 through your code, the library's, the difference
 ptlab exercise grade-all 1 submissions/ --csv grades.csv --workers 2   # a whole class
+ptlab exercise inspect 7 07_path_tracing.py --pixel 12,20   # where your code first differs
 """
 
 from __future__ import annotations
@@ -113,6 +114,8 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         "--path", action="store_true", help="print only the page's path (to open it in a Markdown viewer)"
     )
 
+    _add_inspect(actions)
+
     batch = actions.add_parser(
         "grade-all",
         parents=[graded],
@@ -183,6 +186,36 @@ def _add_render_arguments(actions) -> None:
     add_student_user_argument(render)
 
 
+def _add_inspect(actions) -> None:
+    """``ptlab exercise inspect NN FILE --pixel X,Y`` (``ptlab.exercises.inspection``)."""
+    inspect = actions.add_parser(
+        "inspect",
+        help="compare your functions with the library's at one pixel, vertex by vertex",
+        description="Trace one pixel of the chapter's render check with the library's functions "
+        "and with yours (run in a process of their own, as 'check' runs them), on the same "
+        "samples, and print the first vertex where they differ, with both values. Chapters 3, "
+        "7, 9 and 10. Exit 0 if they agree, 1 if not, 2 if FILE cannot be read.",
+    )
+    inspect.add_argument("chapter", metavar="NN", help="the chapter number")
+    inspect.add_argument("file", metavar="FILE", help="your exercise file")
+    inspect.add_argument(
+        "--pixel",
+        required=True,
+        metavar="X,Y",
+        help="the pixel of the render check's image: X from the left, Y from the top",
+    )
+    inspect.add_argument("--seed", type=int, default=0, help="the render's seed (default 0)")
+    inspect.add_argument(
+        "--sampling",
+        choices=("ggx", "hemisphere"),
+        default="ggx",
+        help="chapter 9: the GGXMetal sampling to compare (default ggx)",
+    )
+    inspect.add_argument("--json", metavar="OUT", help="also write the result as JSON to OUT")
+    inspect.add_argument("--lang", choices=LANGUAGES, help="the language of the message: en or zh")
+    add_student_user_argument(inspect)
+
+
 def run_exercise(args: argparse.Namespace) -> int:
     """The handler of ``ptlab exercise``."""
     return {
@@ -192,7 +225,51 @@ def run_exercise(args: argparse.Namespace) -> int:
         "list": _list,
         "docs": _docs,
         "grade-all": _grade_all,
+        "inspect": _inspect,
     }[args.action](args)
+
+
+def _inspect(args) -> int:
+    from ptlab.exercises import chapter
+    from ptlab.exercises.inspection import INSPECTED, difference_dict, inspect_file, message
+    from ptlab.exercises.messages import language, text
+    from ptlab.inspector import parse_pixel
+    from ptlab.rendering.settings import parse_resolution
+
+    found = chapter(args.chapter)
+    if found.number not in INSPECTED:
+        chapters = ", ".join(str(n) for n in INSPECTED)
+        raise PtlabError(f"chapter {found.number}: inspect compares the functions of chapters {chapters}")
+    pixel = parse_pixel(args.pixel)
+    options = INSPECTED[found.number].options
+    width, height = parse_resolution(options["res"])
+    if not (0 <= pixel[0] < width and 0 <= pixel[1] < height):
+        raise PtlabError(f"--pixel {args.pixel}: chapter {found.number}'s render is {width}x{height}")
+    path = Path(args.file)
+    if path.suffix != ".py":
+        raise PtlabError(f"{path}: expected a Python file (.py)")
+    if args.json:
+        _remove_old_result(Path(args.json))
+    with language(args.lang):
+        difference, failed = inspect_file(
+            found.number, path, pixel, args.seed, args.sampling, user=args.student_user
+        )
+        line = (
+            text("inspect.not_run", message=failed) if failed else message(difference, pixel, options["spp"])
+        )
+    print_verdict(line)
+    if args.json:
+        result = dict(
+            chapter=found.number,
+            file=str(path),
+            pixel=list(pixel),
+            seed=args.seed,
+            first_difference=difference_dict(difference),
+            error=failed,
+        )
+        content = json.dumps(result, indent=2) + "\n"
+        write_atomically(args.json, lambda temporary: Path(temporary).write_text(content))
+    return 0 if difference is None and failed is None else 1
 
 
 def _start(args) -> int:

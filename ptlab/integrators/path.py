@@ -57,6 +57,7 @@ from ptlab.integrators.wavefront import (
     joined,
     kept,
     leave_surface,
+    recorder,
     sees,
     shade,
     surface_hit,
@@ -196,9 +197,10 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
             hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
         )
         emitted *= weight.astype(np.float32)[:, None]
-    add_to_film(
-        film, hit.pixel.take(rows), take_rows(hit.throughput, rows) * emitted, _rows_of(hit.depth, rows)
-    )
+    radiance = take_rows(hit.throughput, rows) * emitted
+    if (rec := recorder()) is not None:
+        rec.emission(hit, rows, radiance)
+    add_to_film(film, hit.pixel.take(rows), radiance, _rows_of(hit.depth, rows))
 
 
 def mis_weight(pdf: np.ndarray, other: np.ndarray | np.floating, heuristic: str = "power") -> np.ndarray:
@@ -241,14 +243,18 @@ def direct_light(
     usable = np.flatnonzero((cos_theta > 0) & (light.pdf > 0) & ~hit.delta)
     visible = sees(accel, hit, usable, take_rows(light.target, usable))
     weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
+    mis = None
     if settings.strategy == "mis":
         bsdf_pdf = shade(hit, "pdf", hit.wo, light.wi, hit.n)
         if scene.light_sampler.is_delta.any():  # no BSDF sample finds a point light: weight 1
             bsdf_pdf = np.where(scene.light_sampler.is_delta.take(kind), 0, bsdf_pdf)
-        weight *= mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
+        mis = mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
+        weight *= mis
     radiance = hit.throughput * shade(hit, "eval", hit.wo, light.wi, hit.n)
     radiance *= light.radiance
     radiance *= weight[:, None]
+    if (rec := recorder()) is not None:
+        rec.light(scene, hit, light, kind, visible, mis, radiance)
     add_to_film(film, hit.pixel, radiance, hit.depth)
     return len(usable)
 
@@ -294,13 +300,11 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
             mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
         ).astype(np.float32)
         radiance = radiance * weight[:, None]
+    radiance = take_rows(paths.throughput, rows) * radiance
+    if (rec := recorder()) is not None:
+        rec.sky(paths, rows, radiance)
     # (A path that escapes after its vertex at depth d sees the sky at depth d + 1.)
-    add_to_film(
-        film,
-        paths.pixel.take(rows),
-        take_rows(paths.throughput, rows) * radiance,
-        _rows_of(paths.depth, rows),
-    )
+    add_to_film(film, paths.pixel.take(rows), radiance, _rows_of(paths.depth, rows))
 
 
 def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> np.ndarray:
@@ -318,6 +322,8 @@ def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> 
     survival = np.where(np.asarray(hit.depth) >= settings.roulette_starts, survival, np.float32(1))
     survive = u < survival
     hit.throughput /= np.where(survive, survival, np.float32(1))[:, None]
+    if (rec := recorder()) is not None:
+        rec.roulette(hit, survival, survive)
     return survive
 
 
@@ -339,6 +345,8 @@ def scatter(
     else:
         wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
     throughput = hit.throughput * weight
+    if (rec := recorder()) is not None:
+        rec.bsdf(hit, wi, weight, pdf, throughput, survive)
     go_on = np.flatnonzero(
         survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0) | (throughput[:, 2] > 0))
     )

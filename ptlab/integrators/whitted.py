@@ -50,7 +50,7 @@ import numpy as np
 
 from ptlab.accel.base import Accelerator
 from ptlab.integrators.path import PathSettings, add_emission, add_sky, direct_light, sampled_lights
-from ptlab.integrators.wavefront import Paths, SurfaceHit, leave_surface, surface_hit
+from ptlab.integrators.wavefront import Paths, SurfaceHit, leave_surface, recorder, surface_hit
 from ptlab.materials.dielectric import Dielectric
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scattering import fresnel_dielectric, reflect, refract
@@ -174,6 +174,8 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
     the path tracer's do (``scatter``).
     """
     throughput = take_rows(hit.throughput, rows) * weight
+    if (rec := recorder()) is not None:
+        rec.split(hit, rows, wi, weight, throughput)
     go_on = np.flatnonzero((throughput > 0).any(axis=1))
     rows, wi, throughput = rows.take(go_on), take_rows(wi, go_on), take_rows(throughput, go_on)
     origins = leave_surface(take_rows(hit.p, rows), take_rows(hit.n, rows), hit.offset.take(rows), wi)
@@ -184,7 +186,13 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
         pixel=hit.pixel.take(rows),
         sees_emission=np.ones(len(rows), dtype=bool),
         sample=hit.sample.take(rows),
+        depth=_next_depth(hit.depth, rows),
     )
+
+
+def _next_depth(depth: int | np.ndarray, rows: np.ndarray) -> int | np.ndarray:
+    """The depth of rays leaving the hits ``rows`` of a batch at ``depth`` (one, or per row)."""
+    return (depth.take(rows) if isinstance(depth, np.ndarray) else depth) + 1
 
 
 def batches(paths: Paths, size: int):
@@ -198,4 +206,5 @@ def batches(paths: Paths, size: int):
             pixel=paths.pixel[rows],
             sees_emission=paths.sees_emission[rows],
             sample=paths.sample[rows],
+            depth=paths.depth[rows] if isinstance(paths.depth, np.ndarray) else paths.depth,
         )

@@ -409,9 +409,13 @@ def check_render(module) -> str:
     # pixels to differ, none of the others by more than 0.1%.
     close = np.isclose(image, expected, rtol=1e-3, atol=1e-4).all(axis=2)
     if close.mean() < 0.98:
+        from ptlab.exercises.inspect_command import suggestion
+
         ratio = image.mean() / expected.mean()
         raise CheckFailed(
-            text("ch03.render", wrong=(~close).sum(), n=close.size, ratio=ratio) + _render_hint(fresnel)
+            text("ch03.render", wrong=(~close).sum(), n=close.size, ratio=ratio)
+            + _render_hint(fresnel)
+            + suggestion(3, image, expected, seed)
         )
     return text("ch03.render_ok", share=close.mean())
 

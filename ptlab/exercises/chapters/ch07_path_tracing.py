@@ -644,7 +644,12 @@ def check_cornell(module) -> str:
     seed = grading_seed_for(CORNELL_SEED)
     library = cornell_passes(seed=seed)
     student = cornell_passes(trace_paths, seed)
-    return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])
+    try:
+        return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])
+    except CheckFailed as failure:
+        from ptlab.exercises.inspect_command import suggestion
+
+        raise CheckFailed(str(failure) + suggestion(7, student, library, seed)) from None
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:

@@ -262,13 +262,18 @@ def _render(module, sampling: str) -> str:
     hemisphere = sampling == "hemisphere"
     what = text("ch09.hemisphere_sampling" if hemisphere else "ch09.importance_sampling")
     hint = text("ch09.hint.eval_angles" if hemisphere else "ch09.hint.jacobian")
-    return compare_renders(
-        student,
-        library,
-        text("ch09.yours", what=what),
-        hint,
-        render_options(seed)["spp_per_pass"],
-    )
+    try:
+        return compare_renders(
+            student,
+            library,
+            text("ch09.yours", what=what),
+            hint,
+            render_options(seed)["spp_per_pass"],
+        )
+    except CheckFailed as failure:
+        from ptlab.exercises.inspect_command import suggestion
+
+        raise CheckFailed(str(failure) + suggestion(9, student, library, seed)) from None
 
 
 def check_render_hemisphere(module) -> str:

@@ -223,7 +223,8 @@ def check_render(module) -> str:
     checked_mis_weight = _checked_mis_weight(module)
     scene = veach_scene()
     options = render_options(grading_seed_for(10))
-    library = regions_of(ptlab.render(scene, **options).astype(np.float64))
+    library_image = ptlab.render(scene, **options)
+    library = regions_of(library_image.astype(np.float64))
     with plugged(ptlab.integrators.path, mis_weight=checked_mis_weight):
         image = ptlab.render(scene, **options)
     require_finite(image, text("ch10.yours"), at_pixel)
@@ -232,6 +233,8 @@ def check_render(module) -> str:
     allowed = TOLERANCE * (library + 0.1 * library.mean())
     overall = student.mean() / library.mean()
     if not (difference <= allowed).all():
+        from ptlab.exercises.inspect_command import suggestion
+
         worst = np.unravel_index(np.argmax(difference / allowed), difference.shape)
         ratio = student[worst] / max(library[worst], 1e-12)
         raise CheckFailed(
@@ -242,6 +245,7 @@ def check_render(module) -> str:
                 overall=overall,
                 check=check_name(10, "weights sum to 1"),
             )
+            + suggestion(10, image, library_image, options["seed"])
         )
     return text("ch10.render_ok", overall=overall)
 

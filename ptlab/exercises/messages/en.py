@@ -570,4 +570,10 @@ MESSAGES: dict[str, str] = {
     "ch10.yours": "veach-mis with your MIS weights",
     "ch10.render": "veach-mis with your MIS weights differs from the library's render along the very same paths: {region} is {ratio:.3f}x the library's, the whole image {overall:.3f}x (brighter: light counted by both strategies; darker: by neither; else each strategy's weight is off, see '{check}')",
     "ch10.render_ok": "veach-mis with your MIS weights matches the library's render along the same paths (whole image {overall:.6f}x)",
+    # ptlab exercise inspect (ptlab.exercises.inspection).
+    "inspect.agree": "your functions and the library's agree at pixel ({x}, {y}): every vertex of its {samples} samples is the same",
+    "inspect.differs": "sample {sample}, depth {depth}: your {quantity} {yours}, the library's {expected}",
+    "inspect.differs_sample": "sample {sample}: your {quantity} {yours}, the library's {expected} (every vertex the same up to there)",
+    "inspect.not_run": "could not compare: {message}",
+    "inspect.suggest": "; to see where, vertex by vertex: ptlab exercise inspect {chapter} YOUR_FILE --pixel {x},{y} --seed {seed} (the pixel that differs most)",
 }

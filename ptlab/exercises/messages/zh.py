@@ -564,4 +564,10 @@ MESSAGES: dict[str, str] = {
     "ch10.yours": "用你的 MIS 权重渲染的 veach-mis",
     "ch10.render": "用你的 MIS 权重渲染的 veach-mis 沿完全相同的路径与库的渲染结果不同：{region}是库的 {ratio:.3f} 倍，整幅图像是 {overall:.3f} 倍（偏亮：光被两种策略都计入了；偏暗：两种都没计入；否则是每种策略的权重不对，见“{check}”）",
     "ch10.render_ok": "用你的 MIS 权重渲染的 veach-mis 沿相同的路径与库的渲染结果一致（整幅图像 {overall:.6f} 倍）",
+    # ptlab exercise inspect (ptlab.exercises.inspection).
+    "inspect.agree": "在像素 ({x}, {y}) 你的函数与库的一致：它的 {samples} 个样本的每个顶点都相同",
+    "inspect.differs": "样本 {sample}，深度 {depth}：你的 {quantity} 是 {yours}，库的是 {expected}",
+    "inspect.differs_sample": "样本 {sample}：你的 {quantity} 是 {yours}，库的是 {expected}（在此之前每个顶点都相同）",
+    "inspect.not_run": "无法比较：{message}",
+    "inspect.suggest": "；逐个顶点查看哪里不同：ptlab exercise inspect {chapter} 你的文件 --pixel {x},{y} --seed {seed}（差别最大的像素）",
 }
