@@ -205,7 +205,10 @@ def _add_inspect(commands) -> None:
 
 
 #: The render options that ``ptlab inspect`` takes: ``render``'s that change the pixel.
-_INSPECT_OPTIONS = tuple(name for name in _RENDER_OPTIONS if name != "workers")
+#: (A render to a target error gives each pixel its own samples: inspect has a fixed spp.)
+_INSPECT_OPTIONS = tuple(
+    name for name in _RENDER_OPTIONS if name not in ("workers", "target_error", "max_spp", "time_limit")
+)
 
 
 def _inspect(args) -> int:

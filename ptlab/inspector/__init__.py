@@ -131,6 +131,11 @@ def inspect_pixel(
     options = RenderOptions.of(args, options, keywords)
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
+    if options.target_error is not None:
+        raise PtlabError(
+            "inspect traces a render of a fixed spp; a render to a target error gives each "
+            "pixel samples of its own (see its --spp-map): give that pixel's --spp instead"
+        )
     options = options.for_scene(scene)
     width, height = options.size
     x, y = pixel
