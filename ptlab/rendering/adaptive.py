@@ -134,6 +134,29 @@ def allocation_weights(
     return np.sqrt(np.maximum(pooled(relative_variance(variance, sums, counts, differences)), 0.0))
 
 
+def _water_level(weights: np.ndarray, counts: np.ndarray, cap: np.ndarray, enough) -> np.ndarray:
+    """The totals clip(lambda w_i, n_i, cap_i) for the least lambda whose totals are
+    ``enough`` (a test of the totals that more samples can only pass), by bisection on
+    lambda between 0 and the level where every pixel with a weight is at its cap."""
+
+    def totals(scale: float) -> np.ndarray:
+        return np.clip(scale * weights, counts, cap)
+
+    weighted = weights > 0
+    high = float(np.max(cap[weighted] / weights[weighted])) if weighted.any() else 0.0
+    if not enough(totals(high)):
+        return totals(high)
+    low = 0.0
+    for _ in range(BISECTIONS):
+        middle = 0.5 * (low + high)
+        low, high = (low, middle) if enough(totals(middle)) else (middle, high)
+    return totals(high)
+
+
+#: Halvings of the water level's interval: 2^-50 of it, far below a sample.
+BISECTIONS = 50
+
+
 def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | np.ndarray) -> np.ndarray:
     """(H, W) int64 new samples per pixel, ``budget`` in all, so that each pixel's total
     count comes as close as it can to being proportional to its weight (sqrt(v) for the
@@ -147,22 +170,13 @@ def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | n
     """
     weights = np.asarray(weights, np.float64)
     counts = np.asarray(counts, np.int64)
-    room = np.maximum(most - counts, 0)
+    cap = np.maximum(counts, most)
+    room = cap - counts
     if budget >= room.sum():
         return room
     if budget <= 0:
         return np.zeros_like(counts)
-
-    def wanted(scale: float) -> np.ndarray:
-        return np.clip(scale * weights - counts, 0, room)
-
-    low, high = 0.0, 1.0
-    while wanted(high).sum() < budget and high < 1e300:
-        high *= 2
-    for _ in range(100):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if wanted(middle).sum() < budget else (low, middle)
-    share = wanted(high)
+    share = _water_level(weights, counts, cap, lambda totals: totals.sum() - counts.sum() >= budget) - counts
     extra = np.floor(share).astype(np.int64)
     left = int(budget - extra.sum())
     if left > 0:  # (only to pixels with a weight and room left: the budget may go unspent)
@@ -170,7 +184,7 @@ def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | n
         fraction = np.where(open_, share - extra, -1.0).ravel()
         order = np.argsort(-fraction, kind="stable")[: min(left, int(open_.sum()))]
         np.add.at(extra.reshape(-1), order, 1)
-    elif left < 0:  # (the bisection's last step overshot by rounding: take the smallest back)
+    elif left < 0:  # (rounding up past the budget: take the smallest fractions back)
         fraction = np.where(extra > 0, share - extra, np.inf).ravel()
         order = np.argsort(fraction, kind="stable")[:-left]
         np.add.at(extra.reshape(-1), order, -1)
@@ -185,22 +199,13 @@ def pass_budget(weights: np.ndarray, counts: np.ndarray, target: float, most: in
     and no more than the pixels' room below ``most``."""
     weights = np.asarray(weights, np.float64)
     counts = np.asarray(counts, np.int64)
-    taken, room = int(counts.sum()), int(np.maximum(most - counts, 0).sum())
+    cap = np.maximum(counts, most)
+    taken, room = int(counts.sum()), int((cap - counts).sum())
     variance = weights * weights  # (per sample: w = sqrt(v))
-
-    def totals(scale: float) -> np.ndarray:
-        return np.clip(scale * weights, counts, np.maximum(counts, most))
-
-    def predicted(scale: float) -> float:
-        return float(np.mean(variance / np.maximum(totals(scale), 1)))
-
-    low, high = 0.0, 1.0
-    while predicted(high) > target and high < 1e300 and totals(high).sum() < taken + room:
-        high *= 2
-    for _ in range(60):
-        middle = 0.5 * (low + high)
-        low, high = (middle, high) if predicted(middle) > target else (low, middle)
-    needed = float(totals(high).sum()) - taken
+    totals = _water_level(
+        weights, counts, cap, lambda totals: np.mean(variance / np.maximum(totals, 1)) <= target
+    )
+    needed = float(totals.sum()) - taken
     # (A little short of the need: the estimate it comes from is itself noisy, and a last
     # small pass costs less than samples past the target.)
     budget = min(max(UNDERSHOOT * needed, taken / 8), taken)

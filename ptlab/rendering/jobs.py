@@ -150,7 +150,8 @@ class CameraSamples:
     Within a job the samples are in sample-major order: the tile's pixel k is row k, k + n,
     k + 2 n, ... (n pixels in the tile). A job with its own count per pixel
     (``Job.counts``) is in the same order with the pixels that have no more samples left out:
-    first every pixel's first sample, then the second of those that have two, and so on.
+    first every pixel's first sample, then the second of those that have two, and so on
+    (the pixels of each ordered from the most samples to the fewest: ``_order``).
     """
 
     def __init__(self, setup: RenderSetup, jobs: list[Job], sampler: TimedSampler):
@@ -158,7 +159,7 @@ class CameraSamples:
         #: Row of each job's first sample, and the total, as in ``np.cumsum``.
         self.starts = np.concatenate([[0], np.cumsum([job.samples for job in jobs])]).astype(np.intp)
         self.handed_out = 0
-        self._orders: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._orders: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = {}
 
     @property
     def count(self) -> int:
@@ -187,7 +188,7 @@ class CameraSamples:
             height, width = job.tile.shape
             n_pixels = width * height
             if job.counts is not None:
-                in_tile, sample_index = self._order(j)
+                in_tile, sample_index, _, _ = self._order(j)
                 in_tile, sample_index = in_tile[start:stop], sample_index[start:stop]
                 pixel_x.append(job.tile.x0 + in_tile % width)
                 pixel_y.append(job.tile.y0 + in_tile // width)
@@ -222,45 +223,59 @@ class CameraSamples:
             sample=sample,
         )
 
-    def _order(self, j: int) -> tuple[np.ndarray, np.ndarray]:
-        """For job ``j`` with a count per pixel: each row's pixel in the tile and sample index
-        (the class docstring's order), made once."""
+    def _order(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+        """For job ``j`` with a count per pixel, made once: each row's pixel in the tile and
+        sample index (the class docstring's order); the tile's pixels from the most samples
+        to the fewest (ties in pixel order), and how many of them have a k-th sample, for
+        each k. A k-th sample's pixels are then the first few of that order, and within a
+        k they come in that order: ``sums`` adds each k's samples as one slice."""
         if j not in self._orders:
             job = self.jobs[j]
             assert job.counts is not None
             assert job.firsts is not None
             counts = job.counts.reshape(-1)
-            # (k, pixel) for every k below the pixel's count, k-major: row-major nonzero.
-            k, in_tile = np.nonzero(np.arange(job.spp)[:, None] < counts[None, :])
-            self._orders[j] = (in_tile, job.firsts.reshape(-1)[in_tile] + k)
+            by_count = np.argsort(-counts, kind="stable")
+            having = np.count_nonzero(counts[None, :] > np.arange(job.spp)[:, None], axis=1)
+            in_tile = np.concatenate([by_count[:n] for n in having])
+            k = np.repeat(np.arange(job.spp), having)
+            self._orders[j] = (in_tile, job.firsts.reshape(-1)[in_tile] + k, by_count, having)
         return self._orders[j]
 
     def sums(self, film: np.ndarray, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Job ``j``'s per-pixel radiance sums, and the sums of its even samples less those of
-        its odd ones (each (tile height, tile width, 3)), from the per-path ``film``: each
-        pixel's paths added one after the other, in sample order."""
+        its odd ones (where ``RenderSetup.halves``; else 0), each (tile height, tile width,
+        3), from the per-path ``film``. A pixel's sums are made in an order of its own
+        samples that no batching changes: in sample order; with a count per pixel, the
+        even samples in order plus the odd ones in order."""
         job = self.jobs[j]
         n_pixels = job.tile.shape[0] * job.tile.shape[1]
         rows = film[self.starts[j] : self.starts[j + 1]]
+        if job.counts is not None:
+            return self._plan_sums(j, rows, n_pixels)
         total, differences = np.zeros((n_pixels, 3)), np.zeros((n_pixels, 3))
-        blocks: list[tuple[slice | np.ndarray, np.ndarray, np.ndarray | int]]
-        if job.counts is None:
-            blocks = [
-                (slice(None), rows[k * n_pixels : (k + 1) * n_pixels], (job.first_sample + k) & 1)
-                for k in range(job.spp)
-            ]
-        else:  # (the k-th samples of the pixels that have k + 1 or more, in pixel order)
-            having = np.bincount(job.counts.reshape(-1), minlength=job.spp + 1)[::-1].cumsum()[::-1]
-            ends = np.cumsum(having[1:])
-            in_tile, sample_index = self._order(j)
-            blocks = [
-                (in_tile[end - size : end], rows[end - size : end], sample_index[end - size : end, None] & 1)
-                for size, end in zip(having[1:], ends, strict=True)
-            ]
-        for pixels, block, odd in blocks:
-            total[pixels] += block
+        for k in range(job.spp):
+            block = rows[k * n_pixels : (k + 1) * n_pixels]
+            total += block
             if self.setup.halves:
-                differences[pixels] += np.where(odd, -block, block)
+                differences += -block if (job.first_sample + k) & 1 else block
+        return total.reshape(*job.tile.shape, 3), differences.reshape(*job.tile.shape, 3)
+
+    def _plan_sums(self, j: int, rows: np.ndarray, n_pixels: int) -> tuple[np.ndarray, np.ndarray]:
+        """``sums`` for a job with a count per pixel: a slice of the pixels (``_order``) per k."""
+        job = self.jobs[j]
+        _, _, by_count, having = self._order(j)
+        # (A pixel's first sample here is even, as every count in such a render is: its
+        # k-th sample here is even when k is.)
+        assert job.firsts is not None
+        assert not np.any(job.firsts & 1)
+        halves = np.zeros((2, n_pixels, 3))
+        start = 0
+        for k, size in enumerate(having):
+            halves[k & 1, :size] += rows[start : start + size]
+            start += size
+        total, differences = np.empty((n_pixels, 3)), np.empty((n_pixels, 3))
+        total[by_count] = halves[0] + halves[1]
+        differences[by_count] = halves[0] - halves[1]
         return total.reshape(*job.tile.shape, 3), differences.reshape(*job.tile.shape, 3)
 
     def job_of(self, rows: np.ndarray) -> np.ndarray:
