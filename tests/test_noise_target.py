@@ -104,6 +104,25 @@ def test_the_allocation_spends_the_budget_in_proportion_within_the_caps():
     assert adaptive.allocate(weights, counts, budget=0, most=64).sum() == 0
 
 
+def test_the_allocation_stays_within_its_bounds_for_weights_of_any_magnitude():
+    # Weights spanning twenty orders of magnitude (a bisection on the level's length, not its
+    # ratio, left the largest weights samples off and rounded the budget negative), zeros,
+    # caps of their own per pixel: never below 0 or past a cap, and the budget spent exactly
+    # where the weighted pixels have the room.
+    rng = np.random.default_rng(7)
+    for _ in range(100):
+        weights = rng.lognormal(0, 6, size=(30, 30)) * (rng.random((30, 30)) > 0.2)
+        counts = 2 * rng.integers(1, 20, size=(30, 30))
+        most = np.minimum(4096, 4 * counts)
+        budget = int(rng.integers(0, 20000))
+        extra = adaptive.allocate(weights, counts, budget, most)
+        room = most - counts
+        assert extra.min() >= 0
+        assert np.all(extra <= room)
+        if budget < room.sum():
+            assert extra.sum() == min(budget, room[weights > 0].sum())
+
+
 def test_one_firefly_does_not_make_its_neighbours_reference_nor_hide_its_own_noise():
     # A flat grey image whose pixel (5, 5) caught one firefly: the median of the 3 x 3 means
     # stands in for its reference, so its squared error is divided by the grey, not by the

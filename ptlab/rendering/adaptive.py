@@ -137,24 +137,28 @@ def allocation_weights(
 def _water_level(weights: np.ndarray, counts: np.ndarray, cap: np.ndarray, enough) -> np.ndarray:
     """The totals clip(lambda w_i, n_i, cap_i) for the least lambda whose totals are
     ``enough`` (a test of the totals that more samples can only pass), by bisection on
-    lambda between 0 and the level where every pixel with a weight is at its cap."""
+    lambda between the level where no pixel has more than it has and the level where every
+    pixel with a weight is at its cap. The bisection halves the interval's ratio, not its
+    length: the levels span as many orders of magnitude as the weights do."""
 
     def totals(scale: float) -> np.ndarray:
         return np.clip(scale * weights, counts, cap)
 
     weighted = weights > 0
-    high = float(np.max(cap[weighted] / weights[weighted])) if weighted.any() else 0.0
+    if not weighted.any():
+        return counts.astype(np.float64)
+    low = float(np.min(np.maximum(counts[weighted], 1) / weights[weighted]))
+    high = float(np.max(np.maximum(cap[weighted], 1) / weights[weighted]))
     if not enough(totals(high)):
         return totals(high)
-    low = 0.0
     for _ in range(BISECTIONS):
-        middle = 0.5 * (low + high)
+        middle = np.sqrt(low * high)
         low, high = (low, middle) if enough(totals(middle)) else (middle, high)
     return totals(high)
 
 
-#: Halvings of the water level's interval: 2^-50 of it, far below a sample.
-BISECTIONS = 50
+#: Halvings of the water level's interval (of its logarithm): 2^-64 of it.
+BISECTIONS = 64
 
 
 def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | np.ndarray) -> np.ndarray:
@@ -184,9 +188,10 @@ def allocate(weights: np.ndarray, counts: np.ndarray, budget: int, most: int | n
         fraction = np.where(open_, share - extra, -1.0).ravel()
         order = np.argsort(-fraction, kind="stable")[: min(left, int(open_.sum()))]
         np.add.at(extra.reshape(-1), order, 1)
-    elif left < 0:  # (rounding up past the budget: take the smallest fractions back)
-        fraction = np.where(extra > 0, share - extra, np.inf).ravel()
-        order = np.argsort(fraction, kind="stable")[:-left]
+    elif left < 0:  # (the level's last step past the budget: take the smallest fractions back)
+        given = extra > 0
+        fraction = np.where(given, share - extra, np.inf).ravel()
+        order = np.argsort(fraction, kind="stable")[: min(-left, int(given.sum()))]
         np.add.at(extra.reshape(-1), order, -1)
     return extra
 

@@ -30,7 +30,7 @@ from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.camera import generate_rays
 from ptlab.integrators import INTEGRATORS
-from ptlab.integrators.path import PathSettings, trace_paths
+from ptlab.integrators.path import BATCH_PATHS, PathSettings, trace_paths
 from ptlab.integrators.path import trace_paths as library_trace_paths
 from ptlab.integrators.wavefront import NonFinite, Paths, counting_nonfinite
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
@@ -362,16 +362,20 @@ def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
     shrink as the render goes on ("guided self-scheduling", Polychronopoulos and Kuck 1987):
     each takes about its share of what is left, 1 / (2 workers), and at most
     ``MAX_GROUP_SAMPLES`` samples (so that progress is shown, and a stop heard, every second
-    or so). One worker has no one to wait for: its groups are all of the largest size. A
+    or so), but at least a batch of paths (``BATCH_PATHS``) if each worker has that much: a
+    smaller group would be all tail (a render to a noise target has passes of a few batches). One worker has no one to wait for: its groups are all of the largest size. A
     group holds one pass: a pass is what the film shows, saves and is stopped after.
     """
     sizes = [job.samples for job in jobs]
     left = sum(sizes)
+    # (No group smaller than a batch of paths, while each worker has that much to do: a
+    # smaller one would be all tail.)
+    least = min(BATCH_PATHS, left / workers)
     groups: list[list[Job]] = []
     group: list[Job] = []
     taken = 0
     for job, size in zip(jobs, sizes, strict=True):
-        share = left / (2 * workers) if workers > 1 else left
+        share = max(left / (2 * workers), least) if workers > 1 else left
         next_pass = bool(group) and job.pass_index != group[-1].pass_index
         if group and (next_pass or taken + size > min(MAX_GROUP_SAMPLES, share)):
             groups.append(group)
