@@ -155,9 +155,14 @@ def test_the_command_line_reports_the_estimate_and_writes_the_spp_map(tmp_path, 
     options = ["--res", "24", "--workers", "1", "--target-error", "0.05"]
     code = main(["render", "cornell-box", *options, "--out", str(out), "--spp-map", str(spp_map)])
     assert code == 0
-    printed = capsys.readouterr().out
-    assert "estimated relMSE" in printed
-    assert "target 0.05: reached" in printed
+    said = capsys.readouterr()
+    assert "estimated relMSE" in said.out
+    assert "target 0.05: reached" in said.out
+    # (a log, not a terminal: a line per pass, with the estimate falling toward the target)
+    passes = [line for line in said.err.splitlines() if line.startswith("pass ")]
+    estimates = [float(line.split("estimated relMSE ")[1].split()[0]) for line in passes]
+    assert len(estimates) >= 2
+    assert estimates[-1] <= 0.05 < estimates[0]
     image, header = read_image(out)
     assert header["relmse_estimate"] <= 0.05
     assert header["spp"] == 16 < header["spp_max"]

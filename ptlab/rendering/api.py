@@ -209,6 +209,8 @@ def render_result(
         if film.passes_done.min() > complete_passes:
             complete_passes = int(film.passes_done.min())
             pass_ended(film)
+    if report is not None and more is not None:  # (the last pass's estimate, made after it)
+        report(film)
     if bar is not None:
         bar.close()
     # (A render to a noise target is complete when it decided to end, not stopped before.)
