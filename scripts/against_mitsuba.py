@@ -601,6 +601,14 @@ def build_parser() -> argparse.ArgumentParser:
         help=f"ptlab's samplers (default {','.join(SAMPLERS)})",
     )
     parser.add_argument(
+        "--ptlab-target-error",
+        type=float,
+        metavar="E",
+        help="also time the whole process 'ptlab render --target-error E' (e.g. the relMSE "
+        "of Mitsuba's multijitter render at --spp, from a first run: the time ptlab needs "
+        "to reach its error)",
+    )
+    parser.add_argument(
         "--ptlab-strategy",
         choices=STRATEGIES,
         default="nee",
@@ -852,9 +860,9 @@ def process_contenders(
     if ptlab_command is None:
         raise PtlabError("the ptlab command is not installed: pip install -e . from the repository")
     workers = [] if args.workers is None else ["--workers", str(args.workers)]
-    ptlab = command_contender(
-        f"ptlab render {DEFAULT_SAMPLER} {args.ptlab_strategy} [process]",
-        lambda seed, out: [
+
+    def ptlab_render(seed: int, out: Path) -> list[str]:
+        return [
             ptlab_command,
             "render",
             args.scene,
@@ -870,13 +878,32 @@ def process_contenders(
             "--out",
             str(out),
             *workers,
-        ],
-        folder / "ptlab.exr",
+        ]
+
+    ptlab = command_contender(
+        f"ptlab render {DEFAULT_SAMPLER} {args.ptlab_strategy} [process]", ptlab_render, folder / "ptlab.exr"
     )
+    contenders = [ptlab]
+    if args.ptlab_target_error is not None:
+        # (the same command, to a noise target instead of a number of samples)
+        target = args.ptlab_target_error
+
+        def to_target(seed: int, out: Path) -> list[str]:
+            command = ptlab_render(seed, out)
+            at = command.index("--spp")  # (its first pass: the default)
+            return [*command[:at], "--target-error", str(target), *command[at + 2 :]]
+
+        contenders.append(
+            command_contender(
+                f"ptlab render {DEFAULT_SAMPLER} {args.ptlab_strategy} to {target:g} [process]",
+                to_target,
+                folder / "ptlab-target.exr",
+            )
+        )
     mitsuba_command = _executable("mitsuba")
     if mitsuba_command is None:
         echo("no mitsuba command beside this Python or on the PATH: its process is not timed")
-        return [ptlab], []
+        return contenders, []
     mitsuba = command_contender(
         f"mitsuba independent rr_depth {MITSUBA_RR_DEPTH} [process]",
         lambda seed, out: [
@@ -893,7 +920,7 @@ def process_contenders(
         ],
         folder / "mitsuba.exr",
     )
-    return [ptlab], [mitsuba]
+    return contenders, [mitsuba]
 
 
 def main(argv: list[str] | None = None) -> int:
