@@ -66,11 +66,13 @@ def test_a_right_answer_agrees_and_a_black_light_differs_at_the_lamp(tmp_path, c
 
 
 @pytest.mark.subprocess
-def test_eta_the_wrong_way_up_bends_the_first_refracted_ray_wrong(tmp_path, capsys):
+def test_eta_the_wrong_way_up_changes_the_first_fresnel_weight(tmp_path, capsys):
     path = tmp_path / "03_whitted.py"
     shutil.copyfile(WRONG / "03_wrong_eta_inverted.py", path)
-    assert main(["exercise", "inspect", "3", str(path), "--pixel", "30,35"]) == 1  # the glass sphere
-    assert capsys.readouterr().out.startswith("sample 0, depth 0: your refracted ray wi (")
+    # Pixel (30, 35) of the render check's view sees the glass block; with eta the wrong way
+    # up, the Fresnel weight of the first reflected ray is the first number to differ.
+    assert main(["exercise", "inspect", "3", str(path), "--pixel", "30,35"]) == 1
+    assert capsys.readouterr().out.startswith("sample 0, depth 0: your reflected ray weight (")
 
 
 def _inspection(*vertices: Vertex, contribution=(1.0, 1.0, 1.0)) -> PixelInspection:

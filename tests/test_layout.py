@@ -31,6 +31,8 @@ LAYERS = [
             "ptlab.meshes",
             "ptlab.scene",
             "ptlab.scene_file",
+            # (the relMSE's definition: the renderer's own estimate of it uses it too)
+            "ptlab.measure.metrics",
         ],
     ),
     ("integrators", ["ptlab.integrators"]),

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from ptlab.rendering import adaptive
+import ptlab.rendering.adaptive as adaptive
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes

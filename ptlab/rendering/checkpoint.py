@@ -189,5 +189,7 @@ def _fits(arrays: dict, film: Film) -> bool:
             for name, (shape, kind) in expected.items()
         )
         and passes.ndim == 1
+        # (a render to a target error has no fixed passes; any other has some)
+        and (len(passes) > 0) == (len(film.passes) > 0)
         and np.issubdtype(passes.dtype, np.integer)
     )

@@ -363,8 +363,9 @@ def job_groups(jobs: list[Job], workers: int) -> list[list[Job]]:
     each takes about its share of what is left, 1 / (2 workers), and at most
     ``MAX_GROUP_SAMPLES`` samples (so that progress is shown, and a stop heard, every second
     or so), but at least a batch of paths (``BATCH_PATHS``) if each worker has that much: a
-    smaller group would be all tail (a render to a noise target has passes of a few batches). One worker has no one to wait for: its groups are all of the largest size. A
-    group holds one pass: a pass is what the film shows, saves and is stopped after.
+    smaller group would be all tail (a render to a noise target has passes of a few batches).
+    One worker has no one to wait for: its groups are all of the largest size. A group holds
+    one pass: a pass is what the film shows, saves and is stopped after.
     """
     sizes = [job.samples for job in jobs]
     left = sum(sizes)
