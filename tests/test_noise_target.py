@@ -123,15 +123,21 @@ def test_the_allocation_stays_within_its_bounds_for_weights_of_any_magnitude():
             assert extra.sum() == min(budget, room[weights > 0].sum())
 
 
-def test_one_firefly_does_not_make_its_neighbours_reference_nor_hide_its_own_noise():
+def test_one_firefly_moves_no_neighbours_reference_and_is_measured_against_half_its_mean():
     # A flat grey image whose pixel (5, 5) caught one firefly: the median of the 3 x 3 means
-    # stands in for its reference, so its squared error is divided by the grey, not by the
-    # firefly's own mean.
+    # stands in for its neighbours' reference, untouched; its own stand-in is half its own
+    # mean, so its squared difference of halves counts, over a quarter of its mean squared.
     counts = np.full((11, 11), 4)
     sums = np.full((11, 11, 3), 2.0)
     sums[5, 5] += 100.0
     reference = adaptive.reference_estimate(sums, counts)
-    assert np.allclose(reference, 0.5)
+    firefly = np.zeros((11, 11), bool)
+    firefly[5, 5] = True
+    assert np.allclose(reference[~firefly], 0.5)
+    assert np.allclose(reference[5, 5], 0.5 * 102 / 4)
+    # and a light one pixel wide is measured against half its brightness, not the dark median
+    sums[5, 5] = 4 * 40.0
+    assert np.allclose(adaptive.reference_estimate(sums, counts)[5, 5], 20.0)
 
 
 @pytest.mark.slow

@@ -259,7 +259,7 @@ def _estimate(film: Film) -> float | None:
     if not film.halves or film.spp < 2:
         return None
     variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-    return adaptive.estimated_relmse(variance, film.sums, film.counts, film.differences)
+    return adaptive.estimated_relmse(variance, film.sums, film.counts)
 
 
 def _jobs_left(film: Film) -> list[Job]:
@@ -318,13 +318,13 @@ class _NoiseTarget:
         ended = film.plan is not None
         film.end_plan()
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-        film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts, film.differences)
+        film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts)
         if ended:
             self.pass_ended(film)
         if film.estimate <= target:
             self.end = "target"
             return []
-        weights = adaptive.allocation_weights(variance, film.sums, film.counts, film.differences)
+        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
         budget = adaptive.pass_budget(
             weights, film.counts, target, np.minimum(self.most, adaptive.GROWTH * film.counts)
         )
