@@ -147,7 +147,8 @@ def _compare_variances(pixels, squares, counts, expected, yours) -> None:
         return
     i, c = np.argwhere(off)[0]
     n = counts.astype(np.float64)
-    usable = (n >= 2) & (expected[:, c] > 1e-9 * expected[:, c].max())  # (not the rounding of a constant pixel)
+    # (pixels whose expected value is not the rounding of a constant pixel)
+    usable = (n >= 2) & (expected[:, c] > 1e-9 * expected[:, c].max())
     ratio = yours[usable, c] / expected[usable, c]
     hint = text("ch11.hint.one_sample") if n[i] < 2 else _vom_mistake(ratio, n[usable])
     shown = "[" + ", ".join(f"{v:.4g}" for v in pixels[i][:, c]) + "]"
@@ -309,7 +310,9 @@ def _allocation_case(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray, 
     return weights, counts, budget, 24
 
 
-def _proportional_new(extra: np.ndarray, weights: np.ndarray, counts: np.ndarray, budget: int, most: int) -> str:
+def _proportional_new(
+    extra: np.ndarray, weights: np.ndarray, counts: np.ndarray, budget: int, most: int
+) -> str:
     """The hint for new samples shared in proportion to the weights (clipped at the cap or
     not), with no regard to the samples each pixel has; "" for any other answer."""
     share = weights * budget / weights.sum()
@@ -351,7 +354,8 @@ def check_allocate(module) -> str:
                 hint=hint,
             )
         )
-    return text("ch11.allocate_ok", budget=budget, pixels=counts.size, capped=int((counts + extra == most).sum()))
+    capped = int((counts + extra == most).sum())
+    return text("ch11.allocate_ok", budget=budget, pixels=counts.size, capped=capped)
 
 
 CHAPTER = Chapter(
