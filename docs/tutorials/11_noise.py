@@ -82,7 +82,7 @@ def main() -> None:
     estimate = float(np.mean(variance / denominator))
     relative_error = np.sqrt((variance / denominator).mean(axis=-1))
     heat_map(out / "noise-estimate.png", relative_error, top=float(np.quantile(relative_error, 0.99)))
-    reference = ptlab.render(scene, spp=16 * spp, res=res, seed=1)
+    reference = ptlab.render(scene, spp=16 * spp, res=res, seed=1, workers=1)  # (in this process)
     true = relmse(image, reference)
     print(f"wrote {out / 'noise.png'}: {spp} spp, relMSE {estimate:.4f} estimated, {true:.4f} measured")
     print("  (measured against 16x the spp; the estimate is of the mean over many renders, and")
