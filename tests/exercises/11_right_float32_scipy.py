@@ -15,12 +15,12 @@ def variance_of_mean(sums, squares, counts):
     return np.where(n >= 2, result, 0).astype(np.float64)
 
 
-def allocation_weights(sums, squares, counts):
+def allocation_weights(variance, sums, counts):
     n = counts[:, :, np.newaxis].astype(np.float32)
     means = sums.astype(np.float32) / np.fmax(n, 1)
     reference = ndimage.median_filter(means, footprint=np.ones((3, 3, 1), bool), mode="reflect")
-    v = (variance_of_mean(sums, squares, counts) * n / np.square(reference + 0.01)).sum(axis=-1)
-    return 100 * np.sqrt(ndimage.uniform_filter(v, size=(7, 7), mode="mirror"))
+    v = (variance.astype(np.float32) * n / np.square(reference + 0.01)).sum(axis=-1)
+    return 100 * np.sqrt(np.fmax(ndimage.uniform_filter(v, size=(7, 7), mode="mirror"), 0))
 
 
 def allocate(weights, counts, budget, most):

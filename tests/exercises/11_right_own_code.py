@@ -33,11 +33,11 @@ def _box7(values):
     return total / 49
 
 
-def allocation_weights(sums, squares, counts):
+def allocation_weights(variance, sums, counts):
     n = counts.astype(float)
     means = sums / np.maximum(n, 1)[..., None]
     reference = _median3(means)
-    per_sample = variance_of_mean(sums, squares, counts) * n[..., None]
+    per_sample = variance * n[..., None]
     v = np.mean(per_sample / (reference + 0.01) ** 2, axis=2)
     pooled = _box7(v)
     return np.sqrt(np.maximum(pooled, 0))

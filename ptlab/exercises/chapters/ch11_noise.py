@@ -60,9 +60,13 @@ def _variance_of_mean(module, sums, squares, counts) -> np.ndarray:
 
 
 def _weights(module, sums, squares, counts) -> np.ndarray:
+    """The student's weights for a film, given the variance of each pixel's mean as the
+    renderer gives it (computed here, so that a wrong ``variance_of_mean`` costs its own
+    check only)."""
     (allocation_weights,) = require(module, "allocation_weights")
+    variance = adaptive.variance_of_mean(sums, squares, counts)
     with np.errstate(all="ignore"):
-        result = allocation_weights(sums.copy(), squares.copy(), counts.copy())
+        result = allocation_weights(variance, sums.copy(), counts.copy())
     weights = finite_array(result, "allocation_weights", counts.shape, text("ch11.hint.few_samples"))
     if not (weights >= 0).all():
         raise CheckFailed(text("ch11.negative", value=float(weights.min())))
@@ -168,12 +172,15 @@ def _compare_variances(pixels, squares, counts, expected, yours) -> None:
 # allocation_weights -----------------------------------------------------------------------
 
 
-def _variant(sums, squares, counts, mistake: str = "") -> np.ndarray:
-    """``adaptive.allocation_weights``, or it with one typical ``mistake``."""
+def _library(sums, squares, counts) -> np.ndarray:
+    """``adaptive.allocation_weights`` of a film, as the student's is called (``_weights``)."""
+    return adaptive.allocation_weights(adaptive.variance_of_mean(sums, squares, counts), sums, counts)
+
+
+def _variant(sums, squares, counts, mistake: str) -> np.ndarray:
+    """``adaptive.allocation_weights`` with one typical ``mistake``."""
     n = np.asarray(counts, np.float64)
     variance = adaptive.variance_of_mean(sums, squares, counts)
-    if mistake in VARIANCE_MISTAKES:  # (variance_of_mean's mistakes, carried into the weights)
-        variance = variance * VARIANCE_MISTAKES[mistake](np.maximum(n, 2))[..., None]
     per_sample = variance if mistake == "of_mean" else variance * n[..., None]
     if mistake == "own_mean":
         reference = sums / np.maximum(n, 1)[..., None]
@@ -187,15 +194,11 @@ def _variant(sums, squares, counts, mistake: str = "") -> np.ndarray:
         return adaptive.pooled(np.sqrt(v))
     if mistake == "no_sqrt":
         return adaptive.pooled(v)
-    return np.sqrt(adaptive.pooled(v))
+    return np.sqrt(np.maximum(adaptive.pooled(v), 0.0))
 
 
-#: variance_of_mean's mistakes, as factors of the right answer for n samples.
-VARIANCE_MISTAKES = {"samples": lambda n: n, "bessel": lambda n: (n - 1) / n}
 #: The mistakes ``_variant`` knows, each with the hint that names it.
 WEIGHT_MISTAKES = {
-    "samples": "ch11.hint.from_variance",
-    "bessel": "ch11.hint.from_variance",
     "sigma": "ch11.hint.sigma",
     "no_sqrt": "ch11.hint.no_sqrt",
     "no_pooling": "ch11.hint.no_pooling",
@@ -235,7 +238,7 @@ def _dark_over_bright(weights: np.ndarray) -> float:
 
 def check_relative(module) -> str:
     film = _halves(grading_rng(111))
-    expected = _dark_over_bright(adaptive.allocation_weights(*film))
+    expected = _dark_over_bright(_library(*film))
     yours = _dark_over_bright(_weights(module, *film))
     if abs(yours / expected - 1) <= 0.1:
         return text("ch11.relative_ok", ratio=yours)
@@ -286,7 +289,7 @@ def _weights_film(rng: np.random.Generator) -> tuple[np.ndarray, ...]:
 def check_weights(module) -> str:
     film = _weights_film(grading_rng(113))
     yours = _weights(module, *film)
-    if _same_up_to_scale(yours, adaptive.allocation_weights(*film)):
+    if _same_up_to_scale(yours, _library(*film)):
         return text("ch11.weights_ok", pixels=(film[2].shape[0] - 2 * MARGIN) ** 2)
     hint = text("ch11.hint.other_values")
     for mistake, message_id in WEIGHT_MISTAKES.items():
@@ -372,7 +375,7 @@ CHAPTER = Chapter(
         ChapterCheck("variance of the mean", 3, check_variance_of_mean, timeout=30),
         ChapterCheck("relative error", 2, check_relative, timeout=30),
         ChapterCheck("one firefly", 2, check_firefly, timeout=30, requires=("relative error",)),
-        ChapterCheck("weights", 2, check_weights, timeout=30, requires=("variance of the mean",)),
+        ChapterCheck("weights", 2, check_weights, timeout=30),
         ChapterCheck("allocation", 1, check_allocate, timeout=30),
     ),
 )

@@ -613,5 +613,4 @@ MESSAGES: dict[str, str] = {
     "ch11.hint.new_not_total": "yours makes the new samples proportional to the weights; it is each pixel's total, what it has plus what it gets, that should be, so the pixels with many samples already get fewer",
     "ch11.allocate": "allocate gives pixel (x={x}, y={y}) (n = {n}, weight {weight:.4g}) {yours} new samples, where the totals proportional to the weights give {expected}{hint}",
     "ch11.allocate_ok": "{budget} samples over {pixels} pixels: every total as near to proportional to its weight as the budget and the cap ({capped} pixels reach it) allow",
-    "ch11.hint.from_variance": "your weights carry the mistake of your variance_of_mean: see 'variance of the mean'",
 }

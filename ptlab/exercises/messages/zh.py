@@ -607,5 +607,4 @@ MESSAGES: dict[str, str] = {
     "ch11.hint.new_not_total": "你让新样本数与权重成正比；应与权重成正比的是每个像素的总数，即已有的加上新得到的，所以已有很多样本的像素得到的更少",
     "ch11.allocate": "allocate 给像素 (x={x}, y={y})（n = {n}，权重 {weight:.4g}）{yours} 个新样本，而总数与权重成正比时应为 {expected}{hint}",
     "ch11.allocate_ok": "{budget} 个样本分给 {pixels} 个像素：在预算和上限（{capped} 个像素达到上限）允许的范围内，每个像素的总数都尽量与其权重成正比",
-    "ch11.hint.from_variance": "你的权重带着你的 variance_of_mean 的错误：见“均值的方差”",
 }

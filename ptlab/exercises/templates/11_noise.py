@@ -44,12 +44,15 @@ def variance_of_mean(sums, squares, counts):
     raise NotImplementedError("variance_of_mean")
 
 
-def allocation_weights(sums, squares, counts):
+def allocation_weights(variance, sums, counts):
     """What each pixel's share of new samples is proportional to (only the proportions
     count: any common factor is fine).
 
     Args:
-        sums, squares, counts: the film, as for ``variance_of_mean``.
+        variance: (H, W, 3) the variance of each pixel's mean: ``variance_of_mean``'s, or,
+            in a render with the sobol sampler, the renderer's estimate from two half buffers
+            (the chapter's page says why).
+        sums, counts: the film, as for ``variance_of_mean``.
 
     Returns:
         (H, W) weights >= 0, computed in four steps:
@@ -57,8 +60,8 @@ def allocation_weights(sums, squares, counts):
         1. R, what stands in for the unknown reference: per channel, the median of the
            means (sums / counts) of the 3 x 3 pixels around each pixel
            (``scipy.ndimage.median_filter`` with ``size=(3, 3, 1)``);
-        2. v, each pixel's relative variance per sample: n times the variance of its mean
-           (that is, s^2), over (R + 0.01)^2, averaged over the three channels;
+        2. v, each pixel's relative variance per sample: n times the variance of its mean,
+           over (R + 0.01)^2, averaged over the three channels;
         3. v pooled: the mean of v over the 7 x 7 pixels around each pixel
            (``scipy.ndimage.uniform_filter`` with ``size=7``);
         4. the square root of the pooled v.
@@ -73,6 +76,8 @@ def allocation_weights(sums, squares, counts):
         * The median, not the pixel's own mean, in the denominator: a firefly raises its
           own pixel's mean, and would hide the noise it brings.
         * Near the film's edges, pad any sensible way (the checks look inside).
+        * ``uniform_filter`` keeps a running sum: after a huge value, a window of zeros can
+          come out a hair below 0, whose square root is NaN. Clip at 0 first.
     """
     raise NotImplementedError("allocation_weights")
 
