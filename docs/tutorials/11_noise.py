@@ -1,12 +1,12 @@
 # %%
 """Chapter 11 tutorial: how noisy is the Cornell box, and where should the next samples go?
 
-Renders the Cornell box one sample per pixel per pass, keeping per pixel what an adaptive
-render keeps (the sum of its samples, of their squares, and their count); estimates the
-image's relMSE from those alone and compares it with the relMSE against a render of 16
-times the samples; then shares a budget of three times the samples taken among the pixels,
-by sigma / (mu + 0.01) (right) and by sigma alone (the chapter's typical mistake), and
-prints the relMSE each would give.
+Renders the Cornell box one sample per pixel per pass with independent samples, keeping per
+pixel the sum of its samples, of their squares, and their count; estimates the image's
+relMSE from those alone and compares it with the relMSE against a render of 16 times the
+samples; then shares a budget of three times the samples taken among the pixels, by
+sigma / (mu + 0.01) (right) and by sigma alone (the chapter's typical mistake), and prints
+the relMSE each would give.
 
     python docs/tutorials/11_noise.py        # noise.png, noise-estimate.png, spp.png, spp-wrong.png
     python docs/tutorials/11_noise.py --res 64 --spp 8 --out /tmp/t
@@ -34,7 +34,9 @@ from ptlab.rendering.adaptive import (
 
 def film_of_samples(scene, spp: int, res: int, seed: int) -> tuple[np.ndarray, ...]:
     """(sums, squares, counts) of a render of ``spp`` passes of one sample per pixel: each
-    pass's samples are what the film's sums gained in it."""
+    pass's samples are what the film's sums gained in it. The samples are independent
+    (``sampler="independent"``), as s^2 / n assumes: sobol's are spread more evenly than
+    independent ones, and its mean varies less than s^2 / n says (the chapter's page)."""
     sums = np.zeros((res, res, 3))
     squares = np.zeros((res, res, 3))
     before = np.zeros((res, res, 3))
@@ -48,13 +50,14 @@ def film_of_samples(scene, spp: int, res: int, seed: int) -> tuple[np.ndarray, .
         before[...] = film.sums
         taken.append(1)
 
-    ptlab.render_result(scene, spp=spp, res=res, seed=seed, workers=1, spp_per_pass=1, on_pass=take)
+    options = dict(spp=spp, res=res, seed=seed, workers=1, spp_per_pass=1, sampler="independent")
+    ptlab.render_result(scene, **options, on_pass=take)
     return sums, squares, np.full((res, res), len(taken), dtype=np.int64)
 
 
-def by_sigma(sums, squares, counts) -> np.ndarray:
+def by_sigma(variance, sums, counts) -> np.ndarray:
     """The typical mistake: weights that follow each pixel's sigma, whatever its brightness."""
-    per_sample = variance_of_mean(sums, squares, counts) * counts[..., None]
+    per_sample = variance * counts[..., None]
     return np.sqrt(np.maximum(pooled(per_sample.mean(axis=-1)), 0.0))  # (rounding: a hair below 0)
 
 
@@ -82,7 +85,7 @@ def main() -> None:
     estimate = float(np.mean(variance / denominator))
     relative_error = np.sqrt((variance / denominator).mean(axis=-1))
     heat_map(out / "noise-estimate.png", relative_error, top=float(np.quantile(relative_error, 0.99)))
-    reference = ptlab.render(scene, spp=16 * spp, res=res, seed=1, workers=1)  # (in this process)
+    reference = ptlab.render(scene, spp=16 * spp, res=res, seed=1, workers=1)  # (sobol: less noise)
     true = relmse(image, reference)
     print(f"wrote {out / 'noise.png'}: {spp} spp, relMSE {estimate:.4f} estimated, {true:.4f} measured")
     print("  (measured against 16x the spp; the estimate is of the mean over many renders, and")
@@ -91,12 +94,12 @@ def main() -> None:
 
     # Where the next samples go: three times as many again, by the two rules.
     budget, most = 3 * int(counts.sum()), 16 * spp
-    v = relative_variance(sums, squares, counts)  # (per sample, unpooled: an unbiased figure)
+    v = relative_variance(variance, sums, counts)  # (per sample, unpooled: an unbiased figure)
     print(f"relMSE predicted after {4 * spp} spp in all (mean of v / n):")
     print(f"  uniform                       {np.mean(v / (4 * counts)):.5f}")
     rules = (
-        ("spp.png", "sigma / (mu + 0.01)", allocation_weights(sums, squares, counts)),
-        ("spp-wrong.png", "sigma alone (wrong)", by_sigma(sums, squares, counts)),
+        ("spp.png", "sigma / (mu + 0.01)", allocation_weights(variance, sums, counts)),
+        ("spp-wrong.png", "sigma alone (wrong)", by_sigma(variance, sums, counts)),
     )
     for name, rule, weights in rules:
         total = counts + allocate(weights, counts, budget, most)

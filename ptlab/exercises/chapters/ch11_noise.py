@@ -8,7 +8,10 @@ references come from ``ptlab.rendering.adaptive`` in the grader's process. Known
 the variance of a mean of n samples is s^2 / n, s^2 unbiased (n - 1); the relMSE-optimal
 share of samples grows as sigma / (mu + 0.01) (a Lagrange multiplier, Neyman's allocation);
 a firefly, one sample far above the rest, must not decide alone where samples go. The
-mistakes each check names are the variants of the right answer computed by ``_variant``.
+student's ``allocation_weights`` gets the variance of the mean as the renderer passes it
+(``ptlab.rendering.api`` calls ``adaptive.allocation_weights(variance, sums, counts, ...)``),
+here from the library's ``variance_of_mean``. The mistakes each check names are the variants
+of the right answer computed by ``_variant``.
 """
 
 from __future__ import annotations
@@ -370,6 +373,9 @@ CHAPTER = Chapter(
         "ptlab.rendering.adaptive.variance_of_mean",
         "ptlab.rendering.adaptive.allocation_weights",
         "ptlab.rendering.adaptive.allocate",
+        # (steps 1 and 2 of allocation_weights, which would leave only the pooling to write)
+        "ptlab.rendering.adaptive.reference_estimate",
+        "ptlab.rendering.adaptive.relative_variance",
     ),
     checks=(
         ChapterCheck("variance of the mean", 3, check_variance_of_mean, timeout=30),
