@@ -88,8 +88,8 @@ def main() -> None:
     reference = ptlab.render(scene, spp=16 * spp, res=res, seed=1, workers=1)  # (sobol: less noise)
     true = relmse(image, reference)
     print(f"wrote {out / 'noise.png'}: {spp} spp, relMSE {estimate:.4f} estimated, {true:.4f} measured")
-    print("  (measured against 16x the spp; the estimate's excess comes from the light's edge,")
-    print("  where the 3 x 3 median stands in for a bright pixel with the ceiling: the chapter's page)")
+    print("  (measured against 16x the spp, whose own noise adds about 1/16 to the measurement:")
+    print("  the estimate is within 10% of the true error; the chapter's page)")
     print(f"wrote {out / 'noise-estimate.png'}: sqrt(var(mean)) / (R + 0.01), each pixel's relative error")
 
     # Where the next samples go: three times as many again, by the two rules.

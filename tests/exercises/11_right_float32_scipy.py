@@ -19,6 +19,7 @@ def allocation_weights(variance, sums, counts):
     n = counts[:, :, np.newaxis].astype(np.float32)
     means = sums.astype(np.float32) / np.fmax(n, 1)
     reference = ndimage.median_filter(means, footprint=np.ones((3, 3, 1), bool), mode="reflect")
+    reference = np.maximum(reference, means * np.float32(0.5))
     v = (variance.astype(np.float32) * n / np.square(reference + 0.01)).sum(axis=-1)
     return 100 * np.sqrt(np.fmax(ndimage.uniform_filter(v, size=(7, 7), mode="mirror"), 0))
 

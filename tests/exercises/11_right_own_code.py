@@ -36,7 +36,7 @@ def _box7(values):
 def allocation_weights(variance, sums, counts):
     n = counts.astype(float)
     means = sums / np.maximum(n, 1)[..., None]
-    reference = _median3(means)
+    reference = np.maximum(_median3(means), means / 2)
     per_sample = variance * n[..., None]
     v = np.mean(per_sample / (reference + 0.01) ** 2, axis=2)
     pooled = _box7(v)

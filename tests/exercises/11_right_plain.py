@@ -14,7 +14,7 @@ def variance_of_mean(sums, squares, counts):
 def allocation_weights(variance, sums, counts):
     n = counts.astype(np.float64)[..., None]
     means = sums / np.maximum(n, 1)
-    reference = median_filter(means, size=(3, 3, 1))
+    reference = np.maximum(median_filter(means, size=(3, 3, 1)), 0.5 * means)
     v = (n * variance / (reference + 0.01) ** 2).mean(axis=-1)
     return np.sqrt(np.maximum(uniform_filter(v, size=7), 0))
 

@@ -17,6 +17,7 @@ of the right answer computed by ``_variant``.
 from __future__ import annotations
 
 import numpy as np
+from scipy.ndimage import median_filter
 
 from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed, grading_rng, require
 from ptlab.exercises.finite import channel_name, finite_array
@@ -187,6 +188,10 @@ def _variant(sums, squares, counts, mistake: str) -> np.ndarray:
     per_sample = variance if mistake == "of_mean" else variance * n[..., None]
     if mistake == "own_mean":
         reference = sums / np.maximum(n, 1)[..., None]
+    elif mistake == "median_only":
+        means = sums / np.maximum(n, 1)[..., None]
+        size = (adaptive.REFERENCE_WINDOW, adaptive.REFERENCE_WINDOW, 1)
+        reference = median_filter(means, size=size, mode="nearest")
     else:
         reference = adaptive.reference_estimate(sums, counts)
     relative = per_sample if mistake == "sigma" else per_sample / (reference + RELMSE_EPSILON) ** 2
@@ -206,6 +211,7 @@ WEIGHT_MISTAKES = {
     "no_sqrt": "ch11.hint.no_sqrt",
     "no_pooling": "ch11.hint.no_pooling",
     "own_mean": "ch11.hint.own_mean",
+    "median_only": "ch11.hint.median_only",
     "of_mean": "ch11.hint.of_mean",
     "pooled_sigma": "ch11.hint.pooled_sigma",
 }

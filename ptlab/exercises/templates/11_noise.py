@@ -59,7 +59,8 @@ def allocation_weights(variance, sums, counts):
 
         1. R, what stands in for the unknown reference: per channel, the median of the
            means (sums / counts) of the 3 x 3 pixels around each pixel
-           (``scipy.ndimage.median_filter`` with ``size=(3, 3, 1)``);
+           (``scipy.ndimage.median_filter`` with ``size=(3, 3, 1)``), but never less than
+           half the pixel's own mean;
         2. v, each pixel's relative variance per sample: n times the variance of its mean,
            over (R + 0.01)^2, averaged over the three channels;
         3. v pooled: the mean of v over the 7 x 7 pixels around each pixel
@@ -74,7 +75,9 @@ def allocation_weights(variance, sums, counts):
         * One pixel's s^2 from a few samples is noisy: a pixel that caught one firefly has a
           huge one. Pooling lets no single pixel decide.
         * The median, not the pixel's own mean, in the denominator: a firefly raises its
-          own pixel's mean, and would hide the noise it brings.
+          own pixel's mean, and would hide the noise it brings. But a median erases a
+          bright feature narrower than its window (a small light, a light's edge): half the
+          pixel's own mean is the floor that keeps such a pixel bright.
         * Near the film's edges, pad any sensible way (the checks look inside).
         * ``uniform_filter`` keeps a running sum: after a huge value, a window of zeros can
           come out a hair below 0, whose square root is NaN. Clip at 0 first.
