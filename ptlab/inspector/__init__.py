@@ -123,9 +123,8 @@ def inspect_pixel(
     """
     from ptlab.accel import make_accelerator
     from ptlab.integrators.wavefront import recording
-    from ptlab.rendering.api import pass_schedule
-    from ptlab.rendering.jobs import Job, RenderSetup, Tile, run_job_group
-    from ptlab.samplers import make_sampler
+    from ptlab.rendering.api import pass_schedule, render_setup
+    from ptlab.rendering.jobs import Job, Tile, run_job_group
     from ptlab.scene_file import load_scene
 
     options = RenderOptions.of(args, options, keywords)
@@ -141,18 +140,8 @@ def inspect_pixel(
     x, y = pixel
     if not (0 <= x < width and 0 <= y < height):
         raise PtlabError(f"pixel ({x}, {y}) is outside the {width}x{height} image")
-    sampler = make_sampler(options.sampler, options.seed, options.spp)
-    scene = scene.with_sampling(options.sampling)
-    setup = RenderSetup(
-        scene=scene,
-        backend=options.backend,
-        width=width,
-        height=height,
-        seed=options.seed,
-        settings=options.path_settings(),
-        integrator=options.integrator,
-        sampler=sampler,
-    )
+    setup = render_setup(scene, options)
+    scene = setup.scene
     passes = pass_schedule(options.spp, options.spp_per_pass)
     pass_of = np.repeat(np.arange(len(passes)), passes)
     tile = Tile(0, x, y, x + 1, y + 1)

@@ -161,9 +161,9 @@ def render_result(
         scene = load_scene(scene)
     options = options.for_scene(scene)
     workers = check_workers(options.workers)
-    sampler = make_sampler(options.sampler, options.seed, options.spp)
-    scene = scene.with_sampling(options.sampling)
-    settings = options.path_settings()
+    setup = render_setup(scene, options)
+    scene, sampler, settings = setup.scene, setup.sampler, setup.settings
+    assert sampler is not None  # (render_setup gives one)
     keep_freed_memory()
 
     width, height = options.size
@@ -182,17 +182,6 @@ def render_result(
     samples_at_start = film.samples
 
     start = time.perf_counter()
-    setup = RenderSetup(
-        scene=scene,
-        backend=options.backend,
-        width=width,
-        height=height,
-        seed=options.seed,
-        settings=settings,
-        integrator=options.integrator,
-        sampler=sampler,
-        halves=options.target_error is not None,
-    )
     jobs = _jobs_left(film)
     pass_ended = _PassEnd(checkpoint, identity, command, on_pass)
     more = None
@@ -242,6 +231,24 @@ def render_result(
             workers=workers if executor is None else "executor",
             **_target_record(more),
         ),
+    )
+
+
+def render_setup(scene: Scene, options: RenderOptions) -> RenderSetup:
+    """What every job of a render of ``scene`` shares (options decided ``for_scene``): the
+    scene with the options' diffuse sampling, the sampler, the path settings; each pixel's
+    samples in two independent halves for a render to a target error."""
+    width, height = options.size
+    return RenderSetup(
+        scene=scene.with_sampling(options.sampling),
+        backend=options.backend,
+        width=width,
+        height=height,
+        seed=options.seed,
+        settings=options.path_settings(),
+        integrator=options.integrator,
+        sampler=make_sampler(options.sampler, options.seed, options.spp),
+        halves=options.target_error is not None,
     )
 
 
