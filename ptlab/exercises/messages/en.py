@@ -53,7 +53,7 @@ MESSAGES: dict[str, str] = {
     "not_finite.more": " and {others} more NaN or infinite values",
     # Renders compared with the library's (renders.py).
     # ptlab exercise render (side_by_side.py).
-    "show.no_render": "chapter {number} has no render: its functions are not used by the renderer",
+    "show.no_render": "chapter {number} has no render to set beside the library's: its functions change where a render's samples go, which 'ptlab render --spp-map' shows, not its picture",
     "show.no_file": "{path}: no such file",
     "show.library": "rendering {scene} at {width}x{height}, {spp} spp, with the library's code",
     "show.yours": "rendering it again with your functions (in a process of their own)",

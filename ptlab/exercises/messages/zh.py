@@ -50,7 +50,7 @@ MESSAGES: dict[str, str] = {
     "not_finite.more": "，另有 {others} 个 NaN 或无穷值",
     # Renders compared with the library's (renders.py).
     # ptlab exercise render（side_by_side.py）。
-    "show.no_render": "第 {number} 章没有渲染：渲染器不会用到这一章的函数",
+    "show.no_render": "第 {number} 章没有可与库的渲染并排比较的渲染：这一章的函数改变的是渲染的样本去哪里（'ptlab render --spp-map' 可以看到），而不是画面",
     "show.no_file": "{path}：没有这个文件",
     "show.library": "用库的代码渲染 {scene}：{width}x{height}，每像素 {spp} 个样本",
     "show.yours": "再用你的函数渲染一遍（你的函数在单独的进程中运行）",
