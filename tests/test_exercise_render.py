@@ -84,7 +84,6 @@ def test_every_chapter_says_what_its_render_shows():
 
 
 def test_a_chapter_without_a_render_says_so_in_one_line(tmp_path):
-
     from ptlab.errors import PtlabError
     from ptlab.exercises.side_by_side import render_side_by_side
 
