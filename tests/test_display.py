@@ -56,7 +56,7 @@ def test_show_without_a_display_writes_a_png_and_says_where(small, tmp_path, cap
 
 def test_show_in_a_notebook_displays_the_image(small, monkeypatch, capsys):
     # In a kernel, IPython's display shows the image; outside one (here) it prints its repr.
-    monkeypatch.setitem(sys.modules, "ipykernel", sys.modules.get("ipykernel", object()))
+    monkeypatch.setattr("ptlab.rendering.display.in_notebook", lambda: True)
     assert ptlab.show(small) is None
     assert "IPython.core.display.Image object" in capsys.readouterr().out
 

@@ -15,20 +15,13 @@ from __future__ import annotations
 import argparse
 import os
 import shlex
-import sys
 import time
 from pathlib import Path
 
+from ptlab.rendering.display import in_notebook
+
 #: When ``tutorial_options`` ran: the pictures written since are this run's.
 _started = time.time()
-
-
-def in_notebook() -> bool:
-    """Whether this runs in a Jupyter kernel: IPython's shell there is a ``ZMQInteractiveShell``.
-    (Not "ipykernel was imported": a program that talks to kernels imports it too.)"""
-    ipython = sys.modules.get("IPython")
-    shell = ipython.get_ipython() if ipython is not None else None
-    return type(shell).__name__ == "ZMQInteractiveShell"
 
 
 def tutorial_options(

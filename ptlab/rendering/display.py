@@ -25,8 +25,12 @@ def png_bytes(image: np.ndarray, exposure: float = 0.0) -> bytes:
 
 
 def in_notebook() -> bool:
-    """Whether this runs in a Jupyter kernel (which shows images itself)."""
-    return "ipykernel" in sys.modules
+    """Whether this runs in a Jupyter kernel (which shows images itself): IPython's shell there
+    is a ``ZMQInteractiveShell``. (Not "ipykernel was imported": a program that talks to
+    kernels, such as a test that runs a notebook, imports it too.)"""
+    ipython = sys.modules.get("IPython")
+    shell = ipython.get_ipython() if ipython is not None else None
+    return type(shell).__name__ == "ZMQInteractiveShell"
 
 
 def show(image, exposure: float = 0.0, out: str | Path = "ptlab-show.png") -> Path | None:
