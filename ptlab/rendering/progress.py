@@ -13,7 +13,7 @@ import time
 
 from tqdm import tqdm
 
-from ptlab.rendering import display
+from ptlab.rendering.display import in_notebook as running_in_notebook
 from ptlab.rendering.film import Film
 
 
@@ -49,7 +49,7 @@ class ProgressBar:
         self.passes, self.total, self.initial, self.target = passes, total_samples, initial, target
         self.start = time.monotonic()
         self.passes_shown = 0
-        in_notebook = display.in_notebook()
+        in_notebook = running_in_notebook()
         on_terminal = sys.stderr.isatty()
         # Lines per pass where there is neither: a file or a pipe would get a bar's every
         # redraw, carriage returns and all.
