@@ -17,7 +17,8 @@ the whole), and the two halves' means, A and B, are two independent estimates of
 Since E[(A - B)^2] = 2 Var(A) and the pixel's mean (A + B) / 2 has Var(A) / 2,
 (A - B)^2 / 4 is an unbiased estimate of the variance of the pixel's mean, whatever the
 sampler (``variance_of_mean_from_halves``; the two "half buffers" of Rousselle, Knaus and
-Zwicker 2012, and of Cycles' adaptive sampling). One pixel's estimate has a single degree
+Zwicker, "Adaptive Rendering with Non-Local Means Filtering", SIGGRAPH Asia 2012, and of
+Cycles' adaptive sampling). One pixel's estimate has a single degree
 of freedom, so it is never trusted alone: the image's estimate is a mean over every pixel,
 and the allocation below pools neighbours.
 
@@ -46,7 +47,8 @@ judges a pixel with its neighbours): a pixel's own samples weigh 1/49 of its dec
 decisions are made only between passes, from the film as it is then, which is the same bit
 for bit whatever the workers. Pooling spreads the samples over a neighbourhood rather than
 a pixel, which costs a little of the gain (an 8 x 8 block allocation gains about 1.3x over
-uniform sampling where a per-pixel oracle gains 1.6x, issue 28's measurements).
+uniform sampling where a per-pixel oracle, which knows each pixel's variance, gains 1.6x:
+measured at 128x128 from 24 renders of 8 spp each of the Cornell box).
 """
 
 from __future__ import annotations
