@@ -273,7 +273,7 @@ def _jobs_left(film: Film) -> list[Job]:
     """The jobs of the fixed passes that the film does not have yet (all of them but in a
     resumed render), or of the noise-target pass that a resumed render was stopped in."""
     if film.plan is not None:
-        return plan_jobs(film, len(film.passes))
+        return plan_jobs(film)
     first_sample = np.concatenate([[0], np.cumsum(film.passes)])
     return [
         Job(tile, k, n, int(first_sample[k]))
@@ -321,7 +321,7 @@ class _NoiseTarget:
         assert target is not None
         if film.samples == 0 and film.plan is None:  # (the first pass: spp everywhere)
             film.start_plan(np.full(film.counts.shape, self.options.spp, dtype=np.int64))
-            return plan_jobs(film, len(film.passes))
+            return plan_jobs(film)
         ended = film.plan is not None
         film.end_plan()
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
@@ -332,9 +332,10 @@ class _NoiseTarget:
             self.end = "target"
             return []
         weights = adaptive.allocation_weights(variance, film.sums, film.counts)
-        budget = adaptive.pass_budget(
-            weights, film.counts, target, np.minimum(self.most, adaptive.GROWTH * film.counts)
-        )
+        # (No pixel more than GROWTH times its samples in one pass: one pass's estimate of a
+        # pixel is not trusted with more.)
+        most = np.minimum(self.most, adaptive.GROWTH * film.counts)
+        budget = adaptive.pass_budget(weights, film.counts, target, most)
         self.end = "max spp"
         if self.options.time_limit is not None:  # (at the speed so far)
             elapsed = time.perf_counter() - self.start
@@ -344,15 +345,12 @@ class _NoiseTarget:
         if budget < film.counts.size // 8:  # (less than an eighth of a sample per pixel: done)
             return []
         # (In pairs, one sample for each half: ``RenderSetup.halves``.)
-        # (No pixel more than GROWTH times its samples in one pass: one pass's estimate of a
-        # pixel is not trusted with more.)
-        most = np.minimum(self.most, adaptive.GROWTH * film.counts)
         pairs = adaptive.allocate(weights, film.counts // 2, budget // 2, most // 2)
         film.start_plan(2 * pairs)
-        return plan_jobs(film, len(film.passes))
+        return plan_jobs(film)
 
 
-def plan_jobs(film: Film, fixed_passes: int) -> list[Job]:
+def plan_jobs(film: Film) -> list[Job]:
     """The jobs of the noise-target pass under way (``Film.plan``) that are not done: one per
     plan tile (``Film.plan_tiles``) that has samples in it, each pixel going on from the
     samples it has."""
@@ -362,7 +360,7 @@ def plan_jobs(film: Film, fixed_passes: int) -> list[Job]:
         counts = film.plan[tile.y0 : tile.y1, tile.x0 : tile.x1]
         if not film.plan_done[tile.index] and counts.any():
             firsts = film.counts[tile.y0 : tile.y1, tile.x0 : tile.x1].copy()
-            index = fixed_passes + film.adaptive_passes
+            index = len(film.passes) + film.adaptive_passes
             jobs.append(Job(tile, index, int(counts.max()), 0, counts.copy(), firsts))
     return jobs
 
