@@ -1,7 +1,7 @@
 """Checkpoints: a render's film saved to disk, so that it can be resumed.
 
-A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums (of the samples and
-of their differences), the samples taken per tile and per pixel, a noise-target pass under way
+A checkpoint is a NumPy ``.npz`` file holding the film's float64 sums (of the samples, and
+of the even ones less the odd ones), the samples taken per tile and per pixel, a noise-target pass under way
 (``Film.plan``) and the render's identity: its options (``RenderOptions.record``) but the number
 of workers, with the scene's fingerprint and the sampler's identity. Resuming adds the
 missing passes in the same order an uninterrupted render would, so the finished image is

@@ -1,5 +1,6 @@
-"""The film: per-pixel sums of radiance (and of its square) in float64, each pixel's count of
-samples, and how many passes each tile has.
+"""The film: per-pixel sums of radiance in float64 (and, for the noise estimate, the even
+samples' sum less the odd ones'), each pixel's count of samples, and how many passes each
+tile has.
 
 Jobs finish in any order, but the film adds each tile's passes in pass order (a result
 that arrives early waits in ``pending``), so the float64 sums, and so the image, are the
@@ -52,7 +53,6 @@ class Film:
         self.tiles = tiles
         self.passes = list(passes)
         self.sums = np.zeros((height, width, 3))
-        self.halves = halves
         self.halves = halves
         self.differences = np.zeros((height, width, 3))
         self.counts = np.zeros((height, width), dtype=np.int64)
