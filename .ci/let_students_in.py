@@ -1,10 +1,11 @@
 """Let other users enter the folders above this Python and this checkout (CI, as root).
 
-The graders run a student's code as the user ``nobody`` when they run as root, as they do
-here and in a course's container (docs/grading-security.md), and that user must be able to
-read the Python that runs ptlab. pyenv's Python lives under /root, which is closed to other
-users on these machines: this adds o+x (enter, not list) to each folder above the Python,
-the virtual environment and the checkout that lacks it, and says which.
+The graders' sandbox mounts the Python where it lies, so students' code needs no more. One
+test runs a grader itself as the user ``nobody`` (a grader that is not root), and that user
+must then be able to read this Python: pyenv's lives under /root, closed to other users on
+these machines. This adds o+x (enter, not list) to each folder above the Python, the
+virtual environment and the checkout that lacks it, and says which; ``.ci/run`` runs that
+test after it, and the rest of the suite before it.
 """
 
 import os

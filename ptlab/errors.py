@@ -37,3 +37,8 @@ class SceneError(PtlabError):
     def __init__(self, file: object, problem: str, key: str | None = None):
         where = f"{file}" if key is None else f"{file}: {key}"
         super().__init__(f"{where}: {problem}")
+
+
+class NotInKitError(RuntimeError):
+    """Raised by what a chapter's kit leaves out (``ptlab.untrusted.kit``): the student's
+    code called the library's answer to the exercise, which its process does not have."""

@@ -75,3 +75,18 @@ def channels(colour: np.ndarray) -> np.ndarray:
     ``(channels(c) * s).T`` is then an (N, 3) array in this module's column-major layout.
     """
     return colour[:, None] if colour.ndim == 1 else colour.T
+
+
+#: Names that lived here and moved, for the students' files that still import them from here
+#: (``ptlab.scattering`` gathered the smooth surface's formulas).
+MOVED = {"reflect": "ptlab.scattering.reflect"}
+
+
+def __getattr__(name: str):
+    """An old name of this module (``MOVED``), from where it lives now (PEP 562)."""
+    if name in MOVED:
+        import importlib
+
+        module, _, attribute = MOVED[name].rpartition(".")
+        return getattr(importlib.import_module(module), attribute)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

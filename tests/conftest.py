@@ -120,11 +120,7 @@ def marked_if_it_starts_processes(request):
 #: Modules whose functions run only in a student's process (``ptlab.untrusted.child`` sets
 #: them up there), where this one cannot trace them; the quick layer grades in such
 #: processes (test_untrusted.py, test_exercises.py).
-ONLY_IN_STUDENTS_PROCESSES = {
-    "ptlab.untrusted.confinement",
-    "ptlab.untrusted.no_exec",
-    "ptlab.untrusted.traps",
-}
+ONLY_IN_STUDENTS_PROCESSES = {"ptlab.untrusted.confinement"}
 _called: set = set()
 _untouched: list[str] = []
 

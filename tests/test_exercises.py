@@ -170,6 +170,19 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     assert [c.verdict for c in report.checks] == ["pass"] * len(report.checks), str(report)
 
 
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_an_answer_that_imports_a_moved_name_from_its_old_place_keeps_full_marks(tmp_path):
+    # ``reflect`` lived in ptlab.vectors before ptlab.scattering gathered the formulas.
+    source = (Path(__file__).parent / "exercises" / "09_right_walter.py").read_text()
+    assert "from ptlab.scattering import reflect" in source
+    path = tmp_path / "09_microfacet.py"
+    old, new = "from ptlab.scattering import reflect", "from ptlab.vectors import reflect"
+    path.write_text(source.replace(old, new))
+    result = grade(chapter(9), path, seed=GRADING_SEED)
+    assert result.full_marks, result.table()
+
+
 @pytest.mark.parametrize(("number", "name"), [(6, "Lambertian"), (9, "GGXMetal")])
 def test_the_exercise_files_keep_material_parameters_in_float32(number, name):
     from ptlab.untrusted.child import import_file

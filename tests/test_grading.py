@@ -189,7 +189,7 @@ def test_sphere_grid_cells_have_equal_area_and_integration_is_exact_for_smooth_f
 
 @pytest.mark.subprocess
 def test_grade_exit_codes(tmp_path, capsys):
-    assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 0
+    assert ptlab_main(["grade", f"{PLAIN}:Lambertian", "--samples", "20000"]) == 0
     assert "PASSED" in capsys.readouterr().out
     assert (
         ptlab_main(
@@ -210,10 +210,36 @@ def test_grade_exit_codes(tmp_path, capsys):
     assert len(list((tmp_path / "plots").glob("*.png"))) == 9
     assert (
         ptlab_main(
-            ["grade", f"{WRONG_FILE}:WalterSampling", "--args", '{"alpha": 0.2}', "--samples", "20000"]
+            ["grade", f"{PLAIN}:Lambertian", "--args", '{"albedo": [0.2, 0.5, 0.9]}', "--samples", "20000"]
         )
         == 0
     )
+
+
+@pytest.mark.subprocess
+def test_grade_leaves_out_the_lambertian_the_checks_hand_to_students(tmp_path, capsys):
+    path = tmp_path / "material.py"
+    path.write_text(
+        "from ptlab.exercises.given import FlakyDiffuse\n"
+        "class Lambertian:\n"
+        "    def eval(self, wo, wi, n):\n        return FlakyDiffuse().eval(wo, wi, n)\n"
+        "    def pdf(self, wo, wi, n):\n        return FlakyDiffuse().pdf(wo, wi, n)\n"
+        "    def sample(self, wo, n, u):\n        return FlakyDiffuse().sample(wo, n, u)\n"
+    )
+    assert ptlab_main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 1
+    out = " ".join(capsys.readouterr().out.split())  # (the table wraps its hints)
+    assert "FAILED" in out
+    assert "eval raised NotInKitError: ptlab.exercises.given.FlakyDiffuse.eval is left out of the kit" in out
+
+
+@pytest.mark.subprocess
+def test_grade_runs_a_material_without_the_librarys_materials(capsys):
+    # WalterSampling is the library's microfacet material with another sampler: right, but
+    # built on a material that is not in the kit ``ptlab grade`` runs it with.
+    assert ptlab_main(["grade", f"{WRONG_FILE}:WalterSampling", "--samples", "20000"]) == 2
+    err = capsys.readouterr().err
+    assert "ptlab.materials.microfacet.Microfacet.__init__ is left out of the kit" in err
+    assert len(err.strip().splitlines()) == 1
 
 
 @pytest.mark.subprocess

@@ -330,3 +330,40 @@ def test_the_schema_encoder_refuses_arrays_of_objects():
     encoder = Encoder(lambda obj: 0, lambda obj: {})
     with pytest.raises(UnsendableError):
         encoder.encode(np.array([object()], dtype=object))
+
+
+# -- where the sandbox cannot be made -----------------------------------------------------------
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_without_bubblewrap_the_grader_grades_and_says_not_for_credit(tmp_path):
+    # A PATH with no bwrap on it is a machine without bubblewrap.
+    result = tmp_path / "result.json"
+    command = ["exercise", "check", "1", str(RIGHT_CAMERA), "--json", str(result)]
+    ran = subprocess.run(
+        [sys.executable, "-m", "ptlab.cli", *command],
+        env=dict(os.environ, PATH=str(tmp_path)),
+        capture_output=True,
+        text=True,
+        timeout=600,
+    )
+    assert ran.returncode == 0, ran.stdout + ran.stderr  # (the student's own check: full marks)
+    assert "NOT FOR CREDIT: bubblewrap is not installed (apt-get install bubblewrap)" in ran.stdout
+    written = json.loads(result.read_text())
+    assert written["for_credit"] is False
+    assert "bubblewrap is not installed" in written["not_for_credit"]
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_with_bubblewrap_a_grade_is_for_credit(tmp_path):
+    from ptlab.untrusted import sandbox
+
+    if sandbox.missing() is not None:
+        pytest.skip(str(sandbox.missing()))
+    result = grade(chapter(1), RIGHT_CAMERA, timeout_scale=0.5)
+    assert result.full_marks, result.table()
+    assert result.for_credit
+    assert result.as_dict()["for_credit"] is True
+    assert "NOT FOR CREDIT" not in result.table()

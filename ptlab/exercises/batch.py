@@ -55,10 +55,11 @@ from ptlab.exercises.chapter import Chapter
 from ptlab.exercises.grader import OVERALL_SLACK, overall_limit, table_message
 from ptlab.exercises.messages import LANGUAGES, active_language
 from ptlab.exercises.progress import private_state
-from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, student_user
+from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, sandbox, student_user
+from ptlab.untrusted.control_groups import ControlGroups
 from ptlab.untrusted.intake import MAX_BYTES
 from ptlab.untrusted.shown import shown
-from ptlab.untrusted.student_user import pool_user
+from ptlab.untrusted.student_user import is_root, pool_user
 
 #: The largest report a grader process may print (a grade's JSON is a few kilobytes).
 MAX_REPORT = 1 << 20
@@ -182,7 +183,7 @@ def columns(chapter: Chapter) -> list[str]:
     return (
         ["student", "file", "score", "max_score"]
         + [c.name for c in chapter.checks]
-        + ["first_failure", "seconds", "grading_seed"]
+        + ["first_failure", "seconds", "grading_seed", "for_credit"]
     )
 
 
@@ -306,6 +307,9 @@ def grade_all(
     write_rows(csv_path, chapter, rows)  # what the grader cannot vouch for goes at once
     record.keep(rows, work)
     todo = [w for w in work if w.student not in rows]
+    outside = sandbox.not_for_credit()
+    if todo and outside is not None:
+        print(f"NOT FOR CREDIT: {outside}", file=sys.stderr)
     limit = overall_limit(chapter, timeout_scale) + EXTRA_SECONDS
     if todo:
         print(
@@ -317,15 +321,19 @@ def grade_all(
         )
     bar = tqdm(total=len(todo), unit="student", disable=not progress, file=sys.stderr)
     runner = _Runner(chapter, timeout_scale, limit, user, workers, seed, lang or active_language())
-    with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
-        runner.guard = guard
-        futures = {pool.submit(runner.grade, w): w for w in todo}
-        for future in as_completed(futures):
-            row = {k: safe_cell(v) for k, v in future.result().items()}
-            rows[row["student"]] = row
-            write_rows(csv_path, chapter, rows)
-            record.keep(rows, work)
-            bar.update()
+    try:
+        with ProcessGuard() as guard, ThreadPoolExecutor(max(1, workers)) as pool:
+            runner.guard = guard
+            futures = {pool.submit(runner.grade, w): w for w in todo}
+            for future in as_completed(futures):
+                row = {k: safe_cell(v) for k, v in future.result().items()}
+                rows[row["student"]] = row
+                write_rows(csv_path, chapter, rows)
+                record.keep(rows, work)
+                bar.update()
+    finally:
+        if runner.groups is not None:
+            runner.groups.remove()
     bar.close()
     return rows
 
@@ -337,7 +345,11 @@ class _Runner:
     at the same time gets a uid of their own (slots 1 to K of ``ptlab.untrusted.
     student_user.pool_user``): the kernel counts processes per uid, so a fork bomb that
     fills its limit leaves the other student's limit whole (and that of any other grader
-    running students as the user itself), and neither may read the other's folder.
+    running students as the user itself), and neither may read the other's folder. Where
+    the grader may make control groups (root), each slot's grader process and all it
+    starts are a group with a CPU weight and quota, a memory limit and a process limit of
+    their own (``ptlab.untrusted.control_groups``): spinning processes of one student take
+    no more than their slot's share of the processors.
     """
 
     def __init__(
@@ -353,12 +365,22 @@ class _Runner:
         self.chapter, self.timeout_scale, self.limit = chapter, timeout_scale, limit
         self.user, self.seed, self.lang = user, seed, lang
         self.slots: queue.SimpleQueue[int] | None = None
+        self.groups: ControlGroups | None = None
         base = student_user(user)
-        if base is not None and workers > 1:
+        self.pooled = base is not None and workers > 1
+        if workers > 1:
             self.slots = queue.SimpleQueue()
             for slot in range(1, workers + 1):  # (not the user itself, whom other graders may run)
-                pool_user(base, slot)  # (a pool that cannot be made: before anything)
+                if self.pooled:
+                    pool_user(base, slot)  # (a pool that cannot be made: before anything)
                 self.slots.put(slot)
+            self.groups = ControlGroups.make(workers) if is_root() else None
+            if self.groups is None:
+                print(
+                    "students graded at once share the CPU and the memory: this grader "
+                    "cannot make control groups (only root can)",
+                    file=sys.stderr,
+                )
         self.guard: ProcessGuard | None = None
         self._lock = threading.Lock()
         self._running: set[int] = set()
@@ -387,6 +409,7 @@ class _Runner:
             return row
         results = {c["name"]: c for c in report["checks"]}
         row["score"], row["grading_seed"] = report["score"], report["grading_seed"]
+        row["for_credit"] = "yes" if report.get("for_credit") is True else "no"
         for check in self.chapter.checks:
             row[check.name] = results[check.name]["points"]
         failed = [c for c in report["checks"] if not c["passed"]]
@@ -408,7 +431,7 @@ class _Runner:
         ]
         if self.user is not None:
             command += ["--student-user", self.user]
-        if slot is not None:
+        if slot is not None and self.pooled:
             command += ["--slot", str(slot)]
         if self.seed is not None:
             command += ["--grading-seed", str(self.seed)]
@@ -419,6 +442,8 @@ class _Runner:
                 command, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL
             )
             self._running.add(process.pid)
+            if self.groups is not None and slot is not None:
+                self.groups.join(slot, process.pid)
         try:
             output, _ = process.communicate(timeout=self.limit)
         except subprocess.TimeoutExpired:

@@ -1,13 +1,13 @@
 """What a chapter of the exercises is: its graded checks, and the helpers checks use.
 
-A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``,
-a list of ``ChapterCheck``s, and the library's own answers to what the student writes (which are
-traps in the student's process, and whose copies earn nothing) and what each function may
-do to its arguments (``Chapter.rules``). A check is a plain function of the student's
-module (a stand-in for it, whose functions run in the student's own process:
-``ptlab.untrusted``): it returns a short note of what it measured, or raises
-``CheckFailed`` with a message for the student. ``ptlab.exercises.grader`` runs the checks;
-this module only describes them.
+A chapter module (``ptlab.exercises.chapters.chNN_name``) defines ``CHAPTER = Chapter(...)``:
+a list of ``ChapterCheck``s; the library's own answers to what the student writes, which the
+student's kit leaves out with everything else that computes them (``ptlab.untrusted.kit``),
+and whose copies earn nothing; and what each function may do to its arguments
+(``Chapter.rules``). A check is a plain function of the student's module (a stand-in for
+it, whose functions run in the student's own process: ``ptlab.untrusted``): it returns a
+short note of what it measured, or raises ``CheckFailed`` with a message for the student.
+``ptlab.exercises.grader`` runs the checks; this module only describes them.
 """
 
 from __future__ import annotations
@@ -28,6 +28,7 @@ import numpy as np
 
 from ptlab.exercises.messages import aside, text
 from ptlab.untrusted import Arguments, Rules, copied_answer, library_answer
+from ptlab.untrusted.sandbox import PACKAGES
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -152,7 +153,10 @@ class Chapter:
         writes: {function: the arguments it fills in} (the film ``trace_paths`` adds to);
             every other argument of the exercise's functions is read-only.
         scratch: {function: the arguments it may change for its own use}.
-        programs: the student's code may start programs (its worker processes).
+        also_left_out: the rest of ptlab that computes what the student writes another way
+            (modules, classes, functions): the chapter's kit leaves it out with ``answers``
+            (``ptlab.untrusted.kit``).
+        packages: the installed packages the student's code may import.
         render: how ``ptlab exercise render`` renders a scene with the chapter's functions;
             None for a chapter whose functions no render calls.
     """
@@ -165,7 +169,8 @@ class Chapter:
     answers: tuple[str, ...] = ()
     writes: dict[str, tuple[str, ...]] = field(default_factory=dict)
     scratch: dict[str, tuple[str, ...]] = field(default_factory=dict)
-    programs: bool = False
+    also_left_out: tuple[str, ...] = ()
+    packages: tuple[str, ...] = PACKAGES
     render: ChapterRender | None = None
 
     def __post_init__(self) -> None:
@@ -206,7 +211,11 @@ class Chapter:
                     names, self.writes.get(node.name, ()), self.scratch.get(node.name, ())
                 )
         return Rules(
-            answers=self.answers, solution=self.solution, arguments=arguments, programs=self.programs
+            answers=self.answers,
+            solution=self.solution,
+            arguments=arguments,
+            also_left_out=self.also_left_out,
+            packages=self.packages,
         )
 
     @property

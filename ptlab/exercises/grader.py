@@ -41,13 +41,15 @@ from ptlab.untrusted import (
     Taken,
     import_nothing_from_here,
     make_undumpable,
+    sandbox,
     student_user,
     take_in,
 )
+from ptlab.untrusted.kit import kit_for
 from ptlab.untrusted.shown import shown, shown_line
 
-#: Seconds the whole grading may take beyond the sum of its checks' limits (starting the
-#: fork server, the library's own renders).
+#: Seconds the whole grading may take beyond the sum of its checks' limits (making the
+#: kit, the library's own renders).
 OVERALL_SLACK = 60.0
 #: The longest message a check reports (the rest is cut off).
 MAX_MESSAGE = 1000
@@ -82,6 +84,8 @@ class Grade:
             ``--grading-seed`` grades again with the same inputs, for the same verdict).
         lang: the language of the messages and of the table ("en", "zh";
             ``ptlab.exercises.messages``).
+        not_for_credit: why the results do not count (``ptlab.untrusted.sandbox.
+            not_for_credit``: no sandbox here, or a grader that is not root), or "".
     """
 
     chapter: int
@@ -91,6 +95,11 @@ class Grade:
     sha256: str = ""
     grading_seed: int = 0
     lang: str = "en"
+    not_for_credit: str = ""
+
+    @property
+    def for_credit(self) -> bool:
+        return not self.not_for_credit
 
     @property
     def score(self) -> int:
@@ -116,6 +125,8 @@ class Grade:
             sha256=self.sha256,
             grading_seed=self.grading_seed,
             lang=self.lang,
+            for_credit=self.for_credit,
+            **({"not_for_credit": self.not_for_credit} if self.not_for_credit else {}),
             checks=[asdict(r) for r in self.results],
         )
 
@@ -144,6 +155,8 @@ class Grade:
             f"  {padded(text('table.total'), width)}  {self.score:>3}/{self.max_score:<3}  "
             + text("table.seed", full_marks=full_marks, seed=self.grading_seed)
         )
+        if self.not_for_credit:
+            lines.append("  " + text("table.not_for_credit", why=self.not_for_credit))
         return "\n".join(lines)
 
 
@@ -259,7 +272,8 @@ def _grade(
                 name = check_name(chapter.number, result.name)
                 echo(f"  {verdict}  {name} ({result.seconds:.1f} s)")
             results.append(result)
-    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed, lang)
+    outside = sandbox.not_for_credit()
+    return Grade(chapter.number, chapter.title, str(path), results, sha256, seed, lang, str(outside or ""))
 
 
 def _import_what_checks_use(rules) -> None:
@@ -274,6 +288,7 @@ def _import_what_checks_use(rules) -> None:
     import ptlab.rendering  # noqa: F401
 
     rules.fingerprints  # noqa: B018 (computed and kept)
+    kit_for(rules.left_out)  # (made once, before any check's time runs)
 
 
 def run_check(

@@ -2,8 +2,8 @@
 library's, beside the library's own render of it, and a picture of their difference.
 
 The student's file is imported as ``ptlab exercise check`` imports it (``ptlab.untrusted``:
-a process of its own, as the student user when run as root, unable to start programs, and
-sending back plain data only); the renders run in this process, which calls the student's
+a fresh interpreter in its sandbox, with the chapter's kit, as the student user when run as
+root, sending back plain data only); the renders run in this process, which calls the student's
 functions there, with one worker (a function plugged in here is not seen by worker
 processes). Each chapter says what it renders (``Chapter.render``: its scene, its options,
 and how its functions go in: those of the chapter's render check). The library's render

@@ -37,6 +37,7 @@ from ptlab.untrusted import (
     import_nothing_from_here,
     library_answer,
     make_undumpable,
+    sandbox,
     student_user,
     take_in,
 )
@@ -46,15 +47,17 @@ from ptlab.untrusted.student_user import add_student_user_argument
 
 #: Seconds one call of the material may take (10^6 directions take well under one).
 CALL_TIME_LIMIT = 120.0
-#: ptlab's own materials, whose copies are not the student's. (They are no traps: a student's
-#: material may inherit some of its methods from one, as long as it writes one itself.)
+#: ptlab's own materials: their copies are not the student's, and the kit that ``ptlab grade``
+#: runs a material with leaves them out (``ptlab.untrusted.kit``).
 MATERIALS = Rules(
     answers=(
         "ptlab.materials.Diffuse",
         "ptlab.materials.Microfacet",
         "ptlab.materials.Mirror",
         "ptlab.materials.Dielectric",
-    )
+    ),
+    # (the Lambertian that chapter 7's checks hand to the student's code is one too)
+    also_left_out=("ptlab.exercises.given",),
 )
 
 
@@ -91,7 +94,7 @@ def add_grade_arguments(parser: argparse.ArgumentParser) -> argparse.ArgumentPar
 
 def run_grade(args: argparse.Namespace) -> int:
     """Grade the material ``args`` name; print the report. Raises GradeLoadError (exit 2)."""
-    from ptlab.grading import check_material, write_plots
+    from ptlab.grading import check_material
 
     if args.samples < 1000:
         raise GradeLoadError("--samples must be at least 1000")
@@ -121,6 +124,7 @@ def run_grade(args: argparse.Namespace) -> int:
                 time_limit=args.time_limit,
                 call_time_limit=CALL_TIME_LIMIT,
                 on_output=relay("  | "),
+                rules=MATERIALS,
                 user=args.student_user,
             ) as submission:
                 origin = library_answer(submission.module, name)
@@ -139,11 +143,20 @@ def run_grade(args: argparse.Namespace) -> int:
         print_verdict(f"{shown(args.target)}: FAILED: {shown_line(failure)}")
         return 1
     print_verdict(str(report))
+    outside = sandbox.not_for_credit()
+    if outside is not None:
+        print_verdict(f"NOT FOR CREDIT: {outside}")
     if args.plots and not report.passed:
-        written = write_plots(report, args.plots)
-        if written:
-            print(f"wrote {len(written)} chi-square plots to {Path(args.plots).resolve()}")
+        _write_plots(report, args.plots)
     return 0 if report.passed else 1
+
+
+def _write_plots(report, folder: str) -> None:
+    from ptlab.grading import write_plots
+
+    written = write_plots(report, folder)
+    if written:
+        print(f"wrote {len(written)} chi-square plots to {Path(folder).resolve()}")
 
 
 def parse_target(target: str, arguments: str = "{}") -> tuple[Path, str, dict]:

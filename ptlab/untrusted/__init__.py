@@ -2,11 +2,12 @@
 trusted code judges.
 
 The graders (``ptlab grade``, ``ptlab exercise check``) never import a student's file.
-A ``Submission`` imports it in a process of its own, started from a fork server, with
-resource limits and a session of its own, in a private folder, as an unprivileged user
-when the grader is root, unable to start programs, with ptlab's own answers turned into
-traps and an audit hook's rules; the grader's checks run in the grader's process and get
-``submission.module``, a stand-in whose functions run in the student's process::
+A ``Submission`` imports it in a fresh interpreter of its own, in a sandbox whose view of
+the file system holds Python, NumPy, the student's files and the chapter's kit (ptlab
+without the chapter's answers), in namespaces of its own (mount, pid, network), as an
+unprivileged user when the grader is root, with resource limits; the grader's checks run
+in the grader's process and get ``submission.module``, a stand-in whose functions run in
+the student's process::
 
     with ProcessGuard() as guard:
         with Submission("06_diffuse.py", guard, time_limit=30) as submission:
@@ -18,14 +19,13 @@ What crosses back is plain data only (JSON and ``.npy`` arrays, ``plain_data``),
 pickle; a reply that is late, missing or malformed ends the check (``SubmissionFailed``).
 The ``ProcessGuard`` keeps every process the student's code starts, even one in a session
 of its own, where it can be ended, and ends them all before the grader writes a result.
-What is left open, and what the operating system closes, is written down in
-docs/grading-security.md.
+What is left open is written down in docs/grading-security.md.
 
 Modules: ``submission`` (the grader's side), ``intake`` (the submission, read once, and its
-private folders), ``rules`` (what the grader asks of it), ``child`` (the student's process),
-``student_user`` (as whom it runs), ``no_exec`` (no programs), ``traps`` (ptlab's answers
-made unusable), ``confinement`` (the audit hook), ``fork_server`` (its preload),
-``proxies`` (stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on
+private folders), ``rules`` (what the grader asks of it), ``kit`` (ptlab without the
+chapter's answers), ``sandbox`` (the process's view and namespaces), ``child`` (the
+student's process), ``student_user`` (as whom it runs), ``confinement`` (the authorship
+hook), ``proxies`` (stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on
 pipes), ``shown`` (what the student controls, as the graders print it), ``processes`` (the
 subreaper), ``ownership`` (is a name the student's code or ptlab's?), ``copies`` (is a
 function a renamed copy of ptlab's?).

@@ -1,17 +1,13 @@
 """The process that imports a student's file and runs its functions for the grader.
 
-It is started by ``ptlab.untrusted.submission`` from a fork server, and everything in it
-is the student's to change: the grader trusts nothing it says beyond the schema of
-``ptlab.untrusted.plain_data``. It
+It is a fresh interpreter that ``ptlab.untrusted.submission`` starts in the student's
+sandbox (``ptlab.untrusted.sandbox``), where the only ptlab is the chapter's kit
+(``ptlab.untrusted.kit``); everything in it is the student's to change, and the grader
+trusts nothing it says beyond the schema of ``ptlab.untrusted.plain_data``. ``main``
 
-1. leaves the grader's session and process group, closes the fork server's pipes it
-   inherited and points its stdout and stderr at the grader's output pipe;
-2. becomes the student's user, when the grader is root, in a network of its own
-   (``ptlab.untrusted.student_user``); asks to be killed if the fork server goes; moves into
-   its private folder, with an environment of its own; lowers its resource limits
-   (``Limits``); cannot start programs from then on (``ptlab.untrusted.no_exec``, unless the
-   chapter's code must); sets the traps on ptlab's answers (``ptlab.untrusted.traps``) and
-   the rules of its audit hook (``ptlab.untrusted.confinement``);
+1. reads its setup (``ChildSetup``) from standard input, which the grader then closes;
+2. asks to be killed if its parent goes, makes itself non-dumpable, lowers its resource
+   limits (``Limits``) and adds the authorship hook (``ptlab.untrusted.confinement``);
 3. imports the student's file (``import_file``) and says whether that worked;
 4. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
    an object it holds (object 0 is the student's module), ``call`` a function or method,
@@ -39,10 +35,8 @@ import pickle
 import resource
 import signal
 import sys
-import tempfile
 import traceback
 from dataclasses import dataclass, fields, is_dataclass
-from multiprocessing.connection import Connection
 from pathlib import Path
 
 import numpy as np
@@ -52,12 +46,8 @@ from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import ChannelClosedError, Reader, write_message
 from ptlab.untrusted.confinement import Refused, confine
 from ptlab.untrusted.copies import Answers
-from ptlab.untrusted.no_exec import forbid_programs
 from ptlab.untrusted.ownership import MATERIAL_METHODS
 from ptlab.untrusted.plain_data import RECORDS, Encoder, UnsendableError
-from ptlab.untrusted.processes import make_undumpable
-from ptlab.untrusted.student_user import StudentUser, become, isolate_network
-from ptlab.untrusted.traps import set_traps
 
 #: The ptlab package: code under it is the library's own, not a student's.
 PTLAB = Path(__file__).resolve().parent.parent
@@ -66,17 +56,7 @@ PTLAB = Path(__file__).resolve().parent.parent
 INTERFACE = PTLAB / "materials" / "base.py"
 MAX_MESSAGE_TEXT = 2000
 PR_SET_PDEATHSIG = 1
-#: Environment variables the student's process keeps (the rest may hold the grader's secrets).
-KEPT_ENVIRONMENT = (
-    "PATH",
-    "LANG",
-    "LC_ALL",
-    "LC_CTYPE",
-    "TZ",
-    "OMP_NUM_THREADS",
-    "OPENBLAS_NUM_THREADS",
-    "MKL_NUM_THREADS",
-)
+PR_SET_DUMPABLE = 4
 
 
 class GradeLoadError(PtlabError):
@@ -103,25 +83,21 @@ class Limits:
 
 
 @dataclass(frozen=True)
-class Confinement:
-    """Where and as whom the student's process runs, and what it may not reach (the
-    grader's side makes it from the ``ptlab.untrusted.rules.Rules`` of the check).
+class ChildSetup:
+    """What the grader tells the student's process before it starts (on its standard input).
 
     Attributes:
-        folder: its private folder, which holds the submission's files.
-        user: the user it becomes (the grader is root), or None to stay the grader's.
-        traps: dotted names of ptlab's answers to trap (``ptlab.untrusted.traps``).
-        answers: fingerprints of the answers it may not compile (``ptlab.untrusted.copies``).
-        programs: it may start programs.
+        path: the student's file, in the process's private folder.
+        receive, send: the file descriptors of the grader's requests and of the replies.
         limits: its resource limits.
+        answers: fingerprints of the answers it may not compile (the authorship hook).
     """
 
-    folder: str
-    user: StudentUser | None
-    traps: tuple[str, ...]
-    answers: Answers
-    programs: bool
+    path: str
+    receive: int
+    send: int
     limits: Limits
+    answers: Answers
 
 
 def import_file(path: Path):
@@ -152,28 +128,29 @@ def import_file(path: Path):
     return module
 
 
-def serve(
-    path: str, receive: Connection, send: Connection, output: Connection, confinement: Confinement
-) -> None:
-    """The child's whole life: set up, import the student's file, answer until told to stop.
-
-    ``receive``, ``send`` and ``output`` are the pipes' ends (as ``Connection`` objects,
-    which the fork server passes to a new process; only their file descriptors are used).
-    """
-    _leave_the_grader(output.fileno(), keep={receive.fileno(), send.fileno()})
+def main() -> None:
+    """The child's whole life: set up, import the student's file, answer until told to stop
+    (``sandbox.BOOTSTRAP`` calls this once it is the student's user)."""
+    setup = pickle.load(sys.stdin.buffer)  # (the grader's, written before any student code)
+    if not isinstance(setup, ChildSetup):
+        raise SystemExit("the grader sent no setup")
+    null = os.open(os.devnull, os.O_RDONLY)
+    os.dup2(null, 0)
+    os.close(null)
+    for stream in (sys.stdout, sys.stderr):
+        if stream is not None:
+            stream.reconfigure(line_buffering=True)
     keep_freed_memory()  # every call's arrays arrive in new buffers: no page faults for them
-    # All of ptlab, before reading its files is refused: done already if the fork server was
-    # started for the graders, not if a render of this process started it first.
-    importlib.import_module("ptlab.untrusted.fork_server")
-    _confine(confinement)
-    requests = Reader(receive.fileno())
-    server = _Server(Path(path), send.fileno())
+    _set_up(setup)
+    requests = Reader(setup.receive)
+    server = _Server(Path(setup.path), setup.send)
+    pid = os.getpid()  # (as this process's own code sees it: in its pid namespace)
     try:
-        server.handles.append(import_file(Path(path)))
+        server.handles.append(import_file(Path(setup.path)))
     except GradeLoadError as error:
         server.send({"id": 0, "import_failed": str(error)})
         return
-    server.send({"id": 0, "ready": True})
+    server.send({"id": 0, "ready": True, "pid": pid})
     while True:
         try:
             parts = requests.read_message()
@@ -182,33 +159,14 @@ def serve(
         server.answer(parts)
 
 
-def _leave_the_grader(output_fd: int, keep: set[int]) -> None:
-    os.setsid()  # a session and process group of its own: the grader's terminal signals stay there
-    _close_inherited(keep | {output_fd})
-    null = os.open(os.devnull, os.O_RDONLY)
-    os.dup2(null, 0)
-    os.dup2(output_fd, 1)
-    os.dup2(output_fd, 2)
-    os.close(null)
-    for stream in (sys.stdout, sys.stderr):
-        if stream is not None:
-            stream.reconfigure(line_buffering=True)
-
-
-def _confine(confinement: Confinement) -> None:
-    """Step 2 of the module docstring, in an order that matters: the network and the user
-    are changed while the process is still root; the parent-death signal after the change
-    of user (which clears it); the limits when the user's process count is known; the
-    traps before the audit hook (setting them makes code objects, which the hook refuses)."""
-    if confinement.user is not None:
-        isolate_network()
-        become(confinement.user)
-    make_undumpable()  # (a change of user does it too, where fs.suid_dumpable is 0): two
-    # students graded at once as the same user cannot ptrace each other
+def _set_up(setup: ChildSetup) -> None:
+    """Step 2 of the module docstring: the parent-death signal and non-dumpability (a
+    change of user clears both, so after it), then the limits, then the hook."""
     if sys.platform.startswith("linux"):
-        ctypes.CDLL(None).prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
-    _move_into(Path(confinement.folder))
-    limits = confinement.limits
+        libc = ctypes.CDLL(None)
+        libc.prctl(PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
+        libc.prctl(PR_SET_DUMPABLE, 0, 0, 0, 0)
+    limits = setup.limits
     for name, value in (
         (resource.RLIMIT_CPU, limits.cpu_seconds),
         (resource.RLIMIT_AS, limits.memory_bytes),
@@ -217,50 +175,7 @@ def _confine(confinement: Confinement) -> None:
         (resource.RLIMIT_NPROC, _user_tasks() + limits.processes),
     ):
         _lower_limit(name, value)
-    if not confinement.programs:
-        forbid_programs()
-    set_traps(confinement.traps)
-    confine(Path(confinement.folder), confinement.answers, confinement.programs)
-
-
-def _move_into(folder: Path) -> None:
-    """Work in ``folder``: the current folder, HOME and the temporary folder (for this
-    process's own pools too), with only ``KEPT_ENVIRONMENT`` of the grader's variables."""
-    import multiprocessing
-
-    os.chdir(folder)
-    kept = {name: os.environ[name] for name in KEPT_ENVIRONMENT if name in os.environ}
-    os.environ.clear()
-    os.environ.update(kept, HOME=str(folder), TMPDIR=str(folder))
-    tempfile.tempdir = str(folder)
-    multiprocessing.current_process()._config.pop("tempdir", None)  # (the grader's, else)
-
-
-def _close_inherited(keep: set[int]) -> None:
-    """Close every file descriptor but stdin, stdout, stderr and ``keep``.
-
-    A process from multiprocessing's fork server inherits the grader's end of the fork
-    server's "alive" pipe (so that it could start processes through that server), and the
-    resource tracker's pipe. Written to, the first crashes the grader's fork server; the
-    second would have the grader's tracker remove shared memory of the student's naming
-    when the grader ends. Both go: the student's code gets a fork server and a tracker of
-    its own should it start processes (where the chapter lets it).
-    """
-    from multiprocessing import forkserver, resource_tracker
-
-    try:
-        open_fds = [int(name) for name in os.listdir("/proc/self/fd")]
-    except OSError:
-        open_fds = range(3, 1024)
-    for fd in open_fds:
-        if fd > 2 and fd not in keep:
-            with contextlib.suppress(OSError):
-                os.close(fd)
-    # Forget them: multiprocessing's own records of the inherited ends just closed.
-    forkserver._forkserver._forkserver_alive_fd = None
-    forkserver._forkserver._inherited_fds = None
-    resource_tracker._resource_tracker._fd = None
-    resource_tracker._resource_tracker._pid = None
+    confine(setup.answers)
 
 
 def _lower_limit(name: int, value: int) -> None:

@@ -62,7 +62,7 @@ class StudentError(Exception):
         if self.not_implemented:
             name = f"{self} " if str(self) else ""
             return f"{name}is not written yet: it still raises NotImplementedError ({place})"
-        if self.type_name == "LibraryAnswerCalled":  # a trap (ptlab.untrusted.traps)
+        if self.type_name == "NotInKitError":  # the library's answer, left out of the kit
             return f"{self} ({place})"
         return f"{self.type_name}: {self} ({place})"
 

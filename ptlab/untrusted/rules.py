@@ -1,17 +1,19 @@
-"""What a grader asks of a submission: which answers are ptlab's, what functions may do to
-their arguments, whether the student's code may start programs.
+"""What a grader asks of a submission: which answers are ptlab's, what its kit leaves out,
+what functions may do to their arguments.
 
 A chapter of the exercises (``ptlab.exercises.chapter.Chapter.rules``) or ``ptlab grade``
 makes ``Rules`` and gives them to ``ptlab.untrusted.Submission``:
 
-* ``answers``: ptlab's own answers to what the student writes. In the student's process
-  they are traps (``ptlab.untrusted.traps``), and a file holding a copy of them, names
+* ``answers``: ptlab's own answers to what the student writes. They are not in the
+  student's kit (``ptlab.untrusted.kit``), and a file holding a copy of them, names
   changed or not, is refused (``ptlab.untrusted.copies``).
+* ``also_left_out``: what else in ptlab computes the same thing another way (a module, a
+  class, a function); the kit leaves it out too. ``packages``: the installed packages the
+  student's process may import (``ptlab.untrusted.sandbox``).
 * ``arguments``: for each graded function, which of its arguments it writes (``film``: the
   grader takes those changes back) or may use as scratch space; any other argument is
   read-only, and changing it fails the check. Changes made anywhere else never reach the
   grader: it computes its references from arrays the student's code never had.
-* ``programs``: whether the student's code may start programs (``ptlab.untrusted.no_exec``).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ from functools import cached_property
 from pathlib import Path
 
 from ptlab.untrusted.copies import Answers, answers_of
+from ptlab.untrusted.sandbox import PACKAGES
 
 
 @dataclass(frozen=True)
@@ -52,7 +55,9 @@ class Rules:
         solution: the chapter's answer file, whose functions count as answers too.
         arguments: {function name: Arguments}; a function without an entry has its
             changes to its arguments dropped.
-        programs: the student's code may start programs (chapter 8's worker processes).
+        also_left_out: dotted names of the rest of ptlab that computes what the student
+            writes another way (a module, a class or a function), left out of the kit.
+        packages: the installed packages (import names) the student's code may import.
         library: the submission is ptlab's own answer file, graded as itself (tests and
             measurements of the graders use this; nothing a student runs can set it).
     """
@@ -60,7 +65,8 @@ class Rules:
     answers: tuple[str, ...] = ()
     solution: Path | None = None
     arguments: dict[str, Arguments] = field(default_factory=dict)
-    programs: bool = False
+    also_left_out: tuple[str, ...] = ()
+    packages: tuple[str, ...] = PACKAGES
     library: bool = False
 
     @cached_property
@@ -71,6 +77,6 @@ class Rules:
         return answers_of(self.answers, self.solution)
 
     @property
-    def traps(self) -> tuple[str, ...]:
-        """The answers to trap in the student's process."""
-        return () if self.library else self.answers
+    def left_out(self) -> tuple[str, ...]:
+        """What the student's kit leaves out: nothing for ptlab's own file."""
+        return () if self.library else self.answers + self.also_left_out

@@ -1,13 +1,12 @@
 """A student's file, imported in a process of its own, and the grader's end of the talk.
 
 ``Submission(path, ...)`` reads the submission once (``ptlab.untrusted.intake``: a syntax
-error is reported without running anything), starts a process from a fork server (a clean
-interpreter that has already imported NumPy and the whole of ptlab, so a check's process
-starts in milliseconds and inherits no Embree threads) in a private folder holding the
-submission's files, as the student's user when the grader is root, with ptlab's answers
-trapped and its rules kept (``ptlab.untrusted.child``); waits, at most the import's own
-time limit, for it to import the file; and gives the grader ``submission.module``, a
-stand-in for the student's module (``ptlab.untrusted.proxies``).
+error is reported without running anything), starts a fresh interpreter for it in the
+student's sandbox (``ptlab.untrusted.sandbox``: a private folder holding the submission's
+files, the chapter's kit in ptlab's place, namespaces of its own, the student's user when
+the grader is root; ``ptlab.untrusted.child``); waits, at most the import's own time
+limit, for it to import the file; and gives the grader ``submission.module``, a stand-in
+for the student's module (``ptlab.untrusted.proxies``).
 
 Every request is pickled to the student's process (which may unpickle the grader's data:
 it is the grader's), and every reply is plain data (``ptlab.untrusted.plain_data``), by a
@@ -24,14 +23,13 @@ Embree structure cannot be pickled and is rebuilt there from its triangles.
 
 from __future__ import annotations
 
+import contextlib
 import io
 import json
-import multiprocessing
-import multiprocessing.connection
-import multiprocessing.forkserver
 import os
 import pickle
 import signal
+import subprocess
 import sys
 import time
 from collections.abc import Callable
@@ -40,11 +38,13 @@ from pathlib import Path
 
 import numpy as np
 
+import ptlab.untrusted.sandbox as sandbox
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import Channel, ChannelClosedError, ChannelError, ChannelTimeoutError, enlarge
-from ptlab.untrusted.child import Confinement, Limits, serve
+from ptlab.untrusted.child import ChildSetup, Limits
 from ptlab.untrusted.copies import copies_in, describe_copies, is_a_copy
 from ptlab.untrusted.intake import RefusedSubmission, Taken, private_folder, remove_folder, take_in
+from ptlab.untrusted.kit import kit_for
 from ptlab.untrusted.ownership import library_answer as borrowed_answer
 from ptlab.untrusted.plain_data import RECORDS, Decoder, MalformedError
 from ptlab.untrusted.processes import LINUX, ProcessGuard, process_table
@@ -62,9 +62,17 @@ from ptlab.untrusted.proxies import (
 from ptlab.untrusted.rules import Arguments, Rules
 from ptlab.untrusted.student_user import student_user
 
-#: Imported once in the fork server: it makes the server non-dumpable and imports all of
-#: ptlab (``ptlab.untrusted.fork_server``).
-PRELOAD = ["ptlab.untrusted.fork_server"]
+#: Environment variables the student's process keeps (the rest may hold the grader's secrets).
+KEPT_ENVIRONMENT = (
+    "PATH",
+    "LANG",
+    "LC_ALL",
+    "LC_CTYPE",
+    "TZ",
+    "OMP_NUM_THREADS",
+    "OPENBLAS_NUM_THREADS",
+    "MKL_NUM_THREADS",
+)
 #: The largest reply, in bytes (a few renders' worth of arrays).
 MAX_REPLY = 1 << 30
 #: Seconds the import of the student's file may take, at most (less if the check's whole
@@ -161,7 +169,12 @@ class Submission:
         self.path = self.taken.path
         self.tree = self.taken.tree
         self.library_answers_allowed = self.rules.library
-        self.user = student_user(user)
+        #: Whether the student's code runs in namespaces of its own (``sandbox.missing``):
+        #: only then are its results for credit.
+        self.sandboxed = sandbox.missing() is None
+        # Without the sandbox the student's process could not read a Python under /root as
+        # another user: it stays the grader's (and the result is not for credit).
+        self.user = student_user(user) if self.sandboxed else None
         self.guard = guard
         self.time_limit = time_limit
         self.call_time_limit = call_time_limit
@@ -170,16 +183,16 @@ class Submission:
         self._shared: dict[int, tuple[int, object]] = {}
         self._shared_types = shared_types()
         self._special: tuple[int, frozenset[type]] | None = None
-        self.folder = private_folder(self.taken, self.user)
+        # The student's folder: in the sandbox, made in memory there; else one of the grader's.
+        self.folder = sandbox.FOLDER if self.sandboxed else private_folder(self.taken, self.user)
         try:
             self.process, self.channel = self._start(
                 on_output, limits or Limits(cpu_seconds=int(time_limit) + 10)
             )
         except BaseException:
-            remove_folder(self.folder)
+            self._remove_folder()
             raise
-        # From here: starting the fork server (the first time, a second or two) is not the
-        # student's time.
+        # From here (the interpreter's start and the kit's imports count: about 0.2 s).
         started = time.monotonic()
         self.deadline = started + time_limit
         self.module = RemoteModule(self)
@@ -189,37 +202,44 @@ class Submission:
 
     def _start(self, on_output, limits: Limits):
         keep_freed_memory()  # replies arrive in new buffers, as they do in the student's process
-        context = multiprocessing.get_context("forkserver")
-        context.set_forkserver_preload(PRELOAD)
-        multiprocessing.forkserver.ensure_running()
         self.guard.trust_current_children()
         request_r, request_w = os.pipe()
         reply_r, reply_w = os.pipe()
         output_r, output_w = os.pipe()
         for fd in (request_w, reply_w):
             enlarge(fd)
-        ends = [multiprocessing.connection.Connection(fd) for fd in (request_r, reply_w, output_w)]
-        confinement = Confinement(
-            folder=str(self.folder),
-            user=self.user,
-            traps=self.rules.traps,
-            answers=self.rules.fingerprints,
-            programs=self.rules.programs,
+        view = sandbox.View(kit_for(self.rules.left_out), self.taken.files, self.folder, self.rules.packages)
+        setup = ChildSetup(
+            path=str(self.folder / self.taken.name),
+            receive=request_r,
+            send=reply_w,
             limits=limits,
+            answers=self.rules.fingerprints,
         )
-        # Not daemonic, so that a student's code may start a pool of its own (chapter 8).
-        process = context.Process(
-            target=serve, args=(str(self.folder / self.taken.name), *ends, confinement), name="ptlab-student"
-        )
+        environment = {name: os.environ[name] for name in KEPT_ENVIRONMENT if name in os.environ}
+        scratch = "/tmp" if self.sandboxed else str(self.folder)  # (the sandbox's /tmp is its own)
+        environment.update(HOME=str(self.folder), TMPDIR=scratch)
+        cwd = "/" if self.sandboxed else self.folder
         try:
-            process.start()
+            process = sandbox.start(
+                view,
+                self.user,
+                pass_fds=(request_r, reply_w),
+                stdin=subprocess.PIPE,
+                stdout=output_w,
+                stderr=output_w,
+                cwd=cwd,
+                env=environment,
+                start_new_session=True,
+            )
         finally:
-            for end in ends:
-                end.close()
-        table = process_table() if LINUX else {}  # (one snapshot for both questions)
-        server = table.get(process.pid)
-        if server is not None and server != os.getpid():
-            self.guard.add_server(server, started=process.pid, table=table)
+            for fd in (request_r, reply_w, output_w):
+                os.close(fd)
+        try:
+            process.stdin.write(pickle.dumps(setup))
+            process.stdin.close()
+        except OSError:  # it ended at once: waiting for its import says how
+            pass
         return process, Channel(request_w, reply_r, output_r, on_output)
 
     @property
@@ -231,11 +251,15 @@ class Submission:
         """End the student's process and every process below it; close the pipes; remove
         its private folder."""
         self.guard.end(self.process.pid)
-        self.process.join(5)
+        with contextlib.suppress(subprocess.TimeoutExpired):
+            self.process.wait(5)
         self.channel.close()
-        if self.process.exitcode is not None:
-            self.process.close()
-        remove_folder(self.folder)
+        self._remove_folder()
+
+    def _remove_folder(self) -> None:
+        """Remove the student's folder where it is the grader's (the sandbox's ends with it)."""
+        if not self.sandboxed:
+            remove_folder(self.folder)
 
     def __enter__(self) -> Submission:
         return self
@@ -244,11 +268,19 @@ class Submission:
         self.close()
 
     def end_started_processes(self) -> None:
-        """End the processes the student's code started (its pools), not the process itself."""
+        """End the processes the student's code started (its pools), not the process itself
+        (in the sandbox, the student's Python is the grandchild of bubblewrap's process)."""
         if LINUX:
-            self.guard.end(
-                *[pid for pid, parent in process_table().items() if parent == self.pid], keep={self.pid}
-            )
+            table = process_table()
+            student = self.pid
+            chain = {student}
+            for _ in range(2 if self.sandboxed else 0):
+                children = [pid for pid, parent in table.items() if parent == student]
+                if len(children) != 1:
+                    return
+                student = children[0]
+                chain.add(student)
+            self.guard.end(*[pid for pid, parent in table.items() if parent == student], keep=chain)
 
     def import_by_file_name(self) -> RemoteModule | str:
         """The student's file imported again in its process, under its own name
@@ -278,9 +310,12 @@ class Submission:
         if "import_failed" in envelope and type(envelope["import_failed"]) is str:
             self.close()
             raise ImportFailed(_collapse_whitespace(envelope["import_failed"]))
-        if envelope.get("ready") is not True:
+        if envelope.get("ready") is not True or type(envelope.get("pid")) is not int:
             self.close()
             raise ImportFailed(f"importing {self.path.name}: the process sent a malformed reply")
+        #: The student's process's id as its own code sees it (in the sandbox, in a pid
+        #: namespace of its own), for checks of what that code reports of its processes.
+        self.own_pid: int = envelope["pid"]
 
     # -- requests ------------------------------------------------------------------------
 
@@ -416,8 +451,11 @@ class Submission:
             limit = self.time_limit if limit is None else limit
             message = f"took longer than {limit:g} s and was stopped (in {during})"
         elif kind == "ended":
-            self.process.join(1)
-            message = f"your code's process ended during {during} ({_exit_cause(self.process.exitcode)})"
+            try:
+                code = self.process.wait(1)
+            except subprocess.TimeoutExpired:
+                code = None
+            message = f"your code's process ended during {during} ({_exit_cause(code)})"
         else:
             message = f"your code's process sent a malformed reply during {during} ({detail})"
         self._failure = SubmissionFailed(message, kind, during)
@@ -642,6 +680,8 @@ def copied_answer(module: RemoteModule) -> str | None:
 def _exit_cause(code: int | None) -> str:
     if code is None:
         return "it stopped answering"
+    if code > 128 and code - 128 in signal.valid_signals():
+        code = 128 - code  # (bubblewrap reports its child's signal as 128 + the signal)
     if code >= 0:
         return f"it exited with code {code}: os._exit or sys.exit?"
     name = signal.Signals(-code).name if -code in signal.valid_signals() else f"signal {-code}"

@@ -17,6 +17,21 @@ def alive(pids) -> list[int]:
     return [pid for pid in pids if pid in running]
 
 
+def students_processes() -> list[int]:
+    """Every process on the machine that a student's process is or started (their command
+    line is the sandbox's ``BOOTSTRAP``: ``ptlab.untrusted.sandbox``). The pids a submission
+    prints are its pid namespace's, which name other processes out here."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if b"from ptlab.untrusted.child import main" in (entry / "cmdline").read_bytes():
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return sorted(set(found) & set(process_table(alive_only=True)))
+
+
 def printed_pids(output: str) -> list[int]:
     """The pids a hostile submission printed, from the grader's stderr (``    | 1234``)."""
     return [

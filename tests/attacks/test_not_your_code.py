@@ -21,24 +21,32 @@ from ptlab.exercises.grader import grade
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
-#: What the static reading of the file says, or the trap in the student's process.
+#: What the static reading of the file says.
 OWN_ANSWER = "ptlab's own answer"
+#: What the student's process says when the code calls an answer: its kit has none.
+NOT_IN_KIT = "is left out of the kit your code is graded with"
 
 
-@pytest.mark.parametrize("name", ["07_direct_light_wrapper.py", "07_alias.py"])
-def test_the_librarys_functions_under_other_names_are_traps(attack, name):
-    result = grade(chapter(7), attack(name, "07_path_tracing.py"), timeout_scale=0.5)
+def test_the_librarys_function_wrapped_under_the_students_name_is_found_in_the_text(attack):
+    result = grade(chapter(7), attack("07_direct_light_wrapper.py", "07_path_tracing.py"), timeout_scale=0.5)
     assert result.score == 0, result.table()
     messages = {r.name: r.message for r in result.results}
     assert f"{OWN_ANSWER} (ptlab.integrators.path.direct_light)" in messages["direct light"]
-    if name == "07_alias.py":  # every function is the library's, through the alias
-        assert f"{OWN_ANSWER} (ptlab.integrators.path.trace_paths)" in messages["Cornell box"]
-        assert f"{OWN_ANSWER} (ptlab.integrators.path.scatter)" in messages["indirect bounce"]
+
+
+def test_the_librarys_functions_under_an_alias_are_not_in_the_kit(attack):
+    result = grade(chapter(7), attack("07_alias.py", "07_path_tracing.py"), timeout_scale=0.5)
+    assert result.score == 0, result.table()
+    messages = {r.name: r.message for r in result.results}
+    assert f"ptlab.integrators.path.direct_light {NOT_IN_KIT}" in messages["direct light"]
+    assert f"ptlab.integrators.path.trace_paths {NOT_IN_KIT}" in messages["Cornell box"]
+    assert f"ptlab.integrators.path.scatter {NOT_IN_KIT}" in messages["indirect bounce"]
 
 
 def test_the_library_compiled_at_import_under_the_students_name_earns_nothing(attack):
+    # The source the file reads is the kit's, whose answers are stubs.
     result = grade(chapter(7), attack("07_compiled_from_source.py", "07_path_tracing.py"), timeout_scale=0.5)
-    assert_honest_failure(result, "reading ptlab's own code")
+    assert_honest_failure(result, NOT_IN_KIT)
 
 
 def _encoded_library(names: list[str]) -> str:
@@ -151,5 +159,6 @@ def test_the_librarys_answers_in_a_fresh_interpreter_are_out_of_reach(attack):
     result = grade(chapter(7), attack("07_pool_oracle.py", "07_path_tracing.py"), timeout_scale=0.5)
     assert result.score == 0, result.table()
     messages = {r.name: r.message for r in result.results}
-    assert "may not start programs" in messages["direct light"]
-    assert "may not start programs" in messages["Cornell box"]
+    # A fresh interpreter in the sandbox sees the same kit: no answers there either.
+    assert NOT_IN_KIT in messages["direct light"]
+    assert NOT_IN_KIT in messages["Cornell box"]

@@ -12,7 +12,9 @@ import json
 import os
 import subprocess
 import sys
+import tempfile
 import time
+from ast import literal_eval
 from pathlib import Path
 
 import pytest
@@ -22,6 +24,7 @@ from ptlab.exercises import chapter
 from ptlab.exercises.batch import find_work, safe_cell
 from ptlab.exercises.grader import grade
 from ptlab.untrusted.channel import Channel
+from ptlab.untrusted.sandbox import SCRATCH_BYTES, python_prefixes
 from ptlab.untrusted.shown import shown
 
 RIGHT_01 = Path(__file__).parent.parent / "exercises" / "01_right_own_code.py"
@@ -321,15 +324,42 @@ def test_the_students_process_sees_only_its_folder_and_the_installed_files(tmp_p
     path.write_bytes((SUBMISSIONS / "plumbing_looks_around.py").read_bytes())
     lines: list[str] = []
     grade(chapter(1), path, timeout_scale=0.2, on_output=lines.append)
-    told = {line.split(": ")[1]: line for line in lines if line.startswith("tell: ")}
-    for refused in (
-        "grader cmdline",
-        "list /proc",
-        "list /",
-        "scandir /tmp",
-        "iterdir /etc",
-        "read /etc/passwd",
-    ):
-        assert "refused: your code may" in told[refused], told
-    for allowed in ("own status", "own folder", "numpy's folder"):
-        assert told[allowed].endswith(": allowed"), told
+    told = {line.split(": ")[1]: line.split(": ", 2)[2] for line in lines if line.startswith("tell: ")}
+    assert told["processes"] == "[1, 2]", told  # bubblewrap's and its own: no grader
+    assert str(tmp_path) not in "\n".join(lines)  # no path of the grader's, in any command line
+    assert "pytest" not in told["command lines"]
+    # Its own /tmp, empty but for the folders above a Python that lies in /tmp (a virtual
+    # environment made there): its own folder is /home/student.
+    python_in_tmp = {prefix.split("/")[2] for prefix in python_prefixes() if prefix.startswith("/tmp/")}
+    assert set(literal_eval(told["/tmp"])) <= python_in_tmp
+    assert set(literal_eval(told["/etc"])) <= {"ld.so.cache", "localtime", "nsswitch.conf"}
+    assert told["/etc/passwd"] == "refused: FileNotFoundError"
+    python = {prefix.split("/")[1] for prefix in python_prefixes()}
+    assert set(literal_eval(told["/"])) <= {"bin", "dev", "etc", "home", "lib", "lib64", "proc", "sbin"} | {
+        "tmp",
+        "usr",
+        "var",
+        *python,
+    }
+    assert "01_cameras.py" in literal_eval(told["own folder"])
+    assert int(told["own status"]) > 0
+    assert int(told["numpy's folder"]) > 0
+
+
+@pytest.mark.subprocess
+def test_filling_every_writable_place_stops_at_its_size_and_leaves_nothing(tmp_path):
+    before = set(Path(tempfile.gettempdir()).glob("ptlab-student-*"))
+    path = tmp_path / "01_cameras.py"
+    path.write_bytes((SUBMISSIONS / "plumbing_fills_the_disk.py").read_bytes())
+    lines: list[str] = []
+    result = grade(chapter(1), path, timeout_scale=0.2, on_output=lines.append)
+    assert result.score == 0
+    filled = [line for line in lines if line.startswith("filled ")]
+    assert filled, lines
+    for line in filled:  # each place is a file system in memory of SCRATCH_BYTES: then ENOSPC
+        megabytes, errno = int(line.split(": ")[1].split(" ")[0]), int(line.rsplit(" ", 1)[1])
+        assert megabytes <= SCRATCH_BYTES >> 20
+        assert errno == 28, line
+    # Nothing of it on the grader's disk (a folder of another grading may come and go).
+    new = set(Path(tempfile.gettempdir()).glob("ptlab-student-*")) - before
+    assert not [folder for folder in new if (folder / "fill0").exists()]

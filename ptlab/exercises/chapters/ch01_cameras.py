@@ -236,6 +236,8 @@ CHAPTER = Chapter(
     title="Cameras and primary rays",
     functions=("generate_rays",),
     answers=("ptlab.camera.generate_rays",),
+    # The render's camera samples are primary rays too.
+    also_left_out=("ptlab.rendering.jobs.CameraSamples", "ptlab.inspector"),
     checks=(
         ChapterCheck("centre ray", 2, check_centre_ray, timeout=30),
         # Any constant unit direction has length 1, and a constant one up and to the left

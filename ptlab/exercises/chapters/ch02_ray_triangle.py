@@ -348,6 +348,9 @@ CHAPTER = Chapter(
     title="Ray-triangle intersection (Möller–Trumbore)",
     functions=("ray_triangle",),
     answers=("ptlab.accel.triangle.ray_triangle",),
+    # Embree answers a ray-triangle query, and so does a BVH of one triangle.
+    also_left_out=("ptlab.accel.embree", "ptlab.accel.numpy_bvh.NumpyBVH"),
+    packages=("numpy", "scipy"),
     checks=(
         # Hits and distances first (t), the barycentrics (u, v) apart: an answer without
         # them still earns the hit checks. Every ray missing gets parallel rays right, and a

@@ -602,6 +602,9 @@ CHAPTER = Chapter(
         "ptlab.accel.numpy_bvh.best_split",
         "ptlab.accel.numpy_bvh.child_order",
     ),
+    # The library's BVH builds and traverses a tree whole, and Embree is one.
+    also_left_out=("ptlab.accel.numpy_bvh", "ptlab.accel.embree"),
+    packages=("numpy", "scipy"),
     checks=(
         ChapterCheck("SAH costs", 2, check_split_costs, timeout=30),
         ChapterCheck("empty sides", 1, check_empty_sides, timeout=30),

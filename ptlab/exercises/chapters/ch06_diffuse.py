@@ -354,6 +354,16 @@ CHAPTER = Chapter(
     title="Monte Carlo and the diffuse material",
     functions=("Lambertian.eval", "Lambertian.pdf", "Lambertian.sample"),
     answers=("ptlab.materials.Diffuse",),
+    # The microfacet material with ks = 0 is a diffuse one, and the hemisphere warps are
+    # half of sample and pdf.
+    also_left_out=(
+        "ptlab.materials.microfacet",
+        "ptlab.sampling.cosine_hemisphere",
+        "ptlab.sampling.cosine_hemisphere_around",
+        "ptlab.sampling.uniform_hemisphere",
+        "ptlab.sampling.uniform_hemisphere_around",
+        "ptlab.exercises.given.FlakyDiffuse",
+    ),
     checks=(
         ChapterCheck("eval", 2, check_eval, timeout=30),
         ChapterCheck("sample", 1, check_sample, timeout=30),

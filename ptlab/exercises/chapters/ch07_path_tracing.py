@@ -48,6 +48,7 @@ from ptlab.exercises.chapter import (
     require,
 )
 from ptlab.exercises.finite import at_pixel, at_row, channel_name, require_finite
+from ptlab.exercises.given import FlakyDiffuse
 from ptlab.exercises.messages import aside, check_name, text
 
 if TYPE_CHECKING:
@@ -314,38 +315,6 @@ def _check_paths(paths, count: int):
     return paths
 
 
-class _FlakyDiffuse:
-    """A Lambertian material whose ``sample`` fails for a quarter of the u (u[:, 0] >= 0.75):
-    it returns -n there, below the surface, where eval and pdf are 0 (the material contract
-    allows this; microfacet sampling does it at grazing angles)."""
-
-    emission = None
-    is_delta = False
-
-    def eval(self, wo, wi, n):
-        from ptlab.vectors import dot
-
-        above = (dot(wo, n) > 0) & (dot(wi, n) > 0)
-        return np.outer(above * (0.7 / math.pi), np.ones(3)).astype(wi.dtype)
-
-    def pdf(self, wo, wi, n):
-        from ptlab.vectors import dot
-
-        cos_theta = dot(wi, n)
-        return np.where((dot(wo, n) > 0) & (cos_theta > 0), cos_theta / math.pi, 0).astype(wi.dtype)
-
-    def sample(self, wo, n, u):
-        from ptlab.sampling import cosine_hemisphere_around
-
-        wi = cosine_hemisphere_around(n, u.astype(n.dtype))
-        return np.where((u[:, 0] >= 0.75)[:, None], -n, wi)
-
-    def sample_weight(self, wo, n, u, front=None):
-        from ptlab.materials.base import Material
-
-        return Material.sample_weight(self, wo, n, u)
-
-
 def _check_pdf_near_zero(scatter) -> None:
     from ptlab.integrators.wavefront import Paths, SurfaceHit
 
@@ -367,7 +336,7 @@ def _check_pdf_near_zero(scatter) -> None:
         wo=wo,
         front=np.ones(count, dtype=bool),
         offset=np.full(count, 1e-4, np.float32),
-        materials=[(None, _FlakyDiffuse())],
+        materials=[(None, FlakyDiffuse())],
         delta=np.zeros(count, dtype=bool),
         t=np.ones(count, np.float32),
         paths=Paths(
@@ -668,6 +637,15 @@ CHAPTER = Chapter(
     answers=tuple(
         f"ptlab.integrators.path.{name}"
         for name in ("direct_light", "russian_roulette", "scatter", "trace_paths")
+    ),
+    # The rest of the library's path loop, Whitted's direct light, and the inspector's
+    # replay of the loop.
+    also_left_out=(
+        "ptlab.integrators.path.add_emission",
+        "ptlab.integrators.path.sampled_lights",
+        "ptlab.integrators.path.add_sky",
+        "ptlab.integrators.whitted",
+        "ptlab.inspector",
     ),
     writes={"direct_light": ("film",), "trace_paths": ("film",)},
     scratch={"russian_roulette": ("throughput",), "scatter": ("hit",), "trace_paths": ("paths",)},

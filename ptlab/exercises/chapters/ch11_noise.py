@@ -383,6 +383,8 @@ CHAPTER = Chapter(
         "ptlab.rendering.adaptive.reference_estimate",
         "ptlab.rendering.adaptive.relative_variance",
     ),
+    # The rest of the noise target: its estimate and its pooling.
+    also_left_out=("ptlab.rendering.adaptive",),
     checks=(
         ChapterCheck("variance of the mean", 3, check_variance_of_mean, timeout=30),
         ChapterCheck("relative error", 2, check_relative, timeout=30),

@@ -23,6 +23,7 @@ MESSAGES: dict[str, str] = {
     "table.total": "total",
     "table.full_marks": "full marks  ",
     "table.seed": "{full_marks}grading seed {seed} (--grading-seed {seed} grades again with the same inputs)",
+    "table.not_for_credit": "NOT FOR CREDIT: {why}",
     # The grader (grader.py).
     "grader.overall_limit": "not run: grading reached its overall limit of {seconds:.0f} s",
     "grader.not_run": "not run: {message}",

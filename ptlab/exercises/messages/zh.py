@@ -21,6 +21,7 @@ MESSAGES: dict[str, str] = {
     "table.total": "总分",
     "table.full_marks": "满分  ",
     "table.seed": "{full_marks}评分种子 {seed}（--grading-seed {seed} 用同样的输入再评一次）",
+    "table.not_for_credit": "不计入成绩：{why}",
     # The grader (grader.py).
     "grader.overall_limit": "未运行：评分已达总时限 {seconds:.0f} 秒",
     "grader.not_run": "未运行：{message}",

@@ -10,7 +10,14 @@ import math
 
 import numpy as np
 
-from ptlab.sampling import cosine_hemisphere_around
+from ptlab.sampling import to_world
+
+
+def cosine_hemisphere_around(n, u):
+    """Cosine-weighted directions around n (Malley's method), written as a student would."""
+    r, phi = np.sqrt(u[:, 0]), 2 * math.pi * u[:, 1]
+    local = np.stack([r * np.cos(phi), r * np.sin(phi), np.sqrt(np.maximum(0.0, 1 - u[:, 0]))], axis=1)
+    return to_world(local, n)
 
 
 def _brightness(rows):
