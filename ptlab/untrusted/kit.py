@@ -27,13 +27,15 @@ import ast
 import atexit
 import compileall
 import hashlib
-import importlib
 import os
 import py_compile
 import shutil
 import tempfile
 import threading
+import types
 from pathlib import Path
+
+from ptlab.untrusted.copies import resolve
 
 #: The package whose kit is made.
 PTLAB = Path(__file__).resolve().parent.parent
@@ -79,24 +81,18 @@ def defined_as(name: str) -> str:
     ``ptlab.materials.diffuse.Diffuse``); a module is its own name.
 
     Raises ``KitError`` when ptlab has no such thing."""
-    parts = name.split(".")
-    for split in range(len(parts), 0, -1):
-        try:
-            value = importlib.import_module(".".join(parts[:split]))
-        except ImportError:
-            continue
-        try:
-            for attribute in parts[split:]:
-                value = getattr(value, attribute)
-        except AttributeError:
-            break
-        if split == len(parts):
-            return value.__name__
-        module, qualname = getattr(value, "__module__", None), getattr(value, "__qualname__", None)
-        if isinstance(module, str) and isinstance(qualname, str):
-            return f"{module}.{qualname}"
-        break
-    raise KitError(f"a chapter leaves out {name}, which is not a module, class or function of ptlab")
+    try:
+        value = resolve(name)
+    except (ImportError, AttributeError):
+        raise KitError(
+            f"a chapter leaves out {name}, which is not a module, class or function of ptlab"
+        ) from None
+    if isinstance(value, types.ModuleType):
+        return value.__name__
+    module, qualname = getattr(value, "__module__", None), getattr(value, "__qualname__", None)
+    if not (isinstance(module, str) and isinstance(qualname, str)):
+        raise KitError(f"a chapter leaves out {name}, which is not a module, class or function of ptlab")
+    return f"{module}.{qualname}"
 
 
 def _kits_folder() -> Path:
