@@ -170,6 +170,25 @@ def _close_pool(pool: ProcessPoolExecutor, kill: bool) -> None:
         pool.shutdown(wait=True, cancel_futures=True)
 
 
+def _kill_workers(pool: ProcessPoolExecutor) -> None:
+    """End the pool's workers at once, rather than after their jobs (they ignore Ctrl-C,
+    which is the main process's to handle). ``_processes`` is the pool's own record of them.
+
+    A worker killed while it writes a result leaves half a message in the results pipe, and
+    the pool's thread, reading it, would wait for the rest forever (and the shutdown with
+    it). Once the workers are gone, this process's end of the pipe is its last writer:
+    closing it turns that wait into an end of file, which the pool's thread takes for a
+    broken pool, as it is."""
+    processes = list((getattr(pool, "_processes", None) or {}).values())
+    for process in processes:
+        process.kill()
+    for process in processes:
+        process.join(timeout=5)
+    results = getattr(pool, "_result_queue", None)
+    if results is not None and not any(process.is_alive() for process in processes):
+        results._writer.close()
+
+
 #: The signals whose Python handlers ``signals_held`` holds back.
 HELD_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -197,11 +216,3 @@ def signals_held() -> Iterator[None]:
             signal.signal(signum, handler)
         for number in dict.fromkeys(held):
             signal.raise_signal(number)
-
-
-def _kill_workers(pool: ProcessPoolExecutor) -> None:
-    """End the pool's workers at once, rather than after their jobs (they ignore Ctrl-C,
-    which is the main process's to handle). ``_processes`` is the pool's own record of them."""
-    processes = getattr(pool, "_processes", None) or {}
-    for process in list(processes.values()):
-        process.kill()
