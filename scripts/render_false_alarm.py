@@ -13,9 +13,11 @@ plugged in directly in this process. It prints, per check, how many comparisons 
 (``compare_renders`` or ``furnace_verdict``, both sides of the noise test included) with the
 rate's 95% Clopper-Pearson interval, and with ``--variance-ratios`` the largest and the
 smallest variance ratio (right answer / library, the half-th largest and smallest over the
-regions, as ``renders.noise_verdict`` takes them) over the trials. ``--constant`` also
+regions, as ``renders.noise_test`` takes them) over the trials. ``--constant`` also
 grades, in every trial, a converged answer (the library's passes' mean in every pass) and
-counts how often the too-clean test catches it (it must be every time).
+counts how often the too-clean test catches it (it must be every time); ``--wrong`` grades
+the wrong answers of ``WRONG`` (tests/exercises/07_wrong_furnace_fake.py, the furnace's
+analytic value with a render's noise) and counts how often they fail (every time too).
 """
 
 from __future__ import annotations
@@ -38,7 +40,8 @@ from ptlab.exercises.chapter import (
     grading_seed_for,
     new_grading_seed,
 )
-from ptlab.exercises.renders import compare_renders, regions_of
+from ptlab.exercises.chapters.ch07_path_tracing import PATTERNED_FALSE_ALARM
+from ptlab.exercises.renders import FALSE_ALARM, compare_renders, noise_test, regions_of
 
 RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
 
@@ -104,6 +107,19 @@ def ch07_furnace() -> tuple:
     return render
 
 
+def ch07_patterned(answer: str = "07_right_own_random") -> Callable:
+    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+
+    module = right_answer(answer)
+
+    def render():  # (as check_furnace makes them)
+        seed = grading_seed_for(ch07.PATTERNED_SEED)
+        student = ch07.patterned_furnace_passes(module.trace_paths, seed)
+        return student, ch07.patterned_furnace_passes(seed=seed), "patterned"
+
+    return render
+
+
 def ch07_roulette() -> tuple:
     from ptlab.exercises.chapters import ch07_path_tracing as ch07
 
@@ -135,6 +151,7 @@ CHECKS = {
     "ch06 render, uniform sampling": lambda: ch06("06_right_uniform"),
     "ch06 render, float32 class": lambda: ch06("06_right_plain_class_float32"),
     "ch07 white furnace": ch07_furnace,
+    "ch07 patterned furnace": ch07_patterned,
     "ch07 roulette": ch07_roulette,
     "ch07 Cornell box": ch07_cornell,
     "ch09 render, Walter sampling": lambda: ch09("ggx"),
@@ -142,19 +159,18 @@ CHECKS = {
 }
 
 
+#: The kinds of check that compare two renders (``compare_renders``), with their mean
+#: tests' false-alarm rates; the others are chapter 7's furnace (``furnace_verdict``).
+COMPARED = {"regions": FALSE_ALARM, "patterned": PATTERNED_FALSE_ALARM}
+#: Wrong answers that a check must fail in every trial (``--wrong``): a file of
+#: tests/exercises, rendered by the check as the right answer is.
+WRONG = {"ch07 patterned furnace": lambda: ch07_patterned("07_wrong_furnace_fake")}
+
+
 def regions(images: np.ndarray, kind) -> np.ndarray:
     """The per-pass region values the noise test compares: colours summed, or the red
     (the furnace's)."""
-    return regions_of(images).sum(axis=-1) if kind == "regions" else regions_of(images)[..., 0]
-
-
-def ratios(student: np.ndarray, library: np.ndarray) -> tuple[float, float]:
-    """(half-th largest, half-th smallest) variance ratio over the regions, as
-    ``noise_verdict`` takes them (with its floor)."""
-    floor = (1e-4 * max(float(np.abs(library).mean()), 1e-12)) ** 2
-    ratio = np.maximum(student.var(axis=0, ddof=1), floor) / np.maximum(library.var(axis=0, ddof=1), floor)
-    ordered, half = np.sort(ratio, axis=None), (ratio.size + 1) // 2
-    return float(ordered[-half]), float(ordered[half - 1])
+    return regions_of(images).sum(axis=-1) if kind in COMPARED else regions_of(images)[..., 0]
 
 
 def verdict(student: np.ndarray, library: np.ndarray, kind) -> str | None:
@@ -162,8 +178,8 @@ def verdict(student: np.ndarray, library: np.ndarray, kind) -> str | None:
     from ptlab.exercises.chapters.ch07_path_tracing import furnace_verdict
 
     try:
-        if kind == "regions":
-            compare_renders(student, library, "the render")
+        if kind in COMPARED:
+            compare_renders(student, library, "the render", false_alarm=COMPARED[kind])
         else:
             furnace_verdict(student, library, kind, "the furnace")
     except CheckFailed as failure:
@@ -177,6 +193,21 @@ def clopper_pearson(failures: int, trials: int) -> tuple[float, float]:
     return float(low), float(high)
 
 
+def trial(render: Callable, wrong: Callable | None, constant: bool) -> dict:
+    """One grading seed of a check: the right answer's verdict (None: passed) and variance
+    ratios, and whether a converged answer (``constant``) and the ``wrong`` one are caught."""
+    student, library, kind = render()
+    noise = noise_test(regions(student, kind), regions(library, kind))
+    outcome = dict(message=verdict(student, library, kind), high=noise.high, low=noise.low)
+    if constant:
+        converged = np.broadcast_to(library.mean(axis=0), library.shape).copy()
+        message = verdict(converged, library, kind)
+        outcome["converged caught"] = message is not None and "too clean" in message
+    if wrong is not None:
+        outcome["wrong caught"] = verdict(*wrong()) is not None
+    return outcome
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=40, help="grading seeds (trials)")
@@ -184,34 +215,32 @@ def main() -> None:
     parser.add_argument("--check", action="append", help="only these checks (repeatable)")
     parser.add_argument("--variance-ratios", action="store_true", help="print the variance ratios")
     parser.add_argument("--constant", action="store_true", help="also grade a converged answer")
+    parser.add_argument("--wrong", action="store_true", help="also grade the checks' wrong answers (WRONG)")
     args = parser.parse_args()
     chosen = {name: make() for name, make in CHECKS.items() if not args.check or name in args.check}
-    failures = dict.fromkeys(chosen, 0)
-    caught = dict.fromkeys(chosen, 0)
-    largest = dict.fromkeys(chosen, 0.0)
-    smallest = dict.fromkeys(chosen, np.inf)
-    for trial in range(args.seeds):
-        seed = new_grading_seed() if args.first_seed is None else args.first_seed + trial
+    wrong = {name: WRONG[name]() for name in chosen if args.wrong and name in WRONG}
+    outcomes: dict[str, list[dict]] = {name: [] for name in chosen}
+    for number in range(args.seeds):
+        seed = new_grading_seed() if args.first_seed is None else args.first_seed + number
         with grading_seed(seed):
             for name, render in chosen.items():
-                student, library, kind = render()
-                high, low = ratios(regions(student, kind), regions(library, kind))
-                largest[name], smallest[name] = max(largest[name], high), min(smallest[name], low)
-                message = verdict(student, library, kind)
-                if message is not None:
-                    failures[name] += 1
-                    print(f"grading seed {seed}, {name}: FAIL {message}", flush=True)
-                if args.constant:
-                    converged = np.broadcast_to(library.mean(axis=0), library.shape).copy()
-                    message = verdict(converged, library, kind)
-                    caught[name] += message is not None and "too clean" in message
-    for name in chosen:
-        low, high = clopper_pearson(failures[name], args.seeds)
-        line = f"{name}: {failures[name]} of {args.seeds} failed (95%: {low:.3g} to {high:.3g})"
+                outcome = trial(render, wrong.get(name), args.constant)
+                outcomes[name].append(outcome)
+                if outcome["message"] is not None:
+                    print(f"grading seed {seed}, {name}: FAIL {outcome['message']}", flush=True)
+    for name, found in outcomes.items():
+        failures = sum(outcome["message"] is not None for outcome in found)
+        low, high = clopper_pearson(failures, args.seeds)
+        line = f"{name}: {failures} of {args.seeds} failed (95%: {low:.3g} to {high:.3g})"
         if args.variance_ratios:
-            line += f"; variance ratio at most {largest[name]:.3g}, at least {smallest[name]:.3g}"
+            largest, smallest = max(o["high"] for o in found), min(o["low"] for o in found)
+            line += f"; variance ratio at most {largest:.3g}, at least {smallest:.3g}"
         if args.constant:
-            line += f"; a converged answer caught as too clean {caught[name]} of {args.seeds} times"
+            caught = sum(o["converged caught"] for o in found)
+            line += f"; a converged answer caught as too clean {caught} of {args.seeds} times"
+        if name in wrong:
+            caught = sum(o["wrong caught"] for o in found)
+            line += f"; the wrong answer failed {caught} of {args.seeds} times"
         print(line, flush=True)
 
 

@@ -5,6 +5,7 @@ are in ``tests/attacks/``.)"""
 from __future__ import annotations
 
 import ast
+import contextlib
 import json
 import os
 import subprocess
@@ -308,6 +309,463 @@ def test_functions_that_are_ptlabs_own(source, origin):
 )
 def test_materials_that_are_ptlabs_own(source, origin):
     assert library_answer(ast.parse(source), "L") == origin
+
+
+# -- code the grader can read (ptlab.untrusted.readable) ------------------------------------
+
+ENCODED = "import base64, zlib\nexec(zlib.decompress(base64.b64decode(b'eJwDAAAAAAE=')))\n"
+GRADED = "07_path_tracing.py"
+
+
+def _taken(files: dict[str, str] | str, graded: str = GRADED):
+    """A submission as ``take_in`` reads it, from texts (one text: the graded file alone)."""
+    from ptlab.untrusted import Taken
+
+    files = {graded: files} if isinstance(files, str) else files
+    data = {name: text.encode() for name, text in files.items()}
+    return Taken(Path(graded), data, "", ast.parse(data[graded]))
+
+
+def _unreadable(files: dict[str, str] | str, name: str = "trace_paths"):
+    from ptlab.untrusted.readable import unreadable_in_text
+
+    return unreadable_in_text(_taken(files), name)
+
+
+#: Texts whose graded function reaches what a readable file does not use: (text, reason,
+#: what the message names). Each spelling of code made from data, or of an object reached
+#: by a name built at run time, that the allowlist leaves out (ptlab.untrusted.uses).
+UNREADABLE_TEXTS = {
+    "encoded": (ENCODED, "unreadable.at_import", "exec"),
+    "encoded beside a def": (
+        ENCODED + "def trace_paths(film):\n    return film",
+        "unreadable.at_import",
+        "exec",
+    ),
+    "marshal": (
+        "import marshal, types\ntrace_paths = types.FunctionType(marshal.loads(b''), {})",
+        "unreadable.at_import",
+        "types.FunctionType",
+    ),
+    "marshal imported by name": (
+        "from marshal import loads\ndef trace_paths(b):\n    return loads(b)",
+        "unreadable.runs_made_code",
+        "marshal",
+    ),
+    "__import__ of a constant": (
+        "_m = __import__('marshal')\ndef trace_paths(film):\n    return film",
+        "unreadable.at_import",
+        "__import__",
+    ),
+    "function type of a lambda": (
+        "_f = type(lambda: 0)\ndef trace_paths(film):\n    return film",
+        "unreadable.at_import",
+        "type(...)",
+    ),
+    "function type called": (
+        "def trace_paths(f, g):\n    return type(f)(g, {})",
+        "unreadable.runs_made_code",
+        "type(...)",
+    ),
+    "class of a function called": (
+        "def trace_paths(f, g):\n    return f.__class__(g, {})",
+        "unreadable.runs_made_code",
+        ".__class__",
+    ),
+    "type with three arguments": (
+        "def trace_paths(d):\n    return type('T', (), d)",
+        "unreadable.runs_made_code",
+        "type(name, bases, namespace)",
+    ),
+    "function type through typing": (
+        "import typing\ndef trace_paths(c):\n    return typing.types.FunctionType(c, {})",
+        "unreadable.runs_made_code",
+        "types.FunctionType",
+    ),
+    "globals looked up": (
+        "def trace_paths(film):\n    return globals()['_h'](film)",
+        "unreadable.runs_made_code",
+        "globals()",
+    ),
+    "globals updated": (
+        "globals().update({'_h': print})\ndef trace_paths(film):\n    return film",
+        "unreadable.at_import",
+        "globals()",
+    ),
+    "vars looked up": (
+        "def trace_paths(o, k):\n    return vars(o)[k]",
+        "unreadable.runs_made_code",
+        "vars()",
+    ),
+    "sys.modules": (
+        "import sys\ndef trace_paths(film):\n    return sys.modules['builtins']",
+        "unreadable.runs_made_code",
+        "sys.modules",
+    ),
+    "sys through another module": (
+        "import dataclasses\ndef trace_paths(film):\n    return dataclasses.sys.modules",
+        "unreadable.runs_made_code",
+        "sys.modules",
+    ),
+    "settrace": (
+        "import sys\nsys.settrace(None)\ndef trace_paths(film):\n    return film",
+        "unreadable.at_import",
+        ".settrace",
+    ),
+    "gc's objects": (
+        "import gc\ndef trace_paths(film):\n    return gc.get_objects()",
+        "unreadable.runs_made_code",
+        "gc.get_objects",
+    ),
+    "getattr of a built name": (
+        "def trace_paths(o):\n    return getattr(o, 'ex' + 'ec')",
+        "unreadable.runs_made_code",
+        "getattr() with a name built at run time",
+    ),
+    "getattr of a dunder": (
+        "def trace_paths(f):\n    return getattr(f, '__globals__')",
+        "unreadable.runs_made_code",
+        "getattr(..., '__globals__')",
+    ),
+    "getattr handed on": (
+        "import functools\ndef trace_paths(o):\n    return functools.reduce(getattr, ['a'], o)",
+        "unreadable.runs_made_code",
+        "getattr",
+    ),
+    "getattr of a module's attribute": (
+        "import sys\ndef trace_paths(film):\n    return getattr(sys, 'modules')",
+        "unreadable.runs_made_code",
+        "sys.modules",
+    ),
+    "builtins": (
+        "def trace_paths(f):\n    return __builtins__",
+        "unreadable.runs_made_code",
+        "__builtins__",
+    ),
+    "a function's globals": (
+        "def trace_paths(f):\n    return f.__globals__['x']",
+        "unreadable.runs_made_code",
+        ".__globals__",
+    ),
+    "a frame": (
+        "def trace_paths(e):\n    return e.tb_frame.f_back",
+        "unreadable.runs_made_code",
+        ".f_back",
+    ),
+    "exec as a local of the module": (
+        "run = exec\ndef trace_paths(s):\n    return run(s)",
+        "unreadable.at_import",
+        "exec",
+    ),
+    "exec bound in a class body": (
+        "class _K:\n    exec = exec\ndef trace_paths(s):\n    return _K.exec(s)",
+        "unreadable.at_import",
+        "exec",
+    ),
+    "helper with eval": (
+        "def _run(s):\n    return eval(s)\ndef trace_paths(s):\n    return _run(s)",
+        "unreadable.runs_made_code",
+        "eval",
+    ),
+    "pickle in npy": (
+        "import numpy as np\ndef trace_paths(f):\n    return np.load(f, allow_pickle=True)",
+        "unreadable.runs_made_code",
+        "allow_pickle",
+    ),
+    "numpy's ctypes": (
+        "import numpy as np\ndef trace_paths(a):\n    return np.ctypeslib.as_array(a)",
+        "unreadable.runs_made_code",
+        ".ctypeslib",
+    ),
+    "numpy handed on": (
+        "import numpy as np\ndef trace_paths(f, xp=np):\n    return xp.ctypeslib",
+        "unreadable.at_import",
+        "numpy as a value",
+    ),
+    "the grader's end in the kit": (
+        "from ptlab.untrusted import child\ndef trace_paths(f):\n    return child.code_digest(f)",
+        "unreadable.runs_made_code",
+        "ptlab.untrusted",
+    ),
+    "find_spec kept": (
+        "import importlib.util\n_spec = importlib.util.find_spec('numba')\ndef trace_paths(f):\n    return f",
+        "unreadable.at_import",
+        "importlib.util.find_spec",
+    ),
+    "importlib": (
+        "import importlib\ndef trace_paths(f):\n    return importlib.import_module(f)",
+        "unreadable.runs_made_code",
+        "importlib.import_module",
+    ),
+    "own code swapped in": (
+        "def _a(f):\n    return f\ndef trace_paths(f):\n    pass\ntrace_paths.__code__ = _a.__code__",
+        "unreadable.at_import",
+        ".__code__",
+    ),
+    "imported": ("from fastpath import trace_paths", "unreadable.imported", None),
+    "module attribute": ("import fastpath\ntrace_paths = fastpath.trace", "unreadable.imported", None),
+    "bound in globals()": ("globals()['trace_paths'] = print", "unreadable.at_import", "globals()"),
+    "the file's encoding": (
+        "# coding: utf-7\ndef trace_paths(film):\n    return film",
+        "unreadable.encoding",
+        None,
+    ),
+    "reordered on screen": (
+        "def trace_paths(film):\n    return film  # \u202e ok\n",
+        "unreadable.reordered",
+        None,
+    ),
+}
+
+#: Texts whose graded function a readable file may hold: what honest answers do.
+READABLE_TEXTS = {
+    "own": "def trace_paths(film):\n    return film",
+    # exec and eval where no graded function reaches them and nothing runs them at import
+    "eval unreached": "def _debug(expression):\n    print(eval(expression))\n"
+    "def trace_paths(film):\n    return film\nif __name__ == '__main__':\n    exec('print(1)')",
+    "local named eval": "def trace_paths(m, x):\n    eval = m.eval\n    return eval(x)",
+    "parameter named compile": "def trace_paths(compile, x):\n    return compile(x)",
+    "type test": "import types\ndef trace_paths(eta):\n"
+    "    return eta() if isinstance(eta, types.FunctionType) else eta",
+    "type compared and named": "def trace_paths(a, b):\n    return type(a) is type(b) and type(a).__name__",
+    "find_spec as a test": "import importlib.util\nHAVE = importlib.util.find_spec('numba') is not None\n"
+    "def trace_paths(film):\n    return film if HAVE else -film",
+    "optional import": "try:\n    import numba\nexcept ImportError:\n    numba = None\n"
+    "def trace_paths(film):\n    return film if numba is None else numba.njit(film)",
+    "globals iterated": "def trace_paths(film):\n    return [k for k in globals() if k.startswith('t')]",
+    "constant getattr": "def trace_paths(m):\n    return getattr(m, 'albedo', 0) + hasattr(m, '__dict__')",
+    "object.__setattr__": "class S:\n    def __init__(self, x):\n        object.__setattr__(self, 'x', x)\n"
+    "        super().__init__()\ndef trace_paths(film):\n    return S(film).x",
+    "sys and os, harmlessly": "import os, sys\ndef trace_paths(film):\n"
+    "    print(os.cpu_count(), file=sys.stderr)\n    return film * sys.float_info.epsilon",
+    "star import": "from ptlab.vectors import *\ndef trace_paths(a):\n    return dot(a, a) + np.sum(a)",
+    "garbage collected": "import gc\ndef trace_paths(film):\n    gc.collect()\n    return film",
+    "math handed on": "import math\ndef trace_paths(a, m=math):\n    return m.sqrt(a)",
+    "a dataclass": "from dataclasses import dataclass, field\n@dataclass\nclass S:\n"
+    "    x: list = field(default_factory=list)\ndef trace_paths(film):\n    return S().x",
+    "numpy and scipy": "import numpy as np\nfrom scipy import ndimage\ndef trace_paths(a):\n"
+    "    return ndimage.uniform_filter(np.linalg.norm(a, axis=1), 3)",
+    "a closure and a partial": "import functools\ndef _make(k):\n    def inner(x):\n        return x * k\n"
+    "    return inner\ntrace_paths = functools.partial(_make(2))",
+}
+
+
+@pytest.mark.parametrize(("text", "reason", "what"), UNREADABLE_TEXTS.values(), ids=UNREADABLE_TEXTS)
+def test_what_a_readable_file_does_not_use(text, reason, what):
+    found = _unreadable(text)
+    assert found is not None, text
+    assert found.reason == reason, found
+    if what is not None:
+        assert found.fields["what"] == what, found
+
+
+@pytest.mark.parametrize("text", READABLE_TEXTS.values(), ids=READABLE_TEXTS)
+def test_what_honest_answers_do_is_readable(text):
+    assert _unreadable(text) is None
+
+
+@pytest.mark.parametrize(
+    ("files", "reason", "what"),
+    [
+        (
+            {GRADED: "from helpers import trace_paths", "helpers.py": "def trace_paths(f):\n    return f"},
+            None,
+            None,
+        ),
+        ({GRADED: "from helpers import trace_paths", "helpers.py": ENCODED}, "unreadable.at_import", "exec"),
+        (
+            {
+                GRADED: "import helpers\ndef trace_paths(f):\n    return helpers.run(f)",
+                "helpers.py": "def run(f):\n    return eval(f)",
+            },
+            "unreadable.runs_made_code",
+            "eval",
+        ),
+        # a library reached through the submission's own module is judged as the library's
+        (
+            {
+                GRADED: "import helpers\ndef trace_paths(f):\n    return helpers.pickle.loads(f)",
+                "helpers.py": "import pickle\n",
+            },
+            "unreadable.runs_made_code",
+            "pickle",
+        ),
+        (
+            {
+                GRADED: "from helpers import *\ndef trace_paths(f):\n    return marshal.loads(f)",
+                "helpers.py": "import marshal\n",
+            },
+            "unreadable.runs_made_code",
+            "marshal",
+        ),
+        # a file named like a module Python has loaded already is not what import finds
+        (
+            {
+                GRADED: "import types\ndef trace_paths(f):\n    return types.new_class(f)",
+                "types.py": "new_class = 1",
+            },
+            "unreadable.runs_made_code",
+            "types.new_class",
+        ),
+    ],
+    ids=[
+        "other file",
+        "other file encoded",
+        "other file's eval",
+        "library through another file",
+        "library through another file's import *",
+        "shadowed",
+    ],
+)
+def test_the_submissions_other_files_are_read_as_the_graded_one(files, reason, what):
+    found = _unreadable(files)
+    assert (found and found.reason) == reason, found
+    if what is not None:
+        assert found.fields["what"] == what, found
+
+
+def test_unreadable_messages_name_the_reason_and_ask_for_a_teacher():
+    from ptlab.exercises.messages import language
+    from ptlab.untrusted.readable import unreadable_in_text
+
+    material = "class L:\n    def eval(self, wo, wi, n):\n        return wo\n"
+    assert unreadable_in_text(_taken(material, "06_diffuse.py"), "L") is None
+    found = unreadable_in_text(_taken(ENCODED + material, "06_diffuse.py"), "L")
+    with language("en"):
+        message = found.message("L")
+    assert message.startswith("L: your file uses exec when it is imported (06_diffuse.py:2)")
+    assert "needs a teacher's look" in message
+    with language("zh"):
+        assert "老师" in found.message("L")
+    # importlib, but for a test of whether a package is installed, is told the way that is
+    found = _unreadable(
+        "import importlib.util\n_s = importlib.util.find_spec('numba')\ndef trace_paths(f): pass"
+    )
+    with language("en"):
+        assert "write 'try: import numba' and 'except ImportError:'" in found.message("trace_paths")
+    with language("zh"):
+        assert "except ImportError" in found.message("trace_paths")
+
+
+def _grading_process(tmp_path: Path, text: str, name: str = GRADED):
+    """A process of the student's file ``text``, as the graders start one (not ptlab's own)."""
+    path = tmp_path / name
+    path.write_text(text)
+    guard = ProcessGuard()
+    guard.__enter__()
+    submission = Submission(path, guard, time_limit=60, rules=Rules())
+    return guard, submission
+
+
+@contextlib.contextmanager
+def _student_process(tmp_path: Path, text: str, name: str = GRADED):
+    guard, submission = _grading_process(tmp_path, text, name)
+    try:
+        yield submission
+    finally:
+        submission.close()
+        guard.__exit__(None, None, None)
+
+
+#: Code made at run time, reached in ways no name in the graded function's code shows: a
+#: dict in the globals, a slot, a library's wrapper, an attribute of NumPy. The reading of
+#: the text refuses each (exec); what runs is checked for itself (the text reading aside).
+MADE = "_namespace = {}\nexec('def _h(film):\\n    return film + 1', _namespace)\n"
+MADE_AND_REACHED = {
+    "globals": MADE
+    + "globals()['_H'] = _namespace\ndef trace_paths(film):\n    return globals()['_H']['_h'](film)\n",
+    "slots": MADE + "class _Call:\n    __slots__ = ('f',)\n    def __init__(self, f):\n        self.f = f\n"
+    "    def __call__(self, *a):\n        return self.f(*a)\ntrace_paths = _Call(_namespace['_h'])\n",
+    "library wrapper": MADE + "import contextlib\nclass _Quiet(contextlib.ContextDecorator):\n"
+    "    def __enter__(self):\n        return self\n    def __exit__(self, *e):\n        return False\n"
+    "trace_paths = _Quiet()(_namespace['_h'])\n",
+    "numpy's attribute": MADE
+    + "import functools, numpy as np\nnp.my_h = functools.partial(_namespace['_h'])\n"
+    "def trace_paths(film):\n    return np.my_h(film)\n",
+    # compiled under the name of the file, at the def's line and under its name
+    "said to be the file's": "def trace_paths(film):\n    return film\n"
+    "_code = compile('def trace_paths(film):\\n    return film + 1', __file__, 'exec')\n"
+    "trace_paths = type(trace_paths)(_code.co_consts[0], globals())\n",
+    # compiled under the name of a library file: not what that file holds
+    "said to be NumPy's": "import numpy\n_namespace = {}\n"
+    "exec(compile('def _h(film):\\n    return film + 1', numpy.__file__, 'exec'), _namespace)\n"
+    "def trace_paths(film):\n    return _namespace['_h'](film)\n",
+    # a module written into the student's folder while it runs, and imported
+    # written and imported at import, where nothing is recorded: its module is found
+    "module written at import": "import os, sys\n_folder = os.path.dirname(__file__)\n"
+    "with open(os.path.join(_folder, 'extra.py'), 'w') as _f:\n    _f.write('VALUE = 41\\n')\n"
+    "sys.path.insert(0, _folder)\nimport extra\ndef trace_paths(film):\n    return extra.VALUE + film\n",
+    "module written at run time": "import os, sys\ndef trace_paths(film):\n"
+    "    folder = os.path.dirname(__file__)\n"
+    "    with open(os.path.join(folder, 'extra.py'), 'w') as f:\n"
+    "        f.write('def h(x):\\n    return x + 1\\n')\n"
+    "    sys.path.insert(0, folder)\n    import extra\n    return extra.h(film)\n",
+}
+
+
+@pytest.mark.subprocess
+@pytest.mark.parametrize("text", MADE_AND_REACHED.values(), ids=MADE_AND_REACHED)
+def test_code_that_runs_and_is_not_the_files_is_found_when_it_runs(tmp_path, text):
+    from ptlab.untrusted.submission import UnreadableCode
+
+    with _student_process(tmp_path, text) as submission:
+        with pytest.raises(UnreadableCode) as raised:
+            submission.module.trace_paths(1)
+        assert raised.value.why.reason == "unreadable.not_the_text"
+        assert "this needs a teacher's look" in str(raised.value)
+        # It ends the check: whatever the check catches, the next request fails the same way.
+        with pytest.raises(UnreadableCode):
+            submission.module.trace_paths(1)
+
+
+@pytest.mark.subprocess
+def test_code_of_the_file_and_of_the_library_is_read_however_it_is_built(tmp_path):
+    """Closures, lambdas, generators, dataclasses and named tuples (whose methods the standard
+    library compiles from strings), a thread of the student's, functions of ptlab's kit and of
+    NumPy, a module-level table far larger than any walk would follow: all run and all are
+    readable."""
+    text = (
+        "import collections, dataclasses, threading\n"
+        "import numpy as np\n"
+        "from ptlab.vectors import dot\n"
+        "@dataclasses.dataclass(frozen=True)\n"
+        "class Settings:\n"
+        "    scale: float = 2.0\n"
+        "    tags: list = dataclasses.field(default_factory=lambda: [1])\n"
+        "TABLE = [(i, i * i) for i in range(60001)]\n"
+        "_square = lambda x: x * x\n"
+        "def _make(k):\n"
+        "    def inner(film):\n"
+        "        Pair = collections.namedtuple('Pair', 'a b')\n"
+        "        box = []\n"
+        "        thread = threading.Thread(target=lambda: box.append(sum(i for i in range(3))))\n"
+        "        thread.start()\n"
+        "        thread.join()\n"
+        "        ones = np.ones((1, 3))\n"
+        "        return (_square(film) * k * Settings().scale + Pair(1, 2).a + box[0] + len(TABLE)\n"
+        "                + np.linspace(0, 1, 2)[0] + dot(ones, ones)[0])\n"
+        "    return inner\n"
+        "trace_paths = _make(3)\n"
+    )
+    with _student_process(tmp_path, text) as submission:
+        assert submission.module.trace_paths(1.0) == 3 * 2.0 + 1 + 3 + 60001 + 3
+        assert submission.code_ran.records > 50  # (the library's code is checked too)
+
+
+def test_a_dataclass_is_a_class_the_grader_calls_and_its_objects_stay_objects():
+    from dataclasses import dataclass
+
+    @dataclass
+    class Lambertian:
+        albedo: float = 0.8
+
+        def __call__(self):
+            return self.albedo
+
+    kept = []
+    encoder = Encoder(lambda obj: kept.append(obj) or len(kept) - 1, lambda obj: {"name": "x"})
+    assert "function" in encoder.encode(Lambertian)  # (a class: the grader makes objects of it)
+    assert "object" in encoder.encode(Lambertian())  # (its fields are read as attributes)
 
 
 @pytest.mark.subprocess

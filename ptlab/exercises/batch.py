@@ -27,6 +27,12 @@ interrupted, the command picks up where it stopped. A student is not graded agai
 CSV still holds the row the grader wrote and the submission is the one it graded; a row
 that is missing (delete it to grade that student anew), changed, or not the grader's own is
 graded again.
+
+After the grades, the pairs of students whose files are alike (``ptlab.exercises.alike``:
+the share of the smaller submission's normalised code found in the other, as MOSS reports
+them) are listed for a teacher to look at, the most similar first: printed, and written to
+a CSV of their own (``write_alike``; ``grade-all --alike``, by default beside the grades:
+``grades-07-alike.csv``). Every submission with a file is compared, graded now or earlier.
 """
 
 from __future__ import annotations
@@ -51,13 +57,14 @@ from tqdm import tqdm
 
 from ptlab.atomic import write_atomically
 from ptlab.errors import PtlabError
+from ptlab.exercises.alike import MAX_COMPARED_BYTES, Alike, alike_pairs, fingerprints
 from ptlab.exercises.chapter import Chapter
 from ptlab.exercises.grader import OVERALL_SLACK, overall_limit, table_message
 from ptlab.exercises.messages import LANGUAGES, active_language
 from ptlab.exercises.progress import private_state
 from ptlab.untrusted import ProcessGuard, import_nothing_from_here, make_undumpable, sandbox, student_user
 from ptlab.untrusted.control_groups import ControlGroups
-from ptlab.untrusted.intake import MAX_BYTES
+from ptlab.untrusted.intake import MAX_BYTES, RefusedSubmission, read_files
 from ptlab.untrusted.shown import shown
 from ptlab.untrusted.student_user import is_root, pool_user
 
@@ -68,6 +75,8 @@ EXTRA_SECONDS = 60.0
 #: The first characters (after any spaces) that make a spreadsheet read a cell as a
 #: formula, the full-width forms included.
 FORMULA_STARTS = ("=", "+", "-", "@", "\uff1d", "\uff0b", "\uff0d", "\uff20")
+#: The columns of the CSV of alike pairs (``write_alike``).
+ALIKE_COLUMNS = ("student_a", "file_a", "student_b", "file_b", "similarity", "shared", "size_a", "size_b")
 
 
 @dataclass(frozen=True)
@@ -459,6 +468,81 @@ class _Runner:
         if process.returncode != 0 or len(output) > MAX_REPORT:
             return None, f"the grader ended with code {process.returncode} and no report"
         return _report(output, self.chapter)
+
+
+@dataclass(frozen=True)
+class ClassAlike:
+    """The pairs of alike students of a class, and who could not be compared.
+
+    Attributes:
+        pairs: ``Alike`` pairs of ``Work``s (``ptlab.exercises.alike.alike_pairs``).
+        not_compared: the submissions (``submitted_file``) whose files could not be read
+            for comparing: larger than ``MAX_COMPARED_BYTES`` or not Python.
+    """
+
+    pairs: list[tuple[Alike, Work, Work]]
+    not_compared: list[str]
+
+
+def default_alike_path(csv_path: Path) -> Path:
+    """Where the alike pairs go when ``--alike`` is not given: beside the grades
+    (``grades-07.csv``: ``grades-07-alike.csv``)."""
+    return csv_path.with_name(f"{csv_path.stem}-alike.csv")
+
+
+def alike_in_class(chapter: Chapter, folder: Path) -> ClassAlike:
+    """The pairs of students of ``folder`` whose submissions for ``chapter`` are alike (the
+    Python files of a student's folder are compared together, as they are graded)."""
+    work = {w.student: w for w in find_work(folder, chapter) if w.file is not None}
+    prints, not_compared = {}, []
+    for student, found in work.items():
+        try:
+            prints[student] = fingerprints(read_files(found.file, with_folder=found.own_folder))
+        except RefusedSubmission:  # (gone since it was graded, or no longer a regular file)
+            prints[student] = None
+        if prints[student] is None:
+            not_compared.append(submitted_file(found))
+    pairs = alike_pairs({student: found for student, found in prints.items() if found is not None})
+    return ClassAlike([(pair, work[pair.first], work[pair.second]) for pair in pairs], not_compared)
+
+
+def submitted_file(work: Work) -> str:
+    """A submission's file as the teacher finds it in the folder: ``alice.py``,
+    ``bob/07_path_tracing.py`` (shown: control characters as escapes)."""
+    if work.file is None or not work.own_folder:
+        return work.entry
+    return work.entry + shown(work.file.name)
+
+
+def alike_lines(found: ClassAlike) -> list[str]:
+    """What grade-all prints of the alike pairs, after the grades."""
+    lines = [
+        f"alike: {submitted_file(first)} and {submitted_file(second)}: {pair.similarity:.2f} "
+        f"({pair.shared} of {min(pair.sizes)} fingerprints; look at them)"
+        for pair, first, second in found.pairs
+    ]
+    if found.not_compared:
+        lines.append(
+            f"not compared (larger than {MAX_COMPARED_BYTES >> 10} KiB, or not Python): "
+            + ", ".join(found.not_compared)
+        )
+    return lines
+
+
+def write_alike(path: Path, found: ClassAlike) -> None:
+    """The alike pairs as a CSV (``ALIKE_COLUMNS``), one row per pair, the most similar
+    first; its cells made safe for spreadsheets (``safe_cell``)."""
+
+    def write(temporary: str) -> None:
+        with open(temporary, "w", newline="", encoding="utf-8") as out:
+            writer = csv.writer(out)
+            writer.writerow(ALIKE_COLUMNS)
+            for pair, first, second in found.pairs:
+                row = [first.student, first.file.name, second.student, second.file.name]
+                row += [f"{pair.similarity:.3f}", pair.shared, *pair.sizes]
+                writer.writerow([safe_cell(cell) for cell in row])
+
+    write_atomically(path, write)
 
 
 def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:

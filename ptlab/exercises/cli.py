@@ -20,7 +20,7 @@ import shutil
 import sys
 from pathlib import Path
 
-from ptlab.atomic import write_atomically
+from ptlab.atomic import check_writable_file, write_atomically
 from ptlab.errors import PtlabError
 from ptlab.exercises.messages import LANGUAGES
 from ptlab.untrusted.shown import print_verdict, relay, shown
@@ -124,10 +124,18 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
         "folder (holding the chapter's file, or one Python file), is one student. "
         "Each is graded in isolation, several at once; the CSV gets one row per "
         "student and is rewritten after each, so an interrupted run resumes "
-        "(students already in the CSV are not graded again).",
+        "(students already in the CSV are not graded again). Then the pairs of students "
+        "whose files are alike (their normalised code, as MOSS compares it) are printed "
+        "for a teacher to look at, and written to a CSV of their own.",
     )
     batch.add_argument("dir", metavar="DIR", help="the folder of submissions")
     batch.add_argument("--csv", metavar="OUT", help="the grades (default grades-NN.csv here)")
+    batch.add_argument(
+        "--alike",
+        metavar="OUT",
+        help="the pairs of students whose files are alike, most similar first (default: "
+        "beside the grades, grades-NN-alike.csv)",
+    )
     batch.add_argument(
         "--workers",
         type=int,
@@ -472,15 +480,21 @@ def _shown(path: Path) -> str:
 
 def _grade_all(args) -> int:
     from ptlab.exercises import chapter
-    from ptlab.exercises.batch import grade_all
+    from ptlab.exercises.batch import alike_in_class, alike_lines, default_alike_path, grade_all, write_alike
 
     found = chapter(args.chapter)
     scale = _timeout_scale(args)
     if args.workers < 1:
         raise PtlabError(f"--workers {args.workers}: must be at least 1")
     csv_path = Path(args.csv or f"grades-{found.number:02d}.csv")
-    if not csv_path.parent.is_dir():
-        raise PtlabError(f"--csv {csv_path}: folder {csv_path.parent} does not exist")
+    alike_path = Path(args.alike) if args.alike else default_alike_path(csv_path)
+    for option, path in (("--csv", csv_path), ("--alike", alike_path)):
+        try:  # (before anything is graded: a class takes hours)
+            check_writable_file(path)
+        except PtlabError as error:
+            raise PtlabError(f"{option} {error}") from None
+    if alike_path.absolute() == csv_path.absolute():
+        raise PtlabError(f"--alike {alike_path}: the same file as --csv")
     rows = grade_all(
         found,
         Path(args.dir),
@@ -494,4 +508,10 @@ def _grade_all(args) -> int:
     )
     full = sum(1 for row in rows.values() if str(row["score"]) == str(row["max_score"]))
     print(f"{len(rows)} students in {csv_path}: {full} with full marks")
+    alike = alike_in_class(found, Path(args.dir))
+    write_alike(alike_path, alike)
+    for line in alike_lines(alike):
+        print(line)
+    count = len(alike.pairs)
+    print(f"{count} pair{'' if count == 1 else 's'} of alike students in {alike_path}")
     return 0

@@ -44,11 +44,12 @@ def check_material(material, seed: int = 0, *, samples: int = 1_000_000, wo_degr
             ``ptlab.materials.base.Material``; ``sample_weight`` (else derived from the
             three), ``is_delta`` (mirrors and glass; else False) and ``emission`` are optional
             (``ptlab.grading.material.as_material``).
-        seed: seeds every random choice (the samples, the rotation of every row, the
-            order of the rows).
+        seed: seeds every random choice (the samples, the walls and the turn of every
+            row, the order of the rows, the wo's angles).
         samples: directions drawn per wo for the statistical checks (default 10^6; fewer
             make the tests weaker, not wrong).
-        wo_degrees: angles of wo from the normal for the statistical checks.
+        wo_degrees: nominal angles of wo from the normal for the statistical checks, each
+            moved by up to 5 degrees per seed (0 stays 0: ``checks.lobe_angles``).
 
     Delta materials (``is_delta``) get the checks of ``ptlab.grading.delta`` instead, at
     their own fixed angles and 2^14 stratified samples; ``samples`` and ``wo_degrees`` do
@@ -80,12 +81,13 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
     # rotation of its own (ptlab.grading.probes), so no normal of the seed is needed.
     grid = SphereGrid.for_samples(checks.Z, samples)
     kept = []
+    degrees = checks.lobe_angles(wo_degrees, streams[7])
     try:
-        lobes, pointwise = checks.measure(material, grid, wo_degrees, samples, streams[2], kept)
+        lobes, pointwise, walls = checks.measure(material, grid, degrees, samples, streams[2], kept)
     except checks.MaterialError as error:
         lobes, failure = None, str(error)
     for name, check in (
-        ("chi-square", lambda: checks.check_chi_square(material, lobes, streams[3])),
+        ("chi-square", lambda: checks.check_chi_square(material, lobes, walls, streams[3])),
         ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
         ("energy", lambda: checks.check_energy(lobes)),
         ("reflectance", lambda: checks.check_reflectance(lobes)),

@@ -127,7 +127,7 @@ def run_grade(args: argparse.Namespace) -> int:
                 rules=MATERIALS,
                 user=args.student_user,
             ) as submission:
-                origin = library_answer(submission.module, name)
+                origin = _library_answer(submission, name)
                 if origin is not None:
                     failure = f"{name} is ptlab's own answer ({origin}), not yours"
                 else:
@@ -174,6 +174,14 @@ def parse_target(target: str, arguments: str = "{}") -> tuple[Path, str, dict]:
     if not isinstance(keywords, dict):
         raise GradeLoadError("--args must be a JSON object, e.g. '{\"roughness\": 0.3}'")
     return path, name, keywords
+
+
+def _library_answer(submission: Submission, name: str) -> str | None:
+    """The ptlab answer that ``name`` is (``library_answer``), once the file is known to
+    have it: a name missing is the user's mistake (exit 2), not code the grader cannot read."""
+    if not hasattr(submission.module, name):
+        raise GradeLoadError(f"{submission.path}: no class or object named {name!r}")
+    return library_answer(submission.module, name)
 
 
 def load_material(submission: Submission, name: str, keywords: dict):

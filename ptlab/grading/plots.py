@@ -1,7 +1,8 @@
 """Pictures of a chi-square test: observed histogram, expected counts, their difference.
 
-Each tested ``wo`` gives three PNG images over the (phi, cos theta) grid of the test
-(phi across, cos theta = 1 at the top, the horizon in the middle), each cell a block of
+Each tested ``wo``, and each wall whose test failed (its samples in its own frame against
+an even spread in azimuth), gives three PNG images over the (phi, cos theta) grid of the
+test (phi across, cos theta = 1 at the top, the horizon in the middle), each cell a block of
 pixels: ``observed`` and ``expected`` counts on one shared colour scale (black, blue, red,
 yellow, white as the count rises), and ``residual``, (observed - expected) / sqrt(expected),
 blue where pdf promises more samples than ``sample`` gives, red where it promises fewer,
@@ -42,7 +43,8 @@ def write_plots(report, directory: str | Path) -> list[Path]:
     """Write the chi-square pictures of ``report`` into ``directory``; returns the paths.
 
     Only a failed chi-square check is drawn (nothing is written otherwise). Files:
-    ``chi2-wo<degrees>-observed.png``, ``-expected.png``, ``-residual.png``.
+    ``chi2-wo<degrees>-observed.png``, ``-expected.png``, ``-residual.png``, and
+    ``chi2-wall<k>-...`` for each wall that failed.
     """
     directory = Path(directory)
     try:
@@ -53,11 +55,12 @@ def write_plots(report, directory: str | Path) -> list[Path]:
         return []
     directory.mkdir(parents=True, exist_ok=True)
     written = []
-    for lobe in check.data["lobes"]:
-        observed, expected, shape = lobe["observed"], lobe["expected"], lobe["shape"]
+    tests = [(f"chi2-wo{lobe['degrees']:g}", lobe) for lobe in check.data["lobes"]]
+    tests += [(f"chi2-wall{wall['wall']}", wall) for wall in check.data.get("walls", [])]
+    for stem, test in tests:
+        observed, expected, shape = test["observed"], test["expected"], test["shape"]
         top = max(observed.max(), expected.max(), 1)
         residual = (observed - expected) / np.sqrt(np.maximum(expected, 1.0))
-        stem = f"chi2-wo{lobe['degrees']:g}"
         for name, image in (
             ("observed", _colour_map(_image(observed / top, shape), _HEAT)),
             ("expected", _colour_map(_image(expected / top, shape), _HEAT)),

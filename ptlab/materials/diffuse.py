@@ -30,8 +30,9 @@ class Diffuse(Material):
     """Lambertian reflection.
 
     Args:
-        albedo: (3,) reflectance in [0, 1], or a ``ptlab.textures.Texture`` of them over the
-            surface's uv (either becomes (N, 3), one per hit, after ``take``).
+        albedo: (3,) reflectance in [0, 1], one number for a grey one, or a
+            ``ptlab.textures.Texture`` of them over the surface's uv (either becomes (N, 3),
+            one per hit, after ``take``).
         sampling: ``"cosine"`` (default) or ``"uniform"``.
         emission: (3,) emitted radiance, or None.
     """
@@ -42,7 +43,12 @@ class Diffuse(Material):
     def __init__(self, albedo=(0.8, 0.8, 0.8), sampling: str = "cosine", emission=None):
         if sampling not in SAMPLINGS:
             raise ValueError(f"unknown sampling {sampling!r}; choose one of {', '.join(SAMPLINGS)}")
-        self.albedo = albedo if isinstance(albedo, Texture) else np.asarray(albedo, dtype=np.float64)
+        if not isinstance(albedo, Texture):
+            # One number is a grey albedo: eval returns a colour per row, (N, 3), as every
+            # material's does (a scalar albedo made it (N, 1)).
+            albedo = np.asarray(albedo, dtype=np.float64)
+            albedo = np.full(3, float(albedo)) if albedo.ndim == 0 else albedo
+        self.albedo = albedo
         self.sampling = sampling
         self.emission = None if emission is None else np.asarray(emission, dtype=np.float64)
 

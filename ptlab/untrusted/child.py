@@ -12,7 +12,9 @@ trusts nothing it says beyond the schema of ``ptlab.untrusted.plain_data``. ``ma
 4. serves requests until the grader closes the pipe: ``get`` and ``set`` an attribute of
    an object it holds (object 0 is the student's module), ``call`` a function or method,
    ``call_each`` a method of several objects on their rows, ``repr`` an object,
-   ``import_by_stem`` the file again under its own name.
+   ``import_by_stem`` the file again under its own name. While it serves them, it records
+   the code that runs (``CodeRecorder``): each reply says what code ran for the first time,
+   for the grader to compare with the files' text (``ptlab.untrusted.code_ran``).
 
 A call's reply is its result, plus (for functions, not methods) the changes it made to its
 arguments in place: arrays written into (the film that ``trace_paths`` adds to), fields of
@@ -24,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import ctypes
+import hashlib
 import importlib
 import importlib.util
 import inspect
@@ -35,7 +38,9 @@ import pickle
 import resource
 import signal
 import sys
+import threading
 import traceback
+import types
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
 
@@ -55,6 +60,10 @@ PTLAB = Path(__file__).resolve().parent.parent
 #: ``Material`` interface's, which only raise ``NotImplementedError``).
 INTERFACE = PTLAB / "materials" / "base.py"
 MAX_MESSAGE_TEXT = 2000
+#: How ``code_record`` names the files of the student's folder and of ptlab (its kit, for
+#: the grader): by their place inside them, whatever path this process sees them at.
+SUBMISSION_FILE = "<submission>/"
+PTLAB_FILE = "<ptlab>/"
 PR_SET_PDEATHSIG = 1
 PR_SET_DUMPABLE = 4
 
@@ -91,6 +100,8 @@ class ChildSetup:
         receive, send: the file descriptors of the grader's requests and of the replies.
         limits: its resource limits.
         answers: fingerprints of the answers it may not compile (the authorship hook).
+        record_code: record the code that runs for the grader (``CodeRecorder``); not for
+            ptlab's own answer files, graded as themselves.
     """
 
     path: str
@@ -98,6 +109,7 @@ class ChildSetup:
     send: int
     limits: Limits
     answers: Answers
+    record_code: bool = True
 
 
 def import_file(path: Path):
@@ -143,7 +155,9 @@ def main() -> None:
     keep_freed_memory()  # every call's arrays arrive in new buffers: no page faults for them
     _set_up(setup)
     requests = Reader(setup.receive)
-    server = _Server(Path(setup.path), setup.send)
+    path = Path(setup.path)
+    recorder = CodeRecorder(path.resolve().parent) if setup.record_code else None
+    server = _Server(path, setup.send, recorder)
     pid = os.getpid()  # (as this process's own code sees it: in its pid namespace)
     try:
         server.handles.append(import_file(Path(setup.path)))
@@ -204,8 +218,8 @@ def _user_tasks() -> int:
 class _Server:
     """Answers the grader's requests about the objects it holds (``handles``)."""
 
-    def __init__(self, path: Path, send_fd: int):
-        self.path, self.send_fd = path, send_fd
+    def __init__(self, path: Path, send_fd: int, recorder: CodeRecorder | None = None):
+        self.path, self.send_fd, self.recorder = path, send_fd, recorder
         self.handles: list = []
         self.shared: dict[int, object] = {}
 
@@ -221,15 +235,22 @@ class _Server:
         try:
             operation, *arguments = _Unpickler(parts[1], self, parts[2:]).load()
         except Exception as error:  # the grader sent what this process cannot rebuild
-            self.send({"id": request_id, "unreceived": f"{type(error).__name__}: {_text(error)}"})
+            envelope = {"id": request_id, "unreceived": f"{type(error).__name__}: {_text(error)}"}
+            if self.recorder is not None:
+                envelope["ran"] = self.recorder.new_records()
+            self.send(envelope)
             return
         encoder = Encoder(self.keep, self.describe)
+        recording = self.recorder.recording() if self.recorder is not None else contextlib.nullcontext()
         try:
-            envelope = getattr(self, f"do_{operation}")(encoder, *arguments)
+            with recording:
+                envelope = getattr(self, f"do_{operation}")(encoder, *arguments)
         except UnsendableError as error:
             envelope = {"unreadable": str(error)}
         except BaseException as error:  # the student's code raised: report it
             envelope = {"raised": self.describe_error(error)}
+        if self.recorder is not None:
+            envelope["ran"] = self.recorder.new_records()
         self.send(dict(id=request_id, **envelope), encoder.parts)
 
     # -- requests ----------------------------------------------------------------------
@@ -359,6 +380,140 @@ def _code_file(value) -> Path | None:
         if code is not None:
             return Path(code.co_filename).resolve()
     return None
+
+
+def code_digest(code: types.CodeType) -> str:
+    """What a code object runs, as a SHA-256 (hex): its bytecode, names, layout and constants
+    (nested code by their own digests), not its file's name nor its line numbers. The grader
+    compiles a file's text itself and compares (``ptlab.untrusted.code_ran``): the same in
+    every process of the same Python, whether the code was compiled from the source or
+    loaded from its ``.pyc``."""
+    digest = hashlib.sha256()
+    layout = (
+        code.co_code,  # (the bytecode as compiled: Python 3.11 keeps its specialised copy apart)
+        code.co_names,
+        code.co_varnames,
+        code.co_freevars,
+        code.co_cellvars,
+        code.co_argcount,
+        code.co_posonlyargcount,
+        code.co_kwonlyargcount,
+        code.co_flags,
+        code.co_qualname,
+        code.co_exceptiontable,
+    )
+    digest.update(repr(layout).encode())
+    for constant in code.co_consts:
+        digest.update(_constant_key(constant).encode())
+    return digest.hexdigest()
+
+
+def _constant_key(constant) -> str:
+    """A constant as text, the same in every process: nested code by its digest, the items of
+    a frozenset in sorted order (its order of iteration changes with the hash seed)."""
+    kind = type(constant)
+    if kind is types.CodeType:
+        return f"code {code_digest(constant)}"
+    if kind is tuple or kind is frozenset:
+        items = [_constant_key(item) for item in constant]
+        return f"{kind.__name__}({','.join(sorted(items) if kind is frozenset else items)})"
+    return f"{kind.__name__} {constant!r}"
+
+
+class CodeRecorder:
+    """The code objects that run while this process serves the grader's requests, and the
+    modules it loads from the student's folder, for the grader to compare with the files'
+    text (``ptlab.untrusted.code_ran``).
+
+    A trace function (``sys.settrace``) sees every Python function, method, lambda,
+    comprehension and generator as its frame starts, whatever called it: a function kept
+    in a dict, a slot, a library's wrapper. It asks for no line events (it returns None),
+    so each call costs one dict store; it runs on this thread during requests only, and
+    in every thread the student's code starts (``threading.settrace``), but not in
+    processes it forks. The student's code runs in this process and could turn it off or
+    change what it says: the grader's reading of the file's text, which refuses every way
+    to reach it, comes first (``ptlab.untrusted.readable``).
+    """
+
+    def __init__(self, folder: Path):
+        self.folder = str(folder)
+        self.ptlab = str(PTLAB)
+        #: {id: code object}, in the order they first ran (kept alive: no id is reused).
+        self.ran: dict[int, types.CodeType] = {}
+        self.sent = 0
+        self.modules: set[str] = set()
+        self.trace = _tracer(self.ran)
+        threading.settrace(self.trace)
+        os.register_at_fork(after_in_child=_stop_tracing)
+
+    @contextlib.contextmanager
+    def recording(self):
+        """Record on this thread while the block runs."""
+        sys.settrace(self.trace)
+        try:
+            yield
+        finally:
+            sys.settrace(None)
+
+    def new_records(self) -> list[list]:
+        """``code_record`` of the code that ran since the last call, and of the modules
+        loaded from the student's folder since then."""
+        ran = list(self.ran.values())  # (a copy in one step: other threads may be adding)
+        found = [code_record(code, self._file(code.co_filename)) for code in ran[self.sent :]]
+        self.sent = len(ran)
+        for name, module in list(sys.modules.items()):
+            if name not in self.modules:
+                self.modules.add(name)
+                file = getattr(module, "__file__", None)
+                if isinstance(file, str) and not _is_libraries(file):
+                    found.append([self._file(file), 0, "<module file>", "", []])
+        return found
+
+    def _file(self, file: str) -> str:
+        """A file as the records name it: one of the student's folder as ``SUBMISSION_FILE``
+        and its name, one of ptlab as ``PTLAB_FILE`` and its path in the package."""
+        if file.startswith("<"):
+            return file  # (a string compiled, <string>; a frozen module)
+        real = os.path.realpath(file)
+        for root, name in ((self.folder, SUBMISSION_FILE), (self.ptlab, PTLAB_FILE)):
+            if real.startswith(root + os.sep):
+                return name + os.path.relpath(real, root)
+        return real
+
+
+def _tracer(ran: dict):
+    """The trace function: records the code of every frame that starts (a closure, which
+    is as cheap as a call gets)."""
+
+    def trace(frame, event, argument):
+        ran[id(frame.f_code)] = frame.f_code
+
+    return trace
+
+
+def _stop_tracing() -> None:
+    """In a process the student's code forks (a pool's worker): no recording, which no one
+    would read (the grader reads what this process replies)."""
+    sys.settrace(None)
+    threading.settrace(None)
+
+
+def _is_libraries(file: str) -> bool:
+    """Whether a module's file is Python's own or an installed package's, as far as this
+    process can tell cheaply: the grader checks every one that is not."""
+    return file.startswith((sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix))
+
+
+def code_record(code: types.CodeType, file: str) -> list:
+    """What the grader needs to find ``code`` in the file it says it is from (named
+    ``file``): [file, first line, qualified name, ``code_digest``, and for code compiled
+    from a string the names of its variables and of those of the code it holds, from
+    which the grader writes a named tuple's ``__new__`` again]."""
+    names = []
+    if file.startswith("<"):
+        inner = [c for c in code.co_consts if type(c) is types.CodeType]
+        names = [*code.co_varnames, *(name for c in inner for name in c.co_varnames)]
+    return [file, code.co_firstlineno, code.co_qualname, code_digest(code), names]
 
 
 def _text(error: BaseException) -> str:

@@ -9,7 +9,10 @@ base64, downloaded before the grading, built from strings).
 
 It is a second layer, not a defence: it lives in the process it watches, whose code can
 take it apart (PEP 578 says as much), and bytecode imported from a ``.pyc`` raises no
-compile event. What it guards is written in docs/grading-security.md.
+compile event. Its state is in a closure, not in the attributes of an object that a look
+at every object (``gc.get_objects()``) would hand out by its class's name; and the reading
+of the file's text (``ptlab.untrusted.uses``) refuses ``gc``, closures' cells and every
+other way there. What it guards is written in docs/grading-security.md.
 """
 
 from __future__ import annotations
@@ -29,30 +32,30 @@ class Refused(PermissionError):  # noqa: N818 (a rule, not an error of the code)
 def confine(answers: Answers) -> None:
     """Add the hook, if there are answers to look for (none when grading ptlab's own file)."""
     if answers:
-        sys.addaudithook(_CompiledCopies(answers))
+        sys.addaudithook(_compiled_copies(answers))
 
 
-class _CompiledCopies:
+def _compiled_copies(answers: Answers):
     """The audit hook (called for every event, so it returns at once for the others)."""
+    parsing: set[int] = set()  # (the threads parsing in the hook: parsing raises events too)
 
-    def __init__(self, answers: Answers):
-        self.answers = answers
-        self.checking = threading.local()  # (parsing inside the hook raises events)
-
-    def __call__(self, event: str, arguments: tuple) -> None:
-        if event != "compile" or getattr(self.checking, "now", False):
+    def hook(event: str, arguments: tuple) -> None:
+        thread = threading.get_ident()
+        if event != "compile" or thread in parsing:
             return
         source, filename = arguments[0], arguments[1]
-        self.checking.now = True
+        parsing.add(thread)
         try:
             tree = source if isinstance(source, ast.AST) else ast.parse(source)
         except (SyntaxError, ValueError, TypeError, MemoryError, RecursionError):
             return  # compile() itself will say what is wrong
         finally:
-            self.checking.now = False
-        found = copies_in(tree, self.answers)
+            parsing.discard(thread)
+        found = copies_in(tree, answers)
         if is_a_copy(found):
             raise Refused(
                 f"compiling {describe_copies(found, os.path.basename(os.fsdecode(filename)))} "
                 f"is not allowed while your code is graded"
             )
+
+    return hook

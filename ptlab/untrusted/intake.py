@@ -69,11 +69,23 @@ def take_in(path: str | Path, with_folder: bool = False, library: bool = False) 
             f"{path} is part of ptlab itself, not a submission: copy the "
             f"exercise with 'ptlab exercise start' and write your own"
         )
-    source = _read_regular(path)
-    files = {path.name: source}
+    files = read_files(path, with_folder)
+    source = files[path.name]
+    return Taken(path, files, hashlib.sha256(source).hexdigest(), _parse(path, source))
+
+
+def read_files(path: str | Path, with_folder: bool = False) -> dict[str, bytes]:
+    """{file name: bytes} of the submission at ``path``, as ``take_in`` reads it: the file
+    itself, and with ``with_folder`` the Python files beside it; nothing of it is parsed.
+
+    Raises:
+        RefusedSubmission: ``path`` is a link, not a regular file, or too large.
+    """
+    path = Path(path)
+    files = {path.name: _read_regular(path)}
     if with_folder:
         files.update(_beside(path))
-    return Taken(path, files, hashlib.sha256(source).hexdigest(), _parse(path, source))
+    return files
 
 
 def _beside(path: Path) -> dict[str, bytes]:

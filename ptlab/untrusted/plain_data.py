@@ -10,8 +10,9 @@ grader decodes only this fixed schema (``Decoder``):
     {"array": k}                                        the k-th .npy part: numbers only
     {"scalar": [dtype, value]}                          a NumPy scalar (numbers only)
     {"record": "Paths", "fields": {...}}                one of ``RECORDS``, rebuilt field by field
-    {"function": h, "name", "kind", "origin", "parameters"}   a function or class left in the
-    {"object": h, "type": name}                         child, or any other object: handle h
+    {"function": h, "name", "kind", "origin", "parameters"}   a function or class (a dataclass
+    {"object": h, "type": name}                         too) left in the child, or any other
+                                                        object (one of a dataclass too): handle h
 
 The ``.npy`` header is read with NumPy's own parser and the data viewed in place; an array
 of Python objects, strings or records is refused. Anything else, or anything deeper than
@@ -99,7 +100,9 @@ class Encoder:
                 return {tag: [self.encode(item, depth + 1) for item in value]}
         if isinstance(value, Iterator):
             return {"list": [self.encode(item, depth + 1) for item in _items_of(value)]}
-        if callable(value) and not is_dataclass(value):
+        if callable(value) and (isinstance(value, type) or not is_dataclass(value)):
+            # (a class, dataclass or not, is called to make objects; an object of a dataclass
+            # with a __call__ stays an object, whose fields the grader reads)
             return dict(function=self.keep(value), **self.describe(value))
         return {"object": self.keep(value), "type": kind.__name__}
 

@@ -42,6 +42,7 @@ import ptlab.untrusted.sandbox as sandbox
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.untrusted.channel import Channel, ChannelClosedError, ChannelError, ChannelTimeoutError, enlarge
 from ptlab.untrusted.child import ChildSetup, Limits
+from ptlab.untrusted.code_ran import CodeRan
 from ptlab.untrusted.copies import copies_in, describe_copies, is_a_copy
 from ptlab.untrusted.intake import RefusedSubmission, Taken, private_folder, remove_folder, take_in
 from ptlab.untrusted.kit import kit_for
@@ -59,6 +60,7 @@ from ptlab.untrusted.proxies import (
     student_error,
     submission_of,
 )
+from ptlab.untrusted.readable import Unreadable, unreadable_in_text
 from ptlab.untrusted.rules import Arguments, Rules
 from ptlab.untrusted.student_user import student_user
 
@@ -104,6 +106,23 @@ class ImportFailed(SubmissionFailed):
 
 class UnreadableResultError(StudentError):
     """The student's function returned something the schema cannot carry."""
+
+
+class UnreadableCode(SubmissionFailed):
+    """A graded name whose code the grader cannot read in the submission's files
+    (``ptlab.untrusted.readable``): the check that uses it earns nothing, and its message
+    asks for a teacher's look. Like every ``SubmissionFailed``, it ends the check (no
+    ``except Exception`` of a check takes it for one call's mistake), and every later
+    request of the same process raises it again.
+
+    Attributes:
+        name: the graded name, or the function whose call ran the code.
+        why: the reason (``ptlab.untrusted.readable.Unreadable``).
+    """
+
+    def __init__(self, name: str, why: Unreadable):
+        super().__init__(why.message(name), "unreadable", name)
+        self.name, self.why = name, why
 
 
 def shared_types() -> frozenset[type]:
@@ -208,13 +227,21 @@ class Submission:
         output_r, output_w = os.pipe()
         for fd in (request_w, reply_w):
             enlarge(fd)
-        view = sandbox.View(kit_for(self.rules.left_out), self.taken.files, self.folder, self.rules.packages)
+        #: The chapter's kit, which the student's process sees as ptlab.
+        self.kit = kit_for(self.rules.left_out)
+        view = sandbox.View(self.kit, self.taken.files, self.folder, self.rules.packages)
+        #: The check of the code each reply says ran (``ptlab.untrusted.code_ran``); none for
+        #: ptlab's own answer files.
+        self.code_ran = (
+            None if self.library_answers_allowed else CodeRan(self.taken, self.kit, self.rules.packages)
+        )
         setup = ChildSetup(
             path=str(self.folder / self.taken.name),
             receive=request_r,
             send=reply_w,
             limits=limits,
             answers=self.rules.fingerprints,
+            record_code=self.code_ran is not None,
         )
         environment = {name: os.environ[name] for name in KEPT_ENVIRONMENT if name in os.environ}
         scratch = "/tmp" if self.sandboxed else str(self.folder)  # (the sandbox's /tmp is its own)
@@ -367,6 +394,7 @@ class Submission:
             self._fail("ended", during)
         envelope, decoder = self._receive(self._requests, during, deadline, limit)
         try:
+            self._check_what_ran(envelope, during)
             self._raise_what_went_wrong(envelope, during)
             if "value" not in envelope:
                 raise MalformedError("a reply without a value")
@@ -381,6 +409,18 @@ class Submission:
             return value, [self._change(entry, decoder) for entry in found]
         except MalformedError as error:
             self._fail("malformed", during, str(error))
+
+    def _check_what_ran(self, envelope: dict, during: str) -> None:
+        """Raise ``UnreadableCode`` (for good) if the code the reply says ran is not the
+        grader's own code at the places it names (``ptlab.untrusted.code_ran``)."""
+        if self.code_ran is None:
+            return
+        if "ran" not in envelope:
+            raise MalformedError("a reply that does not say what code ran")
+        why = self.code_ran.check(envelope["ran"])  # (plain JSON, checked there)
+        if why is not None:
+            self._failure = UnreadableCode(during, why)
+            raise self._failure
 
     def _raise_what_went_wrong(self, envelope: dict, during: str) -> None:
         """Raise what a reply says went wrong: the student's code raised, its result cannot
@@ -645,7 +685,14 @@ def _rebind(container, kind: str, key, value) -> None:
 def library_answer(module: RemoteModule, name: str) -> str | None:
     """The ptlab answer that the student's ``name`` is (``ptlab.integrators.path.trace_paths``),
     or None if it is the student's own code; the library's own answers (``solutions/``)
-    are always their own."""
+    are always their own.
+
+    Raises:
+        UnreadableCode: the text of the submission's files does not show the code that
+            runs for ``name`` (``ptlab.untrusted.readable``): made from data, reached by a
+            name built at run time, or imported from outside them. (What runs is checked
+            at every call: ``Submission.request``.)
+    """
     submission = submission_of(module)
     if submission.library_answers_allowed:
         return None
@@ -653,6 +700,10 @@ def library_answer(module: RemoteModule, name: str) -> str | None:
     if found is None:
         value = getattr(module, name, None)
         found = value.origin if isinstance(value, RemoteFunction) else None
+    if found is None:
+        why = unreadable_in_text(submission.taken, name)
+        if why is not None:
+            raise UnreadableCode(name, why)
     return found
 
 

@@ -1,22 +1,39 @@
-"""Near-copies of ptlab's own answers (docs/grading-security.md): the library's functions
-with the names changed and one or more edits that change nothing (a dead statement, a
-swapped product, a moved assignment, a split return, an unused parameter, a no-op wrapper,
-an extra method), built here from the library's source. Each is found by
-``ptlab.untrusted.copies`` and named with its similarity; no honest answer of
-``tests/exercises`` is; and a near-copy of chapter 6 scores 0 in a whole grading run."""
+"""Copies of ptlab's own answers, however they are dressed (docs/grading-security.md): every
+chapter's answers as a copier hands them in (``corpus.py``), put through the mechanical
+rewrites of ``rewriters.py``, are found and named, at the rate the project asks for; no
+honest answer of ``tests/exercises`` comes near; what the exercise file dictates is no
+evidence; a copy of an earlier release's answer is found too; and the rewrite the issue
+measured (operators as ``operator`` calls, attributes through ``getattr``) scores nothing in
+a grading run. ``scripts/copy_detection.py`` measures every rewrite of every copy; these
+tests take a sample that runs in seconds: every rewrite of each chapter's answer file, and
+two of each answer copied alone."""
 
 from __future__ import annotations
 
 import ast
-import inspect
 import json
 import re
-import textwrap
-import tomllib
+from functools import cache
 from pathlib import Path
 
+import numpy as np
 import pytest
 
+from attacks.corpus import (
+    EXERCISES,
+    Detection,
+    chapter_of,
+    chapters,
+    copied_files,
+    detection,
+    honest_files,
+    honest_scores,
+    near_weight,
+    public_names,
+    weighty,
+)
+from attacks.hostile import SUBMISSIONS
+from attacks.rewriters import REWRITES, rewritten
 from ptlab.cli import main
 from ptlab.exercises import chapter
 from ptlab.grading.cli import MATERIALS
@@ -24,363 +41,219 @@ from ptlab.untrusted.copies import (
     MIN_COPIED_TOKENS,
     THRESHOLD,
     Answers,
+    canonical,
     copied_class,
+    copied_tokens,
     copies_in,
     describe_copies,
     functions_in,
+    grams,
     is_a_copy,
-    resolve,
-    similarities,
+    template_grams,
 )
 
-#: The honest population: students' own right answers and typical wrong ones.
-EXERCISES = Path(__file__).parents[1] / "exercises"
-TEMPLATES = Path(chapter(1).template).parent
-#: Similarity kept clear of THRESHOLD on either side by every file measured here (the
-#: measured extremes are in ptlab/untrusted/copies.py's docstring).
+#: The share of rewritten copies that must be found (the project's requirement).
+REQUIRED_RATE = 0.95
+#: Similarity kept clear of THRESHOLD on either side: by honest answers (below) and by the
+#: answers a copy holds (above), for answers that weigh half of MIN_COPIED_TOKENS or more.
 MARGIN = 0.10
+#: Weight kept clear of MIN_COPIED_TOKENS by the answers an honest file comes within MARGIN
+#: of THRESHOLD to (measured: 10 tokens, chapter 8 written from the hints).
+WEIGHT_MARGIN = 6
+#: The rewrite each answer copied alone is put through here (the answer files get all).
+SAMPLED_REWRITES = ("all at once",)
 
 
-# -- edits that change nothing ------------------------------------------------------------
+@cache
+def sampled_detections(number: int) -> tuple[Detection, ...]:
+    """Chapter ``number``'s weighty copies put to the detector: its answer file through every
+    rewrite, each answer copied alone through ``SAMPLED_REWRITES``."""
+    found = []
+    for copied in copied_files(number):
+        if weighty(copied):
+            rewrites = REWRITES if copied.name == "solution" else SAMPLED_REWRITES
+            found += [detection(copied, rewrite) for rewrite in rewrites]
+    return tuple(found)
 
 
-def _local_names(function: ast.FunctionDef) -> set[str]:
-    names = {a.arg for a in function.args.args + function.args.kwonlyargs} - {"self"}
-    for node in ast.walk(function):
-        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
-            names.add(node.id)
-    return names
+@pytest.mark.parametrize("number", chapters())
+def test_rewritten_copies_of_a_chapters_answers_are_found_at_the_required_rate(number):
+    found = sampled_detections(number)
+    missed = [(d.copied.name, d.rewrite, copied_tokens(list(d.found))) for d in found if not d.detected]
+    assert len(found) - len(missed) >= REQUIRED_RATE * len(found), missed
+    for result in found:
+        if result.detected:  # (named: which function copies which answer, and how much)
+            message = describe_copies(list(result.found), f"{number:02d}.py")
+            first = result.found[0]
+            where = f"{first.answer.origin}, at {number:02d}.py:{first.line}"
+            assert f"{first.name} is {first.similarity:.0%} {where}" in message
+            assert f"({copied_tokens(list(result.found))} tokens of it" in message
 
 
-def renamed(function: ast.FunctionDef) -> ast.FunctionDef:
-    """Every parameter and local variable renamed, docstrings and annotations dropped."""
-    names = {name: f"my_{i}" for i, name in enumerate(sorted(_local_names(function)))}
-    for node in ast.walk(function):
-        if isinstance(node, ast.Name) and node.id in names:
-            node.id = names[node.id]
-        elif isinstance(node, ast.arg):
-            node.arg, node.annotation = names.get(node.arg, node.arg), None
-        elif isinstance(node, ast.FunctionDef):
-            node.returns = None
-        body = getattr(node, "body", None)
-        docstring = (
-            isinstance(body, list)
-            and body
-            and isinstance(body[0], ast.Expr)
-            and isinstance(body[0].value, ast.Constant)
-            and isinstance(body[0].value.value, str)
-        )
-        if docstring:
-            node.body = body[1:] or [ast.Pass()]
-    return function
+def test_the_chapters_that_a_copy_can_be_told_in_are_those_whose_answers_weigh_enough():
+    """A copy is found from MIN_COPIED_TOKENS tokens beyond what the exercise file gives:
+    chapter 2's Moller-Trumbore and chapter 10's heuristics are lighter (everyone writes them
+    alike); every other chapter's answer file is heavy enough to be found when copied."""
+    light = {number for number in chapters() if not any(weighty(c) for c in copied_files(number))}
+    assert light == {2, 10}, light
 
 
-def _statement(text: str) -> list[ast.stmt]:
-    return ast.parse(textwrap.dedent(text)).body
+def test_the_issues_rewrite_of_chapter_7_is_found():
+    """The 35-line rewrite the issue measured: chapter 7's answer with its operators as
+    ``operator`` calls and its attributes read through ``getattr`` (the best match fell to
+    0.38 and the copy scored 12/12)."""
+    solution = next(c for c in copied_files(7) if c.name == "solution")
+    text = rewritten(solution.source, "operators and getattr", public_names(7))
+    assert "getattr(operator, 'mul')(" in text
+    assert "def trace_paths(" in text
+    found = copies_in(ast.parse(text), chapter(7).rules.fingerprints)
+    assert is_a_copy(found)
+    copied = {c.answer.function for c in found}
+    assert {f"ptlab.integrators.path.{name}" for name in ("scatter", "trace_paths", "direct_light")} <= copied
+    assert min(c.similarity for c in found if c.weight >= MIN_COPIED_TOKENS / 2) >= THRESHOLD + MARGIN
 
 
-def _middle(function: ast.FunctionDef) -> int:
-    return len(function.body) // 2
-
-
-def dead_assignment(function: ast.FunctionDef) -> None:
-    function.body[_middle(function) : _middle(function)] = _statement("unused = 0")
-
-
-def dead_branch(function: ast.FunctionDef) -> None:
-    function.body[_middle(function) : _middle(function)] = _statement("if False:\n    pass")
-
-
-def unused_parameter(function: ast.FunctionDef) -> None:
-    function.args.kwonlyargs.append(ast.arg("spare"))
-    function.args.kw_defaults.append(ast.Constant(None))
-
-
-def self_assignment(function: ast.FunctionDef) -> None:
-    name = sorted(a.arg for a in function.args.args if a.arg != "self")[0]
-    function.body[:0] = _statement(f"{name} = {name}")
-
-
-def _reads(node: ast.AST) -> set[str]:
-    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
-
-
-def reordered(function: ast.FunctionDef) -> None:
-    """Two adjacent independent assignments swapped (the first such pair at any depth); a
-    function without one gets its last two statements' order kept and a dead one instead."""
-    for node in ast.walk(function):
-        body = getattr(node, "body", None)
-        for i in range(len(body) - 1 if isinstance(body, list) else 0):
-            first, second = body[i], body[i + 1]
-            if isinstance(first, ast.Assign) and isinstance(second, ast.Assign):
-                written = [_reads(t) for t in (first.targets[0], second.targets[0])]
-                if not written[0] & _reads(second) and not written[1] & _reads(first):
-                    body[i], body[i + 1] = second, first
-                    return
-    dead_assignment(function)
-
-
-def split_returns(function: ast.FunctionDef) -> None:
-    """``return f(x)`` written ``result = f(x); return result``, everywhere."""
-    for node in ast.walk(function):
-        for name in ("body", "orelse"):
-            body = getattr(node, name, None)
-            if isinstance(body, list):
-                for i in reversed(range(len(body))):
-                    if isinstance(body[i], ast.Return) and body[i].value is not None:
-                        value = body[i].value
-                        body[i : i + 1] = [
-                            ast.Assign([ast.Name("result", ast.Store())], value, lineno=0),
-                            ast.Return(ast.Name("result", ast.Load())),
-                        ]
-
-
-def commuted(function: ast.FunctionDef) -> None:
-    """``a * b`` written ``b * a``, and ``a + b`` ``b + a``, everywhere."""
-    for node in ast.walk(function):
-        if isinstance(node, ast.BinOp) and isinstance(node.op, ast.Mult | ast.Add):
-            node.left, node.right = node.right, node.left
-
-
-EDITS = {
-    "dead assignment": [dead_assignment],
-    "dead branch": [dead_branch],
-    "unused parameter": [unused_parameter],
-    "self assignment": [self_assignment],
-    "reordered": [reordered],
-    "split return": [split_returns],
-    "commuted": [commuted],
-    "wrapped": [],  # (the wrapper is made by _file)
-    "all at once": [dead_assignment, dead_branch, unused_parameter, reordered, split_returns, commuted],
-}
-
-
-# -- near-copies of whole exercise files ----------------------------------------------------
-
-#: Per chapter: its imports, its functions {exercise name: library function} and its class
-#: (exercise name, library class, the methods copied).
-CHAPTERS = {
-    3: dict(
-        imports="import numpy as np\nfrom ptlab.vectors import dot\nfrom ptlab.scattering import _column\n",
-        functions={
-            "reflect": "ptlab.scattering.reflect",
-            "refract": "ptlab.scattering.refract",
-            "fresnel": "ptlab.scattering.fresnel_dielectric",
-        },
-    ),
-    6: dict(
-        imports=(
-            "import math\nimport numpy as np\nfrom ptlab.materials.base import Material\n"
-            "from ptlab.sampling import cosine_hemisphere_around, uniform_hemisphere_around\n"
-            "from ptlab.vectors import dot\n"
-        ),
-        cls=("Lambertian", "ptlab.materials.Diffuse", ("eval", "pdf", "sample")),
-        init="    def __init__(self, albedo=(0.8, 0.8, 0.8)):\n"
-        "        self.albedo = np.asarray(albedo, dtype=np.float32)\n"
-        "        self.sampling = 'cosine'\n",
-    ),
-    7: dict(
-        imports="import numpy as np\nfrom ptlab.integrators.path import *  # noqa\n",
-        functions={
-            name: f"ptlab.integrators.path.{name}"
-            for name in ("direct_light", "russian_roulette", "scatter", "trace_paths")
-        },
-    ),
-    9: dict(
-        imports=(
-            "import math\nimport numpy as np\nfrom ptlab.materials.base import Material\n"
-            "from ptlab.materials.microfacet import *  # noqa\n"
-        ),
-        functions={name: f"ptlab.materials.microfacet.{name}" for name in ("D", "G1", "G2", "Lambda")},
-        cls=("GGXMetal", "ptlab.materials.microfacet.Microfacet", ("eval", "pdf", "sample")),
-        init="    def __init__(self, f0=(1.0, 0.782, 0.344), alpha=0.25, sampling='ggx'):\n        pass\n",
-    ),
-}
-
-
-def _edited(source: str, edit: str) -> list[ast.FunctionDef]:
-    """The library function ``source`` renamed and edited as ``EDITS[edit]`` says; wrapped,
-    it is a private helper and a function of its name that only calls it."""
-    function = renamed(ast.parse(textwrap.dedent(source)).body[0])
-    for step in EDITS[edit]:
-        step(function)
-    if edit != "wrapped":
-        return [function]
-    name, function.name = function.name, f"_{function.name}_impl"
-    method = function.args.args[:1] and function.args.args[0].arg == "self"
-    call = f"self.{function.name}" if method else function.name
-    wrapper = _statement(
-        f"def {name}({'self, ' if method else ''}*args, **kwargs):\n    return {call}(*args, **kwargs)"
-    )[0]
-    return [wrapper, function]
-
-
-def near_copy(number: int, edit: str) -> str:
-    """Chapter ``number``'s exercise file made of the library's answers, edited by ``edit``."""
-    spec = CHAPTERS[number]
-    parts = [spec["imports"]]
-    for name, library in spec.get("functions", {}).items():
-        for function in _edited(inspect.getsource(resolve(library)), edit):
-            if not function.name.startswith("_"):
-                function.name = name
-            parts.append(ast.unparse(ast.fix_missing_locations(function)))
-    if "cls" in spec:
-        name, library, methods = spec["cls"]
-        body = [spec["init"]]
-        body += [
-            textwrap.indent(ast.unparse(ast.fix_missing_locations(function)), "    ")
-            for method in methods
-            for function in _edited(inspect.getsource(resolve(f"{library}.{method}")), edit)
-        ]
-        if edit in ("all at once", "wrapped"):  # (an extra method of the student's own)
-            body.append("    def describe(self):\n        return 'a material of my own'")
-        parts.append(f"class {name}(Material):\n" + "\n\n".join(body))
-    return "\n\n\n".join(parts) + "\n"
-
-
-# -- the honest population ------------------------------------------------------------------
-
-
-def honest_files() -> dict[str, str]:
-    """{name: text} of every honest file: the right and wrong answers of tests/exercises
-    (the wrong_answers.toml patches applied), and the exercise templates as handed out."""
-    files = {p.name: p.read_text() for p in sorted(EXERCISES.glob("[0-9][0-9]_*.py"))}
-    for name, wrong in tomllib.loads((EXERCISES / "wrong_answers.toml").read_text()).items():
-        text = files[wrong["base"]]
-        for replacement in wrong["replace"]:
-            text = text.replace(replacement["old"], replacement["new"])
-        files[f"{name}.py"] = text
-    files.update({f"template {p.name}": p.read_text() for p in sorted(TEMPLATES.glob("*.py"))})
-    return files
-
-
-def _number(name: str) -> int:
-    return int(name.removeprefix("template ")[:2])
-
-
-def best_similarities(text: str, answers: Answers) -> dict[str, float]:
-    """{library answer: the similarity of the file's function most like it}."""
-    found = similarities(ast.parse(text), answers)
-    return {a.origin: found[a.origin].similarity if a.origin in found else 0.0 for a in answers.answers}
-
-
-# -- the tests --------------------------------------------------------------------------------
-
-
-@pytest.mark.parametrize("edit", list(EDITS))
-@pytest.mark.parametrize("number", sorted(CHAPTERS))
-def test_a_near_copy_of_the_librarys_answers_is_found_and_named(number, edit):
-    text = near_copy(number, edit)
-    ast.parse(text)  # (a file a student could hand in)
-    found = copies_in(ast.parse(text), chapter(number).rules.fingerprints)
-    assert is_a_copy(found), (edit, text)
-    copied = {copy.answer.origin for copy in found}
-    expected = set(CHAPTERS[number].get("functions", {}).values())
-    if "cls" in CHAPTERS[number]:
-        expected |= {f"{CHAPTERS[number]['cls'][1]}.{m}" for m in CHAPTERS[number]["cls"][2]}
-    assert expected <= copied | _not_in_rules(number), (expected - copied, found)
-    assert all(copy.similarity >= THRESHOLD + MARGIN for copy in found), found
-    first = found[0]
-    message = describe_copies(found, f"{number:02d}.py")
-    said = f"{first.name} is {first.similarity:.0%} {first.answer.origin}, at {number:02d}.py:{first.line}"
-    assert said in message, message
-
-
-def _not_in_rules(number: int) -> set[str]:
-    """The library functions a near-copy holds that its chapter does not count as answers."""
-    origins = {answer.origin for answer in chapter(number).rules.fingerprints.answers}
-    spec = CHAPTERS[number]
-    held = set(spec.get("functions", {}).values())
-    if "cls" in spec:
-        held |= {f"{spec['cls'][1]}.{m}" for m in spec["cls"][2]}
-    return held - origins
+@pytest.mark.parametrize(
+    ("name", "answers"),
+    [
+        ("07_copy_through_a_dict_of_lambdas.py", ("scatter", "trace_paths", "direct_light")),
+        ("06_copy_through_a_dict_of_lambdas.py", ("Diffuse.eval", "Diffuse.pdf")),
+    ],
+)
+def test_a_copy_called_through_a_dict_of_lambdas_is_found(name, answers):
+    """The red-team student's two scripts (NumPy respelt, then every operator called through
+    a module-level dict of lambdas) had full marks: the table's lambdas are inlined where
+    they are called and NumPy's spellings read as one, so the copy is found again."""
+    text = (SUBMISSIONS / name).read_text()
+    assert "OPS['Mult'](" in text
+    assert "np.select([" in text
+    found = copies_in(ast.parse(text), chapter(chapter_of(name)).rules.fingerprints)
+    assert is_a_copy(found), [(c.name, c.similarity) for c in found]
+    module = {7: "ptlab.integrators.path", 6: "ptlab.materials"}[chapter_of(name)]
+    assert {f"{module}.{answer}" for answer in answers} <= {c.answer.function for c in found}
 
 
 @pytest.mark.parametrize("name", list(honest_files()))
 def test_no_honest_answer_is_taken_for_a_copy(name):
     text = honest_files()[name]
-    number = _number(name)
-    answers = chapter(number).rules.fingerprints
-    assert not is_a_copy(copies_in(ast.parse(text), answers)), name
-    # Clear of the threshold: lowered by MARGIN it still finds no copy.
-    sims = best_similarities(text, answers)
-    near = [a for a in answers.answers if sims[a.origin] >= THRESHOLD - MARGIN]
-    assert sum(a.size for a in near) < MIN_COPIED_TOKENS, [(a.origin, sims[a.origin]) for a in near]
+    number = chapter_of(name)
+    assert not is_a_copy(copies_in(ast.parse(text), chapter(number).rules.fingerprints)), name
+    # Clear of the thresholds: what it comes within MARGIN of copying weighs little.
+    weight = near_weight([s for s in _honest_scores() if s.file == name], name, MARGIN)
+    assert weight <= MIN_COPIED_TOKENS - WEIGHT_MARGIN, (name, weight)
     if number in (6, 9):  # (and ``ptlab grade``'s reading of the class)
         cls = {6: "Lambertian", 9: "GGXMetal"}[number]
         assert copied_class(ast.parse(text), cls, MATERIALS.fingerprints) == []
 
 
-def test_the_threshold_lies_between_honest_answers_and_near_copies_with_its_margin():
-    """The figures in ptlab/untrusted/copies.py's docstring: the most similar honest
-    function to an answer that weighs enough to count alone, and the least similar
-    near-copy of a copied answer."""
+@cache
+def _honest_scores():
+    return tuple(honest_scores())
+
+
+def test_the_threshold_lies_between_honest_answers_and_copies_with_its_margin():
+    """Of the answers that weigh half of MIN_COPIED_TOKENS or more: the honest function most
+    like one, and the copy least like the answer it copies (in every sampled rewrite)."""
     honest = max(
-        (sim, name, origin)
-        for name, text in honest_files().items()
-        for origin, sim in best_similarities(text, chapter(_number(name)).rules.fingerprints).items()
-        if _size(_number(name), origin) >= MIN_COPIED_TOKENS / 2
+        (s.similarity, s.file, s.answer.origin)
+        for s in _honest_scores()
+        if s.answer.size >= MIN_COPIED_TOKENS / 2
     )
     copies = min(
-        (copy.similarity, number, edit, copy.answer.origin)
-        for number in CHAPTERS
-        for edit in EDITS
-        for copy in copies_in(ast.parse(near_copy(number, edit)), chapter(number).rules.fingerprints)
+        (c.similarity, d.copied.chapter, d.copied.name, d.rewrite, c.answer.origin)
+        for number in chapters()
+        for d in sampled_detections(number)
+        for c in d.found
+        if c.weight >= MIN_COPIED_TOKENS / 2
     )
-    print(f"most similar honest answer: {honest}; least similar near-copy: {copies}")
+    print(f"most similar honest answer: {honest}; least similar copy: {copies}")
     assert honest[0] + MARGIN <= THRESHOLD <= copies[0] - MARGIN, (honest, copies)
 
 
-def _size(number: int, origin: str) -> int:
-    return next(a.size for a in chapter(number).rules.fingerprints.answers if a.origin == origin)
-
-
-def test_the_code_the_exercise_files_give_is_no_evidence_of_copying():
-    from ptlab.untrusted.copies import template_grams
-
+def test_what_the_exercise_file_dictates_is_no_evidence():
+    """Chapter 8 written from its exercise file's hints is the library's answer nearly token
+    for token (the hints spell it out): it is no copy, and what it shares with the answer
+    weighs almost nothing: the template's code and hints, and the calls it names with the
+    student's own variables, are not evidence."""
+    text = (EXERCISES / "08_right_from_hints.py").read_text()
+    answers = chapter(8).rules.fingerprints
+    found = copies_in(ast.parse(text), answers)
+    assert {c.answer.function for c in found} <= {
+        "ptlab.rendering.jobs.make_tiles",
+        "08_parallel.py:render_parallel",
+    }
+    assert copied_tokens(found) <= MIN_COPIED_TOKENS - WEIGHT_MARGIN
+    weights = {a.origin: a.size for a in answers.answers}
+    assert weights["08_parallel.py:render_parallel"] <= 6
+    assert weights["ptlab.rendering.jobs.make_tiles"] <= 6
+    # The given helper of chapter 8 (``accelerator_for``), and a hint's code in a docstring.
     given = template_grams()
-    # The given helper of chapter 8 (``accelerator_for``) is in the library's answer too,
-    # and a hint's code (``RenderSetup(...)``) in its docstring: neither counts.
-    template = (TEMPLATES / "08_parallel.py").read_text()
-    helper = next(f for f in functions_in(ast.parse(template)) if f.name == "accelerator_for")
-    from ptlab.untrusted.copies import grams
-
+    template = ast.parse(Path(chapter(8).template).read_text())
+    helper = next(f for f in functions_in(canonical(template)) if f.name == "accelerator_for")
     assert grams(helper)
     assert grams(helper) <= given
-    hint = grams(ast.parse('RenderSetup(scene=scene, backend=resolve_backend("auto"), width=width)'))
-    assert hint <= given
-    for number in range(1, 11):
+    assert grams(ast.parse('RenderSetup(scene=scene, backend=resolve_backend("auto"), width=width)')) <= given
+    for number in chapters():
         answers = chapter(number).rules.fingerprints
-        assert all(not (answer.grams & given) for answer in answers.answers)
-        # The exercise file as handed out (given code, hints, stubs) shares nothing with them.
+        assert all(not (answer.grams & given) for answer in answers.answers), number
+        # The exercise file as handed out (given code, hints, stubs) is not like any of them.
         template = Path(chapter(number).template).read_text()
-        assert set(best_similarities(template, answers).values()) == {0.0}, number
+        assert not copies_in(ast.parse(template), answers), number
+
+
+def test_a_copy_of_an_earlier_releases_answer_is_found_and_dated():
+    text = (SUBMISSIONS / "06_diffuse_of_an_earlier_release.py").read_text()
+    answers = chapter(6).rules.fingerprints
+    found = copies_in(ast.parse(text), answers)
+    assert is_a_copy(found)
+    message = describe_copies(found, "06_diffuse.py")
+    assert re.search(
+        r"eval is 100% ptlab\.materials\.Diffuse\.eval \(as of 2026-11-27, [0-9a-f]{7}\)", message
+    )
+    today = Answers(
+        tuple(a for a in answers.answers if "(as of" not in a.origin), answers.given, answers.helpers
+    )
+    assert not is_a_copy(copies_in(ast.parse(text), today))  # (today's answers alone miss it)
+
+
+def test_the_earlier_releases_answers_are_kept_as_source():
+    """The data file holds sources (which the detector reads again whatever its
+    normalisation), dated, for the answers that changed: chapter 7's path loop among them."""
+    from ptlab.untrusted.copies import PAST_ANSWERS
+
+    kept = json.loads(PAST_ANSWERS.read_text())["answers"]
+    assert all(ast.parse(v["source"]) and re.fullmatch(r"\d{4}-\d\d-\d\d", v["date"]) for v in kept)
+    origins = {v["origin"] for v in kept}
+    assert {"ptlab.integrators.path.trace_paths", "ptlab.materials.Diffuse.eval"} <= origins
 
 
 def test_a_class_is_a_copy_when_each_graded_method_it_writes_is_one():
-    text = near_copy(6, "all at once")  # (with a method of the student's own added)
-    tree = ast.parse(text)
-    found = copied_class(tree, "Lambertian", MATERIALS.fingerprints)
-    assert {copy.name for copy in found} == {"eval", "pdf", "sample"}
+    copied = next(c for c in copied_files(6) if c.name == "ptlab.materials.Diffuse")
+    tree = ast.parse(rewritten(copied.source, "all at once", public_names(6) | {"Diffuse"}))
+    found = copied_class(tree, "Diffuse", MATERIALS.fingerprints)
+    assert {c.name for c in found} == {"eval", "pdf", "sample"}
     assert is_a_copy(found)
     # One graded method of the student's own makes the class the student's, as overriding
     # one of an inherited class does (``ptlab grade`` lets a material inherit the others).
     own = ast.parse((EXERCISES / "06_right_uniform.py").read_text())
     own_eval = next(f for f in functions_in(own) if f.name == "eval")
-    lambertian = next(c for c in tree.body if isinstance(c, ast.ClassDef) and c.name == "Lambertian")
-    lambertian.body = [f for f in lambertian.body if getattr(f, "name", "") != "eval"] + [own_eval]
-    assert copied_class(tree, "Lambertian", MATERIALS.fingerprints) == []
+    diffuse = next(c for c in tree.body if isinstance(c, ast.ClassDef) and c.name == "Diffuse")
+    diffuse.body = [f for f in diffuse.body if getattr(f, "name", "") != "eval"] + [own_eval]
+    assert copied_class(tree, "Diffuse", MATERIALS.fingerprints) == []
 
 
-def test_a_near_copy_of_the_librarys_diffuse_is_a_working_material():
-    # (so that the 0 of the grading run below is the copy's verdict, not a broken file)
-    import numpy as np
-
+@pytest.mark.parametrize("rewrite", [r for r in REWRITES if r != "as copied"])
+def test_a_rewritten_copy_computes_what_the_library_does(rewrite):
+    """The rewrites change how the code reads, not what it computes (so that a copy found
+    is a copy that works): the library's Diffuse, rewritten, gives the library's values."""
     from ptlab.materials import Diffuse
 
+    copied = next(c for c in copied_files(6) if c.name == "ptlab.materials.Diffuse")
     namespace: dict = {}
-    exec(compile(near_copy(6, "all at once"), "06_diffuse.py", "exec"), namespace)
-    copy, library = namespace["Lambertian"]((0.5, 0.6, 0.7)), Diffuse((0.5, 0.6, 0.7), sampling="cosine")
+    exec(
+        compile(rewritten(copied.source, rewrite, public_names(6) | {"Diffuse"}), "06.py", "exec"), namespace
+    )
+    copy, library = namespace["Diffuse"]((0.5, 0.6, 0.7), "uniform"), Diffuse((0.5, 0.6, 0.7), "uniform")
     rng = np.random.default_rng(0)
     wo, wi, n = (v / np.linalg.norm(v, axis=1, keepdims=True) for v in rng.normal(size=(3, 64, 3)))
     u = rng.random((64, 2))
@@ -390,12 +263,15 @@ def test_a_near_copy_of_the_librarys_diffuse_is_a_working_material():
 
 @pytest.mark.slow
 @pytest.mark.subprocess
-def test_a_near_copy_of_chapter_6_scores_nothing_in_a_grading_run(tmp_path, capsys):
-    path = tmp_path / "06_diffuse.py"
-    path.write_text(near_copy(6, "all at once"))
-    assert main(["exercise", "check", "6", str(path), "--json", str(tmp_path / "r.json")]) == 1
+def test_the_issues_rewrite_of_chapter_7_scores_nothing_in_a_grading_run(tmp_path, capsys):
+    solution = next(c for c in copied_files(7) if c.name == "solution")
+    path = tmp_path / "07_path_tracing.py"
+    path.write_text(rewritten(solution.source, "operators and getattr", public_names(7)))
+    assert main(["exercise", "check", "7", str(path), "--json", str(tmp_path / "r.json")]) == 1
     result = json.loads((tmp_path / "r.json").read_text())
     assert result["score"] == 0, result
     out = capsys.readouterr().out
     assert "a copy of ptlab's own answer, with the names changed" in out
-    assert re.search(r"(eval|pdf|sample) is \d+% ptlab\.materials\.Diffuse\.(eval|pdf|sample)", out), out
+    assert re.search(
+        r"\d+ tokens of it that the exercise file does not give: \w+ is \d+% ptlab\.integrators", out
+    )

@@ -30,8 +30,9 @@ def test_forged_replies_and_verdicts_earn_nothing(attack):
 
 
 def test_patching_the_checks_numpy_and_the_report_earns_nothing(attack):
+    # (It swaps a function's __code__ at import: the grader cannot read what would run.)
     result = grade(chapter(1), attack("patches_the_grader.py"), timeout_scale=0.2)
-    assert_honest_failure(result, "not written yet")
+    assert_honest_failure(result, "needs a teacher's look")
 
 
 def test_the_grader_never_unpickles_what_the_student_sends(attack):
@@ -152,7 +153,10 @@ def generate_rays(camera, width, height, pixel_x, pixel_y, u):
 
 
 @pytest.mark.parametrize("what", MALFORMED)
-def test_a_malformed_reply_fails_the_check_with_one_line_in_bounded_time(tmp_path, what):
+def test_a_malformed_reply_fails_the_check_with_one_line_in_bounded_time(tmp_path, monkeypatch, what):
+    # The forger writes to the channel's descriptor with os.write, which the grader's reading
+    # of the text refuses before anything runs; this test is of the protocol underneath.
+    monkeypatch.setattr("ptlab.untrusted.submission.unreadable_in_text", lambda *arguments: None)
     path = tmp_path / "01_cameras.py"
     path.write_text(FORGER.format(payload=MALFORMED[what], after=AFTER.get(what, "pass")))
     start = time.monotonic()

@@ -146,7 +146,8 @@ def test_a_replay_of_a_known_grading_seed_earns_nothing_under_a_fresh_one(tmp_pa
 def _converged(tmp_path: Path) -> Path:
     """Chapter 7's right answer whose loop ignores its samples: it adds a picture rendered
     beforehand (the furnace's analytic value for the scene's own albedo and emission, else
-    a converged Cornell box of the library's) to every pass."""
+    a converged Cornell box of the library's, at the pixel each camera ray goes through: the
+    film has a row per path) to every pass."""
     from ptlab.exercises.chapters.ch07_path_tracing import CORNELL_RENDER, cornell_passes
 
     picture = cornell_passes(seed=3).mean(axis=0).reshape(-1, 3)  # (32 * 32, 3), at home
@@ -170,8 +171,13 @@ def trace_paths(film, scene, accel, paths, sampler, settings):
         depth = settings.max_depth if settings.rr >= 1 else 1000
         value = le * (1 - a ** (depth + 1)) / (1 - a)
         _np.add.at(film, paths.pixel, value)
-    elif len(film) == len(CORNELL):
-        _np.add.at(film, paths.pixel, CORNELL[paths.pixel])
+    elif scene.name == "cornell-box":  # the picture's pixel of each camera ray, by projection
+        camera, d = scene.camera, paths.dirs.astype(float)
+        scale, ahead = _np.tan(_np.radians(camera.fov_y) / 2), d @ camera.forward
+        x = ((d @ camera.right) / ahead / scale + 1) / 2 * 32
+        y = (1 - (d @ camera.up) / ahead / scale) / 2 * 32
+        pixel = _np.clip(y.astype(int), 0, 31) * 32 + _np.clip(x.astype(int), 0, 31)
+        _np.add.at(film, paths.pixel, CORNELL[pixel])
     return rays
 """
     )

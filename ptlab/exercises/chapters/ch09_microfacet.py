@@ -268,7 +268,7 @@ def _render(module, sampling: str) -> str:
             library,
             text("ch09.yours", what=what),
             hint,
-            render_options(seed)["spp_per_pass"],
+            spp_per_pass,
         )
     except CheckFailed as failure:
         from ptlab.exercises.inspect_command import suggestion

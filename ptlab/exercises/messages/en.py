@@ -45,6 +45,24 @@ MESSAGES: dict[str, str] = {
     "require.missing": "your file has no function {names} (keep the names of the exercise file)",
     "require.library_answer": "{name}: this is ptlab's own answer ({origin}), not yours: write it in your file",
     "require.copied": "your file holds {copied}: write your own",
+    # Code the grader cannot read in the file (ptlab.untrusted.readable): a reason, in {why}.
+    "require.unreadable": "{name}: {why}: the grader cannot read the code that runs for it in your "
+    "file, so the checks that use it earn nothing; this needs a teacher's look",
+    "unreadable.at_import": "your file uses {what} when it is imported ({file}:{line}), which makes code "
+    "from data or finds things by names built at run time, and so may define or change any of its functions",
+    "unreadable.runs_made_code": "it uses {what} ({file}:{line}), which makes code from data or finds "
+    "things by names built at run time",
+    "unreadable.not_in_text": "it is not defined in the text of {file} (it is made when the file runs)",
+    "unreadable.imported": "it is imported from {module}, which is not a file of your submission",
+    "unreadable.not_the_text": "the code that runs for it ({code}, said to be from {where}) is not the "
+    "code written there",
+    "unreadable.too_much": "the grader could not follow all the code it runs",
+    "unreadable.hint.importlib": " (to use a package only where it is installed, write 'try: import numba' "
+    "and 'except ImportError:')",
+    "unreadable.encoding": "{file} declares the source encoding {encoding}, in which a reader sees other "
+    "text than Python runs (save it as UTF-8)",
+    "unreadable.reordered": "{file} holds characters that reorder the text on screen (line {line}), so a "
+    "reader sees other code than Python runs",
     "returned": "what {name} returned",
     "at_row": "row {row} of {rows}",
     "at_column": ", column {column}",
@@ -88,6 +106,11 @@ MESSAGES: dict[str, str] = {
     "picture's {regions} regions, {total:.3g} times over the whole picture, where a right answer's is at "
     "least 1/{clean_ratio:g} of it, with chance at least {bound:.3g}: this test fails a right answer with "
     "probability at most {false_alarm:g})",
+    "render.less_noisy": "less noisy than the library's at the same {spp} samples per pixel (your passes' "
+    "variance is {low:.3g} times the library's in half the picture's {regions} regions, {total:.3g} times over "
+    "the whole picture, where a right answer's is at least 1/{clean_ratio:g} of it, with chance at least "
+    "{bound:.3g}): a picture of other light has noise of its own (a material's wider highlight is less noisy), "
+    "so the difference in the mean is what to look at",
     "render.too_noisy": "too noisy: your passes' variance is {median:.3g} times the library's at the same "
     "samples per pixel in half the picture's {regions} regions ({total:.3g} times over the whole picture), "
     "where a right answer's is at most {noise_ratio:g} times (with chance, at most {bound:.3g}: this test "
@@ -361,7 +384,9 @@ MESSAGES: dict[str, str] = {
     "ch06.hint.double": "2x too big: the hemisphere's uniform density is 1/(2 pi), not 1/pi",
     "ch06.hint.pi": "a factor pi: the cosine density is cos(theta) / pi",
     "ch06.pdf_total": "your pdf integrates to {total:.4f} over the sphere; a probability density must integrate to 1",
-    "ch06.pdf_ok": "the pdf integrates to {total:.4f} over the sphere, 0 below the surface",
+    "ch06.pdf_ok": "the pdf integrates to {total:.4f} over the sphere, 0 below the surface, and {samples:,} directions from sample follow it",
+    "ch06.pdf_not_density": "pdf is not the density of your samples: sample puts {yours:.1%} of its directions where cos(theta_i) is between {low:.1f} and {high:.1f}, but pdf integrates to {expected:.1%} there (chi-square p = {p:.2g}); pdf must be the density with which sample picks wi (cosine sampling: cos(theta) / pi; uniform: 1 / (2 pi))",
+    "ch06.pdf_not_density_fails": "pdf is not the density of your samples: {yours:.1%} of the directions sample gives land below the surface or where pdf is 0, but pdf leaves {expected:.1%} there (chi-square p = {p:.2g}); pdf must be the density with which sample picks wi",
     "ch06.hint.black": "it reflects nothing: eval is 0 everywhere",
     "ch06.harness_eval": "the harness's points need the eval the chapter asks for (the reflectance{what}), but yours differs from it by up to {error:.3g}{black}: see the {check} check",
     "ch06.harness_warns": "the material harness warns of {names}{what}: {hints}",
@@ -444,7 +469,9 @@ MESSAGES: dict[str, str] = {
     "ch07.hint.too_dark": "too dark: light is lost at some bounce (shadow rays blocked by the surface they start on? the throughput?)",
     "ch07.furnace": "{what}: {averages}: {hint}",
     "ch07.no_roulette": "without Russian roulette, at most {depth} bounces",
-    "ch07.furnace_ok": "your furnace averages {mean:.4f} +- {error:.4f}; the radiance is {radiance}",
+    "ch07.furnace_ok": "your furnace averages {mean:.4f} +- {error:.4f}; the radiance is {radiance}; {patterned}",
+    "ch07.patterned": "the furnace of {patches} patches and an inner sphere, each of its own albedo and emission, with your trace_paths",
+    "ch07.hint.patterned": "a loop right in the furnace of one material is right here too: does each path take the emission and the albedo of the triangle it hits, and do shadow rays see the inner sphere?",
     "ch07.your_roulette": "with your roulette at p_rr = 0.8",
     "ch07.yours": "the Cornell box with your trace_paths",
     # Chapter 8: Parallel rendering over tiles (chapters/ch08_parallel.py).
@@ -548,25 +575,26 @@ MESSAGES: dict[str, str] = {
     "ch10.check.render": "render",
     "ch10.shape": "{name} must return one weight per sample, shape {expected}; yours has shape {shape}",
     "ch10.hint.both_zero": "0 / 0: where both pdfs are 0 the sample cannot happen; give it weight 0",
-    "ch10.nan": "{name} returned NaN for pdf = {pdf:g}, other = {other:g}",
+    "ch10.hint.overflow": 'overflow: in float32 the square of a density above {limit:.3g} is inf, and inf / inf is NaN (the chapter\'s pitfall "Overflow"); divide both densities by the larger first, so that nothing above 1 is squared: with r = the smaller / the larger, the weight is 1 / (1 + r^2) where pdf is the larger, r^2 / (1 + r^2) where other is',
+    "ch10.nan": "{name} returned NaN for pdf = {pdf:g}, other = {other:g} ({dtype})",
     "ch10.inf": "{name} returned {weight:g} for pdf = {pdf:g}, other = {other:g}: a weight lies between 0 and 1",
-    "ch10.known": "{name}(pdf = {pdf:g}, other = {other:g}) should be {formula} = {expected:.4g}, yours is {yours:.4g}",
+    "ch10.known": "{name}(pdf = {pdf:g}, other = {other:g}) in {dtype} should be {formula} = {expected:.4g}, yours is {yours:.4g}",
     "ch10.known_ok": "{n} known values, {formula}",
     "ch10.hint.both_one": ": both strategies weighted 1, so every light path found by both is counted twice (double counting)",
     "ch10.hint.both_zero_weights": ": both weighted 0, so light found by either is lost",
-    "ch10.sum": "with heuristic={heuristic}, the weights of the two strategies for one sample (pdf_light = {pdf_light:.4g}, pdf_bsdf = {pdf_bsdf:.4g}) add up to {total:.4g}, not 1{hint}",
+    "ch10.sum": "with heuristic={heuristic}, the weights of the two strategies for one sample (pdf_light = {pdf_light:.4g}, pdf_bsdf = {pdf_bsdf:.4g}, {dtype}) add up to {total:.4g}, not 1{hint}",
     "ch10.power": "power",
     "ch10.balance": "balance",
     "ch10.hint.order": "yours is the {heuristic} heuristic of (other, pdf): the densities are passed on in the wrong order, so each strategy gets the other's weight. mis_weight(pdf, other) is the weight of the strategy that drew the sample with density pdf, and grows with it (the chapter's pitfall \"The argument order\")",
     "ch10.hint.other_heuristic": "yours is the {heuristic} heuristic: is the heuristic argument passed on?",
     "ch10.hint.other_values": "yours sums to 1 but gives other values",
     "ch10.heuristic": "mis_weight(..., {name}) should be the {heuristic} heuristic; {hint}",
-    "ch10.sum_ok": "the two strategies' weights add up to 1 for 1000 random pairs, both heuristics",
+    "ch10.sum_ok": "the two strategies' weights add up to 1 for {n} random pairs of densities from 10^-3 to 10^30, both heuristics, in float32 and float64",
     "ch10.why.other_zero": "the other strategy cannot draw this sample (a mirror's BSDF pdf is 0 for a light sample), so this one must count it fully",
     "ch10.why.this_zero": "this strategy cannot draw the sample, so its weight is 0",
     "ch10.why.both_zero": "a sample neither strategy can draw gets weight 0",
     "ch10.hint.swapped": "yours gives these weights to the other strategy: are pdf and other passed on in the wrong order?",
-    "ch10.zero": "mis_weight(pdf = {pdf:g}, other = {other:g}, {heuristic}) should be {expected:g}, yours is {yours:g}: {why}",
+    "ch10.zero": "mis_weight(pdf = {pdf:g}, other = {other:g}, {heuristic}) in {dtype} should be {expected:g}, yours is {yours:g}: {why}",
     "ch10.zero_ok": "weight 1 when the other pdf is 0, 0 when this one is, 0 (not NaN) when both are",
     "ch10.yours": "veach-mis with your MIS weights",
     "ch10.render": "veach-mis with your MIS weights differs from the library's render along the very same paths: {region} is {ratio:.3f}x the library's, the whole image {overall:.3f}x (brighter: light counted by both strategies; darker: by neither; else each strategy's weight is off, see '{check}')",
@@ -593,7 +621,11 @@ MESSAGES: dict[str, str] = {
     "ch11.hint.one_sample": "one sample, or none, tells nothing of the spread: the variance is 0 there by convention, never NaN",
     "ch11.vom_known": "variance_of_mean of a pixel whose samples are {samples} (n = {n}, {channel}) should be {expected:.6g}, yours is {yours:.6g}{hint}",
     "ch11.vom_film": "variance_of_mean at pixel (x={x}, y={y}) ({channel}, n = {n}) should be {expected:.6g}, yours is {yours:.6g}",
-    "ch11.vom_ok": "s^2 / n with s^2 unbiased: {pixels} known pixels and a film of {film} pixels with 1 to 16 samples",
+    "ch11.vom_ok": "s^2 / n with s^2 unbiased, never below 0: {pixels} known pixels and a film of {film} pixels with 1 to 16 samples, {alike} of them of samples all alike",
+    "ch11.vom_negative": "variance_of_mean gives {value:.3g} for {pixel}, of {n} samples: a variance is never below 0",
+    "ch11.hint.cancellation": 'its samples are all {sample:.6g}, so sum x^2 - (sum x)^2 / n cancels to 0, and rounding makes it a hair below 0 (the chapter\'s pitfall "Cancellation"): clip it at 0',
+    "ch11.known_pixel": "the pixel whose samples are {samples} ({channel})",
+    "ch11.hint.pooled_below_zero": 'at pixel (x={x}, y={y}) every pixel of the 7 x 7 window has no noise, so its pooled v is 0, but a running-sum filter (uniform_filter, an integral image) leaves a remainder a hair below 0 there, whose square root is NaN (the chapter\'s pitfall "`sqrt` of a pooled value a hair below 0"): clip the pooled values at 0 before the square root',
     "ch11.hint.sigma": "your weights follow sigma_i alone, which sends samples to the bright pixels; relMSE divides each error by (mu_i + 0.01)^2, so the best share is sigma_i / (mu_i + 0.01)",
     "ch11.hint.no_sqrt": "your weights follow v_i = sigma_i^2 / (mu_i + 0.01)^2, not its square root: the relMSE is least with n_i proportional to sqrt(v_i)",
     "ch11.hint.no_pooling": "each pixel decides from its own few samples, so the pixel that caught a firefly gets the samples: pool v over the 7 x 7 pixels around each pixel before the square root",
@@ -607,7 +639,7 @@ MESSAGES: dict[str, str] = {
     "ch11.relative_ok": "the dark half's weights are {ratio:.3f}x the bright half's: sigma / (mu + 0.01)",
     "ch11.firefly": "one firefly at pixel (x={x}, y={y}) gets {ratio:.3g}x the weight of its neighbours: {hint}",
     "ch11.firefly_ok": "one firefly raises its neighbourhood, not its pixel alone ({ratio:.3f}x its neighbours' weight)",
-    "ch11.weights": "allocation_weights on a film of smooth and heavy-tailed noise, counts from 2 to 16 and three fireflies is not sqrt of the pooled relative variance, even up to a common factor: {hint}",
+    "ch11.weights": "allocation_weights on a film of smooth and heavy-tailed noise, counts from 2 to 16, three fireflies and a band without noise is not sqrt of the pooled relative variance, even up to a common factor: {hint}",
     "ch11.weights_ok": "sqrt of the pooled relative variance at {pixels} pixels, up to a common factor",
     "ch11.allocate_integers": "allocate must return whole numbers of new samples, 0 or more, for every pixel",
     "ch11.allocate_budget": "allocate gave {total} new samples in all; the budget is {budget}, to be spent exactly",

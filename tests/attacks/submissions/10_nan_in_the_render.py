@@ -12,6 +12,8 @@ def balance_heuristic(pdf, other):
 
 
 def power_heuristic(pdf, other):
+    larger = np.maximum(pdf, other)  # (divided first: no square overflows float32)
+    pdf, other = pdf / np.where(larger > 0, larger, 1), other / np.where(larger > 0, larger, 1)
     with np.errstate(invalid="ignore", divide="ignore"):
         return np.nan_to_num(pdf * pdf / (pdf * pdf + other * other))
 

@@ -77,8 +77,7 @@ def _feed(digest, value) -> None:
     elif value is None or type(value).__name__ in _SKIPPED_TYPES:
         return
     elif hasattr(value, "__dict__"):
-        for name in sorted(vars(value)):
-            item = vars(value)[name]
+        for _name, item in sorted(vars(value).items()):
             if isinstance(item, np.ndarray | bool | int | float):
                 _feed(digest, item)
 
