@@ -27,8 +27,12 @@ chapter's answers), ``sandbox`` (the process's view and namespaces), ``child`` (
 student's process), ``student_user`` (as whom it runs), ``confinement`` (the authorship
 hook), ``proxies`` (stand-ins), ``plain_data`` (the reply schema), ``channel`` (messages on
 pipes), ``shown`` (what the student controls, as the graders print it), ``processes`` (the
-subreaper), ``ownership`` (is a name the student's code or ptlab's?), ``copies`` (is a
-function a renamed copy of ptlab's?).
+subreaper), ``ownership`` (is a name the student's code or ptlab's?), ``readable`` and
+``uses`` (can the grader read, in the files' text, the code that runs for a graded name?),
+``code_ran`` (is the code that ran the code the grader compiled from those files?),
+``copies`` (is a function a renamed copy of ptlab's?), with ``canonical`` (code put in one
+form: ``canonical_names``, ``canonical_syntax``, ``canonical_blocks``, ``syntax_trees``)
+and ``fingerprints`` (its tokens and grams).
 """
 
 from __future__ import annotations
