@@ -7,7 +7,7 @@
 The concepts of light transport are the top-level modules and the folders ``materials``,
 ``accel`` and ``integrators``; running a render is ``ptlab.rendering`` (whose API is
 re-exported here), measuring it ``ptlab.measure``, grading ``ptlab.grading`` and
-``ptlab.exercises`` (docs/architecture.md draws the layers).
+``ptlab.course`` (docs/architecture.md draws the layers).
 
 The names below are imported when first used (PEP 562), so that ``import ptlab.cli`` stays
 light until the command line has started its worker processes (``ptlab.rendering``).

@@ -66,13 +66,13 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
         "`grade-all NN DIR` grades a whole class.",
     )
     # The graders' own arguments are added only for their command: importing ptlab.grading
-    # and ptlab.exercises costs every other command a tenth of a second of start-up.
+    # and ptlab.course costs every other command a tenth of a second of start-up.
     if command in (None, "grade"):
-        from ptlab.grading.cli import add_grade_arguments
+        from ptlab.course.grade_command import add_grade_arguments
 
         add_grade_arguments(grade)
     if command in (None, "exercise"):
-        from ptlab.exercises.cli import add_exercise_arguments
+        from ptlab.course.cli import add_exercise_arguments
 
         add_exercise_arguments(exercise)
     commands.add_parser("scenes", help="list the built-in scenes")
@@ -800,9 +800,9 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser(command if command in COMMANDS else None).parse_args(argv)
     args.whole_process = whole_process  # (not a caller's, such as a test's, in its process)
     if args.command == "grade":
-        from ptlab.grading.cli import run_grade as handler
+        from ptlab.course.grade_command import run_grade as handler
     elif args.command == "exercise":
-        from ptlab.exercises.cli import run_exercise as handler
+        from ptlab.course.cli import run_exercise as handler
     else:
         handler = {
             "render": _render,
@@ -819,7 +819,7 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
     except PtlabError as error:
-        from ptlab.untrusted.shown import shown_line  # (it may quote a student's file name)
+        from ptlab.course.sandbox.shown import shown_line  # (it may quote a student's file name)
 
         print(f"ptlab: error: {shown_line(error)}", file=sys.stderr)
         return 2

@@ -40,5 +40,5 @@ class SceneError(PtlabError):
 
 
 class NotInKitError(RuntimeError):
-    """Raised by what a chapter's kit leaves out (``ptlab.untrusted.kit``): the student's
+    """Raised by what a chapter's kit leaves out (``ptlab.course.sandbox.kit``): the student's
     code called the library's answer to the exercise, which its process does not have."""

@@ -1,4 +1,4 @@
-"""Measure grade-all's pairs of alike students (``ptlab.exercises.alike``) on the test answers.
+"""Measure grade-all's pairs of alike students (``ptlab.course.alike``) on the test answers.
 
     python scripts/alike_scores.py               # per chapter: honest pairs, copies
     python scripts/alike_scores.py --class 400   # and the time to compare a class of 400
@@ -27,8 +27,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from alike_corpus import copied, honest
 
-from ptlab.exercises import all_chapters
-from ptlab.exercises.alike import MIN_SHARED, THRESHOLD, alike_pairs, fingerprints
+from ptlab.course import all_chapters
+from ptlab.course.alike import MIN_SHARED, THRESHOLD, alike_pairs, fingerprints
 
 
 def _similarity(first: frozenset[int], second: frozenset[int]) -> tuple[float, int]:

@@ -9,7 +9,7 @@ seed, and a tolerance too tight for some of them would fail a right answer now a
 every check of the chapter runs, at grading seeds 1, 7920, 15839, ..., on each right answer
 (``NN_right_*.py``); the script prints every failure and, per chapter, how many there were.
 The answers are trusted files, imported here: the graders' questions of who wrote a
-function (``ptlab.exercises.chapter.require``: the library's answer under another name, a
+function (``ptlab.course.chapter.require``: the library's answer under another name, a
 copy) need the sandbox's view of a submission, and are not asked. Chapter 10's render is
 slower than the rest: it runs every ``--every-render`` seeds.
 """
@@ -21,8 +21,8 @@ import importlib.util
 import sys
 from pathlib import Path
 
-from ptlab.exercises import chapter
-from ptlab.exercises.chapter import CheckFailed, grading_seed
+from ptlab.course import chapter
+from ptlab.course.chapter import CheckFailed, grading_seed
 
 ANSWERS = Path(__file__).resolve().parents[1] / "tests" / "exercises"
 
@@ -64,7 +64,7 @@ def main() -> None:
     parser.add_argument("--chapter", type=int, action="append", help="chapters (default: 10 and 11)")
     parser.add_argument("--every-render", type=int, default=10, help="run chapter 10's render every N seeds")
     args = parser.parse_args()
-    rules = sys.modules["ptlab.exercises.chapter"]
+    rules = sys.modules["ptlab.course.chapter"]
     rules.library_answer = lambda module, name: None  # (see the docstring)
     rules.copied_answer = lambda module: None
     for number in args.chapter or [10, 11]:

@@ -1,4 +1,4 @@
-"""Measure the copy detector (``ptlab/untrusted/copies.py``): how often a rewritten copy of a
+"""Measure the copy detector (``ptlab/course/sandbox/copies.py``): how often a rewritten copy of a
 chapter's answers is found, and how close honest answers come to being taken for copies.
 
     python scripts/copy_detection.py            # every chapter, every rewrite (about a minute)
@@ -11,7 +11,7 @@ in), each put through every mechanical rewrite of ``tests/attacks/rewriters.py``
 dead code, constants, swapped operands, a wrapping class, conditional and loop forms, and
 all at once). A copy that weighs less than ``MIN_COPIED_TOKENS`` as copied (a formula, or
 code the exercise file spells out) cannot be told from honest work: it is listed, not
-counted. The earlier releases' answers (``ptlab/untrusted/past_answers.json``) are put to
+counted. The earlier releases' answers (``ptlab/course/sandbox/past_answers.json``) are put to
 the detector as they were written, and all at once. The honest answers are the right and
 wrong answers of ``tests/exercises`` and the exercise files as handed out.
 
@@ -44,8 +44,8 @@ from attacks.corpus import (
 )
 from attacks.rewriters import REWRITES
 
-from ptlab.exercises import chapter
-from ptlab.untrusted.copies import (
+from ptlab.course import chapter
+from ptlab.course.sandbox.copies import (
     MIN_COPIED_TOKENS,
     THRESHOLD,
     copied_tokens,

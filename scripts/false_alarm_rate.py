@@ -8,7 +8,7 @@
 Trial k draws a fresh grading seed (from the operating system, as the exercise grader does;
 or ``--first-seed`` K + k) and grades the (k mod M)-th of M correct materials (or, with
 ``--every-material``, all of them) with the harness's seed that the material-harness checks
-of chapters 6 and 9 derive from it (``ptlab.exercises.chapter.grading_seed_for``), the
+of chapters 6 and 9 derive from it (``ptlab.course.chapter.grading_seed_for``), the
 harness's defaults otherwise (``--harness-seed N``: every material once with the harness's
 seed N itself, as ``ptlab grade --seed N`` grades). Four of them compute in float32, as a
 student's material may (the renderer passes float32 arrays): the library's on float32
@@ -34,7 +34,7 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np
 from scipy.stats import beta
 
-from ptlab.exercises.chapter import grading_seed, grading_seed_for, new_grading_seed
+from ptlab.course.chapter import grading_seed, grading_seed_for, new_grading_seed
 from ptlab.grading import check_material
 from ptlab.materials import Dielectric, Diffuse, Microfacet, Mirror
 

@@ -28,8 +28,8 @@ HERE = Path(__file__).resolve().parents[1]
 #: What each side runs: grade a chapter's own answer file, print seconds and checks as JSON.
 PROBE = """
 import json, sys, time
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course.grader import grade
 number = int(sys.argv[1])
 start = time.perf_counter()
 result = grade(chapter(number), chapter(number).solution, library_answer=True, seed=1)
@@ -43,8 +43,8 @@ print(json.dumps({"seconds": seconds, "checks": len(result.results), "full": res
 START_PROBE = """
 import json, statistics, sys, tempfile, time
 from pathlib import Path
-from ptlab.exercises import chapter
-from ptlab.untrusted import ProcessGuard, Submission
+from ptlab.course import chapter
+from ptlab.course.sandbox import ProcessGuard, Submission
 path = Path(tempfile.mkdtemp()) / "01_cameras.py"
 path.write_text("def generate_rays(*arguments):\\n    return 1\\n")
 seconds = []

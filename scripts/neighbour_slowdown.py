@@ -9,7 +9,7 @@ column) and their ratio:
     python scripts/neighbour_slowdown.py --rounds 3
 
 As root, on a machine with control groups, each student's grader and all it starts share one
-CPU weight (``ptlab/untrusted/control_groups.py``), so the ratio should stay near 1.
+CPU weight (``ptlab/course/sandbox/control_groups.py``), so the ratio should stay near 1.
 """
 
 from __future__ import annotations

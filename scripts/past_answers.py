@@ -1,13 +1,13 @@
-"""Write ``ptlab/untrusted/past_answers.json``: earlier releases' versions of every answer.
+"""Write ``ptlab/course/sandbox/past_answers.json``: earlier releases' versions of every answer.
 
     python scripts/past_answers.py            # from this checkout's git history
     python scripts/past_answers.py --check    # exit 1 if the file is not what it would write
 
 A student may copy last year's release or a fork rather than today's library, so the copy
-detector (``ptlab/untrusted/copies.py``) compares a student's file with every version of an
+detector (``ptlab/course/sandbox/copies.py``) compares a student's file with every version of an
 answer that git history holds. For each answer of every chapter and of ``ptlab grade``
-(``Chapter.answers``, ``ptlab.grading.cli.MATERIALS``) and each function of the chapters'
-answer files (``ptlab/exercises/solutions/``), this walks the commits that changed ptlab,
+(``Chapter.answers``, ``ptlab.course.grade_command.MATERIALS``) and each function of the chapters'
+answer files (``ptlab/course/solutions/``), this walks the commits that changed ptlab,
 newest first, looks for the function by its qualified name in each file they changed (an
 answer may have moved between modules: a function of the same name in another file than
 today's counts only if it shares ``RELATED`` of its grams with a version kept already; a
@@ -32,9 +32,9 @@ import sys
 from dataclasses import dataclass
 from pathlib import Path
 
-from ptlab.exercises import all_chapters
-from ptlab.grading.cli import MATERIALS
-from ptlab.untrusted.copies import (
+from ptlab.course import all_chapters
+from ptlab.course.grade_command import MATERIALS
+from ptlab.course.sandbox.copies import (
     PAST_ANSWERS,
     Answer,
     answer_context,
@@ -52,7 +52,7 @@ RELATED = 0.25
 #: found through the kept one (``THRESHOLD`` and a margin).
 REDUNDANT = 0.95
 #: Folders of ptlab whose functions are never answers (the exercise files, the graders).
-NOT_ANSWERS = ("ptlab/exercises/templates/", "ptlab/untrusted/", "ptlab/grading/")
+NOT_ANSWERS = ("ptlab/course/templates/", "ptlab/course/sandbox/", "ptlab/grading/")
 
 
 @dataclass
@@ -169,7 +169,9 @@ def contents() -> str:
     helpers = library_helpers(answer_names())
     versions = past_versions(wanted_answers(helpers), helpers)
     versions.sort(key=lambda v: (v["origin"], v["date"], v["commit"]), reverse=True)
-    about = "Earlier versions of ptlab's answers (ptlab/untrusted/copies.py), by scripts/past_answers.py."
+    about = (
+        "Earlier versions of ptlab's answers (ptlab/course/sandbox/copies.py), by scripts/past_answers.py."
+    )
     return json.dumps({"about": about, "answers": versions}, indent=1, ensure_ascii=False) + "\n"
 
 

@@ -33,15 +33,15 @@ os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 import numpy as np
 from scipy.stats import beta
 
-from ptlab.exercises.chapter import (
+from ptlab.course.chapter import (
     CheckFailed,
     grading_rng,
     grading_seed,
     grading_seed_for,
     new_grading_seed,
 )
-from ptlab.exercises.chapters.ch07_path_tracing import PATTERNED_FALSE_ALARM
-from ptlab.exercises.renders import FALSE_ALARM, compare_renders, noise_test, regions_of
+from ptlab.course.chapters.ch07_path_tracing import PATTERNED_FALSE_ALARM
+from ptlab.course.renders import FALSE_ALARM, compare_renders, noise_test, regions_of
 
 RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
 
@@ -55,7 +55,7 @@ def right_answer(name: str):
 
 
 def ch06(name: str) -> Callable:
-    from ptlab.exercises.chapters.ch06_diffuse import (
+    from ptlab.course.chapters.ch06_diffuse import (
         RENDER_SEED,
         SPP_STREAM,
         render_passes,
@@ -76,8 +76,8 @@ def ch06(name: str) -> Callable:
 
 
 def ch09(sampling: str) -> Callable:
-    from ptlab.exercises.chapters.ch06_diffuse import render_spp_per_pass
-    from ptlab.exercises.chapters.ch09_microfacet import RENDER_SEED, SPP_STREAM, render_passes
+    from ptlab.course.chapters.ch06_diffuse import render_spp_per_pass
+    from ptlab.course.chapters.ch09_microfacet import RENDER_SEED, SPP_STREAM, render_passes
 
     module = right_answer("09_right_walter")
 
@@ -92,7 +92,7 @@ def ch09(sampling: str) -> Callable:
 
 
 def ch07_furnace() -> tuple:
-    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+    from ptlab.course.chapters import ch07_path_tracing as ch07
 
     module = right_answer("07_right_own_random")
 
@@ -108,7 +108,7 @@ def ch07_furnace() -> tuple:
 
 
 def ch07_patterned(answer: str = "07_right_own_random") -> Callable:
-    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+    from ptlab.course.chapters import ch07_path_tracing as ch07
 
     module = right_answer(answer)
 
@@ -121,7 +121,7 @@ def ch07_patterned(answer: str = "07_right_own_random") -> Callable:
 
 
 def ch07_roulette() -> tuple:
-    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+    from ptlab.course.chapters import ch07_path_tracing as ch07
 
     module = right_answer("07_right_own_random")
 
@@ -136,7 +136,7 @@ def ch07_roulette() -> tuple:
 
 
 def ch07_cornell() -> Callable:
-    from ptlab.exercises.chapters import ch07_path_tracing as ch07
+    from ptlab.course.chapters import ch07_path_tracing as ch07
 
     module = right_answer("07_right_own_random")
 
@@ -175,7 +175,7 @@ def regions(images: np.ndarray, kind) -> np.ndarray:
 
 def verdict(student: np.ndarray, library: np.ndarray, kind) -> str | None:
     """None if the check passes ``student``, else its message."""
-    from ptlab.exercises.chapters.ch07_path_tracing import furnace_verdict
+    from ptlab.course.chapters.ch07_path_tracing import furnace_verdict
 
     try:
         if kind in COMPARED:

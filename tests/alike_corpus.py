@@ -1,4 +1,4 @@
-"""What grade-all's pairs of alike students (``ptlab.exercises.alike``) are measured on: the
+"""What grade-all's pairs of alike students (``ptlab.course.alike``) are measured on: the
 honest answers of ``tests/exercises`` and the library's own answers, chapter by chapter,
 and copies of them as a student who copies another's file hands it in (names changed,
 statements and functions reordered, dead code added). ``tests/test_alike.py`` and
@@ -14,8 +14,8 @@ import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 
-from ptlab.exercises import all_chapters
-from ptlab.untrusted.copies import resolve
+from ptlab.course import all_chapters
+from ptlab.course.sandbox.copies import resolve
 
 EXERCISES = Path(__file__).parent / "exercises"
 PATCHED = tomllib.loads((EXERCISES / "wrong_answers.toml").read_text(encoding="utf-8"))

@@ -91,8 +91,8 @@ def pytest_runtest_setup(item) -> None:
 @pytest.fixture(autouse=True)
 def _graders_speak_english():
     """The tests read the graders' English messages, whatever this machine's locale
-    (``ptlab.exercises.messages``); a test of another language sets it itself."""
-    from ptlab.exercises.messages import language
+    (``ptlab.course.messages``); a test of another language sets it itself."""
+    from ptlab.course.messages import language
 
     with language("en"):
         yield
@@ -117,10 +117,10 @@ def marked_if_it_starts_processes(request):
 # a module that defines functions had none of them called: the quick layer must touch every
 # module, not just import it.
 
-#: Modules whose functions run only in a student's process (``ptlab.untrusted.child`` sets
+#: Modules whose functions run only in a student's process (``ptlab.course.sandbox.child`` sets
 #: them up there), where this one cannot trace them; the quick layer grades in such
 #: processes (test_untrusted.py, test_exercises.py).
-ONLY_IN_STUDENTS_PROCESSES = {"ptlab.untrusted.confinement"}
+ONLY_IN_STUDENTS_PROCESSES = {"ptlab.course.sandbox.confinement"}
 _called: set = set()
 _untouched: list[str] = []
 
@@ -221,7 +221,7 @@ def _is_multiprocessing_helper(pid: int) -> bool:
 @pytest.fixture
 def nothing_left_behind():
     """After the test: no process below this one but multiprocessing's own helpers."""
-    from ptlab.untrusted.processes import descendants, process_table
+    from ptlab.course.sandbox.processes import descendants, process_table
 
     yield
     below = descendants({os.getpid()}, process_table(alive_only=True)) - {os.getpid()}

@@ -1,4 +1,4 @@
-"""grade-all's pairs of alike students (``ptlab.exercises.alike``, ``ptlab.exercises.batch``):
+"""grade-all's pairs of alike students (``ptlab.course.alike``, ``ptlab.course.batch``):
 honest answers written apart are not reported, copies with the names changed and the code
 reordered are, and the report is printed after the grades and written to its own CSV."""
 
@@ -13,12 +13,12 @@ import pytest
 from alike_corpus import EXERCISES, copied, honest
 
 from ptlab.cli import main
-from ptlab.exercises import all_chapters, chapter
-from ptlab.exercises.alike import MAX_COMPARED_BYTES, MIN_SHARED, THRESHOLD, alike_pairs, fingerprints
+from ptlab.course import all_chapters, chapter
+from ptlab.course.alike import MAX_COMPARED_BYTES, MIN_SHARED, THRESHOLD, alike_pairs, fingerprints
 
 CHAPTERS = [c.number for c in all_chapters()]
 #: How far above every honest pair written apart (of at least MIN_SHARED shared
-#: fingerprints) the threshold must stay: measured, 0.24 (ptlab.exercises.alike's docstring).
+#: fingerprints) the threshold must stay: measured, 0.24 (ptlab.course.alike's docstring).
 HONEST_MARGIN = 0.2
 
 

@@ -160,8 +160,8 @@ def test_listing_and_help_import_none_of_the_heavy_libraries():
         "embreex",
         "OpenImageIO",
         "ptlab.grading",
-        "ptlab.untrusted",
-        "ptlab.exercises",
+        "ptlab.course.sandbox",
+        "ptlab.course",
     )
     code = (
         "import sys, contextlib, io\n"

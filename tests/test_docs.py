@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from ptlab.exercises import all_chapters
+from ptlab.course import all_chapters
 
 ROOT = Path(__file__).parents[1]
 PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]

@@ -1,4 +1,4 @@
-"""The graders' texts (``ptlab.exercises.messages``): one catalogue per language, the same
+"""The graders' texts (``ptlab.course.messages``): one catalogue per language, the same
 messages in each, and every message of the graders taken from them, so that a student on
 the Chinese track gets a Chinese table (``ptlab exercise check --lang zh``)."""
 
@@ -16,10 +16,10 @@ from pathlib import Path
 
 import pytest
 
-import ptlab.exercises
-from ptlab.exercises import all_chapters, chapter
-from ptlab.exercises.grader import grade
-from ptlab.exercises.messages import (
+import ptlab.course
+from ptlab.course import all_chapters, chapter
+from ptlab.course.grader import grade
+from ptlab.course.messages import (
     CATALOGUES,
     LANGUAGES,
     active_language,
@@ -29,7 +29,7 @@ from ptlab.exercises.messages import (
     text,
 )
 
-HERE = Path(ptlab.exercises.__file__).parent
+HERE = Path(ptlab.course.__file__).parent
 WRONG = Path(__file__).parent / "exercises"
 #: The modules whose messages come from the catalogues: the grader's own, and the chapters'.
 MODULES = [

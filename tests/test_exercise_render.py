@@ -1,5 +1,5 @@
 """``ptlab exercise render``: a scene rendered with a student's functions, beside the
-library's render of it, and their difference (``ptlab.exercises.side_by_side``)."""
+library's render of it, and their difference (``ptlab.course.side_by_side``)."""
 
 from __future__ import annotations
 
@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from ptlab.cli import main
-from ptlab.exercises import all_chapters, chapter
+from ptlab.course import all_chapters, chapter
 from ptlab.image import read_image
 
 WRONG = Path(__file__).parent / "exercises"
@@ -84,8 +84,8 @@ def test_every_chapter_says_what_its_render_shows():
 
 
 def test_a_chapter_without_a_render_says_so_in_one_line(tmp_path):
+    from ptlab.course.side_by_side import render_side_by_side
     from ptlab.errors import PtlabError
-    from ptlab.exercises.side_by_side import render_side_by_side
 
     with pytest.raises(PtlabError, match=r"^chapter 11 has no render to set beside the library's: "):
         render_side_by_side(chapter(11), WRONG / "11_right_own_code.py", lang="en")

@@ -25,8 +25,8 @@ import numpy as np
 import pytest
 
 from ptlab.cli import main
-from ptlab.exercises import all_chapters, chapter
-from ptlab.exercises.grader import grade
+from ptlab.course import all_chapters, chapter
+from ptlab.course.grader import grade
 
 WRONG = Path(__file__).parent / "exercises"
 #: The wrong answers that are right answers with the mistake patched in, by name.
@@ -156,8 +156,8 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
     than the library's) get full marks: their functions are theirs (not the library's), and
     run in the student's process. The material harness warns of nothing: the exercise
     file's own ``__init__`` keeps float32 float32."""
+    from ptlab.course.sandbox.child import import_file
     from ptlab.grading import check_material
-    from ptlab.untrusted.child import import_file
 
     result = grade(chapter(path.name[:2]), path, seed=GRADING_SEED)
     assert result.full_marks, result.table()
@@ -185,7 +185,7 @@ def test_an_answer_that_imports_a_moved_name_from_its_old_place_keeps_full_marks
 
 @pytest.mark.parametrize(("number", "name"), [(6, "Lambertian"), (9, "GGXMetal")])
 def test_the_exercise_files_keep_material_parameters_in_float32(number, name):
-    from ptlab.untrusted.child import import_file
+    from ptlab.course.sandbox.child import import_file
 
     material = getattr(import_file(chapter(number).template), name)()
     parameter = material.albedo if number == 6 else material.f0
@@ -291,7 +291,7 @@ def test_the_harness_names_the_checked_file_in_a_command_that_runs_where_the_che
 
 @pytest.mark.parametrize("chinese", [False, True], ids=["en", "zh"])
 def test_docs_shows_a_chapters_page_and_where_its_tutorial_is(chinese, capsys):
-    from ptlab.exercises.pages import page, tutorial
+    from ptlab.course.pages import page, tutorial
 
     found = chapter(7)
     assert main(["exercise", "docs", "7", *(["--zh"] if chinese else [])]) == 0
@@ -401,8 +401,8 @@ def test_grade_all_grades_each_student_alone_and_resumes(tmp_path, capsys):
 
 @pytest.mark.subprocess
 def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
-    from ptlab.exercises.batch import Work, _Runner
-    from ptlab.untrusted import ProcessGuard
+    from ptlab.course.batch import Work, _Runner
+    from ptlab.course.sandbox import ProcessGuard
 
     sleeper = tmp_path / "sleeper.py"
     sleeper.write_text("import time\ntime.sleep(3600)\n")
@@ -420,14 +420,14 @@ def test_a_grader_that_does_not_finish_costs_only_its_student(tmp_path):
 
 
 def _graded(path: Path, score: int):
-    from ptlab.exercises.grader import CheckResult, Grade
+    from ptlab.course.grader import CheckResult, Grade
 
     results = [CheckResult("a", score, 10, score == 10, "", 0.0)]
     return Grade(1, "Cameras", str(path), results, hashlib.sha256(path.read_bytes()).hexdigest())
 
 
 def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, monkeypatch, capsys):
-    from ptlab.exercises.progress import remember
+    from ptlab.course.progress import remember
 
     monkeypatch.setenv("XDG_STATE_HOME", str(tmp_path / "state"))
     homework, elsewhere = tmp_path / "course" / "hw", tmp_path / "elsewhere"
@@ -457,7 +457,7 @@ def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, mo
     assert "no results recorded" in where
     assert main(["exercise", "list", "--forget", str(homework)]) == 2
     assert "not a folder 'ptlab exercise start' remembers" in capsys.readouterr().err
-    from ptlab.exercises.progress import state_file
+    from ptlab.course.progress import state_file
 
     state_file().unlink()  # start's folders forgotten:
     monkeypatch.chdir(tmp_path / "course")  # found below the current folder
@@ -473,7 +473,7 @@ def test_list_finds_the_work_where_the_student_looks_and_says_where(tmp_path, mo
 
 
 def test_a_later_failure_replaces_a_pass_in_the_record(tmp_path):
-    from ptlab.exercises.progress import read_record, remember
+    from ptlab.course.progress import read_record, remember
 
     answer = tmp_path / "01_cameras.py"
     answer.write_text("# a first version\n")
@@ -490,7 +490,7 @@ def test_replacing_materials_keeps_the_scenes_lights_sky_uvs_and_defaults():
     # Homework 5's scene has all four: point lights, a sky, a textured floor's uvs and its
     # own resolution; a render check that swaps in a student's material must keep them.
     import ptlab
-    from ptlab.exercises.renders import replace_materials
+    from ptlab.course.renders import replace_materials
 
     scene = ptlab.load_scene("games101-hw5")
     swapped = replace_materials(scene, lambda m: None if m.emission is not None else m)

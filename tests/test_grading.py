@@ -284,7 +284,7 @@ def test_grade_exit_codes(tmp_path, capsys):
 def test_grade_leaves_out_the_lambertian_the_checks_hand_to_students(tmp_path, capsys):
     path = tmp_path / "material.py"
     path.write_text(
-        "from ptlab.exercises.given import FlakyDiffuse\n"
+        "from ptlab.course.given import FlakyDiffuse\n"
         "class Lambertian:\n"
         "    def eval(self, wo, wi, n):\n        return FlakyDiffuse().eval(wo, wi, n)\n"
         "    def pdf(self, wo, wi, n):\n        return FlakyDiffuse().pdf(wo, wi, n)\n"
@@ -293,7 +293,7 @@ def test_grade_leaves_out_the_lambertian_the_checks_hand_to_students(tmp_path, c
     assert ptlab_main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 1
     out = " ".join(capsys.readouterr().out.split())  # (the table wraps its hints)
     assert "FAILED" in out
-    assert "eval raised NotInKitError: ptlab.exercises.given.FlakyDiffuse.eval is left out of the kit" in out
+    assert "eval raised NotInKitError: ptlab.course.given.FlakyDiffuse.eval is left out of the kit" in out
 
 
 @pytest.mark.subprocess

@@ -13,8 +13,8 @@ from pathlib import Path
 
 import pytest
 
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course.grader import grade
 
 EXERCISES = Path(__file__).parent / "exercises"
 #: The grading seed of the tests whose verdicts rest on statistics (as tests/test_exercises.py).

@@ -1,4 +1,4 @@
-"""``ptlab exercise inspect`` (``ptlab.exercises.inspection``): a student's functions against
+"""``ptlab exercise inspect`` (``ptlab.course.inspection``): a student's functions against
 the library's at one pixel, and the command a failing render check suggests. Deterministic:
 both sides trace the same samples, so a right answer agrees and a wrong one differs at a
 vertex known in advance."""
@@ -13,9 +13,9 @@ import pytest
 from test_exercises import WRONG, _wrong_answer_text
 
 from ptlab.cli import main
-from ptlab.exercises.inspect_command import suggestion
-from ptlab.exercises.inspection import Difference, first_difference, message
-from ptlab.exercises.messages import language
+from ptlab.course.inspect_command import suggestion
+from ptlab.course.inspection import Difference, first_difference, message
+from ptlab.course.messages import language
 from ptlab.inspector import PixelInspection
 from ptlab.inspector.records import BsdfSample, Sample, Vertex
 

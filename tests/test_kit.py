@@ -1,4 +1,4 @@
-"""The kits (``ptlab/untrusted/kit.py``): ptlab with a chapter's answers left out as stubs."""
+"""The kits (``ptlab/course/sandbox/kit.py``): ptlab with a chapter's answers left out as stubs."""
 
 from __future__ import annotations
 
@@ -8,9 +8,9 @@ import inspect
 
 import pytest
 
+from ptlab.course import all_chapters
+from ptlab.course.sandbox.kit import KitError, defined_as, kit_for
 from ptlab.errors import NotInKitError
-from ptlab.exercises import all_chapters
-from ptlab.untrusted.kit import KitError, defined_as, kit_for
 
 
 def _tree(kit, relative: str) -> ast.Module:
@@ -71,12 +71,13 @@ def test_no_kit_holds_the_graders_code_but_the_childs_side():
     kit = kit_for(()) / "ptlab"
     assert not (kit / "grading").exists()
     assert not (kit / "cli.py").exists()
-    assert sorted(p.name for p in (kit / "exercises").glob("*.py")) == ["__init__.py", "given.py"]
-    assert not (kit / "exercises" / "solutions").exists()
-    untrusted = {p.name for p in (kit / "untrusted").glob("*.py")}
+    assert sorted(p.name for p in (kit / "course").glob("*.py")) == ["__init__.py", "given.py"]
+    assert not (kit / "course" / "solutions").exists()
+    assert not (kit / "course" / "chapters").exists()
+    untrusted = {p.name for p in (kit / "course" / "sandbox").glob("*.py")}
     assert {"child.py", "channel.py", "plain_data.py"} <= untrusted
     assert not {"submission.py", "kit.py", "sandbox.py", "intake.py"} & untrusted
-    assert list((kit / "untrusted" / "__pycache__").glob("child.*.pyc"))  # compiled beforehand
+    assert list((kit / "course" / "sandbox" / "__pycache__").glob("child.*.pyc"))  # compiled beforehand
 
 
 def test_names_are_resolved_where_they_are_defined_and_unknown_ones_refused():

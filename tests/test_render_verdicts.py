@@ -1,6 +1,6 @@
 """What the checks say of pictures and numbers that are wrong in the ways issue 36 named: a
 render less noisy than the library's is accused of not being a render only when it is the
-library's picture in the mean (``ptlab.exercises.renders.NoiseTest.verdict``); chapter 7's
+library's picture in the mean (``ptlab.course.renders.NoiseTest.verdict``); chapter 7's
 patterned furnace ties the picture to the samples; chapter 10's densities reach float32's
 overflow; chapter 11's films hold pixels whose samples are all alike.
 
@@ -18,11 +18,11 @@ import numpy as np
 import pytest
 from scipy.ndimage import uniform_filter
 
-from ptlab.exercises.chapter import CheckFailed, grading_rng, grading_seed, grading_seed_for
-from ptlab.exercises.chapters import ch07_path_tracing as ch07
-from ptlab.exercises.chapters import ch10_mis as ch10
-from ptlab.exercises.chapters import ch11_noise as ch11
-from ptlab.exercises.renders import compare_renders
+from ptlab.course.chapter import CheckFailed, grading_rng, grading_seed, grading_seed_for
+from ptlab.course.chapters import ch07_path_tracing as ch07
+from ptlab.course.chapters import ch10_mis as ch10
+from ptlab.course.chapters import ch11_noise as ch11
+from ptlab.course.renders import compare_renders
 from ptlab.rendering import adaptive
 
 ANSWERS = Path(__file__).parent / "exercises"
@@ -199,8 +199,8 @@ def test_the_weights_film_makes_an_unclipped_square_root_nan_and_says_why():
 def test_a_wrong_d_is_told_its_picture_differs_not_that_it_is_not_a_render(tmp_path):
     """GGX's D with alpha where alpha^2 belongs (a wider, dimmer lobe) renders a picture much
     less noisy than the library's: an honest mistake, told as a difference."""
-    from ptlab.exercises import chapter
-    from ptlab.exercises.grader import grade
+    from ptlab.course import chapter
+    from ptlab.course.grader import grade
 
     right = (ANSWERS / "09_right_walter.py").read_text(encoding="utf-8")
     wrong = right.replace("(alpha2 - 1) + 1", "(alpha - 1) + 1").replace(

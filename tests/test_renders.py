@@ -1,4 +1,4 @@
-"""The render comparisons of the exercises (``ptlab.exercises.renders``) and chapter 7's furnace
+"""The render comparisons of the exercises (``ptlab.course.renders``) and chapter 7's furnace
 verdict, on made-up passes: normal region values around a picture, so that each test's
 verdict is known. Seeds are fixed; with these sizes a right answer fails a comparison with
 probability at most 1.1e-3 (``FALSE_ALARM`` + ``NOISE_FALSE_ALARM``), and the seeds below
@@ -9,9 +9,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.exercises.chapter import CheckFailed
-from ptlab.exercises.chapters.ch07_path_tracing import furnace_radiance, furnace_verdict
-from ptlab.exercises.renders import NOISE_RATIO, compare_renders
+from ptlab.course.chapter import CheckFailed
+from ptlab.course.chapters.ch07_path_tracing import furnace_radiance, furnace_verdict
+from ptlab.course.renders import NOISE_RATIO, compare_renders
 
 PASSES, SIZE = 12, 16
 

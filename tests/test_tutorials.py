@@ -1,5 +1,5 @@
 """Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures;
-the command line they share (``ptlab.exercises.tutorial``) takes those settings."""
+the command line they share (``ptlab.course.tutorial``) takes those settings."""
 
 from __future__ import annotations
 
@@ -16,13 +16,13 @@ TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("[0-9
 
 
 def test_there_is_a_tutorial_per_chapter():
-    from ptlab.exercises import all_chapters
+    from ptlab.course import all_chapters
 
     assert [p.stem for p in TUTORIALS] == [c.stem for c in all_chapters()]
 
 
 def test_every_tutorial_takes_res_spp_and_out_and_makes_the_folder(tmp_path, monkeypatch):
-    from ptlab.exercises.tutorial import tutorial_options
+    from ptlab.course.tutorial import tutorial_options
 
     out = tmp_path / "pictures" / "chapter 7"
     monkeypatch.setattr(sys, "argv", ["07_path_tracing.py", "--res", "32", "--out", str(out)])

@@ -1,4 +1,4 @@
-"""The pieces of ``ptlab.untrusted``: the reply schema, the pipes, the student's process,
+"""The pieces of ``ptlab.course.sandbox``: the reply schema, the pipes, the student's process,
 the subreaper, and what counts as ptlab's own answer. (The attacks on the graders, whole,
 are in ``tests/attacks/``.)"""
 
@@ -16,13 +16,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
-from ptlab.untrusted import Arguments, ProcessGuard, Rules, StudentError, Submission, SubmissionFailed
-from ptlab.untrusted.channel import Channel, ChannelError, ChannelTimeoutError
-from ptlab.untrusted.ownership import library_answer
-from ptlab.untrusted.plain_data import Decoder, Encoder, MalformedError, UnsendableError
-from ptlab.untrusted.processes import process_table
+from ptlab.course import chapter
+from ptlab.course.grader import grade
+from ptlab.course.sandbox import Arguments, ProcessGuard, Rules, StudentError, Submission, SubmissionFailed
+from ptlab.course.sandbox.channel import Channel, ChannelError, ChannelTimeoutError
+from ptlab.course.sandbox.ownership import library_answer
+from ptlab.course.sandbox.plain_data import Decoder, Encoder, MalformedError, UnsendableError
+from ptlab.course.sandbox.processes import process_table
 
 pytestmark = pytest.mark.usefixtures("nothing_left_behind")
 RIGHT_CAMERA = Path(__file__).parent / "exercises" / "01_right_own_code.py"
@@ -311,7 +311,7 @@ def test_materials_that_are_ptlabs_own(source, origin):
     assert library_answer(ast.parse(source), "L") == origin
 
 
-# -- code the grader can read (ptlab.untrusted.readable) ------------------------------------
+# -- code the grader can read (ptlab.course.sandbox.readable) ------------------------------------
 
 ENCODED = "import base64, zlib\nexec(zlib.decompress(base64.b64decode(b'eJwDAAAAAAE=')))\n"
 GRADED = "07_path_tracing.py"
@@ -319,7 +319,7 @@ GRADED = "07_path_tracing.py"
 
 def _taken(files: dict[str, str] | str, graded: str = GRADED):
     """A submission as ``take_in`` reads it, from texts (one text: the graded file alone)."""
-    from ptlab.untrusted import Taken
+    from ptlab.course.sandbox import Taken
 
     files = {graded: files} if isinstance(files, str) else files
     data = {name: text.encode() for name, text in files.items()}
@@ -327,14 +327,14 @@ def _taken(files: dict[str, str] | str, graded: str = GRADED):
 
 
 def _unreadable(files: dict[str, str] | str, name: str = "trace_paths"):
-    from ptlab.untrusted.readable import unreadable_in_text
+    from ptlab.course.sandbox.readable import unreadable_in_text
 
     return unreadable_in_text(_taken(files), name)
 
 
 #: Texts whose graded function reaches what a readable file does not use: (text, reason,
 #: what the message names). Each spelling of code made from data, or of an object reached
-#: by a name built at run time, that the allowlist leaves out (ptlab.untrusted.uses).
+#: by a name built at run time, that the allowlist leaves out (ptlab.course.sandbox.uses).
 UNREADABLE_TEXTS = {
     "encoded": (ENCODED, "unreadable.at_import", "exec"),
     "encoded beside a def": (
@@ -483,9 +483,9 @@ UNREADABLE_TEXTS = {
         "numpy as a value",
     ),
     "the grader's end in the kit": (
-        "from ptlab.untrusted import child\ndef trace_paths(f):\n    return child.code_digest(f)",
+        "from ptlab.course.sandbox import child\ndef trace_paths(f):\n    return child.code_digest(f)",
         "unreadable.runs_made_code",
-        "ptlab.untrusted",
+        "ptlab.course.sandbox",
     ),
     "find_spec kept": (
         "import importlib.util\n_spec = importlib.util.find_spec('numba')\ndef trace_paths(f):\n    return f",
@@ -625,8 +625,8 @@ def test_the_submissions_other_files_are_read_as_the_graded_one(files, reason, w
 
 
 def test_unreadable_messages_name_the_reason_and_ask_for_a_teacher():
-    from ptlab.exercises.messages import language
-    from ptlab.untrusted.readable import unreadable_in_text
+    from ptlab.course.messages import language
+    from ptlab.course.sandbox.readable import unreadable_in_text
 
     material = "class L:\n    def eval(self, wo, wi, n):\n        return wo\n"
     assert unreadable_in_text(_taken(material, "06_diffuse.py"), "L") is None
@@ -706,7 +706,7 @@ MADE_AND_REACHED = {
 @pytest.mark.subprocess
 @pytest.mark.parametrize("text", MADE_AND_REACHED.values(), ids=MADE_AND_REACHED)
 def test_code_that_runs_and_is_not_the_files_is_found_when_it_runs(tmp_path, text):
-    from ptlab.untrusted.submission import UnreadableCode
+    from ptlab.course.sandbox.submission import UnreadableCode
 
     with _student_process(tmp_path, text) as submission:
         with pytest.raises(UnreadableCode) as raised:
@@ -816,7 +816,7 @@ def test_without_bubblewrap_the_grader_grades_and_says_not_for_credit(tmp_path):
 @pytest.mark.slow
 @pytest.mark.subprocess
 def test_with_bubblewrap_a_grade_is_for_credit(tmp_path):
-    from ptlab.untrusted import sandbox
+    from ptlab.course.sandbox import sandbox
 
     if sandbox.missing() is not None:
         pytest.skip(str(sandbox.missing()))

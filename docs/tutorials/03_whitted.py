@@ -20,8 +20,8 @@ import math
 import numpy as np
 
 import ptlab
-from ptlab.exercises.chapters.ch03_whitted import spheres_scene, whitted_image
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.chapters.ch03_whitted import spheres_scene, whitted_image
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.scattering import fresnel_dielectric, reflect, refract
 

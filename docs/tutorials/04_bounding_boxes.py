@@ -18,8 +18,8 @@ import numpy as np
 import ptlab
 import ptlab.accel.numpy_bvh
 from ptlab.accel.numpy_bvh import build_bvh, slab_test
-from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.plug import plugged
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 
 

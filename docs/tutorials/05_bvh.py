@@ -21,9 +21,9 @@ import numpy as np
 import ptlab
 import ptlab.accel.numpy_bvh as numpy_bvh
 from ptlab.camera import generate_rays
-from ptlab.exercises.chapters.ch05_bvh import sah_cost
-from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.chapters.ch05_bvh import sah_cost
+from ptlab.course.plug import plugged
+from ptlab.course.tutorial import show_pictures, tutorial_options
 
 #: A ray's tag, carried in its tmin: ray i starts at t = i * TAG (see ``boxes_entered``).
 TAG = 1e-7

@@ -16,8 +16,8 @@ from __future__ import annotations
 import numpy as np
 
 import ptlab
-from ptlab.exercises.renders import replace_materials
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.renders import replace_materials
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Diffuse, Material
 

@@ -19,9 +19,9 @@ import numpy as np
 
 import ptlab
 import ptlab.integrators.path as path
-from ptlab.exercises.chapters.ch07_path_tracing import furnace_scene
-from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.chapters.ch07_path_tracing import furnace_scene
+from ptlab.course.plug import plugged
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.wavefront import SHADOW_EPSILON, add_to_film, shade
 from ptlab.vectors import dot

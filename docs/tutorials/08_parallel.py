@@ -24,7 +24,7 @@ import numpy as np
 
 import ptlab
 from ptlab.accel import make_accelerator, resolve_backend
-from ptlab.exercises.tutorial import in_notebook, show_pictures, tutorial_options
+from ptlab.course.tutorial import in_notebook, show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import PathSettings
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job

@@ -19,9 +19,9 @@ import math
 import numpy as np
 
 import ptlab
-from ptlab.exercises.chapters.ch09_microfacet import metals_scene
-from ptlab.exercises.renders import replace_materials
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.chapters.ch09_microfacet import metals_scene
+from ptlab.course.renders import replace_materials
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.materials import Material, Microfacet
 from ptlab.materials.microfacet import G1, D

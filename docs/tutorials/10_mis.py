@@ -17,8 +17,8 @@ import numpy as np
 
 import ptlab
 import ptlab.integrators.path
-from ptlab.exercises.plug import plugged
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.plug import plugged
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import mis_weight
 

@@ -19,7 +19,7 @@ from pathlib import Path
 import numpy as np
 
 import ptlab
-from ptlab.exercises.tutorial import show_pictures, tutorial_options
+from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.measure.metrics import RELMSE_EPSILON, relmse
 from ptlab.rendering.adaptive import (

@@ -27,7 +27,7 @@ and triangles before it can compute anything, and gathering is the slow part of 
 
 ``slab_test``, ``ray_triangle``, ``split_costs``, ``best_split`` and ``child_order`` are
 looked up in this module by name when they are called, so an exercise can swap any of
-them for a student's own (``ptlab.exercises.plug``).
+them for a student's own (``ptlab.course.plug``).
 
 The tree is stored as flat arrays (one row per node), the layout a GPU or a C
 implementation would use too: node ``i`` has bounds ``box_min[i], box_max[i]``; an

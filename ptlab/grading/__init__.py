@@ -11,7 +11,7 @@
 delta material such as ``Mirror`` or ``Dielectric``, those of ``ptlab.grading.delta``),
 each deterministic for a given seed and with a documented false-alarm rate; a wrong
 material fails with a hint naming the likely mistake. ``write_plots`` draws a failed
-chi-square test; ``ptlab grade FILE.py:Name`` (``ptlab.grading.cli``) does all of it from
+chi-square test; ``ptlab grade FILE.py:Name`` (``ptlab.course.grade_command``) does all of it from
 the command line.
 
 The method follows the statistical tests of Mitsuba 3 (``mitsuba.chi2``) and Nori's

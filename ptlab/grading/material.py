@@ -7,21 +7,18 @@ with ``batch_key``, ``stack`` and ``take``. ``as_material`` supplies what an obj
 the weight f_r |cos theta_i| / pdf from the three functions (``Material.sample_weight``),
 ``is_delta`` False and ``emission`` None.
 
-Materials of a student's process (``ptlab.untrusted`` stand-ins) that the renderer shades in
-one batch of hits are grouped (``MaterialGroup``): one request to the student's process
-shades all the rows, each with its own material, instead of one request per material.
+Each adapted material shades its own rows (``batch_key`` is the material itself); the
+course groups the materials of one student's process into one request
+(``ptlab.course.sandbox.remote_material``).
 """
 
 from __future__ import annotations
 
-import copy
 import inspect
 
 import numpy as np
 
-from ptlab.materials.base import Material
-from ptlab.untrusted import RemoteObject, submission_of
-from ptlab.untrusted.ownership import MATERIAL_METHODS
+from ptlab.materials.base import HOMEWORK_METHODS, Material
 
 
 class NotAMaterialError(TypeError):
@@ -40,11 +37,11 @@ class AdaptedMaterial(Material):
     ``sample_weight``, ``is_delta``, ``emission``)."""
 
     def __init__(self, material):
-        missing = [name for name in MATERIAL_METHODS if not callable(getattr(material, name, None))]
+        missing = [name for name in HOMEWORK_METHODS if not callable(getattr(material, name, None))]
         if missing:
             raise NotAMaterialError(f"it has no {', '.join(missing)} (a material has eval, pdf and sample)")
         self.material = material
-        self._eval, self._pdf, self._sample = (getattr(material, name) for name in MATERIAL_METHODS)
+        self._eval, self._pdf, self._sample = (getattr(material, name) for name in HOMEWORK_METHODS)
         weight = getattr(material, "sample_weight", None)
         self._sample_weight = weight if callable(weight) else None
         self._weight_takes_front = self._sample_weight is not None and _takes_front(weight)
@@ -69,22 +66,6 @@ class AdaptedMaterial(Material):
         if front is not None and self._weight_takes_front:
             return self._sample_weight(wo, n, u, front)
         return self._sample_weight(wo, n, u)
-
-    def batch_key(self) -> object:
-        """Stand-ins of one student's process, alike in what they define, shade together."""
-        if not isinstance(self.material, RemoteObject):
-            return id(self)
-        return (
-            "student",
-            id(submission_of(self.material)),
-            self.is_delta,
-            self._sample_weight is None,
-            self._weight_takes_front,
-        )
-
-    @classmethod
-    def stack(cls, materials: list[AdaptedMaterial]) -> Material:
-        return materials[0] if len(materials) == 1 else MaterialGroup(materials)
 
     def take(self, index: np.ndarray) -> Material:
         return self
@@ -121,42 +102,3 @@ def _emission(value) -> np.ndarray | None:
     except (TypeError, ValueError):
         return None
     return emission if emission.shape == (3,) and np.isfinite(emission).all() else None
-
-
-class MaterialGroup(Material):
-    """Several ``AdaptedMaterial``s of one student's process with the same ``batch_key``;
-    after ``take(index)``, row k is shaded by member ``index[k]``, all rows in one request."""
-
-    def __init__(self, members: list[AdaptedMaterial]):
-        self.members = members
-        self.is_delta = members[0].is_delta
-        self.which: np.ndarray | None = None
-        self._derived_weight = members[0]._sample_weight is None
-        self._takes_front = members[0]._weight_takes_front
-
-    def take(self, index: np.ndarray) -> MaterialGroup:
-        taken = copy.copy(self)
-        taken.which = index
-        return taken
-
-    def _each(self, method: str, *arrays):
-        objects = [m.material for m in self.members]
-        return submission_of(objects[0]).call_each(objects, self.which, method, *arrays)
-
-    def eval(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        return self._each("eval", wo, wi, n)
-
-    def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
-        return self._each("pdf", wo, wi, n)
-
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
-        return self._each("sample", wo, n, u)
-
-    def sample_weight(
-        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
-    ) -> tuple[np.ndarray, np.ndarray]:
-        if self._derived_weight:
-            return super().sample_weight(wo, n, u, front)
-        if front is not None and self._takes_front:
-            return self._each("sample_weight", wo, n, u, front)
-        return self._each("sample_weight", wo, n, u)

@@ -31,7 +31,11 @@ import numpy as np
 from ptlab.materials.parameters import MaterialParameters
 from ptlab.vectors import dot
 
-__all__ = ["DeltaMaterial", "Material"]
+__all__ = ["HOMEWORK_METHODS", "DeltaMaterial", "Material"]
+
+#: The three functions GAMES101 Homework 7 asks of a material, and all that the graders and
+#: the renderer need of one (``ptlab.grading.material.as_material`` supplies the rest).
+HOMEWORK_METHODS = ("eval", "pdf", "sample")
 
 
 class Material(MaterialParameters):

@@ -303,7 +303,7 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
     film = np.zeros((camera.count, 3), order="F")
     timed = TimedAccelerator(accel)
     # The path loop is called by its name in this module, where chapter 7's grader puts a
-    # student's in its place (ptlab.exercises.plug).
+    # student's in its place (ptlab.course.plug).
     trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
     with counting_nonfinite() as nonfinite:
         if trace is library_trace_paths:

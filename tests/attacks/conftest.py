@@ -14,7 +14,7 @@ from attacks.hostile import SUBMISSIONS
 
 
 def pytest_collection_modifyitems(config, items) -> None:
-    from ptlab.untrusted.sandbox import missing
+    from ptlab.course.sandbox.sandbox import missing
 
     why = missing()
     if why is not None:

@@ -1,7 +1,7 @@
 """The copy detector's corpus: every chapter's answers as a student who copies them would
 hand them in, and the honest answers they must be told from.
 
-A copier's file is the chapter's answer file (``ptlab/exercises/solutions/``) with every
+A copier's file is the chapter's answer file (``ptlab/course/solutions/``) with every
 import of what the chapter's kit leaves out replaced by the library's code of it (which
 the kit no longer has), and each of the chapter's answers (``Chapter.answers``) copied
 alone the same way: the library's definition, what it needs of the left-out code, and
@@ -21,8 +21,8 @@ from functools import cache
 from pathlib import Path
 
 from attacks.rewriters import rewritten
-from ptlab.exercises import all_chapters, chapter
-from ptlab.untrusted.copies import (
+from ptlab.course import all_chapters, chapter
+from ptlab.course.sandbox.copies import (
     MIN_COPIED_TOKENS,
     THRESHOLD,
     Answer,
@@ -33,7 +33,7 @@ from ptlab.untrusted.copies import (
     resolve,
     similarities,
 )
-from ptlab.untrusted.kit import defined_as
+from ptlab.course.sandbox.kit import defined_as
 
 #: The honest answers: students' own right answers and typical wrong ones.
 EXERCISES = Path(__file__).parents[1] / "exercises"

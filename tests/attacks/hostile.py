@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ptlab.untrusted.processes import process_table
+from ptlab.course.sandbox.processes import process_table
 
 #: The hostile submissions, one file per attack (each docstring says what it does).
 SUBMISSIONS = Path(__file__).parent / "submissions"
@@ -19,13 +19,13 @@ def alive(pids) -> list[int]:
 
 def students_processes() -> list[int]:
     """Every process on the machine that a student's process is or started (their command
-    line is the sandbox's ``BOOTSTRAP``: ``ptlab.untrusted.sandbox``). The pids a submission
+    line is the sandbox's ``BOOTSTRAP``: ``ptlab.course.sandbox.sandbox``). The pids a submission
     prints are its pid namespace's, which name other processes out here."""
     found = []
     for entry in Path("/proc").iterdir():
         if entry.name.isdigit():
             try:
-                if b"from ptlab.untrusted.child import main" in (entry / "cmdline").read_bytes():
+                if b"from ptlab.course.sandbox.child import main" in (entry / "cmdline").read_bytes():
                     found.append(int(entry.name))
             except OSError:
                 continue

@@ -4,7 +4,7 @@ Each rewriter is an ``ast.NodeTransformer`` whose ``rewrite(tree)`` returns a re
 copy of a module; none changes what the file computes (up to floating-point rounding where
 it moves arithmetic), nor the names the grader looks up (``keep``). ``REWRITES`` names
 them and their combinations; ``rewritten(source, rewrite, keep)`` gives the text a student
-would hand in. The copy detector (``ptlab.untrusted.copies``) must see through every one:
+would hand in. The copy detector (``ptlab.course.sandbox.copies``) must see through every one:
 ``scripts/copy_detection.py`` measures it, ``tests/attacks/test_copies.py`` checks it.
 """
 

@@ -35,9 +35,9 @@ from attacks.corpus import (
 from attacks.hostile import SUBMISSIONS
 from attacks.rewriters import REWRITES, rewritten
 from ptlab.cli import main
-from ptlab.exercises import chapter
-from ptlab.grading.cli import MATERIALS
-from ptlab.untrusted.copies import (
+from ptlab.course import chapter
+from ptlab.course.grade_command import MATERIALS
+from ptlab.course.sandbox.copies import (
     MIN_COPIED_TOKENS,
     THRESHOLD,
     Answers,
@@ -219,7 +219,7 @@ def test_a_copy_of_an_earlier_releases_answer_is_found_and_dated():
 def test_the_earlier_releases_answers_are_kept_as_source():
     """The data file holds sources (which the detector reads again whatever its
     normalisation), dated, for the answers that changed: chapter 7's path loop among them."""
-    from ptlab.untrusted.copies import PAST_ANSWERS
+    from ptlab.course.sandbox.copies import PAST_ANSWERS
 
     kept = json.loads(PAST_ANSWERS.read_text())["answers"]
     assert all(ast.parse(v["source"]) and re.fullmatch(r"\d{4}-\d\d-\d\d", v["date"]) for v in kept)

@@ -13,9 +13,9 @@ import pytest
 
 from attacks.hostile import assert_honest_failure, printed_pids, students_processes
 from ptlab.cli import main
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade, run_check
-from ptlab.untrusted import ProcessGuard
+from ptlab.course import chapter
+from ptlab.course.grader import grade, run_check
+from ptlab.course.sandbox import ProcessGuard
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
@@ -156,7 +156,7 @@ def generate_rays(camera, width, height, pixel_x, pixel_y, u):
 def test_a_malformed_reply_fails_the_check_with_one_line_in_bounded_time(tmp_path, monkeypatch, what):
     # The forger writes to the channel's descriptor with os.write, which the grader's reading
     # of the text refuses before anything runs; this test is of the protocol underneath.
-    monkeypatch.setattr("ptlab.untrusted.submission.unreadable_in_text", lambda *arguments: None)
+    monkeypatch.setattr("ptlab.course.sandbox.submission.unreadable_in_text", lambda *arguments: None)
     path = tmp_path / "01_cameras.py"
     path.write_text(FORGER.format(payload=MALFORMED[what], after=AFTER.get(what, "pass")))
     start = time.monotonic()

@@ -15,8 +15,8 @@ from __future__ import annotations
 import pytest
 
 from ptlab.cli import main
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course.grader import grade
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 

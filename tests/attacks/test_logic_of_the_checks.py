@@ -9,12 +9,12 @@ import time
 import numpy as np
 import pytest
 
-import ptlab.untrusted.submission
+import ptlab.course.sandbox.submission
 from attacks.hostile import assert_honest_failure
 from ptlab.cli import main
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
-from ptlab.untrusted import ArgumentChanged, Arguments, ProcessGuard, Rules, Submission
+from ptlab.course import chapter
+from ptlab.course.grader import grade
+from ptlab.course.sandbox import ArgumentChanged, Arguments, ProcessGuard, Rules, Submission
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
@@ -49,7 +49,7 @@ def test_only_the_arguments_a_function_writes_come_back(tmp_path):
 
 
 def test_a_file_that_hangs_at_import_costs_one_import_limit_not_every_check(tmp_path, monkeypatch):
-    monkeypatch.setattr(ptlab.untrusted.submission, "IMPORT_TIME_LIMIT", 2.0)
+    monkeypatch.setattr(ptlab.course.sandbox.submission, "IMPORT_TIME_LIMIT", 2.0)
     path = tmp_path / "06_diffuse.py"
     path.write_text("import time\ntime.sleep(3600)\n")
     start = time.monotonic()
@@ -62,7 +62,7 @@ def test_a_file_that_hangs_at_import_costs_one_import_limit_not_every_check(tmp_
 def test_ptlab_grade_of_a_file_that_hangs_at_import_ends_within_the_import_limit(
     tmp_path, capsys, monkeypatch
 ):
-    monkeypatch.setattr(ptlab.untrusted.submission, "IMPORT_TIME_LIMIT", 2.0)
+    monkeypatch.setattr(ptlab.course.sandbox.submission, "IMPORT_TIME_LIMIT", 2.0)
     path = tmp_path / "material.py"
     path.write_text("import time\ntime.sleep(3600)\n")
     start = time.monotonic()

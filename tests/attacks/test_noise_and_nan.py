@@ -10,9 +10,9 @@ import re
 
 import pytest
 
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
-from ptlab.exercises.renders import NOISE_RATIO
+from ptlab.course import chapter
+from ptlab.course.grader import grade
+from ptlab.course.renders import NOISE_RATIO
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 

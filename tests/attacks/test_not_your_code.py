@@ -20,8 +20,8 @@ import pytest
 
 from attacks.hostile import SUBMISSIONS, assert_honest_failure
 from ptlab.cli import main
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course.grader import grade
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 EXERCISES = SUBMISSIONS.parents[1] / "exercises"
@@ -90,7 +90,7 @@ def test_a_right_answer_that_uses_exec_for_something_else_keeps_its_marks(tmp_pa
 def _encoded_library(names: list[str]) -> str:
     """A student's file that carries the library's functions ``names`` (dotted) as base64 and
     compiles them at import: no trace of them in its text, none in the files it reads."""
-    from ptlab.untrusted.copies import resolve
+    from ptlab.course.sandbox.copies import resolve
 
     source = "\n\n".join(textwrap.dedent(inspect.getsource(resolve(n))) for n in names)
     blob = base64.b64encode(source.encode()).decode()
@@ -232,7 +232,7 @@ CAUGHT = dict.fromkeys(
     "03_whitted.py",
 )
 #: Of these, those the authorship hook refuses as they are imported: they compile a copy of
-#: ptlab's answers (``ptlab.untrusted.confinement``).
+#: ptlab's answers (``ptlab.course.sandbox.confinement``).
 REFUSED_AT_IMPORT = (
     "03_hook_off_then_exec.py",  # (whose search for the hook's state finds nothing now)
     "03_exec_of_library_source.py",
@@ -273,8 +273,8 @@ def test_what_runs_for_the_red_teams_files_is_not_the_files_own_code(tmp_path, n
     """The second layer alone, with no reading of the text (the grader reads it only when a
     check asks for a graded name): calling a graded function runs code that is not the
     file's, and the call fails; or the file is refused as it is imported."""
-    from ptlab.untrusted import ImportFailed, ProcessGuard, StudentError, Submission
-    from ptlab.untrusted.submission import UnreadableCode
+    from ptlab.course.sandbox import ImportFailed, ProcessGuard, StudentError, Submission
+    from ptlab.course.sandbox.submission import UnreadableCode
 
     if "marshalled" in name and not MARSHALLED_HERE:
         pytest.skip("code objects marshalled by Python 3.11")

@@ -19,10 +19,10 @@ from pathlib import Path
 import pytest
 
 from attacks.hostile import SUBMISSIONS
-from ptlab.exercises import chapter
-from ptlab.exercises.grader import grade
-from ptlab.untrusted.student_user import student_user
-from ptlab.untrusted.submission import KEPT_ENVIRONMENT
+from ptlab.course import chapter
+from ptlab.course.grader import grade
+from ptlab.course.sandbox.student_user import student_user
+from ptlab.course.sandbox.submission import KEPT_ENVIRONMENT
 
 pytestmark = [
     pytest.mark.slow,
@@ -87,7 +87,7 @@ def test_the_students_code_runs_as_nobody_with_no_way_back(attack):
         assert who[f"unshare-{kind}"] == "-1 errno 1", who
     # Its ptlab is the kit: no exercises (their answers and checks), no graders.
     _, _, holds = who["ptlab"].split(" ")
-    assert {"exercises", "untrusted", "camera.py"} <= set(holds.split(","))
+    assert {"course", "camera.py"} <= set(holds.split(","))
     assert not {"grading", "cli.py"} & set(holds.split(","))
     folder, mode, _, home, _, environment = who["folder"].split(" ")
     # Its folder is in memory in its own view (only its processes are there to write in it):
@@ -360,7 +360,7 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
     # student's code is the grader's own user: not for credit.
     assert "NOT FOR CREDIT: the grader is not root" in checked.stdout
     probe = (
-        "import os\nfrom ptlab.untrusted.processes import make_undumpable\nmake_undumpable()\n"
+        "import os\nfrom ptlab.course.sandbox.processes import make_undumpable\nmake_undumpable()\n"
         "parent = os.getpid()\nif os.fork() == 0:\n    try:\n"
         "        open(f'/proc/{parent}/environ', 'rb').read()\n        print('read', flush=True)\n"
         "    except OSError as error:\n        print('refused', error.errno, flush=True)\n"

@@ -20,12 +20,12 @@ from pathlib import Path
 import pytest
 
 from attacks.hostile import SUBMISSIONS
-from ptlab.exercises import chapter
-from ptlab.exercises.batch import find_work, safe_cell
-from ptlab.exercises.grader import grade
-from ptlab.untrusted.channel import Channel
-from ptlab.untrusted.sandbox import SCRATCH_BYTES, python_prefixes
-from ptlab.untrusted.shown import shown
+from ptlab.course import chapter
+from ptlab.course.batch import find_work, safe_cell
+from ptlab.course.grader import grade
+from ptlab.course.sandbox.channel import Channel
+from ptlab.course.sandbox.sandbox import SCRATCH_BYTES, python_prefixes
+from ptlab.course.sandbox.shown import shown
 
 RIGHT_01 = Path(__file__).parent.parent / "exercises" / "01_right_own_code.py"
 FORGED = "  total  10/10  full marks"

@@ -28,10 +28,10 @@ import numpy as np
 import pytest
 
 from attacks.hostile import SUBMISSIONS
-from ptlab.exercises import chapter
-from ptlab.exercises import renders as renders_module
-from ptlab.exercises.chapters import ch01_cameras, ch05_bvh, ch07_path_tracing
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course import renders as renders_module
+from ptlab.course.chapters import ch01_cameras, ch05_bvh, ch07_path_tracing
+from ptlab.course.grader import grade
 
 pytestmark = [pytest.mark.slow, pytest.mark.subprocess]  # graders, in processes
 
@@ -122,7 +122,7 @@ def test_a_replay_of_the_library_at_the_old_inputs_earns_nothing(number, tmp_pat
 def test_a_replay_of_a_known_grading_seed_earns_nothing_under_a_fresh_one(tmp_path, monkeypatch):
     """Knowing the seed of an earlier grading (its report says it) does not help: the
     next grading draws another."""
-    from ptlab.exercises.chapter import grading_seed
+    from ptlab.course.chapter import grading_seed
 
     found = chapter(1)
     replay = _load(SUBMISSIONS / "replay_answers.py", "replay_answers")
@@ -148,7 +148,7 @@ def _converged(tmp_path: Path) -> Path:
     beforehand (the furnace's analytic value for the scene's own albedo and emission, else
     a converged Cornell box of the library's, at the pixel each camera ray goes through: the
     film has a row per path) to every pass."""
-    from ptlab.exercises.chapters.ch07_path_tracing import CORNELL_RENDER, cornell_passes
+    from ptlab.course.chapters.ch07_path_tracing import CORNELL_RENDER, cornell_passes
 
     picture = cornell_passes(seed=3).mean(axis=0).reshape(-1, 3)  # (32 * 32, 3), at home
     assert CORNELL_RENDER["res"] == 32

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 import pytest
 
-from ptlab.exercises import chapter
-from ptlab.exercises.chapter import Chapter, ChapterCheck, CheckFailed
-from ptlab.exercises.grader import grade
+from ptlab.course import chapter
+from ptlab.course.chapter import Chapter, ChapterCheck, CheckFailed
+from ptlab.course.grader import grade
 
 #: Each trivial submission, and the checks that passed on it before ``requires``: they
 #: pass by themselves still (a quick one says so; a render or a harness is not run), and

@@ -1,7 +1,7 @@
 """A right chapter-8 answer written from the exercise file's hints alone, step by step, as a
 student who follows them would write it: the same tiles, job and pool as the library's
 answer, because the hints spell them out. It must get full marks, and is no copy: what the
-exercise file dictates is no evidence of copying (ptlab/untrusted/copies.py)."""
+exercise file dictates is no evidence of copying (ptlab/course/sandbox/copies.py)."""
 
 import multiprocessing
 import os

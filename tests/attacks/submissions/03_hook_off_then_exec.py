@@ -1,4 +1,4 @@
-"""An attack: the authorship hook (``ptlab.untrusted.confinement``) found among all objects
+"""An attack: the authorship hook (``ptlab.course.sandbox.confinement``) found among all objects
 (``gc.get_objects()``) and switched off, then ptlab.scattering's source, base64-encoded,
 run with ``exec``; the graded functions look the results up in ``globals()``. It had full
 marks."""

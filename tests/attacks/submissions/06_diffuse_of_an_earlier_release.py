@@ -1,6 +1,6 @@
 """A chapter-6 answer copied from an earlier release of ptlab: the ``Diffuse`` of commit 10d12b8
 (2026-11-27) as its text was then, under the exercise's name. Today's library reads otherwise:
-only the earlier releases' answers (ptlab/untrusted/past_answers.json) find it."""
+only the earlier releases' answers (ptlab/course/sandbox/past_answers.json) find it."""
 
 from __future__ import annotations
 
