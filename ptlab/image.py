@@ -5,7 +5,7 @@
   ``.hdr`` (Radiance RGBE), ``.pfm`` and ``.tif`` / ``.tiff`` files, in their own ways.
 * ``.png`` and ``.jpg`` / ``.jpeg`` files hold 8-bit sRGB: linear values (times 2^exposure)
   clipped to [0, 1] and encoded with the
-  sRGB transfer function of IEC 61966-2-1 (``srgb_encode``; ``tests/test_image.py`` checks
+  sRGB transfer function of IEC 61966-2-1 (``srgb_encode``; ``tests/renderer/test_image.py`` checks
   it against colour-science's ``cctf_encoding``, which gives the same numbers but costs
   a second of imports, matplotlib's among them, at every PNG). (The homework writes
   ``pow(x, 0.6)``, which is neither sRGB nor a gamma any display expects.)
@@ -141,6 +141,6 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
     image = np.asarray(pixels, dtype=np.float32).reshape(spec.height, spec.width, 3)
     if path.suffix.lower() == ".pfm":
         # A PFM file stores its bottom row first, as OpenImageIO writes it, but OpenImageIO
-        # 3.2 reads the rows back in file order (tests/test_cli.py checks both).
+        # 3.2 reads the rows back in file order (tests/renderer/test_cli.py checks both).
         image = image[::-1]
     return image, metadata

@@ -75,6 +75,19 @@ _GAMMA = 0x9E3779B97F4A7C15
 _MASK64 = (1 << 64) - 1
 
 
+def largest_below_one(dtype) -> np.floating:
+    """The largest number below 1 in the float type ``dtype``: 1 - 2^-24 in float32,
+    1 - 2^-53 in float64. Where arithmetic on uniforms (a sum, a stretch) can round up to 1,
+    the result is clamped to it, so that it stays in [0, 1)."""
+    float_type = np.dtype(dtype).type
+    return np.nextafter(float_type(1), float_type(0))
+
+
+#: ``largest_below_one`` of float32, the type of every sampler's uniforms (pbrt-v4's
+#: ``OneMinusEpsilon``): 1 - 2^-24.
+ONE_MINUS_EPSILON = largest_below_one(np.float32)
+
+
 def mix64(x: np.ndarray) -> np.ndarray:
     """A 64-bit hash of uint64 values: SplitMix64's finalizer (D. Stafford's "Mix13", 2011;
     G. Steele et al. 2014, "Fast Splittable Pseudorandom Number Generators").
@@ -402,7 +415,7 @@ class StratifiedSampler(Sampler):
 
 def _below_one(x: np.ndarray) -> np.ndarray:
     """float32 values clamped below 1 (a sum of floats can round up to 1.0 exactly)."""
-    return np.minimum(x, np.float32(1 - 2.0**-24), dtype=np.float32)
+    return np.minimum(x, ONE_MINUS_EPSILON, dtype=np.float32)
 
 
 def make_sampler(name: str, seed: int = 0, spp: int = 1) -> Sampler:

@@ -10,6 +10,8 @@ GAMES101 lecture 15/16):
 * ``uniform_hemisphere_around`` / ``cosine_hemisphere_around``: the same two hemisphere
   densities around any normal (the cosine one without a local frame: faster);
 * ``uniform_triangle``: a uniform point on a triangle, as barycentrics;
+* ``pick_from_cdf``: one of K items with the probabilities of a discrete CDF, and the uniform
+  that picked it stretched back to [0, 1) to serve again (``discrete_cdf`` makes the CDF);
 * ``ggx_visible_normals``: GGX microfacet normals seen from a direction, with density
   D_wo(h) = G1(wo) max(0, wo . h) D(h) / cos(theta_o) (Heitz 2018; the spherical-cap form of
   Dupuy and Benyoub 2023).
@@ -30,6 +32,7 @@ import math
 
 import numpy as np
 
+from ptlab.samplers import ONE_MINUS_EPSILON
 from ptlab.vectors import dot, normalize, vec3
 
 TWO_PI = 2.0 * math.pi
@@ -139,3 +142,47 @@ def uniform_triangle(u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """
     s = np.sqrt(u[:, 0])
     return u[:, 1] * s, 1.0 - s
+
+
+def discrete_cdf(weights: np.ndarray) -> np.ndarray:
+    """(K,) float64 cumulative distribution of (K,) non-negative ``weights`` (not all 0):
+    item i has probability weights[i] / sum(weights); exactly 1 from the last item of
+    non-zero weight on."""
+    cdf = np.cumsum(weights, dtype=np.float64)
+    cdf /= cdf[-1]
+    return cdf
+
+
+def pick_from_cdf(cdf: np.ndarray, u: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Inverse-CDF choice of one of K items per uniform, and the uniform reused (pbrt-v4's
+    ``SampleDiscrete``, section 2.3.1).
+
+    Item i is chosen where cdf[i - 1] <= u < cdf[i] (from 0 for the first item): with
+    probability cdf[i] - cdf[i - 1], never an item of probability 0. ``u`` is then stretched
+    from that interval back to [0, 1), (u - cdf[i - 1]) / (cdf[i] - cdf[i - 1]), so that it
+    can serve again, as stratified as it was (``ptlab.samplers``).
+
+    Args:
+        cdf: (K,) non-decreasing, the last 1 (a u that rounding left at or above it picks
+            the last item); float32 or float64, the type the stretch is computed in.
+        u: (N,) uniforms in [0, 1).
+
+    Returns:
+        index: (N,) intp, the item chosen for each u;
+        stretched: (N,) in u's float type, in [0, 1).
+    """
+    edges = cdf[:-1]
+    # The number of edges at or below u. For a handful of items (the Cornell box has two
+    # light triangles) counting them pass by pass is ~10x faster than a binary search.
+    if len(edges) < 16:
+        index = np.zeros(len(u), dtype=np.intp)
+        for edge in edges:
+            index += u >= edge
+    else:
+        index = np.searchsorted(edges, u, side="right")
+    below = np.concatenate([[0.0], edges]).astype(cdf.dtype)
+    # 1 / the interval's width, to multiply by (an interval of width 0 is never chosen; the
+    # floor keeps its entry finite all the same).
+    stretch = 1 / np.maximum(cdf - below, cdf.dtype.type(1e-30))
+    stretched = (u - below.take(index)) * stretch.take(index)
+    return index, np.minimum(stretched, ONE_MINUS_EPSILON).astype(u.dtype, copy=False)

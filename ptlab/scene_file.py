@@ -45,7 +45,7 @@ from ptlab.errors import PtlabError, SceneError, is_integer
 from ptlab.lights import PointLights, Sky, area_times_radiance, triangle_areas
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
 from ptlab.meshes import drop_zero_area, has_area, read_mesh
-from ptlab.scene import OFFSET_SCALE, RenderDefaults, Scene
+from ptlab.scene import OFFSET_SCALE, RenderDefaults, Scene, bounds
 from ptlab.textures import Checkerboard
 
 SCENE_FILE_NAME = "scene.toml"
@@ -223,13 +223,14 @@ class _SceneReader:
             material_ids.append(np.full(len(tri), material, dtype=np.intp))
             keys.append(key)
         self.check_extent(triangles, keys)
+        all_triangles = np.concatenate(triangles)
         material_of_triangle = np.concatenate(material_ids)
         point_lights = self.point_lights(data.get("point_light", []))
         sky = self.sky(data["sky"]) if "sky" in data else None
-        self.check_light_power(triangles, material_of_triangle, materials, point_lights)
+        self.check_light_power(all_triangles, material_of_triangle, materials, point_lights)
         textured = any(m.textured for m in materials)
         scene = Scene(
-            triangles=np.concatenate(triangles),
+            triangles=all_triangles,
             material_ids=material_of_triangle,
             materials=materials,
             camera=camera,
@@ -581,15 +582,16 @@ class _SceneReader:
 
     def check_extent(self, triangles: list[np.ndarray], keys: list[str]) -> None:
         """The whole scene's size and place, against MIN_SCENE_SIZE and MAX_DISTANCE_IN_SIZES."""
-        corners = np.concatenate([t.reshape(-1, 3) for t in triangles])
-        size = float(np.ptp(corners, axis=0).max())
+        boxes = [bounds(t) for t in triangles]  # (each mesh's: no copy of them all)
+        lows, highs = zip(*boxes, strict=True)
+        size = float((np.max(highs, axis=0) - np.min(lows, axis=0)).max())
         if size < MIN_SCENE_SIZE:
             raise self.error(
                 "mesh",
                 f"the scene is only {size:g} wide; float32 rays need at "
                 f"least {MIN_SCENE_SIZE:g}: use smaller units",
             )
-        farthest = [float(np.abs(t).max()) for t in triangles]
+        farthest = [float(max(-low.min(), high.max())) for low, high in boxes]
         i = int(np.argmax(farthest))
         if farthest[i] > MAX_DISTANCE_IN_SIZES * size:
             raise self.error(
@@ -603,17 +605,20 @@ class _SceneReader:
 
     def check_light_power(
         self,
-        triangles: list[np.ndarray],
+        triangles: np.ndarray,
         material_ids: np.ndarray,
         materials: list[Material],
         point_lights: PointLights | None,
     ) -> None:
         """The lights' total power (area x radiance, and 4 pi x intensity), which light
-        sampling divides by in float32, must be a normal float32 number."""
-        emission = np.array([m.emission if m.emission is not None else np.zeros(3) for m in materials])[
-            material_ids
-        ]
-        power = float(np.sum(area_times_radiance(triangle_areas(np.concatenate(triangles)), emission)))
+        sampling divides by in float32, must be a normal float32 number.
+
+        ``triangles``: (T, 3, 3), ``material_ids``: (T,) their materials' indices."""
+        emission = np.array([m.emission if m.emission is not None else np.zeros(3) for m in materials])
+        lit = np.flatnonzero(emission.any(axis=1).take(material_ids))
+        power = float(
+            np.sum(area_times_radiance(triangle_areas(triangles[lit]), emission[material_ids[lit]]))
+        )
         float32 = np.finfo(np.float32)
         if power > 0 and not float32.tiny <= power <= float32.max:
             raise self.error(

@@ -33,7 +33,7 @@ def main() -> None:
     keys = sampler.keys(pixel, np.zeros(N, dtype=np.int64))
     jitter = sampler.get(keys, BounceUniforms.PIXEL, 2)
     origins, dirs = generate_rays(scene.camera, WIDTH, HEIGHT, pixel % WIDTH, pixel // WIDTH, jitter)
-    paths = Paths(origins, dirs, np.ones((N, 3), np.float32, order="F"), pixel, np.ones(N, bool), keys)
+    paths = Paths.camera(origins, dirs, pixel, keys)
     hit = surface_hit(scene, paths, accel.intersect(paths.origins, paths.dirs))
     u = BounceUniforms(sampler, hit.sample, 0).light()
     film = np.zeros((WIDTH * HEIGHT, 3))

@@ -11,8 +11,10 @@ triangles) as an OBJ file, and a scene file that puts it in the Cornell box unde
 every comparison alternately, ``--repeat`` times:
 
 * reading: ``ptlab.load_scene`` of the scene file (the Cornell box's walls and light too, and
-  the scene's own checks), ``ptlab.meshes.read_mesh_triangles`` of the OBJ file alone, and
-  ``trimesh.load`` of it (seconds inside the process, imports excluded);
+  the scene's own checks) against ``trimesh.load`` of the OBJ file as a user calls it (its
+  default processing included), alternately in one process after one of each; and
+  ``ptlab.meshes.read_mesh_triangles`` of the OBJ file alone against ``trimesh.load`` of it
+  without processing, each in a process of its own (seconds, imports excluded);
 * the NumPy BVH: ``NumpyBVH(scene.triangles)``'s seconds, and the peak of memory that
   tracemalloc sees during a second build, per triangle;
 * the render: ``ptlab render SCENE --res 128 --spp 4 --workers 1`` with ``--backend embree``
@@ -20,7 +22,7 @@ every comparison alternately, ``--repeat`` times:
   and peak resident memory).
 
 It prints every run, then a Markdown table of medians, with ranges where runs differ, for
-docs/performance.md.
+docs/performance.md; the ratios are medians of the runs' own ratios.
 """
 
 from __future__ import annotations
@@ -35,13 +37,21 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 CORNELL = ROOT / "scenes" / "cornell-box"
 
-#: Run in a process of its own: the seconds of ptlab.load_scene(argv[1]).
-LOAD_SCENE = """
+#: Run in a process of its own: the seconds of ptlab.load_scene(argv[1]) and of
+#: trimesh.load(argv[2]), alternately, argv[3] times each (after one of each: both import
+#: more of themselves on their first file).
+LOAD_SCENE_AGAINST_TRIMESH = """
 import sys, time
-import ptlab
-start = time.perf_counter()
-ptlab.load_scene(sys.argv[1])
-print(time.perf_counter() - start)
+import ptlab, trimesh
+scene, obj, rounds = sys.argv[1], sys.argv[2], int(sys.argv[3])
+ptlab.load_scene(scene)
+trimesh.load(obj)
+for _ in range(rounds):
+    start = time.perf_counter()
+    ptlab.load_scene(scene)
+    middle = time.perf_counter()
+    trimesh.load(obj)
+    print(middle - start, time.perf_counter() - middle)
 """
 #: The seconds of ptlab's OBJ reader alone, read_mesh_triangles(argv[1]).
 READ_MESH = """
@@ -51,7 +61,8 @@ start = time.perf_counter()
 read_mesh_triangles(sys.argv[1])
 print(time.perf_counter() - start)
 """
-#: The seconds of trimesh.load(argv[1]), as ptlab read OBJ files before it read them itself.
+#: The seconds of trimesh.load(argv[1]) without processing, as ptlab read OBJ files before it
+#: read them itself.
 TRIMESH_LOAD = """
 import sys, time
 import trimesh
@@ -175,11 +186,18 @@ def main() -> int:
     for subdivisions in args.subdivisions:
         obj, scene, count = write_scene(folder, subdivisions)
         runs: dict[str, list[float]] = {}
+        pairs = python(LOAD_SCENE_AGAINST_TRIMESH, str(scene), str(obj), str(args.repeat))
+        runs["load_scene"], runs["trimesh.load(path)"] = pairs[0::2], pairs[1::2]
+        load = [p / t for p, t in zip(runs["load_scene"], runs["trimesh.load(path)"], strict=True)]
+        print(
+            f"{count:8d} triangles  load_scene {runs['load_scene']}, trimesh.load(path) "
+            f"{runs['trimesh.load(path)']}: load_scene / trimesh.load {spread(load, 2)}",
+            flush=True,
+        )
         for _ in range(args.repeat):
             for name, values in (
-                ("load_scene", python(LOAD_SCENE, str(scene))),
                 ("read_mesh", python(READ_MESH, str(obj))),
-                ("trimesh.load", python(TRIMESH_LOAD, str(obj))),
+                ("trimesh raw", python(TRIMESH_LOAD, str(obj))),
                 ("build", python(BUILD, str(scene))),
                 ("embree", render(scene, "embree", folder)),
                 ("numpy", render(scene, "numpy", folder)),
@@ -194,10 +212,11 @@ def main() -> int:
                 else:
                     runs.setdefault(name, []).append(values[0])
         ratio = [n / e for n, e in zip(runs["numpy s"], runs["embree s"], strict=True)]
-        read = [p / t for p, t in zip(runs["read_mesh"], runs["trimesh.load"], strict=True)]
+        read = [p / t for p, t in zip(runs["read_mesh"], runs["trimesh raw"], strict=True)]
         rows.append(
-            f"| {count:,} | {spread(runs['load_scene'], 2)} | {spread(runs['read_mesh'], 2)} "
-            f"| {spread(runs['trimesh.load'], 2)} | {spread(read, 2)} "
+            f"| {count:,} | {spread(runs['load_scene'], 2)} | {spread(runs['trimesh.load(path)'], 2)} "
+            f"| {spread(load, 2)} | {spread(runs['read_mesh'], 2)} "
+            f"| {spread(runs['trimesh raw'], 2)} | {spread(read, 2)} "
             f"| {spread(runs['build s'], 2)} "
             f"| {spread(runs['build B/tri'], 0)} | {spread(runs['embree s'])} "
             f"| {spread(runs['numpy s'])} | {spread(ratio, 2)} "
@@ -205,12 +224,13 @@ def main() -> int:
             f"| {spread([m * 2**20 / count for m in runs['numpy MB']], 0)} |"
         )
     print(
-        "\n| triangles | load_scene s | read_mesh s | trimesh.load s | read_mesh / trimesh "
+        "\n| triangles | load_scene s | trimesh.load(path) s | load_scene / trimesh.load "
+        "| read_mesh s | trimesh.load, no processing s | read_mesh / trimesh "
         "| NumPy BVH build s "
         "| build peak B/tri | render embree s | render numpy s | numpy / embree "
         "| render peak MB, embree / numpy | numpy peak B/tri |"
     )
-    print("|" + " --- |" * 12)
+    print("|" + " --- |" * 14)
     print("\n".join(rows))
     return 0
 

@@ -8,16 +8,17 @@ Each trial draws a fresh grading seed (from the operating system, as the grader 
 ``--first-seed`` K, K + 1, ...) and, inside it, renders what each render check renders (the
 same settings, seeds and furnace parameters, through the chapters' own functions): the
 library's passes, and a right answer's, whose functions (the right answers of
-tests/exercises, which draw random numbers or sample otherwise than the library) are
-plugged in directly in this process. It prints, per check, how many comparisons failed
-(``compare_renders`` or ``furnace_verdict``, both sides of the noise test included) with the
-rate's 95% Clopper-Pearson interval, and with ``--variance-ratios`` the largest and the
-smallest variance ratio (right answer / library, the half-th largest and smallest over the
-regions, as ``renders.noise_test`` takes them) over the trials. ``--constant`` also
-grades, in every trial, a converged answer (the library's passes' mean in every pass) and
-counts how often the too-clean test catches it (it must be every time); ``--wrong`` grades
-the wrong answers of ``WRONG`` (tests/exercises/07_wrong_furnace_fake.py, the furnace's
-analytic value with a render's noise) and counts how often they fail (every time too).
+tests/exercises, which draw random numbers or sample otherwise than the library) are passed
+to the render directly, in this process (not through the sandbox). It prints, per check, how
+many comparisons failed (``compare_renders`` or ``furnace_verdict``, both sides of the noise
+test included) with the rate's 95% Clopper-Pearson interval, and with ``--variance-ratios``
+the largest and the smallest variance ratio (right answer / library, the half-th largest and
+smallest over the regions, as ``renders.noise_test`` takes them) over the trials.
+``--constant`` also grades, in every trial, a converged answer (the library's passes' mean
+in every pass) and counts how often the too-clean test catches it (it must be every time);
+``--wrong`` grades the wrong answers of ``WRONG`` (tests/exercises/07_wrong_furnace_fake.py,
+the furnace's analytic value with a render's noise) and counts how often they fail (every
+time too).
 """
 
 from __future__ import annotations

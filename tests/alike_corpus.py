@@ -1,7 +1,7 @@
 """What grade-all's pairs of alike students (``ptlab.course.alike``) are measured on: the
 honest answers of ``tests/exercises`` and the library's own answers, chapter by chapter,
 and copies of them as a student who copies another's file hands it in (names changed,
-statements and functions reordered, dead code added). ``tests/test_alike.py`` and
+statements and functions reordered, dead code added). ``tests/course/test_alike.py`` and
 ``scripts/alike_scores.py`` use them."""
 
 from __future__ import annotations

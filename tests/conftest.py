@@ -22,7 +22,7 @@ from hypothesis import HealthCheck, settings
 import ptlab
 from ptlab.scene import Scene
 
-# Property-based tests (tests/test_fuzz.py) run a fixed, derandomized set of examples by
+# Property-based tests (tests/renderer/test_fuzz.py) run a fixed, derandomized set of examples by
 # default, so that the suite's time and verdict are the same on every run, and keep no
 # example database; Hypothesis's other files (caches) go to the temporary folder, not the
 # checkout. HYPOTHESIS_PROFILE=long searches afresh, far longer.
@@ -119,7 +119,7 @@ def marked_if_it_starts_processes(request):
 
 #: Modules whose functions run only in a student's process (``ptlab.course.sandbox.child`` sets
 #: them up there), where this one cannot trace them; the quick layer grades in such
-#: processes (test_untrusted.py, test_exercises.py).
+#: processes (course/test_sandbox.py, course/test_exercises.py).
 ONLY_IN_STUDENTS_PROCESSES = {"ptlab.course.sandbox.confinement"}
 _called: set = set()
 _untouched: list[str] = []

@@ -114,7 +114,7 @@ def _longest_module(dotted: str, modules: dict[str, Path]) -> str | None:
 
 #: The one arrow the graph leaves out: ``reflect`` moved from ``ptlab.vectors`` to
 #: ``ptlab.scattering``, and students' files written before keep importing it from its old
-#: place (``tests/test_exercises.py`` holds them to full marks). ``ptlab.vectors`` forwards
+#: place (``tests/course/test_exercises.py`` holds them to full marks). ``ptlab.vectors`` forwards
 #: that name on first use (PEP 562); nothing of its own code uses scattering.
 OLD_NAMES_FORWARDED = {"ptlab.vectors": {"ptlab.scattering"}}
 

@@ -1,7 +1,7 @@
 """Deliberately wrong materials, each making one classic mistake the grader must catch, and
 right ones written otherwise than the library's, which it must pass.
 
-Used by ``tests/test_grading.py`` (and handy for ``ptlab grade tests/wrong_materials.py:NAME``).
+Used by ``tests/renderer/test_grading.py`` (and handy for ``ptlab grade tests/wrong_materials.py:NAME``).
 Each class says its mistake (or why it is right) in its docstring; ``WRONG`` and ``RIGHT``
 list them. The ones that are plain classes, or build on ``_Lambertian`` or ``_GGX`` (which
 use none of the library's materials), can be graded by ``ptlab grade`` too, whose kit

@@ -16,11 +16,10 @@ import math
 import numpy as np
 
 import ptlab
-import ptlab.rendering.jobs
 from ptlab.camera import generate_rays
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
+from ptlab.rendering.pieces import Pieces
 
 
 def upside_down_rays(camera, width, height, pixel_x, pixel_y, u):
@@ -53,8 +52,9 @@ def main() -> None:
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1)
     write_image(out / "cameras.png", ptlab.render(scene, **options))
-    with plugged(ptlab.rendering.jobs, generate_rays=upside_down_rays):
-        write_image(out / "cameras-wrong.png", ptlab.render(scene, **options))
+    # A render is made of pieces (the library's by default): give it the wrong camera's rays.
+    upside_down = Pieces(generate_rays=upside_down_rays)
+    write_image(out / "cameras-wrong.png", ptlab.render(scene, **options, pieces=upside_down))
     print(f"wrote {out / 'cameras.png'} and {out / 'cameras-wrong.png'}")
     show_pictures(out)
 

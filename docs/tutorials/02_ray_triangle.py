@@ -16,11 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 import ptlab
-import ptlab.accel.numpy_bvh
 from ptlab.accel.triangle import ray_triangle
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
+from ptlab.rendering.pieces import BVHPieces, Pieces
 
 
 def swapped_uv_ray_triangle(origins, dirs, v0, e1, e2):
@@ -50,12 +49,10 @@ def main() -> None:
 
     scene = ptlab.load_scene("cornell-box")
     options = dict(spp=args.spp, res=args.res, workers=1, backend="numpy")
-    # The Cornell box's 32 triangles are fewer than SMALL_SCENE, below which the NumPy BVH
-    # tests every triangle its own way, without ray_triangle: 0 sends the render through it.
-    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0):
-        write_image(out / "ray-triangle.png", ptlab.render(scene, **options))
-    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0, ray_triangle=swapped_uv_ray_triangle):
-        write_image(out / "ray-triangle-wrong.png", ptlab.render(scene, **options))
+    write_image(out / "ray-triangle.png", ptlab.render(scene, **options))
+    # The NumPy BVH is built and walked with the pieces it is given: here, the wrong test.
+    swapped_uv = Pieces(bvh=BVHPieces(ray_triangle=swapped_uv_ray_triangle))
+    write_image(out / "ray-triangle-wrong.png", ptlab.render(scene, **options, pieces=swapped_uv))
     print(
         f"wrote {out / 'ray-triangle.png'} and {out / 'ray-triangle-wrong.png'} "
         f"(the second with u and v swapped)"

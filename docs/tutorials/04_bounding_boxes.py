@@ -3,9 +3,9 @@
 
 Asks ``ptlab.accel.numpy_bvh.slab_test`` about a unit box and a flat box (the square z = 1)
 and prints the answers, counts the flat boxes in the Cornell box's BVH, then renders the
-Cornell box's normals through the NumPy BVH twice: with the library's slab test, and with
-the lecture slide's strict ``t_enter < t_exit``, which misses every flat box: the walls
-inside them vanish.
+Cornell box's normals with the NumPy BVH twice: with the library's pieces, and with the
+lecture slide's strict ``t_enter < t_exit`` as the tree's slab test, which misses every
+flat box: the walls inside them vanish.
 
     python docs/tutorials/04_bounding_boxes.py       # writes bounding-boxes.png, bounding-boxes-wrong.png
     python docs/tutorials/04_bounding_boxes.py --res 64 --out /tmp/t
@@ -16,11 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 import ptlab
-import ptlab.accel.numpy_bvh
 from ptlab.accel.numpy_bvh import build_bvh, slab_test
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
+from ptlab.rendering.pieces import BVHPieces, Pieces
 
 
 def strict_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
@@ -62,12 +61,10 @@ def main() -> None:
     )
 
     options = dict(spp=args.spp, res=args.res, integrator="normals", workers=1, backend="numpy")
-    # The Cornell box's 32 triangles are fewer than SMALL_SCENE, below which the NumPy BVH
-    # tests every triangle and no box: 0 makes the render walk the tree, through slab_test.
-    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0):
-        write_image(out / "bounding-boxes.png", ptlab.render(scene, **options))
-    with plugged(ptlab.accel.numpy_bvh, SMALL_SCENE=0, slab_test=strict_slab_test):
-        write_image(out / "bounding-boxes-wrong.png", ptlab.render(scene, **options))
+    write_image(out / "bounding-boxes.png", ptlab.render(scene, **options))
+    # The NumPy BVH is walked with the pieces it is given: here, the strict slab test.
+    strict = Pieces(bvh=BVHPieces(slab_test=strict_slab_test))
+    write_image(out / "bounding-boxes-wrong.png", ptlab.render(scene, **options, pieces=strict))
     print(
         f"wrote {out / 'bounding-boxes.png'} and {out / 'bounding-boxes-wrong.png'} (the second "
         f"with the strict test)"

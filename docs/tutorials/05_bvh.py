@@ -15,14 +15,14 @@ boxes each camera ray enters (same colour scale: brighter is more work).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
 import ptlab
-import ptlab.accel.numpy_bvh as numpy_bvh
+from ptlab.accel.numpy_bvh import BVHPieces, FlatBVH, NumpyBVH
 from ptlab.camera import generate_rays
 from ptlab.course.chapters.ch05_bvh import sah_cost
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 
 #: A ray's tag, carried in its tmin: ray i starts at t = i * TAG (see ``boxes_entered``).
@@ -47,28 +47,30 @@ def low_child_first(first_child, axis, dirs):
     return first_child, first_child + 1
 
 
-def boxes_entered(bvh: numpy_bvh.NumpyBVH, origins: np.ndarray, dirs: np.ndarray) -> np.ndarray:
-    """(N,) the boxes each ray enters on its way through ``bvh`` to its closest hit.
+def boxes_entered(
+    triangles: np.ndarray, pieces: BVHPieces, origins: np.ndarray, dirs: np.ndarray
+) -> tuple[NumpyBVH, np.ndarray]:
+    """The NumPy BVH over ``triangles`` built and walked with ``pieces``, and (N,) the boxes
+    each ray enters on its way through it to its closest hit.
 
-    ``slab_test`` is not told which rays it tests, so every ray carries a tag in its tmin
-    (ray i ignores hits before t = i * TAG: nothing here is that close to the camera) and
-    a counting slab test reads the tags back.
+    The tree's slab test is that of ``pieces``, counting the boxes it finds entered. It is
+    not told which rays it tests, so every ray carries a tag in its tmin (ray i ignores hits
+    before t = i * TAG: nothing here is that close to the camera) that it reads back.
     """
     count = np.zeros(len(origins), np.intp)
 
     def counting_slab_test(o, inv_d, box_min, box_max, tmin, tmax):
-        hit, t_enter = slab_test(o, inv_d, box_min, box_max, tmin, tmax)
+        hit, t_enter = pieces.slab_test(o, inv_d, box_min, box_max, tmin, tmax)
         np.add.at(count, np.rint(tmin[hit] / TAG).astype(np.intp), 1)
         return hit, t_enter
 
-    slab_test = numpy_bvh.slab_test
+    bvh = NumpyBVH(triangles, pieces=replace(pieces, slab_test=counting_slab_test))
     tag = (np.arange(len(origins)) * TAG).astype(np.float32)
-    with plugged(numpy_bvh, slab_test=counting_slab_test):
-        bvh.intersect(origins, dirs, tmin=tag)
-    return count
+    bvh.intersect(origins, dirs, tmin=tag)
+    return bvh, count
 
 
-def node_levels(tree: numpy_bvh.FlatBVH) -> np.ndarray:
+def node_levels(tree: FlatBVH) -> np.ndarray:
     """(M,) the level of each node (the root's is 0): children come after their parent."""
     level = np.zeros(len(tree.child), np.intp)
     for node in np.flatnonzero(tree.child >= 0):
@@ -111,12 +113,10 @@ def main() -> None:
 
     counts, trees = {}, {}
     for name, pieces in [
-        ("bvh", {}),
-        ("bvh-wrong", dict(split_costs=median_split_costs, child_order=low_child_first)),
+        ("bvh", BVHPieces()),
+        ("bvh-wrong", BVHPieces(split_costs=median_split_costs, child_order=low_child_first)),
     ]:
-        with plugged(numpy_bvh, **pieces):
-            bvh = numpy_bvh.NumpyBVH(scene.triangles)
-            entered = boxes_entered(bvh, origins, dirs)
+        bvh, entered = boxes_entered(scene.triangles, pieces, origins, dirs)
         trees[name] = bvh.bvh
         counts[name] = np.bincount(pixel, weights=entered, minlength=width * height) / spp
         label = "SAH, near child first" if name == "bvh" else "median split, low child first"

@@ -15,28 +15,32 @@ library's path tracer, then with each mistake of the homework's castRay put in i
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 import ptlab
-import ptlab.integrators.path as path
 from ptlab.course.chapters.ch07_path_tracing import furnace_scene
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
+from ptlab.integrators.path import scatter, trace_paths
 from ptlab.integrators.wavefront import SHADOW_EPSILON, add_to_film, shade
+from ptlab.rendering.pieces import PathPieces, Pieces
 from ptlab.vectors import dot
 
-library_scatter = path.scatter
 
-
-def no_emission(film, scene, hit, settings) -> None:
-    """The black light: camera rays add nothing for the light they see."""
+def loop_with_black_light(film, scene, accel, paths, sampler, settings) -> int:
+    """The black light: camera rays add nothing for the light they see. The library's path
+    loop with light sampling (the homework's) adds a ray's hit emission only where
+    ``sees_emission`` says so (camera rays, and rays after a mirror or glass): here none do."""
+    blind = replace(paths, sees_emission=np.zeros_like(paths.sees_emission))
+    return trace_paths(film, scene, accel, blind, sampler, settings)
 
 
 def scatter_seeing_emission(scene, hit, u, survive, with_pdf=False):
     """Double counting: the rays after a diffuse bounce add the emission they hit, although
     light sampling at the bounce has already counted that light."""
-    paths = library_scatter(scene, hit, u, survive, with_pdf)
+    paths = scatter(scene, hit, u, survive, with_pdf)
     paths.sees_emission[:] = True
     return paths
 
@@ -56,18 +60,19 @@ def direct_light_without_epsilon(film, scene, accel, hit, u, settings) -> int:
     return len(wi)
 
 
+#: Each mistake as the pieces of a render: the path loop, or one step of the library's.
 MISTAKES = {
-    "black light": dict(add_emission=no_emission),
-    "double counting": dict(scatter=scatter_seeing_emission),
-    "no shadow epsilon": dict(direct_light=direct_light_without_epsilon),
+    "black light": Pieces(trace_paths=loop_with_black_light),
+    "double counting": Pieces(path=PathPieces(scatter=scatter_seeing_emission)),
+    "no shadow epsilon": Pieces(path=PathPieces(direct_light=direct_light_without_epsilon)),
 }
 
 
 def render(scene, mistake: str | None, **options) -> np.ndarray:
-    """The library's render, with one mistake plugged into ``ptlab.integrators.path``
-    (in this process: ``workers=1``, where the plugged functions are seen)."""
-    with plugged(path, **MISTAKES.get(mistake, {})):
-        return ptlab.render(scene, workers=1, **options)
+    """The library's render, or with one mistake among its pieces (in this process,
+    ``workers=1``: the mistakes are this script's functions, which worker processes may
+    not have)."""
+    return ptlab.render(scene, workers=1, **options, pieces=MISTAKES.get(mistake))
 
 
 # %%

@@ -16,11 +16,10 @@ from __future__ import annotations
 import numpy as np
 
 import ptlab
-import ptlab.integrators.path
-from ptlab.course.plug import plugged
 from ptlab.course.tutorial import show_pictures, tutorial_options
 from ptlab.image import write_image
 from ptlab.integrators.path import mis_weight
+from ptlab.rendering.pieces import PathPieces, Pieces
 
 
 def weight_one(pdf, other, heuristic="power"):
@@ -56,8 +55,10 @@ def main() -> None:
             f"wrote {out / name}: strategy {strategy!r}, {result.seconds:.1f} s, "
             f"mean brightness {result.image.mean():.4f}"
         )
-    with plugged(ptlab.integrators.path, mis_weight=weight_one):
-        image = ptlab.render(scene, strategy="mis", workers=1, **options)  # in this process
+    # The MIS weight is one of the path tracer's pieces; a render in this process (workers=1)
+    # can be given this script's own.
+    weights_of_one = Pieces(path=PathPieces(mis_weight=weight_one))
+    image = ptlab.render(scene, strategy="mis", workers=1, **options, pieces=weights_of_one)
     write_image(out / "mis-wrong.png", image)
     print(
         f"wrote {out / 'mis-wrong.png'}: both strategies weighted 1, mean brightness "

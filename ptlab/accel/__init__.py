@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.accel.base import Accelerator, Hits
+from ptlab.accel.numpy_bvh import BVHPieces, NumpyBVH
 
 BACKENDS = ("auto", "embree", "numpy")
 
-__all__ = ["BACKENDS", "Accelerator", "Hits", "make_accelerator", "resolve_backend"]
+__all__ = ["BACKENDS", "Accelerator", "BVHPieces", "Hits", "make_accelerator", "resolve_backend"]
 
 
 def resolve_backend(backend: str) -> str:
@@ -31,13 +32,16 @@ def resolve_backend(backend: str) -> str:
     return "embree"
 
 
-def make_accelerator(triangles: np.ndarray, backend: str = "auto") -> Accelerator:
-    """Build the ray-query structure for (T, 3, 3) ``triangles`` with the named backend."""
+def make_accelerator(
+    triangles: np.ndarray, backend: str = "auto", bvh: BVHPieces | None = None
+) -> Accelerator:
+    """Build the ray-query structure for (T, 3, 3) ``triangles`` with the named backend;
+    ``bvh``: the NumPy BVH's pieces, if not the library's (Embree has none to give)."""
     backend = resolve_backend(backend)
     if backend == "embree":
+        if bvh is not None and bvh != BVHPieces():
+            raise ValueError("Embree builds and walks its own tree: BVH pieces need backend='numpy'")
         from ptlab.accel.embree import EmbreeAccelerator
 
         return EmbreeAccelerator(triangles)
-    from ptlab.accel.numpy_bvh import NumpyBVH
-
-    return NumpyBVH(triangles)
+    return NumpyBVH(triangles, pieces=bvh)

@@ -19,15 +19,16 @@ small enough to be an exercise:
   (``ptlab.accel.triangle.ray_triangle``) or pushes the two children, near one on top
   (``child_order``).
 
-A scene of at most ``SMALL_SCENE`` triangles (the Cornell box has 32) skips the walk:
+A scene of at most ``SMALL_SCENE`` triangles (the Cornell box has 32) skips the walk
+(unless the tree is given pieces other than the library's, which only the walk uses):
 every ray is tested against every triangle, one triangle at a time for all the rays
 (``NumpyBVH._test_every_triangle``). Each step is then mostly plain arithmetic on whole
 arrays, with the triangle's data broadcast, where a walk gathers every ray's node, box
 and triangles before it can compute anything, and gathering is the slow part of NumPy.
 
-``slab_test``, ``ray_triangle``, ``split_costs``, ``best_split`` and ``child_order`` are
-looked up in this module by name when they are called, so an exercise can swap any of
-them for a student's own (``ptlab.course.plug``).
+``slab_test``, ``ray_triangle``, ``split_costs``, ``best_split`` and ``child_order`` are the
+tree's pieces (``BVHPieces``): a tree is built and walked with the pieces it is given,
+the library's unless told otherwise (the course gives a student's: chapters 2, 4 and 5).
 
 The tree is stored as flat arrays (one row per node), the layout a GPU or a C
 implementation would use too: node ``i`` has bounds ``box_min[i], box_max[i]``; an
@@ -38,6 +39,7 @@ reordered triangle arrays.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -47,8 +49,8 @@ from ptlab.accel.triangle import ray_triangle
 from ptlab.vectors import cross, dot
 
 #: The most triangles for which testing all of them surely beats walking the tree (7.4x
-#: faster on the Cornell box: docs/performance.md). Read when a ``NumpyBVH`` is built, so
-#: the exercises can set it to 0 to render through a student's tree.
+#: faster on the Cornell box: docs/performance.md). A tree given pieces other than the
+#: library's walks whatever its size (``NumpyBVH``).
 SMALL_SCENE = 64
 
 # pbrt-v4's gamma(3) for float32: the relative rounding error of t computed by the slab test.
@@ -227,7 +229,11 @@ def best_split(
 
 
 def build_bvh(
-    triangles: np.ndarray, max_leaf_size: int = 4, max_bins: int = 12, traversal_cost: float = 1.0
+    triangles: np.ndarray,
+    max_leaf_size: int = 4,
+    max_bins: int = 12,
+    traversal_cost: float = 1.0,
+    pieces: BVHPieces | None = None,
 ) -> FlatBVH:
     """Top-down binned-SAH BVH (pbrt-v4 7.3.2; Wald 2007), one tree level at a time.
 
@@ -244,10 +250,12 @@ def build_bvh(
         max_leaf_size: the most triangles a leaf may hold.
         max_bins: number of SAH bins per axis (fewer on levels whose nodes are all smaller).
         traversal_cost: cost of visiting a node, in units of one triangle test.
+        pieces: the SAH's ``split_costs`` and ``best_split`` (default: the library's).
 
     Returns:
         The tree as a ``FlatBVH``.
     """
+    pieces = pieces or BVHPieces()
     tris = np.asarray(triangles, dtype=np.float64)
     if len(tris) == 0:
         raise ValueError("a BVH needs at least one triangle")
@@ -283,7 +291,7 @@ def build_bvh(
         )
 
         split_bin, split_axis, is_leaf, median = _choose_splits(
-            bins, n_bins, tri_lo, tri_hi, box_lo, box_hi, size, offset, max_leaf_size, traversal_cost
+            bins, n_bins, tri_lo, tri_hi, box_lo, box_hi, size, offset, max_leaf_size, traversal_cost, pieces
         )
 
         # Partition each splitting node's run: left side first (stable sort by side).
@@ -343,6 +351,7 @@ def _choose_splits(
     offset: np.ndarray,
     max_leaf_size: int,
     traversal_cost: float,
+    pieces: BVHPieces,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The split of each of K nodes of a level (``split_costs``, ``best_split``), from its
     triangles' (P, 3) bins along each axis and (P, 3) bounds, node after node (node k's
@@ -369,8 +378,10 @@ def _choose_splits(
         bin_lo, bin_hi = _bin_bounds(
             key, tri_lo[tris].astype(np.float32), tri_hi[tris].astype(np.float32), (n_bins, m, 3, 3)
         )
-        cost = split_costs(bin_count, bin_lo, bin_hi, box_lo[nodes], box_hi[nodes], traversal_cost)
-        split_bin[nodes], split_axis[nodes], is_leaf[nodes] = best_split(cost, size[nodes], max_leaf_size)
+        cost = pieces.split_costs(bin_count, bin_lo, bin_hi, box_lo[nodes], box_hi[nodes], traversal_cost)
+        split_bin[nodes], split_axis[nodes], is_leaf[nodes] = pieces.best_split(
+            cost, size[nodes], max_leaf_size
+        )
         median[nodes] = ~is_leaf[nodes] & np.isinf(cost[split_bin[nodes], np.arange(m), split_axis[nodes]])
     split_axis[median] = 0
     return split_bin, split_axis, is_leaf, median
@@ -389,7 +400,9 @@ class NumpyBVH:
         triangles: (T, 3, 3) array, vertex k of triangle i at ``triangles[i, k]``.
         max_leaf_size, traversal_cost: see ``build_bvh``.
         every_triangle: test every ray against every triangle instead of walking the tree;
-            None (default) for ``SMALL_SCENE`` triangles or fewer (module docstring).
+            None (default) for ``SMALL_SCENE`` triangles or fewer (module docstring), with
+            the library's pieces: a tree given others always walks the tree, through them.
+        pieces: the functions it is built and walked with (default: the library's).
     """
 
     name = "numpy"
@@ -400,10 +413,16 @@ class NumpyBVH:
         max_leaf_size: int = 4,
         traversal_cost: float = 1.0,
         every_triangle: bool | None = None,
+        pieces: BVHPieces | None = None,
     ):
+        self.pieces = pieces = pieces or BVHPieces()
         tris = np.asarray(triangles, dtype=np.float64).reshape(-1, 3, 3)
-        self.bvh = bvh = build_bvh(tris, max_leaf_size=max_leaf_size, traversal_cost=traversal_cost)
-        self.every_triangle = len(tris) <= SMALL_SCENE if every_triangle is None else bool(every_triangle)
+        self.bvh = bvh = build_bvh(
+            tris, max_leaf_size=max_leaf_size, traversal_cost=traversal_cost, pieces=pieces
+        )
+        if every_triangle is None:
+            every_triangle = len(tris) <= SMALL_SCENE and pieces == BVHPieces()
+        self.every_triangle = bool(every_triangle)
         # For testing every triangle: each one's index, v0, edges and plane (normal . x =
         # offset), largest first: a ray that finds a near hit early has fewer planes ahead
         # of it to pass.
@@ -489,7 +508,7 @@ class NumpyBVH:
             col = np.arange(ray.size)
             node = stack.take(sp * ray.size + col, mode="clip")
             sp -= 1
-            hit, _ = slab_test(
+            hit, _ = self.pieces.slab_test(
                 o.T,
                 inv_d.T,
                 self._box_min.take(node, axis=1).T,
@@ -579,7 +598,7 @@ class NumpyBVH:
         owner = np.repeat(np.arange(len(j)), count)  # the ray (index into j) of each pair
         tri = np.repeat(first - start, count) + np.arange(len(owner))
         rows = j.take(owner)
-        t, u, v = ray_triangle(
+        t, u, v = self.pieces.ray_triangle(
             o.take(rows, axis=1).T,
             d.take(rows, axis=1).T,
             self._v0.take(tri, axis=1).T,
@@ -607,7 +626,9 @@ class NumpyBVH:
         one first, so the near one (``child_order``) is popped next and its hits can
         cull the far one."""
         n = d.shape[1]
-        near, far = child_order(self.bvh.child.take(node), self.bvh.axis.take(node), d.take(j, axis=1).T)
+        near, far = self.pieces.child_order(
+            self.bvh.child.take(node), self.bvh.axis.take(node), d.take(j, axis=1).T
+        )
         top = sp.take(j) * n + j
         stack.put(top + n, far)
         stack.put(top + 2 * n, near)
@@ -632,6 +653,18 @@ def child_order(first_child: np.ndarray, axis: np.ndarray, dirs: np.ndarray) -> 
     """
     backwards = dirs[np.arange(len(axis)), axis] < 0  # meets the high child first
     return first_child + backwards, first_child + ~backwards
+
+
+@dataclass(frozen=True)
+class BVHPieces:
+    """The functions a tree is built and walked with: the library's by default, any of
+    them a student's in the course's chapters (each with the signature of the library's)."""
+
+    ray_triangle: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = ray_triangle
+    slab_test: Callable[..., tuple[np.ndarray, np.ndarray]] = slab_test
+    split_costs: Callable[..., np.ndarray] = split_costs
+    best_split: Callable[..., tuple[np.ndarray, np.ndarray, np.ndarray]] = best_split
+    child_order: Callable[..., tuple[np.ndarray, np.ndarray]] = child_order
 
 
 def _component_major(vectors: np.ndarray) -> np.ndarray:

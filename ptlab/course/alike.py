@@ -15,7 +15,7 @@ normalised code, and each pair of students is scored by the fingerprints they sh
 
 A pair is reported from ``THRESHOLD`` similarity and ``MIN_SHARED`` shared fingerprints.
 Measured on the answers of ``tests/exercises`` and the library's own, each chapter's
-against each other (``scripts/alike_scores.py`` prints the figures, ``tests/test_alike.py``
+against each other (``scripts/alike_scores.py`` prints the figures, ``tests/course/test_alike.py``
 checks them): honest submissions written apart share at most 0.56 of their fingerprints
 where they share at least ``MIN_SHARED`` (chapter 8, whose exercise file's hints spell out
 the tiles, the job and the pool), and 0.72 where they share fewer (chapter 2's

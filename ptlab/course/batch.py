@@ -272,7 +272,11 @@ class Record:
         self.sha256 = {student: _sha256(files.get(student)) for student in rows}
         self.path.parent.mkdir(mode=0o700, exist_ok=True)
         text = json.dumps({"chapter": self.chapter.number, "rows": self.rows, "sha256": self.sha256})
-        write_atomically(self.path, lambda temporary: Path(temporary).write_text(text))
+
+        def write(temporary: str) -> None:
+            Path(temporary).write_text(text)
+
+        write_atomically(self.path, write)
 
 
 def _sha256(file: Path | None) -> str:
@@ -386,7 +390,7 @@ class _Runner:
         if workers > 1:
             self.slots = queue.SimpleQueue()
             for slot in range(1, workers + 1):  # (not the user itself, whom other graders may run)
-                if self.pooled:
+                if self.pooled and base is not None:
                     pool_user(base, slot)  # (a pool that cannot be made: before anything)
                 self.slots.put(slot)
             self.groups = ControlGroups.make(workers) if is_root() else None
@@ -401,10 +405,10 @@ class _Runner:
         self._running: set[int] = set()
 
     def grade(self, work: Work) -> dict:
-        row = dict.fromkeys(columns(self.chapter), "")
+        row: dict[str, object] = dict.fromkeys(columns(self.chapter), "")
         row.update(
             student=work.student,
-            file="" if work.file is None else work.file.name,
+            file=_file_name(work),
             score=0,
             max_score=sum(c.points for c in self.chapter.checks),
         )
@@ -416,7 +420,7 @@ class _Runner:
         try:
             report, problem = self._run(work, slot)
         finally:
-            if slot is not None:
+            if slot is not None and self.slots is not None:
                 self.slots.put(slot)
         row["seconds"] = f"{time.monotonic() - start:.1f}"
         if report is None:
@@ -432,6 +436,9 @@ class _Runner:
         return row
 
     def _run(self, work: Work, slot: int | None = None) -> tuple[dict | None, str]:
+        guard = self.guard
+        if guard is None:
+            raise RuntimeError("grade_all gives the runner its ProcessGuard before it grades")
         command = [
             sys.executable,
             "-I",
@@ -467,7 +474,7 @@ class _Runner:
             with self._lock:
                 self._running.discard(process.pid)
                 # The grader and whatever it left (re-parented here if it was killed).
-                self.guard.end(process.pid, keep=self._running)
+                guard.end(process.pid, keep=self._running)
             process.wait()
         if output is None:
             return None, f"grading did not finish in {self.limit:.0f} s"
@@ -502,8 +509,11 @@ def alike_in_class(chapter: Chapter, folder: Path) -> ClassAlike:
     work = {w.student: w for w in find_work(folder, chapter) if w.file is not None}
     prints, not_compared = {}, []
     for student, found in work.items():
+        file = found.file
         try:
-            prints[student] = fingerprints(read_files(found.file, with_folder=found.own_folder))
+            prints[student] = (
+                fingerprints(read_files(file, with_folder=found.own_folder)) if file is not None else None
+            )
         except RefusedSubmission:  # (gone since it was graded, or no longer a regular file)
             prints[student] = None
         if prints[student] is None:
@@ -544,11 +554,16 @@ def write_alike(path: Path, found: ClassAlike) -> None:
             writer = csv.writer(out)
             writer.writerow(ALIKE_COLUMNS)
             for pair, first, second in found.pairs:
-                row = [first.student, first.file.name, second.student, second.file.name]
+                row: list[object] = [first.student, _file_name(first), second.student, _file_name(second)]
                 row += [f"{pair.similarity:.3f}", pair.shared, *pair.sizes]
                 writer.writerow([safe_cell(cell) for cell in row])
 
     write_atomically(path, write)
+
+
+def _file_name(work: Work) -> str:
+    """The name of a submission's file ("" for none)."""
+    return "" if work.file is None else work.file.name
 
 
 def _report(output: bytes, chapter: Chapter) -> tuple[dict | None, str]:

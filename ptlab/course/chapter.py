@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from ptlab.course.messages import aside, text
-from ptlab.course.sandbox import Arguments, Rules, copied_answer, library_answer
+from ptlab.course.sandbox import Arguments, RemoteModule, Rules, copied_answer, library_answer
 from ptlab.course.sandbox.sandbox import PACKAGES
 
 if TYPE_CHECKING:
@@ -240,7 +240,7 @@ def checked_array(value, name: str, shape: tuple, nan_hint: str = "") -> np.ndar
     return result
 
 
-def student_file(module: ModuleType) -> str:
+def student_file(module: RemoteModule) -> str:
     """The student's file as a command run where the check runs can name it: relative to the
     current folder when it lies inside it, else absolute; quoted for the shell if need be.
 
@@ -254,7 +254,7 @@ def student_file(module: ModuleType) -> str:
     return shlex.quote(str(shown))
 
 
-def require(module: ModuleType, *names: str) -> list[Callable]:
+def require(module: RemoteModule, *names: str) -> list[Callable]:
     """The functions ``names`` of the student's module; a clear failure if one is missing,
     is ptlab's own answer under the student's name (``ptlab.course.sandbox.ownership``), or the
     file holds a copy of ptlab's answers with the names changed (``ptlab.course.sandbox.copies``)."""

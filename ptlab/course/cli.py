@@ -276,7 +276,11 @@ def _inspect(args) -> int:
             error=failed,
         )
         content = json.dumps(result, indent=2) + "\n"
-        write_atomically(args.json, lambda temporary: Path(temporary).write_text(content))
+
+        def write(temporary: str) -> None:
+            Path(temporary).write_text(content)
+
+        write_atomically(args.json, write)
     return 0 if difference is None and failed is None else 1
 
 
@@ -366,7 +370,11 @@ def _check(args) -> int:
     print_verdict(result.table())  # (a reader gone away changes nothing below, nor the exit code)
     if args.json:
         text = json.dumps(result.as_dict(), indent=2) + "\n"
-        write_atomically(args.json, lambda temporary: Path(temporary).write_text(text))
+
+        def write(temporary: str) -> None:
+            Path(temporary).write_text(text)
+
+        write_atomically(args.json, write)
     remember(result)
     return 0 if result.full_marks else 1
 

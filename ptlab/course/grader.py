@@ -225,8 +225,9 @@ def _grade(
     import_nothing_from_here()
     rules = chapter.library_rules if library_answer else chapter.rules
     _import_what_checks_use(rules)
+    taken: Taken | str
     try:
-        taken: Taken | str = take_in(path, with_folder=with_folder, library=library_answer)
+        taken = take_in(path, with_folder=with_folder, library=library_answer)
         sha256 = taken.sha256
     except RefusedSubmission as refused:  # (its bytes are not read: it may be a link)
         taken, sha256 = str(refused), ""

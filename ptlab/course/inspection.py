@@ -6,8 +6,8 @@ pixel draw the same numbers: until the student's code computes something else, b
 the same paths. Per chapter (``INSPECTED``):
 
 * 3 (reflect, refract, fresnel) and 10 (mis_weight): the pixel is inspected twice, with the
-  library's functions and with the student's plugged in where the chapter's render check
-  plugs them; the records are compared field by field (``first_difference``): the first
+  library's functions and with the student's as the render's pieces, as the chapter's
+  render check has them; the records are compared field by field (``first_difference``): the first
   vertex where they part is the student's bug.
 * 7 (the path loop): the same, with the student's ``direct_light``, ``russian_roulette`` and
   ``scatter`` in the library's loop (seen from outside: what each returns, ``Recorder``'s
@@ -26,15 +26,18 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable, Iterator
-from contextlib import ExitStack, contextmanager
+from contextlib import contextmanager
 from dataclasses import asdict, dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ptlab.course.chapter import require
 from ptlab.inspector import PixelInspection, inspect_pixel
 from ptlab.inspector.records import Sample, Vertex
+from ptlab.integrators.path import PathPieces
+from ptlab.rendering.pieces import Pieces
 
 #: Two values are the same to this relative and absolute tolerance (float32 rounding of two
 #: right answers that compute alike differs by about 1e-6).
@@ -128,54 +131,37 @@ class Inspected:
     compare: Callable[..., Difference | None]
 
 
-def _twice(plug: Callable[[Any], ExitStack]) -> Callable[..., Difference | None]:
+def _twice(pieces_of: Callable[[Any], Pieces]) -> Callable[..., Difference | None]:
     """A ``compare`` that inspects the pixel with the library's functions, then with the
-    student's (``plug(module)``, a ``with`` block in which they are plugged in)."""
+    student's (``pieces_of(module)``: the render's pieces made of them)."""
 
     def compare(module, scene, pixel, options) -> Difference | None:
         library = inspect_pixel(scene, pixel, **options)
-        with plug(module):
-            yours = inspect_pixel(scene, pixel, **options)
+        yours = inspect_pixel(scene, pixel, **options, pieces=pieces_of(module))
         return first_difference(yours, library)
 
     return compare
 
 
-def _plug_ch03(module) -> ExitStack:
-    import ptlab.integrators.whitted as whitted
-    import ptlab.materials.mirror as mirror
-    from ptlab.course.chapter import require
-    from ptlab.course.plug import plugged
+def _pieces_ch03(module) -> Pieces:
+    from ptlab.course.chapters.ch03_whitted import surface_pieces
 
-    reflect, refract, fresnel = require(module, "reflect", "refract", "fresnel")
-    stack = ExitStack()
-    stack.enter_context(plugged(whitted, reflect=reflect, refract=refract, fresnel_dielectric=fresnel))
-    stack.enter_context(plugged(mirror, reflect=reflect))
-    return stack
+    return surface_pieces(*require(module, "reflect", "refract", "fresnel"))
 
 
-def _plug_ch10(module) -> ExitStack:
-    import ptlab.integrators.path as path
-    from ptlab.course.chapter import require
-    from ptlab.course.plug import plugged
-
+def _pieces_ch10(module) -> Pieces:
     (mis_weight,) = require(module, "mis_weight")
 
     def weights(pdf, other, heuristic="power"):
         pdf, other = np.broadcast_arrays(pdf, other)
         return np.asarray(mis_weight(pdf, other, heuristic), dtype=np.float32)
 
-    stack = ExitStack()
-    stack.enter_context(plugged(path, mis_weight=weights))
-    return stack
+    return Pieces(path=PathPieces(mis_weight=weights))
 
 
-def _plug_ch07_pieces(module) -> ExitStack:
+def _pieces_ch07_steps(module) -> Pieces:
     """The student's direct_light, russian_roulette and scatter in the library's loop,
     each reporting what it returned to the recorder (the library's report their insides)."""
-    import ptlab.integrators.path as path
-    from ptlab.course.chapter import require
-    from ptlab.course.plug import plugged
     from ptlab.integrators.wavefront import recorder
 
     direct_light, russian_roulette, scatter = require(module, "direct_light", "russian_roulette", "scatter")
@@ -205,25 +191,17 @@ def _plug_ch07_pieces(module) -> ExitStack:
             rec.next_paths(hit, paths)
         return paths
 
-    stack = ExitStack()
-    stack.enter_context(plugged(path, direct_light=light, russian_roulette=roulette, scatter=bounce))
-    return stack
+    return Pieces(path=PathPieces(direct_light=light, russian_roulette=roulette, scatter=bounce))
 
 
-def _plug_ch07_loop(module) -> ExitStack:
-    import ptlab.rendering.jobs as jobs
-    from ptlab.course.chapter import require
-    from ptlab.course.plug import plugged
-
+def _pieces_ch07_loop(module) -> Pieces:
     (trace_paths,) = require(module, "trace_paths")
-    stack = ExitStack()
-    stack.enter_context(plugged(jobs, trace_paths=trace_paths))
-    return stack
+    return Pieces(trace_paths=trace_paths)
 
 
 def _compare_ch07(module, scene, pixel, options) -> Difference | None:
-    found = _twice(_plug_ch07_pieces)(module, scene, pixel, options)
-    return found if found is not None else _twice(_plug_ch07_loop)(module, scene, pixel, options)
+    found = _twice(_pieces_ch07_steps)(module, scene, pixel, options)
+    return found if found is not None else _twice(_pieces_ch07_loop)(module, scene, pixel, options)
 
 
 def _compare_ch09(module, scene, pixel, options) -> Difference | None:
@@ -310,10 +288,10 @@ def _veach():
 #: The chapters ``ptlab exercise inspect`` knows, with their render checks' scenes and sizes
 #: (so that the pixel a failing render check names is the same pixel here).
 INSPECTED: dict[int, Inspected] = {
-    3: Inspected(_glass_block, dict(res=48, spp=2, integrator="whitted"), _twice(_plug_ch03)),
+    3: Inspected(_glass_block, dict(res=48, spp=2, integrator="whitted"), _twice(_pieces_ch03)),
     7: Inspected(_cornell, dict(res=32, spp=8, rr=0.8, sampler="independent"), _compare_ch07),
     9: Inspected(_metals, dict(res=32, spp=8, max_depth=6, sampler="independent"), _compare_ch09),
-    10: Inspected(_veach, dict(res=32, spp=8, max_depth=3, strategy="mis"), _twice(_plug_ch10)),
+    10: Inspected(_veach, dict(res=32, spp=8, max_depth=3, strategy="mis"), _twice(_pieces_ch10)),
 }
 
 

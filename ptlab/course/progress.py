@@ -140,12 +140,12 @@ def started_folders() -> list[Path]:
 def remember_folder(folder: Path) -> None:
     """Add ``folder`` to the folders ``list`` looks in (quietly skipped where unwritable)."""
     names = [str(p) for p in started_folders()]
-    folder = str(folder.resolve())
-    if folder in names:
+    wanted = str(folder.resolve())
+    if wanted in names:
         return
     try:
         state_file().parent.mkdir(parents=True, exist_ok=True)
-        _write_json(state_file(), [*names, folder])
+        _write_json(state_file(), [*names, wanted])
     except OSError:
         pass
 
@@ -168,7 +168,7 @@ def folders_below(top: Path) -> list[Path]:
     found, level = [], [top]
     for _ in range(SEARCH_DEPTH + 1):
         found.extend(level)
-        below = []
+        below: list[Path] = []
         for folder in level:
             try:
                 entries = sorted(folder.iterdir())

@@ -2,14 +2,15 @@
 
 The chapters whose code changes what the renderer computes (the rays, the intersection,
 the materials, the path loop) end with a render check: the same scene, the same seed,
-rendered once with the library's code and once with the student's plugged in.
+rendered once with the library's code and once with the student's functions as the
+render's pieces (``ptlab.rendering.pieces``).
 ``pass_images`` keeps every pass of a render as an independent estimate, and
 ``compare_renders`` compares the two renders' passes region by region: the student's must
 not be NaN, not noisier than a right answer's may be, nor far less noisy (``noise_test``),
 and not differ from the library's in the mean beyond the noise (a paired t-test per region
 and colour).
-``check_render_through`` is the whole check of the chapters whose functions the renderer
-looks up (1, 2, 4 and 5): the Cornell box through the library's code, then through the
+``check_render_through`` is the whole check of the chapters whose functions are pieces of
+the renderer (1, 2, 4 and 5): the Cornell box through the library's code, then through the
 student's, compared. ``replace_materials`` swaps a scene's materials for a student's.
 
 Every threshold comes from the library's passes, never from the student's alone (the
@@ -23,13 +24,14 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from types import ModuleType
 
 import numpy as np
 
+from ptlab.accel.numpy_bvh import BVHPieces
 from ptlab.course.chapter import CheckFailed, grading_seed_for
 from ptlab.course.finite import at_pixel, channel_name, require_finite
 from ptlab.course.messages import aside, text
+from ptlab.rendering.pieces import Pieces
 
 #: The chance that a right answer fails the mean test of a render comparison, at most
 #: (Bonferroni over every region and colour, and over the two standard errors each is
@@ -91,17 +93,16 @@ MISSING_TOLERANCE = 0.01
 
 def check_render_through(
     yours: str,
-    hooks: ModuleType,
-    replacements: dict,
+    pieces: Pieces,
     *,
     passes: dict | None = None,
     hint: str = "",
     nan_hint: str = "",
     missing_hint: str = "",
 ) -> str:
-    """The Cornell box rendered with the library's code, then with the student's functions
-    ``replacements`` (by name) plugged into ``hooks``, the module the renderer looks them up
-    in: the same picture? -> a note saying how close, or ``CheckFailed``.
+    """The Cornell box rendered with the library's code, then with ``pieces``, the student's
+    functions in the library's place: the same picture? -> a note saying how close, or
+    ``CheckFailed``.
 
     Args:
         yours: the student's code in the messages: "your rays", "your BVH" (in the active
@@ -117,31 +118,25 @@ def check_render_through(
             this says what may have lost them.
 
     The library's picture is rendered first, before any of the student's code runs. The
-    pieces of the NumPy BVH (``hooks`` is ``ptlab.accel.numpy_bvh``) are seen only through
-    its tree: the student's render runs on the NumPy backend with ``SMALL_SCENE`` 0 (a scene
-    as small as the Cornell box would otherwise be tested triangle by triangle, without
-    one). The library's normals view comes from the same backend as the student's (compared
-    pixel by pixel), its passes from the fastest (compared up to noise).
+    pieces of the NumPy BVH are seen only through its tree: the student's render runs on
+    the NumPy backend (which walks its tree for a scene as small as the Cornell box when
+    given pieces of its own: ``NumpyBVH``). The library's normals view comes from the same
+    backend as the student's (compared pixel by pixel), its passes from the fastest
+    (compared up to noise).
     """
     import ptlab
-    import ptlab.accel.numpy_bvh
-    from ptlab.course.plug import plugged
 
-    backend = "auto"
-    if hooks is ptlab.accel.numpy_bvh:
-        backend, replacements = "numpy", dict(replacements, SMALL_SCENE=0)
+    backend = backend_for(pieces)
     scene = ptlab.load_scene("cornell-box")
     if passes is not None:
         library = pass_images(scene, backend="auto", **passes)
-        with plugged(hooks, **replacements):
-            student = pass_images(scene, backend=backend, **passes)
+        student = pass_images(scene, backend=backend, pieces=pieces, **passes)
         return compare_renders(
             student, library, text("render.path_traced", yours=yours), hint, passes["spp_per_pass"]
         )
     options = dict(NORMALS_VIEW, seed=grading_seed_for(NORMALS_STREAM), workers=1, backend=backend)
     library = ptlab.render(scene, **options)
-    with plugged(hooks, **replacements):
-        student = ptlab.render(scene, **options)
+    student = ptlab.render(scene, **options, pieces=pieces)
     what = text("render.normals", yours=yours)
     require_finite(student, what, at_pixel, hint=nan_hint)
     missing = (student.max(axis=2) == 0) & (library.max(axis=2) > 0)
@@ -151,6 +146,12 @@ def check_render_through(
     if not difference <= NORMALS_TOLERANCE:
         raise CheckFailed(text("render.normals_differ", what=what, difference=difference) + aside(hint))
     return text("render.normals_match", yours=yours)
+
+
+def backend_for(pieces: Pieces, backend: str = "auto") -> str:
+    """``backend``, or the NumPy BVH where ``pieces`` has BVH pieces of a student's (Embree
+    has none to swap)."""
+    return "numpy" if pieces.bvh != BVHPieces() else backend
 
 
 def replace_materials(scene, replace: Callable):
@@ -188,7 +189,9 @@ def replace_materials(scene, replace: Callable):
     )
 
 
-def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, **options) -> np.ndarray:
+def pass_images(
+    scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, pieces: Pieces | None = None, **options
+) -> np.ndarray:
     """(passes, res, res, 3) float64: the image of each pass of one render, on its own.
 
     Raises ``CheckFailed`` if any sample was NaN or infinite (``add_to_film`` leaves them
@@ -197,8 +200,8 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
     The render takes independent samples (``sampler="independent"``), so the passes are
     independent estimates of the same picture and their spread gives the standard error.
     (Stratified and sobol samples would make the passes of one pixel correlated, parts of
-    one pattern.) The render runs in this process (``workers=1``), where ``plugged``
-    functions are seen, with the render's own tiles (``TILE_SIZE``): its calls are a
+    one pattern.) The render runs in this process (``workers=1``), where the student's
+    ``pieces`` (if given) are, with the render's own tiles (``TILE_SIZE``): its calls are a
     render's batches, not sizes of the grader's own.
     """
     from ptlab.rendering import render_result
@@ -218,6 +221,7 @@ def pass_images(scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, 
         workers=1,
         spp_per_pass=spp_per_pass,
         on_pass=keep,
+        pieces=pieces,
         **dict(dict(sampler="independent"), **options),
     )
     if result.nonfinite:  # (left out of the image, which therefore looks fine: say so)
@@ -262,6 +266,7 @@ def compare_renders(
         return text("render.matches", what=what, threshold=threshold, overall=overall)
     if difference is None:
         raise CheckFailed(text("render.differs", what=what, difference=said))
+    then: str | None  # (the noise, said second, may have nothing to say)
     if said is not None and not noise.too_clean:  # (too noisy first: added noise moves the mean too)
         first, then = said, difference
     else:  # (the difference first; a picture of other light, less noisy, after it)
@@ -344,7 +349,7 @@ def mean_verdict(student: np.ndarray, library: np.ndarray, false_alarm: float = 
         "render.mean_brighter" if mean[worst] > 0 else "render.mean_darker",
         wrong=int(wrong.sum()),
         tests=mean.size,
-        region=describe_region(*worst),
+        region=describe_region(*map(int, worst)),
         ratio=ratio,
         t=min(t[worst], 999),
         threshold=threshold,
@@ -392,8 +397,8 @@ class NoiseTest:
         numbers = dict(regions=self.regions, total=self.total, false_alarm=NOISE_FALSE_ALARM)
         if self.too_clean:
             clean = dict(low=self.low, clean_ratio=CLEAN_RATIO, bound=1 / (CLEAN_RATIO * self.chance))
-            spp = spp or text("render.its")
-            return text("render.less_noisy" if differs else "render.too_clean", spp=spp, **clean, **numbers)
+            samples = spp or text("render.its")
+            return text("render.less_noisy" if differs else "render.too_clean", spp=samples, **clean, **numbers)
         if self.too_noisy:
             return text(
                 "render.too_noisy",

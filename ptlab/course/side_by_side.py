@@ -4,9 +4,10 @@ library's, beside the library's own render of it, and a picture of their differe
 The student's file is imported as ``ptlab exercise check`` imports it (``ptlab.course.sandbox``:
 a fresh interpreter in its sandbox, with the chapter's kit, as the student user when run as
 root, sending back plain data only); the renders run in this process, which calls the student's
-functions there, with one worker (a function plugged in here is not seen by worker
-processes). Each chapter says what it renders (``Chapter.render``: its scene, its options,
-and how its functions go in: those of the chapter's render check). The library's render
+functions there, with one worker (the student's functions are stand-ins of this process,
+which worker processes would not have). Each chapter says what it renders
+(``Chapter.render``: its scene, its options, and the render's pieces made of the student's
+functions: those of the chapter's render check). The library's render
 comes first, before any of the student's code runs.
 
 Both renders take the same seed: where the student's code draws the same random numbers as
@@ -18,16 +19,15 @@ from __future__ import annotations
 
 import warnings
 from collections.abc import Callable
-from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
-from types import ModuleType
 
 import numpy as np
 
 from ptlab.course.chapter import Chapter, CheckFailed, grading_seed, new_grading_seed
 from ptlab.course.messages import language, text
 from ptlab.errors import PtlabError
+from ptlab.rendering.pieces import Pieces
 
 #: The width of a render that names no ``--res`` (its height: the scene's own aspect ratio).
 DEFAULT_WIDTH = 256
@@ -82,14 +82,15 @@ class Pictures:
         return [write_image(folder / f"{stem}-{name}.png", image) for name, image in pictures.items()]
 
 
-def render_plugged(scene, options: dict, hooks: ModuleType | None = None, **replacements) -> np.ndarray:
-    """``ptlab.render(scene, **options)`` in this process (one worker), with each of
-    ``replacements`` plugged into ``hooks`` (``ptlab.course.plug.plugged``)."""
-    from contextlib import nullcontext
+def render_with_pieces(scene, options: dict, pieces: Pieces | None = None) -> np.ndarray:
+    """``ptlab.render(scene, **options)`` in this process (one worker), made of ``pieces``
+    (the library's if None), on the NumPy backend if they include BVH pieces."""
+    import ptlab
+    from ptlab.course.renders import backend_for
 
-    from ptlab.course.plug import plugged
-
-    return render_within(scene, options, nullcontext() if hooks is None else plugged(hooks, **replacements))
+    if pieces is not None:
+        options = dict(options, backend=backend_for(pieces, options.get("backend", "auto")))
+    return ptlab.render(scene, **dict(options, workers=1), pieces=pieces)
 
 
 def render_with_materials(
@@ -103,16 +104,7 @@ def render_with_materials(
     if not any(replaces(m) for m in scene.materials):
         raise CheckFailed(missing)
     replaced = replace_materials(scene, lambda m: material_for(m) if replaces(m) else None)
-    return render_plugged(replaced, options)
-
-
-def render_within(scene, options: dict, block: AbstractContextManager) -> np.ndarray:
-    """``ptlab.render(scene, **options)`` in this process (one worker), inside ``block``
-    (a ``with`` block in which the renderer uses the student's functions)."""
-    import ptlab
-
-    with block:
-        return ptlab.render(scene, **dict(options, workers=1))
+    return render_with_pieces(replaced, options)
 
 
 def render_options(scene, chapter: Chapter, res: str | None, spp: int | None, seed: int) -> dict:
@@ -146,7 +138,7 @@ def render_side_by_side(
     lang: str | None = None,
 ) -> Pictures:
     """Render ``scene_name`` (default: the chapter's) with the library's code, then with the
-    student's file ``path`` plugged in, isolated as ``check`` runs it.
+    student's file ``path`` as the render's pieces, isolated as ``check`` runs it.
 
     Args:
         progress: show a progress bar of each render (``ptlab.render``'s).

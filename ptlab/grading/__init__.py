@@ -21,12 +21,15 @@ The method follows the statistical tests of Mitsuba 3 (``mitsuba.chi2``) and Nor
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from typing import TypeVar
 
 import numpy as np
 
 from ptlab.grading import checks, delta
 from ptlab.grading.material import AdaptedMaterial, as_material
 from ptlab.grading.plots import write_plots
+from ptlab.grading.probes import Kept
 from ptlab.grading.report import Check, Report
 from ptlab.grading.sphere import SphereGrid
 
@@ -34,6 +37,8 @@ __all__ = ["Check", "Report", "check_material", "write_plots"]
 
 #: The angles between wo and n at which the statistical checks sample: head-on, oblique and grazing.
 WO_DEGREES = (0.0, 45.0, 80.0)
+
+_Result = TypeVar("_Result")
 
 
 def check_material(material, seed: int = 0, *, samples: int = 1_000_000, wo_degrees=WO_DEGREES) -> Report:
@@ -80,12 +85,13 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
     # The grid's frame is the checks' own: every row the material sees is turned by a
     # rotation of its own (ptlab.grading.probes), so no normal of the seed is needed.
     grid = SphereGrid.for_samples(checks.Z, samples)
-    kept = []
+    kept: list[Kept] = []
     degrees = checks.lobe_angles(wo_degrees, streams[7])
+    failure = None  # measure's error, if it raised (then lobes, pointwise and walls are unset)
     try:
         lobes, pointwise, walls = checks.measure(material, grid, degrees, samples, streams[2], kept)
     except checks.MaterialError as error:
-        lobes, failure = None, str(error)
+        failure = str(error)
     for name, check in (
         ("chi-square", lambda: checks.check_chi_square(material, lobes, walls, streams[3])),
         ("pdf normalisation", lambda: checks.check_normalisation(lobes)),
@@ -94,7 +100,7 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
         ("estimator agreement", lambda: checks.check_estimator(lobes)),
         ("sample_weight", lambda: checks.check_sample_weight(pointwise)),
     ):
-        results.append(_guard(name, check) if lobes is not None else _failure(name, failure))
+        results.append(_guard(name, check) if failure is None else _failure(name, failure))
     results.append(_guard("reciprocity", checks.check_reciprocity, material, streams[5]))
     results.append(_guard("float32", checks.check_float32, material, streams[6], kept=kept))
     results.append(_guard("row independence", checks.check_row_independence, material, kept, streams[4]))
@@ -102,7 +108,7 @@ def _checks(material, streams, samples: int, wo_degrees: tuple) -> list[Check]:
 
 
 def _delta_checks(material, streams) -> list[Check]:
-    kept = []
+    kept: list[Kept] = []
     try:
         scattering = delta.scatter_all(material, streams[1], kept)
     except checks.MaterialError as error:
@@ -121,8 +127,9 @@ def _delta_checks(material, streams) -> list[Check]:
     return results
 
 
-def _guard(name: str, check, *args, **keywords) -> Check | None:
-    """Run one check; a material that raises fails it with the error as the hint."""
+def _guard(name: str, check: Callable[..., _Result], *args, **keywords) -> _Result | Check:
+    """Run one check (its result: a ``Check``, or for ``delta.check_front`` perhaps None); a
+    material that raises fails it with the error as the hint."""
     try:
         return check(*args, **keywords)
     except checks.MaterialError as error:

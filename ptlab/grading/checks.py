@@ -89,7 +89,9 @@ gradings. (Before the walls, 0 in 1000 runs at 10^6 samples per wo.)
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -98,6 +100,7 @@ from ptlab.grading.probes import Kept, Probe, Walls, rows_of
 from ptlab.grading.report import Check, verdict
 from ptlab.grading.sphere import SphereGrid, along
 from ptlab.rendering.sizes import SPP_PER_PASS, TILE_SIZE
+from ptlab.samplers import ONE_MINUS_EPSILON, largest_below_one
 from ptlab.sampling import to_world
 from ptlab.vectors import dot, normalize, vec3
 
@@ -291,7 +294,7 @@ def measure(
     observed = np.zeros(count * grid.cells, dtype=np.intp)
     failed, failed_below = np.zeros(count, dtype=np.intp), np.zeros(count, dtype=np.intp)
     weights = _Moments(count)
-    pointwise = []
+    pointwise: list[dict[str, np.ndarray]] = []
     start = 0
     for rows in render_calls(rng, count * samples):
         lobe = lobe_of_row[start : start + rows]
@@ -376,7 +379,10 @@ class _Moments:
     def __init__(self, groups: int):
         self.groups = groups
         self.count = np.zeros(groups)
-        self.mean = self.m2 = None
+        # (groups, K) once the first batch is added, which sets them as they are.
+        self.mean: np.ndarray = np.zeros((groups, 0))
+        self.m2: np.ndarray = np.zeros((groups, 0))
+        self.empty = True
 
     def add(self, group: np.ndarray, values: np.ndarray) -> None:
         count = np.bincount(group, minlength=self.groups).astype(np.float64)
@@ -392,8 +398,8 @@ class _Moments:
             m2 = np.column_stack(
                 [np.bincount(group, weights=deviation[:, c] ** 2, minlength=self.groups) for c in columns]
             )
-        if self.mean is None:
-            self.count, self.mean, self.m2 = count, mean, m2
+        if self.empty:
+            self.count, self.mean, self.m2, self.empty = count, mean, m2, False
             return
         total = self.count + count
         delta = mean - self.mean
@@ -481,7 +487,9 @@ def ask_at(
     ]
 
 
-def _pointwise(material, wo, n, u, wi, pdf, f, cos_theta_i, most: int, keep: list | None) -> dict:
+def _pointwise(
+    material, wo, n, u, wi, pdf, f, cos_theta_i, most: int, keep: list | None
+) -> dict[str, np.ndarray]:
     """sample_weight on the first rows (``most`` at most), next to sample's wi and f cos / pdf there."""
     k = min(len(u), most)
     keep = None if derives_sample_weight(material) else keep
@@ -514,17 +522,17 @@ def pooled_chi_square(
     observed, expected = np.asarray(observed, float), np.asarray(expected, float)
     keep = (expected > 0) | (observed > 0)
     small = keep & (expected < min_expected)
-    o, e = list(observed[keep & ~small]), list(expected[keep & ~small])
+    o_cells, e_cells = list(observed[keep & ~small]), list(expected[keep & ~small])
     if small.any():
         pool_o, pool_e = observed[small].sum(), expected[small].sum()
-        if pool_e >= min_expected or not e:
-            o.append(pool_o)
-            e.append(pool_e)
+        if pool_e >= min_expected or not e_cells:
+            o_cells.append(pool_o)
+            e_cells.append(pool_e)
         else:
-            smallest = int(np.argmin(e))
-            o[smallest] += pool_o
-            e[smallest] += pool_e
-    o, e = np.array(o), np.array(e)
+            smallest = int(np.argmin(e_cells))
+            o_cells[smallest] += pool_o
+            e_cells[smallest] += pool_e
+    o, e = np.array(o_cells), np.array(e_cells)
     if (e <= 0).any():
         return math.inf, max(len(e) - 1, 1)
     return float(((o - e) ** 2 / e).sum()), max(len(e) - 1, 1)
@@ -739,7 +747,8 @@ def _candidate_integrals(material, lobes: list[Lobe], rng: np.random.Generator) 
 
 def check_normalisation(lobes: list[Lobe]) -> Check:
     z = z_two_sided(sidak(ALPHA_NORMALISATION, len(lobes)))
-    worst, worst_ratio, text = None, -1.0, ""
+    worst: Lobe | None = None
+    worst_ratio, text = -1.0, ""
     for lobe in lobes:
         success = 1.0 - lobe.failed / lobe.samples
         allowed = z * math.sqrt(success * (1 - success) / lobe.samples) + 2 * lobe.errors[0] + 1e-6
@@ -752,7 +761,7 @@ def check_normalisation(lobes: list[Lobe]) -> Check:
             )
     passed = worst_ratio <= 1
     hint = ""
-    if not passed:
+    if not passed and worst is not None:  # (a ratio above 1 set worst)
         integral, success = worst.pdf_integral, 1.0 - worst.failed / worst.samples
         if integral > 1 + 1e-3:
             hint = (
@@ -850,6 +859,8 @@ def check_estimator(lobes: list[Lobe]) -> Check:
         c = int(np.argmax(ratio))
         if ratio[c] > worst_ratio:
             worst_ratio, worst = float(ratio[c]), (lobe, c)
+    if worst is None:  # (every wo sets it: its ratios are >= 0)
+        raise ValueError("no wo's to check the estimator at")
     lobe, c = worst
     passed = worst_ratio <= 1
     hint = ""
@@ -982,7 +993,7 @@ def _explain_weight(weight: np.ndarray, reference: np.ndarray, cos_theta_i: np.n
         log_ratio = np.log(w[both] / r[both])
         log_cos = np.log(cos_theta_i[both])
         spreads = {k: np.ptp(log_ratio - k * log_cos) for k in (0, -1, 1)}
-        k = min(spreads, key=spreads.get)
+        k = min(spreads, key=lambda power: spreads[power])
         if spreads[k] < 1e-3:
             if k == -1:
                 return (
@@ -1130,22 +1141,29 @@ def check_consistency(material, rng: np.random.Generator) -> Check:
 
 def _look_at_directions(material, rng: np.random.Generator) -> dict[str, list[str]]:
     """The problems of eval and pdf at the named and random directions, for each wo's name."""
-    wo, wi, wo_names, wi_names = [], [], [], []
+    wo_blocks: list[np.ndarray] = []
+    wi_blocks: list[np.ndarray] = []
+    wo_name_list: list[str] = []
+    wi_name_list: list[str] = []
     for wo_name, degrees in _WO_PROBES.items():
         wo_local = _wo_local(degrees)
         probes = _probe_directions(wo_local)
         random_wi = normalize(rng.normal(size=(CONSISTENCY_RANDOM_ROWS, 3)))
-        wi += [np.vstack(list(probes.values())), random_wi]
+        wi_blocks += [np.vstack(list(probes.values())), random_wi]
         names = list(probes) + ["random"] * CONSISTENCY_RANDOM_ROWS
-        wi_names += names
-        wo_names += [wo_name] * len(names)
-        wo.append(np.tile(wo_local, (len(names), 1)))
+        wi_name_list += names
+        wo_name_list += [wo_name] * len(names)
+        wo_blocks.append(np.tile(wo_local, (len(names), 1)))
     exact, wo, wi, wo_names, wi_names = _twice(
-        len(wo_names), np.vstack(wo), np.vstack(wi), np.array(wo_names), np.array(wi_names)
+        len(wo_name_list),
+        np.vstack(wo_blocks),
+        np.vstack(wi_blocks),
+        np.array(wo_name_list),
+        np.array(wi_name_list),
     )
     f, pdf = ask_at(material, ("eval", "pdf"), wo, wi, Z, rng, exact)
     below = (wi[:, 2] < -1e-6) | (wo[:, 2] < -1e-6)
-    problems = {}
+    problems: dict[str, list[str]] = {}
     for wo_name in _WO_PROBES:
         rows = wo_names == wo_name
         problems[wo_name] = []
@@ -1157,7 +1175,7 @@ def _look_at_directions(material, rng: np.random.Generator) -> dict[str, list[st
 def _look_at_samples(material, rng: np.random.Generator) -> dict[str, list[str]]:
     """The problems of sample (and pdf there) and sample_weight at edge and random u, for each
     wo's name."""
-    u_edges = np.array([0.0, 0.5, 1 - 2**-24, 1 - 2**-53])
+    u_edges = np.array([0.0, 0.5, ONE_MINUS_EPSILON, largest_below_one(np.float64)])
     edges = np.array(np.meshgrid(u_edges, u_edges)).reshape(2, -1).T
     per_wo = CONSISTENCY_RANDOM_ROWS
     u = np.vstack([np.concatenate([edges, rng.random((per_wo - len(edges), 2))]) for _ in _WO_PROBES])
@@ -1181,10 +1199,12 @@ def _look_at_samples(material, rng: np.random.Generator) -> dict[str, list[str]]
         negative = (weight < -NEGATIVE_ROUNDING).any(axis=1)
         nonzero = (weight != 0).any(axis=1)
     length = np.linalg.norm(wi_s, axis=1)
+    # (asarray: NumPy's stubs type a reduction along an axis as perhaps a scalar.)
     finite, unit, pdf_finite, weight_finite, negative, nonzero, length = (
-        probe.receive_rows(a) for a in (finite, unit, pdf_finite, weight_finite, negative, nonzero, length)
+        probe.receive_rows(np.asarray(a))
+        for a in (finite, unit, pdf_finite, weight_finite, negative, nonzero, length)
     )
-    problems = {}
+    problems: dict[str, list[str]] = {}
     for wo_name, degrees in _WO_PROBES.items():
         rows = wo_names == wo_name
         found = problems[wo_name] = []
@@ -1208,9 +1228,10 @@ def _look_at_samples(material, rng: np.random.Generator) -> dict[str, list[str]]
 
 
 def _look(
-    problems: list[str], method: str, values: np.ndarray, names: list[str], wo_name: str, below: np.ndarray
+    problems: list[str], method: str, values: np.ndarray, names: np.ndarray, wo_name: str, below: np.ndarray
 ) -> None:
-    """Record where ``values`` (rows, K) are non-finite, negative, or nonzero below the surface."""
+    """Record where ``values`` (rows, K) are non-finite, negative, or nonzero below the surface
+    (``names`` (rows,) the name of each row's wi)."""
     for test, text in (
         (~np.isfinite(values).all(axis=1), "NaN or inf"),
         ((values < -NEGATIVE_ROUNDING).any(axis=1), "negative"),
@@ -1340,9 +1361,10 @@ def check_row_independence(
     compared = excused = 0
     for record in kept:
         order = rng.permutation(record.rows)
-        ways = [
+        # Each way: its name, how it asks a record's rows again, and the order it asks them in.
+        ways: list[tuple[str, Callable[[Kept], tuple], np.ndarray | None]] = [
             ("alone", lambda r: _ask_alone(material, r), None),
-            ("in another order", lambda r, order=order: _ask_again(material, r, order), order),
+            ("in another order", partial(_ask_again, material, index=order), order),
             *(
                 (
                     f"inside a batch of {size} rows",

@@ -242,7 +242,8 @@ def check_directions(material, scatters: list[Scatter]) -> Check:
             "2 (wo . n) n - wo (with wo pointing away from the surface) nor a refraction in the "
             "plane of wo and n",
         )
-    worst, worst_error, tir = None, 0.0, None
+    worst: Scatter | None = None
+    worst_error, tir = 0.0, None
     for s in scatters:
         if not s.refracted.any() or eta is None:
             continue
@@ -257,7 +258,7 @@ def check_directions(material, scatters: list[Scatter]) -> Check:
                 worst, worst_error = s, error
     passed = worst_error <= 1e-5
     hint = ""
-    if not passed:
+    if not passed and worst is not None and eta is not None:  # (an error above 0 set both)
         measured = float(np.nanmedian(worst.ratio))
         hint = (
             f"refracted directions break Snell's law at {worst.label}: sin theta_o / sin theta_t = "
@@ -278,13 +279,15 @@ def check_directions(material, scatters: list[Scatter]) -> Check:
 def _fresnel_fit(material, scatters: list[Scatter]):
     """Fitted colours and residuals of the reflected / refracted weights against Fresnel."""
     eta = relative_eta(material, scatters)
+    if eta is None:
+        raise ValueError("no eta to fit Fresnel with: the material has none and refracts nothing")
     rows = []
-    for s in scatters:
-        eta_rel = eta if s.side == "outside" else 1.0 / eta
-        F = float(fresnel_dielectric(np.array([s.cos_theta_o]), eta_rel)[0])  # noqa: N806
-        reflected = (s.weight * s.reflected[:, None]).sum(axis=0) / len(s.wi)
-        refracted = (s.weight * s.refracted[:, None]).sum(axis=0) / len(s.wi)
-        rows.append((s, eta_rel, F, reflected, refracted))
+    for scatter in scatters:
+        row_eta = eta if scatter.side == "outside" else 1.0 / eta
+        row_F = float(fresnel_dielectric(np.array([scatter.cos_theta_o]), row_eta)[0])  # noqa: N806
+        reflected = (scatter.weight * scatter.reflected[:, None]).sum(axis=0) / len(scatter.wi)
+        refracted = (scatter.weight * scatter.refracted[:, None]).sum(axis=0) / len(scatter.wi)
+        rows.append((scatter, row_eta, row_F, reflected, refracted))
     F = np.array([r[2] for r in rows])  # noqa: N806
     R_hat = np.array([r[3] for r in rows])  # noqa: N806
     T_hat = np.array([r[4] for r in rows])  # noqa: N806

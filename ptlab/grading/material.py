@@ -15,6 +15,7 @@ course groups the materials of one student's process into one request
 from __future__ import annotations
 
 import inspect
+from typing import Self
 
 import numpy as np
 
@@ -55,7 +56,10 @@ class AdaptedMaterial(Material):
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         return self._pdf(wo, wi, n)
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
+        # The homework's sample(wo, n, u) has no front (ptlab.materials.base): it is not passed on.
         return self._sample(wo, n, u)
 
     def sample_weight(
@@ -67,7 +71,7 @@ class AdaptedMaterial(Material):
             return self._sample_weight(wo, n, u, front)
         return self._sample_weight(wo, n, u)
 
-    def take(self, index: np.ndarray) -> Material:
+    def take(self, index: np.ndarray, uv: np.ndarray | None = None) -> Self:
         return self
 
     def __getattr__(self, name: str):

@@ -39,6 +39,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from ptlab.samplers import largest_below_one
 from ptlab.vectors import vec3
 
 #: The permutations of the three axes and their signs (the determinants of their matrices).
@@ -138,6 +139,8 @@ class Rotations:
         """(rows, 3) column-major: each row of ``w`` (rows, 3, every row on a wall) in its
         wall's frame (the twist not undone): where a sampler's own tangent frame, a function
         of n, stays put from row to row."""
+        if self.walls is None:
+            raise ValueError("these rotations put no row on a wall")
         f = [[entry[self.wall] for entry in row] for row in self.walls.frames]
         return _transposed(f, w)
 
@@ -301,7 +304,7 @@ class Kept:
             step = NUDGE_ULPS * float(np.finfo(a.dtype).eps)
             moved = a + (step * rng.uniform(-1.0, 1.0, a.shape)).astype(a.dtype)
             if a.ndim == 2 and a.shape[1] != 3:  # uniforms, not directions
-                moved = np.clip(moved, 0, np.nextafter(a.dtype.type(1), a.dtype.type(0)))
+                moved = np.clip(moved, 0, largest_below_one(a.dtype))
             arguments.append(np.asfortranarray(moved) if _fortran(a) else np.ascontiguousarray(moved))
         return replace(self, arguments=tuple(arguments))
 
@@ -318,7 +321,7 @@ class Kept:
             if a.ndim == 2 and a.shape[1] == 3:
                 filler.append(turn.apply(a[which].astype(np.float64)).astype(a.dtype))
             elif a.ndim == 2 and a.dtype.kind == "f":
-                below_one = np.nextafter(a.dtype.type(1), a.dtype.type(0))
+                below_one = largest_below_one(a.dtype)
                 filler.append(np.minimum(rng.random((count, a.shape[1])).astype(a.dtype), below_one))
             else:
                 filler.append(a[which])

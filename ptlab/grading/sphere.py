@@ -150,13 +150,13 @@ class SphereGrid:
             np.repeat(np.arange(self.cells), lobes),
             np.tile(np.arange(lobes), self.cells),
         )
-        coarse = self._rule(f, *regions[:4], regions[5])
+        coarse = self._rule(f, regions)
         values = coarse.shape[1]
         totals = np.zeros((lobes * self.cells, values))
         error = np.zeros((lobes, values))
         for level in range(max_levels + 1):
             children = _split(*regions)
-            fine_parts = self._rule(f, *children[:4], children[5])
+            fine_parts = self._rule(f, children)
             fine = fine_parts.reshape(-1, 4, values).sum(axis=1)
             difference = np.abs(fine - coarse)
             area = (np.cos(regions[0]) - np.cos(regions[0] + regions[2])) * regions[3]
@@ -177,14 +177,15 @@ class SphereGrid:
             coarse = fine_parts[refine]
         return totals.reshape(lobes, self.cells, values), error
 
-    def _rule(self, f, theta0, phi0, d_theta, d_phi, lobe) -> np.ndarray:
-        """(R, K) 3 x 3 Gauss-Legendre estimates of the integrals over R regions, each of the
-        function of its (R,) ``lobe``.
+    def _rule(self, f, regions: tuple[np.ndarray, ...]) -> np.ndarray:
+        """(R, K) 3 x 3 Gauss-Legendre estimates of the integrals over R ``regions`` (theta0,
+        phi0, d_theta, d_phi, cell, lobe: (R,) each), each of the function of its lobe.
 
         The rule runs over (theta, phi) with the weight sin theta: a function smooth on the
         sphere is smooth in (theta, phi) even at the poles, where as a function of
         cos theta it has a square-root singularity that would need much refining.
         """
+        theta0, phi0, d_theta, d_phi, _, lobe = regions
         x = (_NODES + 1.0) / 2.0
         theta = (theta0[:, None, None] + d_theta[:, None, None] * x[None, :, None]).repeat(3, axis=2)
         phi = (phi0[:, None, None] + d_phi[:, None, None] * x[None, None, :]).repeat(3, axis=1)
@@ -196,7 +197,7 @@ class SphereGrid:
         return np.einsum("rpk,p->rk", values, weights) * (d_theta * d_phi)[:, None]
 
 
-def _split(theta0, phi0, d_theta, d_phi, *labels):
+def _split(theta0, phi0, d_theta, d_phi, *labels) -> tuple[np.ndarray, ...]:
     """The 2 x 2 children of each region, the four of region r at rows 4r .. 4r + 3; the
     ``labels`` (the cell, the lobe) are the parent's."""
     half_theta, half_phi = d_theta / 2.0, d_phi / 2.0

@@ -29,6 +29,7 @@ import numpy as np
 from ptlab.errors import PtlabError
 from ptlab.inspector.records import BsdfSample, LightSample, Recorder, Roulette, Sample, Vertex
 from ptlab.rendering.options import RenderOptions, takes_options
+from ptlab.rendering.pieces import Pieces
 from ptlab.scene import Scene
 
 __all__ = [
@@ -111,7 +112,12 @@ def _pixel_after_scene(function: Callable) -> Callable:
 @_pixel_after_scene
 @takes_options
 def inspect_pixel(
-    scene: Scene | str, pixel: tuple[int, int], *args, options: RenderOptions | None = None, **keywords: Any
+    scene: Scene | str,
+    pixel: tuple[int, int],
+    *args,
+    options: RenderOptions | None = None,
+    pieces: Pieces | None = None,
+    **keywords: Any,
 ) -> PixelInspection:
     """Trace every sample of one pixel as ``ptlab.render`` does, recording each vertex.
 
@@ -120,6 +126,8 @@ def inspect_pixel(
         pixel: (x, y): x counts from the left, y from the top.
         options: the render's options (``RenderOptions``, or its fields by name): the same
             options give the same pixel as the render.
+        pieces: the functions the render is made of, if not the library's
+            (``ptlab.rendering.pieces``): the same pieces give the same pixel.
     """
     from ptlab.accel import make_accelerator
     from ptlab.integrators.wavefront import recording
@@ -140,7 +148,7 @@ def inspect_pixel(
     x, y = pixel
     if not (0 <= x < width and 0 <= y < height):
         raise PtlabError(f"pixel ({x}, {y}) is outside the {width}x{height} image")
-    setup = render_setup(scene, options)
+    setup = render_setup(scene, options, pieces)
     scene = setup.scene
     passes = pass_schedule(options.spp, options.spp_per_pass)
     pass_of = np.repeat(np.arange(len(passes)), passes)
@@ -150,7 +158,9 @@ def inspect_pixel(
     jobs = [Job(tile, int(pass_of[k]), 1, k) for k in range(options.spp)]
     recorder = Recorder()
     with recording(recorder):
-        results = run_job_group(setup, jobs, make_accelerator(scene.triangles, options.backend))
+        results = run_job_group(
+            setup, jobs, make_accelerator(scene.triangles, options.backend, setup.pieces.bvh)
+        )
     contributions = [result.sums[0, 0] for result in results]
     return PixelInspection(
         scene=scene.name,

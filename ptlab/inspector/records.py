@@ -214,12 +214,11 @@ class Recorder:
         vertices = self._at(hit)
         if not vertices:
             return
-        from ptlab.integrators.wavefront import shade
 
         with np.errstate(all="ignore"):
-            f = shade(hit, "eval", hit.wo, wi, hit.n)
+            f = hit.bsdf.f(wi)
             if pdf is None:
-                pdf = shade(hit, "pdf", hit.wo, wi, hit.n)
+                pdf = hit.bsdf.pdf(wi)
             cos_theta = dot(wi, hit.n)
         for k, vertex in enumerate(vertices):
             vertex.bsdf = BsdfSample(

@@ -11,7 +11,10 @@
 
 Every integrator is called alike, ``trace(film, scene, accel, paths, sampler, settings)``:
 it adds the radiance of the camera rays ``paths`` into ``film``, (pixels, 3) float64, and
-returns the number of rays it traced. ``ptlab.rendering.jobs`` looks it up here.
+returns the number of rays it traced. One that ``refills`` also takes ``more``, where it
+finds new camera paths as old ones end (``ptlab.integrators.path.trace_paths``), and is
+called once for a whole group of jobs; the others are called a job at a time.
+``ptlab.rendering.jobs`` looks them up here.
 """
 
 from __future__ import annotations
@@ -32,15 +35,17 @@ class Integrator:
     Attributes:
         trace: the function that renders with it (the module docstring's signature).
         max_depth: the most bounces of a path, unless the scene file or the user says.
+        refills: ``trace`` takes ``more`` (the module docstring).
     """
 
     trace: Callable[..., int]
     max_depth: int
+    refills: bool = False
 
 
 #: Every integrator, by name.
 INTEGRATORS: dict[str, Integrator] = {
-    "path": Integrator(trace_paths, max_depth=PathSettings.max_depth),
+    "path": Integrator(trace_paths, max_depth=PathSettings.max_depth, refills=True),
     # The homework's maxDepth = 5: a Whitted ray bounces only off mirrors and glass.
     "whitted": Integrator(trace_whitted, max_depth=5),
     # (A debug view stops at the first hit: its max depth is only recorded with the image.)

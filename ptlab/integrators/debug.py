@@ -19,7 +19,7 @@ import numpy as np
 
 from ptlab.accel.base import Accelerator
 from ptlab.integrators.path import PathSettings
-from ptlab.integrators.wavefront import Paths, SurfaceHit, add_to_film, shade, surface_hit
+from ptlab.integrators.wavefront import Paths, SurfaceHit, add_to_film, surface_hit
 from ptlab.samplers import BounceUniforms, Sampler
 from ptlab.scene import Scene
 
@@ -32,7 +32,7 @@ def normals(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
 def albedo(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
     """(N, 3) one sample of the directional albedo: the bounce weight f cos / pdf."""
     u = BounceUniforms(sampler, hit.sample, 0).bsdf()
-    _, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
+    weight = hit.bsdf.sample(u).weight
     return weight
 
 

@@ -42,7 +42,7 @@ every integrator shares, ``ptlab.integrators.wavefront``.
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -59,11 +59,12 @@ from ptlab.integrators.wavefront import (
     leave_surface,
     recorder,
     sees,
-    shade,
+    shade,  # noqa: F401
     surface_hit,
 )
 from ptlab.lights import LightPoint
 from ptlab.samplers import BounceUniforms, Sampler
+from ptlab.scattering import fresnel_dielectric, reflect, refract
 from ptlab.scene import Scene
 from ptlab.vectors import dot, take_rows
 
@@ -75,30 +76,30 @@ class PathSettings:
     Attributes:
         rr: Russian roulette: a survival probability in (0, 1] (the homework's 0.8), or
             ``"throughput"`` to survive with probability max(throughput) (pbrt-v4's rule).
-        rr_min_depth: bounces every path makes before roulette starts; None for the usual
-            choice of each rule: 0 for a fixed probability (the homework's), 2 for
-            ``"throughput"`` (pbrt-v4's).
+        rr_depth: bounces every path makes before roulette starts; None for the usual
+            choice of each rule, decided when the settings are made: 0 for a fixed
+            probability (the homework's), 2 for ``"throughput"`` (pbrt-v4's).
         max_depth: the most bounces a path makes (0 = emission only, 1 = direct light).
         strategy: ``"nee"``, ``"bsdf"`` or ``"mis"`` (module docstring).
         heuristic: the MIS weights, ``"power"`` (default) or ``"balance"``.
         sample_sky: light sampling samples the sky (unless the strategy is ``"bsdf"``); if
             False, rays find it only by escaping, and count it in full. (The Whitted tracer's
             rays escape only from mirrors and glass, so there the sky lights nothing.)
+        pieces: the functions the steps are made of (``PathPieces``: the library's unless
+            a render is given others, ``ptlab.rendering.pieces``).
     """
 
     rr: float | str = "throughput"
-    rr_min_depth: int | None = None
+    rr_depth: int | None = None
     max_depth: int = 100
     strategy: str = "nee"
     heuristic: str = "power"
     sample_sky: bool = True
+    pieces: PathPieces = field(default_factory=lambda: PathPieces())
 
-    @property
-    def roulette_starts(self) -> int:
-        """The depth at which Russian roulette starts."""
-        if self.rr_min_depth is not None:
-            return self.rr_min_depth
-        return 2 if self.rr == "throughput" else 0
+    def __post_init__(self) -> None:
+        if self.rr_depth is None:  # (each rule's usual start: the docstring)
+            self.rr_depth = 2 if self.rr == "throughput" else 0
 
 
 STRATEGIES = ("nee", "bsdf", "mis")
@@ -150,6 +151,7 @@ def trace_paths(
                 paths = joined(paths, new)
         if len(paths) == 0:
             return rays
+        # 1. The closest hit (a camera ray that sees a light adds its Le, below).
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
         if scene.sky is not None:
@@ -167,12 +169,16 @@ def trace_paths(
         u = BounceUniforms(sampler, hit.sample, hit.depth)  # this bounce's random numbers
         if ending.any():  # (a batch at several depths: these find no more light)
             hit.throughput = np.where(ending[:, None], np.float32(0), hit.throughput)
+        step = settings.pieces  # (the library's steps, or those a render was given)
+        # 2. Direct light: L_dir = Le f_r cos(theta) cos(theta') / |x - x'|^2 / pdf_light.
         if sampled_lights(scene, settings).any():
-            rays += direct_light(film, scene, accel, hit, u.light(), settings)
+            rays += step.direct_light(film, scene, accel, hit, u.light(), settings)
+        # 3. Russian roulette: go on with probability P_RR, the throughput divided by it.
         going_on = np.ones(len(hit.prim), dtype=bool) & ~ending
-        if np.any(hit.depth >= settings.roulette_starts):
-            going_on = going_on & russian_roulette(hit, settings, u.roulette())
-        paths = scatter(scene, hit, u.bsdf(), going_on, with_pdf=settings.strategy == "mis")
+        if np.any(hit.depth >= roulette_depth(settings)):
+            going_on = going_on & step.russian_roulette(hit, settings, u.roulette())
+        # 4. Indirect light: wi ~ pdf, throughput *= f_r cos(theta) / pdf, the next ray.
+        paths = step.scatter(scene, hit, u.bsdf(), going_on, with_pdf=settings.strategy == "mis")
 
 
 def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: PathSettings) -> None:
@@ -194,7 +200,9 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
         found = LightPoint(radiance=emitted, dist2=t * t, cos_theta_light=dot(n, wo))
         pdf_light = scene.light_sampler.pdf_li(scene.area_lights, found, sampled_lights(scene, settings))
         weight = np.where(
-            hit.sees_emission.take(rows), 1.0, mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic)
+            hit.sees_emission.take(rows),
+            1.0,
+            settings.pieces.mis_weight(hit.pdf.take(rows), pdf_light, settings.heuristic),
         )
         emitted *= weight.astype(np.float32)[:, None]
     radiance = take_rows(hit.throughput, rows) * emitted
@@ -245,12 +253,14 @@ def direct_light(
     weight = np.where(visible, cos_theta / np.where(visible, light.pdf, 1), 0).astype(np.float32)
     mis = None
     if settings.strategy == "mis":
-        bsdf_pdf = shade(hit, "pdf", hit.wo, light.wi, hit.n)
+        bsdf_pdf = hit.bsdf.pdf(light.wi)
         if scene.light_sampler.is_delta.any():  # no BSDF sample finds a point light: weight 1
             bsdf_pdf = np.where(scene.light_sampler.is_delta.take(kind), 0, bsdf_pdf)
-        mis = mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
+        mis = settings.pieces.mis_weight(light.pdf, bsdf_pdf, settings.heuristic).astype(np.float32)
         weight *= mis
-    radiance = hit.throughput * shade(hit, "eval", hit.wo, light.wi, hit.n)
+    # throughput * f_r * Li * cos(theta) / pdf (* the MIS weight), as three in-place steps.
+    f_r = hit.bsdf.f(light.wi)
+    radiance = hit.throughput * f_r
     radiance *= light.radiance
     radiance *= weight[:, None]
     if (rec := recorder()) is not None:
@@ -297,7 +307,7 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
         weight = np.where(
             paths.sees_emission.take(rows),
             1.0,
-            mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
+            settings.pieces.mis_weight(paths.pdf.take(rows), pdf_light, settings.heuristic),
         ).astype(np.float32)
         radiance = radiance * weight[:, None]
     radiance = take_rows(paths.throughput, rows) * radiance
@@ -311,7 +321,7 @@ def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> 
     """(N,) bool: which paths go on. Their throughput is divided by the survival odds.
 
     Dividing by the probability of surviving keeps the estimate unbiased (lecture 16).
-    u: (N,) uniforms. Paths not yet at ``settings.roulette_starts`` all go on (survival 1).
+    u: (N,) uniforms. Paths not yet at ``settings.rr_depth`` all go on (survival 1).
     """
     if settings.rr == "throughput":
         t = hit.throughput
@@ -319,12 +329,18 @@ def russian_roulette(hit: SurfaceHit, settings: PathSettings, u: np.ndarray) -> 
     else:
         survival = np.float32(settings.rr)
     # (Paths not yet at the start survive: one depth for all, or several in one batch.)
-    survival = np.where(np.asarray(hit.depth) >= settings.roulette_starts, survival, np.float32(1))
+    survival = np.where(np.asarray(hit.depth) >= roulette_depth(settings), survival, np.float32(1))
     survive = u < survival
     hit.throughput /= np.where(survive, survival, np.float32(1))[:, None]
     if (rec := recorder()) is not None:
         rec.roulette(hit, survival, survive)
     return survive
+
+
+def roulette_depth(settings: PathSettings) -> int:
+    """``settings.rr_depth``, which ``PathSettings`` decided when it was made."""
+    assert settings.rr_depth is not None  # (``PathSettings.__post_init__``)
+    return settings.rr_depth
 
 
 def _rows_of(depth: int | np.ndarray, rows: np.ndarray) -> int | np.ndarray:
@@ -339,11 +355,10 @@ def scatter(
 
     ``with_pdf`` keeps the pdf of each sampled direction, which MIS weighs emission with.
     """
-    pdf = None
-    if with_pdf:  # (the sample carries its pdf: ``Material.sample_weight_pdf``)
-        wi, weight, pdf = shade(hit, "sample_weight_pdf", hit.wo, hit.n, u, hit.front)
-    else:
-        wi, weight = shade(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
+    # weight = f_r cos(theta_i) / pdf, which a material computes with its sample
+    # (``Material.sample_weight``: a mirror's is its reflectance, with no pdf to divide by).
+    sample = hit.bsdf.sample(u, with_pdf)
+    wi, weight, pdf = sample.wi, sample.weight, sample.pdf
     throughput = hit.throughput * weight
     if (rec := recorder()) is not None:
         rec.bsdf(hit, wi, weight, pdf, throughput, survive)
@@ -363,3 +378,23 @@ def scatter(
         pdf=kept(pdf, go_on, every),
         depth=(kept(depth, go_on, every) if isinstance(depth, np.ndarray) else depth) + 1,
     )
+
+
+@dataclass(frozen=True)
+class PathPieces:
+    """The functions that tracing paths is made of, each a step a chapter of the course asks
+    a student to write: the smooth surface's laws, which the Whitted tracer uses (chapter 3:
+    ``reflect``, ``refract``, ``fresnel_dielectric``), the path loop's steps (chapter 7:
+    ``direct_light``, ``russian_roulette``, ``scatter``) and the MIS weight (chapter 10).
+    The library's by default; a render given others (``ptlab.rendering.pieces.Pieces``)
+    carries them in its ``PathSettings``, so every step finds them where it finds its
+    settings. Each has the signature of the library's function of its name.
+    """
+
+    reflect: Callable[..., np.ndarray] = reflect
+    refract: Callable[..., np.ndarray] = refract
+    fresnel_dielectric: Callable[..., np.ndarray] = fresnel_dielectric
+    direct_light: Callable[..., int] = direct_light
+    russian_roulette: Callable[..., np.ndarray] = russian_roulette
+    scatter: Callable[..., Paths] = scatter
+    mis_weight: Callable[..., np.ndarray] = mis_weight

@@ -36,7 +36,8 @@ SHADOW_EPSILON = 1e-4
 @dataclass
 class Paths:
     """The state of a batch of paths, as structure-of-arrays: one row per path, every field
-    of a path in this one object, compacted together (``take``) when paths end."""
+    of a path in this one object, made for new camera rays by ``camera`` and compacted
+    together (``take``) when paths end."""
 
     origins: np.ndarray  # (N, 3) float32
     dirs: np.ndarray  # (N, 3) float32 unit
@@ -48,6 +49,22 @@ class Paths:
     #: The bounce each path is at (0: a camera ray): one for the whole batch, or (N,) intp
     #: when the batch holds paths at different depths (path regeneration, ``path.py``).
     depth: int | np.ndarray = 0
+
+    @classmethod
+    def camera(cls, origins: np.ndarray, dirs: np.ndarray, pixel: np.ndarray, sample: np.ndarray) -> Paths:
+        """New paths from the camera: rays from ``origins`` along ``dirs`` (N, 3) float32,
+        each adding its radiance into film row ``pixel`` (N,) and drawing its random numbers
+        with the sampler keys ``sample`` (N,) uint64; throughput 1, at depth 0, seeing the
+        emission they hit (a camera ray counts the lights it sees)."""
+        count = len(pixel)
+        return cls(
+            origins=origins,
+            dirs=dirs,
+            throughput=np.ones((count, 3), dtype=np.float32, order="F"),
+            pixel=pixel,
+            sees_emission=np.ones(count, dtype=bool),
+            sample=sample,
+        )
 
     def __len__(self) -> int:
         return len(self.pixel)
@@ -152,6 +169,59 @@ class SurfaceHit:
     def depth(self) -> int | np.ndarray:
         """The paths' depth (``Paths.depth``)."""
         return self.paths.depth
+
+    @property
+    def bsdf(self) -> HitBSDF:
+        """The materials at these vertices, asked as one BSDF (``HitBSDF``)."""
+        return HitBSDF(self)
+
+
+@dataclass(frozen=True)
+class BSDFSample:
+    """Directions drawn from each vertex's material, with what the path needs of them
+    (pbrt-v4's ``BSDFSample``, Mitsuba 3's ``BSDFSample3f``).
+
+    Attributes:
+        wi: (N, 3) unit directions, away from the surface.
+        weight: (N, 3) f_r |cos theta_i| / pdf: what the throughput is multiplied by.
+        pdf: (N,) the solid-angle density of ``wi``, where asked for (MIS weighs emission
+            found along ``wi`` by it); else None.
+        delta: (N,) bool: the material is a mirror or glass (its pdf has no value).
+    """
+
+    wi: np.ndarray
+    weight: np.ndarray
+    pdf: np.ndarray | None
+    delta: np.ndarray
+
+
+class HitBSDF:
+    """The materials of a batch of vertices, asked as one BSDF at the vertices' ``wo`` and
+    normals: ``f(wi)``, ``pdf(wi)`` and ``sample(u)``, each row by its own material. (A
+    student's file, holding to the homework's three functions, calls ``shade`` instead.)"""
+
+    def __init__(self, hit: SurfaceHit):
+        self.hit = hit
+
+    def f(self, wi: np.ndarray) -> np.ndarray:
+        """(N, 3) f_r(wo, wi), cosine not included (``Material.eval``)."""
+        hit = self.hit
+        return _each_material(hit, "eval", hit.wo, wi, hit.n)
+
+    def pdf(self, wi: np.ndarray) -> np.ndarray:
+        """(N,) the density with which ``sample`` would have drawn ``wi`` (``Material.pdf``)."""
+        hit = self.hit
+        return _each_material(hit, "pdf", hit.wo, wi, hit.n)
+
+    def sample(self, u: np.ndarray, with_pdf: bool = False) -> BSDFSample:
+        """Draw a direction per row from (N, 2) uniforms ``u``; its pdf too if ``with_pdf``
+        (``Material.sample_weight`` and ``sample_weight_pdf``)."""
+        hit = self.hit
+        if with_pdf:  # (the sample carries its pdf: ``Material.sample_weight_pdf``)
+            wi, weight, pdf = _each_material(hit, "sample_weight_pdf", hit.wo, hit.n, u, hit.front)
+            return BSDFSample(wi, weight, pdf, hit.delta)
+        wi, weight = _each_material(hit, "sample_weight", hit.wo, hit.n, u, hit.front)
+        return BSDFSample(wi, weight, None, hit.delta)
 
 
 @overload
@@ -391,10 +461,15 @@ def taken(stacked, index: np.ndarray, uv: np.ndarray | None):
 
 
 def shade(hit: SurfaceHit, method: str, *arrays: np.ndarray):
-    """Call ``material.<method>(*arrays)`` for every hit, each with its own material.
+    """Call ``material.<method>(*arrays)`` for every hit, each with its own material: the
+    homework's three functions by name, as chapter 7's files call them (the renderer asks
+    ``hit.bsdf``, the same calls with their names fixed)."""
+    return _each_material(hit, method, *arrays)
 
-    With several groups the rows of each are gathered, shaded and put back.
-    """
+
+def _each_material(hit: SurfaceHit, method: str, *arrays: np.ndarray):
+    """``material.<method>(*arrays)`` for every hit, each with its own material: with
+    several groups the rows of each are gathered, shaded and put back."""
     if hit.materials[0][0] is None:
         return getattr(hit.materials[0][1], method)(*arrays)
     outputs: tuple[np.ndarray, ...] = ()

@@ -46,16 +46,19 @@ in parts (``MAX_BATCH``).
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 
 from ptlab.accel.base import Accelerator
-from ptlab.integrators.path import PathSettings, add_emission, add_sky, direct_light, sampled_lights
+from ptlab.integrators.path import PathPieces, PathSettings, add_emission, add_sky, sampled_lights
 from ptlab.integrators.wavefront import Paths, SurfaceHit, leave_surface, recorder, surface_hit
 from ptlab.materials.dielectric import Dielectric
+from ptlab.materials.mirror import Mirror
 from ptlab.samplers import BounceUniforms, Sampler
-from ptlab.scattering import fresnel_dielectric, reflect, refract
+from ptlab.scattering import FresnelSplit
 from ptlab.scene import Scene
-from ptlab.vectors import concatenate_rows, dot, take_rows, vec3
+from ptlab.vectors import concatenate_rows, take_rows
 
 #: Direct light by light sampling only, and emission counted where the ray may see it: the
 #: path tracer's ``"nee"`` rules (Whitted has no BSDF sampling to combine them with); the
@@ -85,12 +88,14 @@ def trace_whitted(
             mirrors and glass).
         sampler: where the random numbers come from (the light samples; mirrors and glass
             need none), in the path tracer's layout (``ptlab.samplers.BounceUniforms``).
-        settings: only ``max_depth`` is used (no Russian roulette, no strategies).
+        settings: only ``max_depth`` and the pieces (``PathPieces``: reflect, refract,
+            Fresnel, direct light) are used (no Russian roulette, no strategies).
 
     Returns:
         the number of rays traced (closest-hit and shadow rays).
     """
     rays = 0
+    light_sampling = replace(LIGHT_SAMPLING, pieces=settings.pieces)
     for depth in range(first_depth, settings.max_depth + 1):
         if len(paths.pixel) > MAX_BATCH:  # grown by glass splits: trace it in parts
             return rays + sum(
@@ -100,31 +105,32 @@ def trace_whitted(
         hits = accel.intersect(paths.origins, paths.dirs)
         rays += len(hits.prim)
         if scene.sky is not None:
-            add_sky(film, scene, paths, hits, LIGHT_SAMPLING)  # the rays that escape see it
+            add_sky(film, scene, paths, hits, light_sampling)  # the rays that escape see it
         hit = surface_hit(scene, paths, hits)  # drops the rays that missed
         if len(hit.prim) == 0:
             break
-        add_emission(film, scene, hit, LIGHT_SAMPLING)  # camera rays and mirror/glass rays
+        add_emission(film, scene, hit, light_sampling)  # camera rays and mirror/glass rays
         if depth == settings.max_depth:
             break
         u = BounceUniforms(sampler, hit.sample, depth)
-        if sampled_lights(scene, LIGHT_SAMPLING).any():  # diffuse and glossy: direct light only
-            rays += direct_light(film, scene, accel, hit, u.light(), LIGHT_SAMPLING)
+        if sampled_lights(scene, light_sampling).any():  # diffuse and glossy: direct light only
+            rays += settings.pieces.direct_light(film, scene, accel, hit, u.light(), light_sampling)
         if not hit.delta.any():  # no mirror or glass: every ray ends
             break
-        paths = reflect_and_refract(hit, u.bsdf())  # glass: two rays for one
+        paths = reflect_and_refract(hit, u.bsdf(), settings.pieces)  # glass: two rays for one
         if len(paths.pixel) == 0:
             break
     return rays
 
 
-def reflect_and_refract(hit: SurfaceHit, u: np.ndarray) -> Paths:
+def reflect_and_refract(hit: SurfaceHit, u: np.ndarray, pieces: PathPieces | None = None) -> Paths:
     """The rays leaving the mirrors and glass among ``hit``; the other rows end.
 
-    Glass rows become two rays each (``fresnel_split``); any other delta material gives the
-    one direction and weight of its ``sample_weight`` (deterministic for ``Mirror``; u: (N, 2)
-    uniforms for a material that samples).
+    Glass rows become two rays each (``fresnel_split``); a mirror reflects (``pieces.reflect``)
+    with the weight of its ``sample_weight``; any other delta material gives the one
+    direction and weight of its ``sample_weight`` (u: (N, 2) uniforms for one that samples).
     """
+    pieces = pieces or PathPieces()
     rows, wi, weight = [], [], []
     for group_rows, material in hit.materials:
         if not material.is_delta:
@@ -132,7 +138,10 @@ def reflect_and_refract(hit: SurfaceHit, u: np.ndarray) -> Paths:
         index = np.arange(len(hit.prim)) if group_rows is None else group_rows
         wo, n, front = take_rows(hit.wo, index), take_rows(hit.n, index), hit.front.take(index)
         if isinstance(material, Dielectric):
-            branches = fresnel_split(material, wo, n, front)
+            branches = fresnel_split(material, wo, n, front, pieces)
+        elif isinstance(material, Mirror):
+            _, reflectance = material.sample_weight(wo, n, take_rows(u, index), front)
+            branches = [(pieces.reflect(wo, n), reflectance)]
         else:
             branches = [material.sample_weight(wo, n, take_rows(u, index), front)]
         for branch_wi, branch_weight in branches:
@@ -143,7 +152,7 @@ def reflect_and_refract(hit: SurfaceHit, u: np.ndarray) -> Paths:
 
 
 def fresnel_split(
-    glass: Dielectric, wo: np.ndarray, n: np.ndarray, front: np.ndarray
+    glass: Dielectric, wo: np.ndarray, n: np.ndarray, front: np.ndarray, pieces: PathPieces | None = None
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Homework 5's ``REFLECTION_AND_REFRACTION`` case: both rays, each with its weight.
 
@@ -152,18 +161,16 @@ def fresnel_split(
         wo: (N, 3) unit directions back along the rays.
         n: (N, 3) unit normals on the side of ``wo`` (``SurfaceHit.n``).
         front: (N,) bool, True where ``wo`` is outside the glass.
+        pieces: the reflect, refract and Fresnel functions (default: the library's).
 
     Returns:
         [(reflected wi, kr), (refracted wi, (1 - kr) transmittance / eta_rel^2)], (N, 3) each.
         Under total internal reflection kr = 1 and the refracted weight is 0.
     """
-    eta = np.asarray(glass.eta, dtype=n.dtype)
-    eta_rel = np.where(front, eta, 1 / eta)  # the index beyond the surface over wo's side
-    cos_theta_o = dot(wo, n)
-    kr = fresnel_dielectric(cos_theta_o, eta_rel)
-    transmittance = glass.transmittance.astype(n.dtype, copy=False)
-    transmitted = ((1 - kr) / (eta_rel * eta_rel))[:, None] * transmittance
-    return [(reflect(wo, n), vec3(kr, kr, kr)), (refract(wo, n, eta_rel), transmitted)]
+    pieces = pieces or PathPieces()
+    reflect, refract, fresnel = pieces.reflect, pieces.refract, pieces.fresnel_dielectric
+    split = FresnelSplit.at(wo, n, glass.eta, front, reflect=reflect, refract=refract, fresnel=fresnel)
+    return split.both(glass.transmittance)
 
 
 def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndarray) -> Paths:

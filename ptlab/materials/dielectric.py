@@ -5,7 +5,8 @@ either reflects, wi = reflect(wo, n), or refracts by Snell's law, wi = refract(w
 (pbrt-v4 sections 9.3 and 9.5; GAMES101 lecture 13, Whitted ray tracing). The fraction
 reflected is the exact Fresnel reflectance of unpolarised light, ``fresnel_dielectric``; from
 inside beyond the critical angle it is 1: total internal reflection. (The three formulas are
-``ptlab.scattering``'s.)
+``ptlab.scattering``'s, and so is the split between the two directions, ``FresnelSplit``:
+this material picks one of them at random, the Whitted tracer follows both.)
 
 Like ``Mirror`` this is a delta material (pbrt-v4's convention for specular BxDFs): ``eval``
 and ``pdf`` return 0 and ``sample_weight`` does the work. It picks reflection with
@@ -31,8 +32,8 @@ from __future__ import annotations
 import numpy as np
 
 from ptlab.materials.base import DeltaMaterial
-from ptlab.scattering import fresnel_dielectric, reflect, refract
-from ptlab.vectors import channels, dot
+from ptlab.scattering import FresnelSplit
+from ptlab.vectors import dot
 
 
 class Dielectric(DeltaMaterial):
@@ -91,16 +92,7 @@ class Dielectric(DeltaMaterial):
         # Work with the normal on the side of wo.
         facing = np.where(cos_theta_o >= 0, 1, -1).astype(n.dtype)
         n = n * facing[:, None]
-        cos_theta_o = np.abs(cos_theta_o)
-        eta = self.eta if np.ndim(self.eta) == 0 else np.asarray(self.eta, dtype=n.dtype)
-        eta_rel = np.where(outside, eta, 1.0 / eta).astype(n.dtype, copy=False)
-        R = fresnel_dielectric(cos_theta_o, eta_rel)  # noqa: N806 (pbrt's name)
-        reflected = u[:, 0] < R
-        wi = np.where(reflected[:, None], reflect(wo, n), refract(wo, n, eta_rel))
-        transmittance = channels(self.transmittance.astype(n.dtype, copy=False))
-        refracted = ~reflected / (eta_rel * eta_rel)
-        weight = reflected.astype(n.dtype) + transmittance * refracted
-        return wi, weight.T
+        return FresnelSplit.at(wo, n, self.eta, outside).choose(u[:, 0], self.transmittance)
 
     def batch_key(self) -> object:
         return "dielectric"

@@ -53,6 +53,7 @@ import math
 import numpy as np
 
 from ptlab.materials.base import Material
+from ptlab.samplers import largest_below_one
 from ptlab.sampling import cosine_hemisphere, ggx_visible_normals, to_world
 from ptlab.scattering import F_schlick, reflect
 from ptlab.vectors import channels, dot, normalize
@@ -222,8 +223,7 @@ class Microfacet(Material):
             u0 / _at_least(p_specular, 1e-30),
             (u0 - p_specular) / _at_least(1.0 - p_specular, 1e-30),
         )
-        below_one = np.nextafter(u.dtype.type(1), u.dtype.type(0))
-        u = np.stack([np.minimum(u0, below_one), u[:, 1]], axis=1)
+        u = np.stack([np.minimum(u0, largest_below_one(u.dtype)), u[:, 1]], axis=1)
         wi_specular = reflect(wo, ggx_visible_normals(wo, n, alpha, u))
         wi_diffuse = to_world(cosine_hemisphere(u), n)
         return np.where(specular[:, None], wi_specular, wi_diffuse)

@@ -22,10 +22,11 @@ import statistics
 import time
 from collections.abc import Iterator
 from contextlib import contextmanager
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import ptlab.integrators.path as path_module
 import ptlab.rendering.jobs as jobs_module
+from ptlab.integrators import INTEGRATORS
 from ptlab.rendering import render_result
 from ptlab.scene import Scene
 
@@ -75,13 +76,16 @@ def timing_bounces() -> Iterator[BounceLog]:
             if started:
                 log.bounces.append((started[0][0], time.perf_counter() - started[0][1]))
 
+    # (A measurement's instruments: the path loop's module's ``surface_hit``, and the path
+    # integrator of the registry, each put back when the block ends.)
+    path_integrator = INTEGRATORS["path"]
     path_module.surface_hit = timed_surface_hit
-    jobs_module.trace_paths = jobs_module.library_trace_paths = timed_trace_paths
+    INTEGRATORS["path"] = replace(path_integrator, trace=timed_trace_paths)
     try:
         yield log
     finally:
         path_module.surface_hit = surface_hit
-        jobs_module.trace_paths = jobs_module.library_trace_paths = trace_paths
+        INTEGRATORS["path"] = path_integrator
 
 
 @contextmanager

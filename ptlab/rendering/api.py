@@ -25,6 +25,7 @@ from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.rendering.options import DEFAULT_MAX_SPP, DEFAULT_RES, RenderOptions, resolution, takes_options
+from ptlab.rendering.pieces import LIBRARY, Pieces
 from ptlab.rendering.scheduler import run_jobs
 from ptlab.rendering.settings import check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
@@ -141,6 +142,7 @@ def render_result(
     on_pass: Callable[[Film], None] | None = None,
     stop: Callable[[], bool] | None = None,
     command: dict | None = None,
+    pieces: Pieces | None = None,
     **keywords: Any,
 ) -> RenderResult:
     """Render and return the image with its statistics (arguments as for ``render``).
@@ -155,13 +157,16 @@ def render_result(
             returns what it has (``complete`` is then False).
         command: kept in the checkpoint, not compared: what ``ptlab render --resume FILE``
             needs besides the options (``scene`` and ``out``).
+        pieces: the functions the render is made of, if not the library's
+            (``ptlab.rendering.pieces``); a render with worker processes needs them to be
+            functions of a module that the workers can import.
     """
     options = RenderOptions.of(args, options, keywords)
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
     options = options.for_scene(scene)
     workers = check_workers(options.workers)
-    setup = render_setup(scene, options)
+    setup = render_setup(scene, options, pieces)
     scene, sampler, settings = setup.scene, setup.sampler, setup.settings
     assert sampler is not None  # (render_setup gives one)
     keep_freed_memory()
@@ -227,17 +232,18 @@ def render_result(
             record,
             scene=scene.name,
             spp=film.spp,
-            rr_depth=settings.roulette_starts,
+            rr_depth=settings.rr_depth,
             workers=workers if executor is None else "executor",
             **_target_record(more),
         ),
     )
 
 
-def render_setup(scene: Scene, options: RenderOptions) -> RenderSetup:
+def render_setup(scene: Scene, options: RenderOptions, pieces: Pieces | None = None) -> RenderSetup:
     """What every job of a render of ``scene`` shares (options decided ``for_scene``): the
-    scene with the options' diffuse sampling, the sampler, the path settings; each pixel's
-    samples in two independent halves for a render to a target error."""
+    scene with the options' diffuse sampling, the sampler, the path settings, the pieces
+    (the library's unless given); each pixel's samples in two independent halves for a
+    render to a target error."""
     width, height = options.size
     return RenderSetup(
         scene=scene.with_sampling(options.sampling),
@@ -249,6 +255,7 @@ def render_setup(scene: Scene, options: RenderOptions) -> RenderSetup:
         integrator=options.integrator,
         sampler=make_sampler(options.sampler, options.seed, options.spp),
         halves=options.target_error is not None,
+        pieces=pieces or LIBRARY,
     )
 
 
@@ -390,6 +397,7 @@ def render(
     options: RenderOptions | None = None,
     executor: Executor | None = None,
     progress: bool = False,
+    pieces: Pieces | None = None,
     **keywords: Any,
 ) -> np.ndarray:
     """Render a scene; return (H, W, 3) float32 linear RGB.
@@ -404,9 +412,13 @@ def render(
             Dask client's ``get_executor()``, ...) instead of ptlab's own process pool;
             the image is the same, bit for bit.
         progress: show a progress bar (on a terminal, or in a notebook), or a line per pass.
+        pieces: the functions the render is made of, if not the library's
+            (``ptlab.rendering.pieces``).
     """
     options = RenderOptions.of(args, options, keywords)
-    result = render_result(scene, options=options, executor=executor, progress=progress or None)
+    result = render_result(
+        scene, options=options, executor=executor, progress=progress or None, pieces=pieces
+    )
     if result.nonfinite:  # (a bug in a material or an integrator; ``render_result`` counts them)
         warnings.warn(result.nonfinite_message(), RuntimeWarning, stacklevel=2)
     return result.image

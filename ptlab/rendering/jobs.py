@@ -21,18 +21,17 @@ from __future__ import annotations
 
 import threading
 import uuid
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import cast
 
 import numpy as np
 
 from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
-from ptlab.camera import generate_rays
-from ptlab.integrators import INTEGRATORS
-from ptlab.integrators.path import BATCH_PATHS, PathSettings, trace_paths
-from ptlab.integrators.path import trace_paths as library_trace_paths
+from ptlab.integrators import INTEGRATORS, Integrator
+from ptlab.integrators.path import BATCH_PATHS, PathSettings
 from ptlab.integrators.wavefront import NonFinite, Paths, counting_nonfinite
+from ptlab.rendering.pieces import LIBRARY, Pieces
 from ptlab.samplers import DEFAULT_SAMPLER, BounceUniforms, Sampler, TimedSampler, make_sampler
 from ptlab.scene import Scene
 
@@ -115,7 +114,9 @@ class RenderSetup:
 
     ``sampler`` gives every random number (by default the ``DEFAULT_SAMPLER`` with this
     setup's seed). ``token`` names the render, so that a worker process keeps one ray-query
-    structure per render however many of its jobs it runs.
+    structure per render however many of its jobs it runs. ``pieces`` are the functions
+    the render is made of (``ptlab.rendering.pieces``; the path loop's steps go into
+    ``settings``, where each step finds them).
     """
 
     scene: Scene
@@ -130,8 +131,11 @@ class RenderSetup:
     #: Draw each pixel's even and odd samples as two independent sequences (a render to a
     #: noise target measures its error by how the two halves differ: ``ptlab.rendering.adaptive``).
     halves: bool = False
+    pieces: Pieces = LIBRARY
 
     def __post_init__(self):
+        if self.settings.pieces != self.pieces.path:
+            object.__setattr__(self, "settings", replace(self.settings, pieces=self.pieces.path))
         if self.sampler is None:
             object.__setattr__(self, "sampler", make_sampler(DEFAULT_SAMPLER, self.seed))
         elif self.sampler.seed != self.seed:
@@ -213,15 +217,10 @@ class CameraSamples:
             pixel, index_in_pixel = pixel + odd * (setup.width * setup.height), index_in_pixel >> 1
         sample = self.sampler.keys(pixel, index_in_pixel)
         jitter = self.sampler.get(sample, BounceUniforms.PIXEL, 2)
-        origins, dirs = generate_rays(setup.scene.camera, setup.width, setup.height, xs, ys, jitter)
-        return Paths(
-            origins=origins,
-            dirs=dirs,
-            throughput=np.ones((last - first, 3), dtype=np.float32, order="F"),
-            pixel=np.arange(first, last),
-            sees_emission=np.ones(last - first, dtype=bool),
-            sample=sample,
+        origins, dirs = setup.pieces.generate_rays(
+            setup.scene.camera, setup.width, setup.height, xs, ys, jitter
         )
+        return Paths.camera(origins, dirs, np.arange(first, last), sample)
 
     def _order(self, j: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
         """For job ``j`` with a count per pixel, made once: each row's pixel in the tile and
@@ -302,19 +301,21 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
     camera = CameraSamples(setup, jobs, sampler)
     film = np.zeros((camera.count, 3), order="F")
     timed = TimedAccelerator(accel)
-    # The path loop is called by its name in this module, where chapter 7's grader puts a
-    # student's in its place (ptlab.course.plug).
-    trace = trace_paths if setup.integrator == "path" else INTEGRATORS[setup.integrator].trace
+    integrator = integrator_of(setup)
     with counting_nonfinite() as nonfinite:
-        if trace is library_trace_paths:
+        if integrator.refills:
             # An empty batch, which the loop fills from the jobs' samples (``more``).
             empty = camera.paths(0, 0)
-            rays = trace(film, setup.scene, timed, empty, cast(Sampler, sampler), setup.settings, camera.more)
-        else:  # (a student's path loop, Whitted, a debug view: a job at a time)
+            rays = integrator.trace(
+                film, setup.scene, timed, empty, cast(Sampler, sampler), setup.settings, camera.more
+            )
+        else:  # (Whitted, a debug view, a path loop given as a piece: a job at a time)
             rays = 0
             for j in range(len(jobs)):
                 paths = camera.paths(camera.starts[j], camera.starts[j + 1])
-                rays += trace(film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings)
+                rays += integrator.trace(
+                    film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings
+                )
     sums = [camera.sums(film, j) for j in range(len(jobs))]
     return [
         JobResult(
@@ -329,6 +330,15 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
         )
         for j, job in enumerate(jobs)
     ]
+
+
+def integrator_of(setup: RenderSetup) -> Integrator:
+    """The integrator a render runs: the registry's of its name, but for a path loop given
+    as one of the render's pieces (``Pieces.trace_paths``)."""
+    integrator = INTEGRATORS[setup.integrator]
+    if setup.integrator == "path" and setup.pieces.trace_paths is not None:
+        return Integrator(setup.pieces.trace_paths, max_depth=integrator.max_depth)
+    return integrator
 
 
 def _nonfinite_in(camera: CameraSamples, nonfinite: NonFinite, j: int) -> dict:
@@ -399,7 +409,7 @@ def install_setup(setup: RenderSetup) -> None:
     with _worker_lock:
         if setup.token not in _worker_renders:
             _worker_renders.clear()  # one render at a time: free the last one
-            accel = make_accelerator(setup.scene.triangles, setup.backend)
+            accel = make_accelerator(setup.scene.triangles, setup.backend, setup.pieces.bvh)
             _worker_renders[setup.token] = (setup, accel)
 
 

@@ -158,7 +158,7 @@ class RenderOptions:
         PathSettings.heuristic, HEURISTICS, "the MIS weights of the strategy mis: power or balance"
     )
     rr_depth: int | None = integer(
-        PathSettings.rr_min_depth,
+        PathSettings.rr_depth,
         "bounces before Russian roulette starts (default 0 with a "
         "fixed P, like the homework; 2 with throughput, like pbrt-v4)",
         0,
@@ -288,7 +288,7 @@ class RenderOptions:
             max_depth=self.max_depth,
             strategy=self.strategy,
             heuristic=self.heuristic,
-            rr_min_depth=self.rr_depth,
+            rr_depth=self.rr_depth,
         )
 
     def record(self) -> dict[str, Any]:

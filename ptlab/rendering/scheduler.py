@@ -69,7 +69,7 @@ def run_jobs(
                 stop=stop,
             )
     elif workers == 1:
-        accel = make_accelerator(setup.scene.triangles, setup.backend)
+        accel = make_accelerator(setup.scene.triangles, setup.backend, setup.pieces.bvh)
         for groups in phases():
             for group in groups:
                 if stop():

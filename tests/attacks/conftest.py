@@ -1,7 +1,7 @@
 """Fixtures of the attack tests: every test here leaves no process behind, and runs its
 hostile submission from a fresh folder of its own. They try the students' sandbox: where
 bubblewrap cannot make it, they are skipped (the graders then mark every result not for
-credit, which ``tests/test_untrusted.py`` checks)."""
+credit, which ``tests/course/test_sandbox.py`` checks)."""
 
 from __future__ import annotations
 

@@ -17,6 +17,7 @@ import numpy as np
 from ptlab.course.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.course.finite import require_finite
 from ptlab.course.messages import aside, text
+from ptlab.rendering.pieces import Pieces
 
 
 def _camera():
@@ -34,7 +35,8 @@ def _camera():
 def _size(stream: int, even: bool) -> tuple[int, int]:
     """(width, height) of the grading run's image for one check: even or odd both."""
     rng = grading_rng(stream)
-    return tuple(int(2 * rng.integers(2, 21) + (0 if even else 1)) for _ in range(2))
+    width, height = (int(2 * rng.integers(2, 21) + (0 if even else 1)) for _ in range(2))
+    return width, height
 
 
 def _rays(module, camera, width, height, pixel_x, pixel_y, u):
@@ -203,31 +205,27 @@ def _jitter_hint(dirs, camera, width, height, pixel_x, pixel_y, u) -> str:
     return aside(text("ch01.hint.jitter"))
 
 
-def _plugged_rays(module) -> dict:
-    """The student's ``generate_rays``, as the renderer looks it up in ``ptlab.rendering.jobs``."""
+def _student_rays(module) -> Pieces:
+    """A render's pieces with the student's ``generate_rays`` for the primary rays."""
 
     def student_rays(camera, width, height, pixel_x, pixel_y, u):
         origins, dirs = _rays(module, camera, width, height, pixel_x, pixel_y, u)
         return (np.asfortranarray(origins, dtype=np.float32), np.asfortranarray(dirs, dtype=np.float32))
 
-    return dict(generate_rays=student_rays)
+    return Pieces(generate_rays=student_rays)
 
 
 def check_render(module) -> str:
-    import ptlab.rendering.jobs
     from ptlab.course.renders import check_render_through
 
-    return check_render_through(
-        text("ch01.yours"), ptlab.rendering.jobs, _plugged_rays(module), nan_hint=text("ch01.nan_hint")
-    )
+    return check_render_through(text("ch01.yours"), _student_rays(module), nan_hint=text("ch01.nan_hint"))
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
     """``scene`` rendered through the student's rays (``ptlab exercise render``)."""
-    import ptlab.rendering.jobs
-    from ptlab.course.side_by_side import render_plugged
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(scene, options, ptlab.rendering.jobs, **_plugged_rays(module))
+    return render_with_pieces(scene, options, _student_rays(module))
 
 
 CHAPTER = Chapter(

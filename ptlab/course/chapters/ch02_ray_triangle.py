@@ -29,6 +29,7 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.finite import require_finite
 from ptlab.course.messages import aside, text
+from ptlab.rendering.pieces import BVHPieces, Pieces
 
 #: The unit triangle in the plane z = 0, and a triangle in general position, each with a
 #: direction that sees its front face (det > 0; the opposite direction sees its back).
@@ -106,7 +107,7 @@ def _aimed(triangle, uv, t, dirs):
 def _edges(triangle, n: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(n, 3) copies of ``triangle``'s v0 and its edges e1 = v1 - v0, e2 = v2 - v0."""
     v0, v1, v2 = (np.asarray(p, dtype=np.float64) for p in triangle)
-    return tuple(np.tile(a, (n, 1)) for a in (v0, v1 - v0, v2 - v0))
+    return np.tile(v0, (n, 1)), np.tile(v1 - v0, (n, 1)), np.tile(v2 - v0, (n, 1))
 
 
 def _expect_hits(module, triangle, uv, t, dirs, what: str, barycentrics: bool = False) -> int:
@@ -154,15 +155,25 @@ def _fmt(values) -> str:
     return "(" + ", ".join(f"{x:.4g}" for x in values) + ")"
 
 
-#: Rays aimed at known points of the triangles: (triangle, (u, v) of each ray, t, direction,
-#: the id of what they are). Those hitting the front face from in front, those hitting it from behind
-#: (negative t), and those hitting the back face (det < 0).
-FRONT_HITS = (
+#: Rays aimed at known points of a triangle, as ``_expect_hits`` takes them: (triangle, (u, v)
+#: of each ray, t (one, or one per ray), direction, the id of what they are).
+HitCase = tuple[
+    tuple[tuple[float, float, float], ...],
+    tuple[tuple[float, float], ...],
+    float | tuple[float, ...],
+    tuple[float, ...],
+    str,
+]
+#: Those hitting the front face from in front, those hitting it from behind (negative t), and
+#: those hitting the back face (det < 0).
+FRONT_HITS: tuple[HitCase, ...] = (
     (UNIT, ((0.25, 0.5), (0.1, 0.1), (0.6, 0.3)), 1.0, UNIT_FRONT, "ch02.unit_triangle"),
     (SLANTED, ((0.2, 0.3), (0.7, 0.1), (0.05, 0.9)), (2.5, 0.5, 7.0), SLANTED_FRONT, "ch02.slanted_triangle"),
 )
-BEHIND_HITS = ((UNIT, ((0.25, 0.5), (0.6, 0.2)), -1.0, UNIT_FRONT, "ch02.behind_triangle"),)
-BACK_HITS = (
+BEHIND_HITS: tuple[HitCase, ...] = (
+    (UNIT, ((0.25, 0.5), (0.6, 0.2)), -1.0, UNIT_FRONT, "ch02.behind_triangle"),
+)
+BACK_HITS: tuple[HitCase, ...] = (
     (
         UNIT,
         ((0.25, 0.5), (0.6, 0.2)),
@@ -300,8 +311,9 @@ def _error_hint(name: str, error: float, swapped: bool = False) -> str:
     return text("ch02.hint.uv_formula")
 
 
-def _plugged_ray_triangle(module) -> dict:
-    """The student's ``ray_triangle``, as the NumPy BVH looks it up, its results checked."""
+def _student_ray_triangle(module) -> Pieces:
+    """A render's pieces with the student's ``ray_triangle`` in the NumPy BVH, its results
+    checked."""
     (ray_triangle,) = require(module, "ray_triangle")
 
     def student_ray_triangle(origins, dirs, v0, e1, e2):
@@ -315,31 +327,26 @@ def _plugged_ray_triangle(module) -> dict:
         _require_finite_hits(t, u, v, bvh=True)
         return t, u, v
 
-    return dict(ray_triangle=student_ray_triangle)
+    return Pieces(bvh=BVHPieces(ray_triangle=student_ray_triangle))
 
 
 def check_render(module) -> str:
-    import ptlab.accel.numpy_bvh
     from ptlab.course.renders import check_render_through
 
     return check_render_through(
         text("ch02.yours"),
-        ptlab.accel.numpy_bvh,
-        _plugged_ray_triangle(module),
+        _student_ray_triangle(module),
         passes=dict(RENDER, seed=grading_seed_for(RENDER_SEED)),
         hint=text("ch02.hint.render"),
     )
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
-    """``scene`` rendered through the student's ray_triangle (``ptlab exercise render``), on the NumPy
-    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
-    import ptlab.accel.numpy_bvh
-    from ptlab.course.side_by_side import render_plugged
+    """``scene`` rendered through the student's ray_triangle (``ptlab exercise render``), on the
+    NumPy BVH, which walks its tree through it whatever the scene's size."""
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(
-        scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_plugged_ray_triangle(module)
-    )
+    return render_with_pieces(scene, options, _student_ray_triangle(module))
 
 
 CHAPTER = Chapter(

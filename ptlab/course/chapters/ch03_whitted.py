@@ -8,9 +8,8 @@ is the mean of the squared amplitude ratios r_parallel and r_perpendicular (pbrt
 1 at grazing incidence and 1 beyond the critical angle (total internal reflection). They are
 computed here from first principles, in float64, independently of the library.
 
-Then the student's three functions go into the Whitted ray tracer (``ptlab.integrators.whitted``
-imports them by name with ``from ... import``, so that is where they are plugged in, and
-``ptlab.materials.mirror`` for the mirror's ``reflect``), which renders the Cornell box's
+Then the student's three functions are the Whitted ray tracer's pieces (``PathPieces``: it
+reflects at mirrors and glass and refracts into glass with them), which renders the Cornell box's
 walls with a mirror sphere, a glass sphere and a glass block (``check_scene``: in the block
 total internal reflection shows, which a sphere never has). Whitted's tracer spends no
 random numbers on mirrors and glass, so with the same seed the two images must agree pixel
@@ -25,8 +24,7 @@ from __future__ import annotations
 
 import copy
 import math
-from collections.abc import Iterator
-from contextlib import contextmanager
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -42,6 +40,8 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.finite import at_pixel, finite_array, require_finite
 from ptlab.course.messages import aside, check_name, text
+from ptlab.integrators.path import PathPieces
+from ptlab.rendering.pieces import Pieces
 
 if TYPE_CHECKING:
     from ptlab.scene import Scene
@@ -127,8 +127,9 @@ def check_reflect(module) -> str:
 # -- refract ----------------------------------------------------------------------------------
 
 
-def snell(wo: np.ndarray, n: np.ndarray, eta: float) -> np.ndarray:
-    """The refracted direction from Snell's law, built from its two components (float64).
+def snell(wo: np.ndarray, n: np.ndarray, eta: float | np.ndarray) -> np.ndarray:
+    """The refracted direction from Snell's law, built from its two components (float64);
+    ``eta``: one ratio of indices, or an (N, 1) column of them, one per row.
 
     The tangential part of the transmitted direction is -(tangential part of wo) / eta, and
     its normal part is -cos(theta_t) n with cos(theta_t) = sqrt(1 - sin^2(theta_t)).
@@ -167,9 +168,18 @@ def check_refract(module) -> str:
             )
         if not wt[0] @ n[0] < 0:
             raise CheckFailed(text("ch03.refract_through"))
+    _check_refract_random(refract, glass)
+    return text("ch03.refract_ok")
+
+
+def _check_refract_random(refract: Callable, glass: float) -> None:
+    """``refract`` of random directions about random normals, with one ``eta`` for all rows
+    (into glass, out of it) and with one per row (in and out by turns)."""
     wo, n = _random_cases(32)
-    for eta in (glass, 1 / glass, np.where(np.arange(len(wo)) % 2, glass, 1 / glass)):
-        column = eta[:, None] if np.ndim(eta) else eta
+    in_and_out = np.where(np.arange(len(wo)) % 2, glass, 1 / glass)
+    etas: tuple[float | np.ndarray, ...] = (glass, 1 / glass, in_and_out)
+    for eta in etas:
+        column = eta[:, None] if isinstance(eta, np.ndarray) else eta
         refracts = np.sum(wo * n, axis=1) ** 2 > 1 - np.ravel(column**2)  # not totally reflected
         expected = snell(wo, n, column)
         wt = _call(refract, "refract", wo, n, eta, shape=wo.shape)
@@ -177,7 +187,6 @@ def check_refract(module) -> str:
         if not ok.all():
             per_row = aside(text("ch03.hint.per_row_column")) if np.ndim(eta) else ""
             raise CheckFailed(text("ch03.refract_random", wrong=(~ok).sum(), n=ok.size, per_row=per_row))
-    return text("ch03.refract_ok")
 
 
 # -- Fresnel ---------------------------------------------------------------------------------
@@ -211,15 +220,23 @@ def check_fresnel(module) -> str:
     grazing = _call(fresnel, "fresnel", np.array([1e-4]), glass, shape=(1,))[0]
     if not grazing >= 0.99:
         raise CheckFailed(text("ch03.fresnel_grazing", yours=grazing))
+    _check_fresnel_random(fresnel, glass, diamond, rng)
+    return text("ch03.fresnel_ok")
+
+
+def _check_fresnel_random(fresnel: Callable, glass: float, diamond: float, rng: np.random.Generator) -> None:
+    """``fresnel`` at 200 random angles (from ``rng``), with one ``eta`` for all (glass from
+    either side, diamond) and with a random one per angle."""
     cos_i = np.sort(rng.uniform(0.02, 1, 200))
-    for eta in (glass, 1 / glass, diamond, rng.uniform(1.1, 2.0, 200)):
+    etas: tuple[float | np.ndarray, ...] = (glass, 1 / glass, diamond, rng.uniform(1.1, 2.0, 200))
+    for eta in etas:
         expected = fresnel_reference(cos_i, eta)
         F = _call(fresnel, "fresnel", cos_i, eta, shape=cos_i.shape)  # noqa: N806 (the usual name)
         if not np.abs(F - expected).max() <= 1e-5:
             worst = int(np.argmax(np.abs(F - expected)))
             schlick_r0 = ((eta - 1) / (eta + 1)) ** 2
             schlick = schlick_r0 + (1 - schlick_r0) * (1 - cos_i) ** 5
-            eta_here = eta[worst] if np.ndim(eta) else eta
+            eta_here = eta[worst] if isinstance(eta, np.ndarray) else eta
             hint = ""
             if eta_here < 1 and 1 - cos_i[worst] ** 2 >= eta_here**2:  # sin(theta_t) >= 1 there
                 critical = math.degrees(math.asin(eta_here))
@@ -235,7 +252,6 @@ def check_fresnel(module) -> str:
                 text("ch03.fresnel", angle=angle, eta=eta_here, expected=expected[worst], yours=F[worst])
                 + hint
             )
-    return text("ch03.fresnel_ok")
 
 
 def check_total_internal_reflection(module) -> str:
@@ -330,7 +346,8 @@ def spheres_scene(glass_block: bool = False) -> Scene:
     import ptlab
     from ptlab.materials import Dielectric, Mirror
     from ptlab.meshes import read_mesh_triangles
-    from ptlab.scene import Scene, builtin_scenes_dir
+    from ptlab.scene import Scene
+    from ptlab.scene_file import builtin_scenes_dir
 
     cornell = ptlab.load_scene("cornell-box")
     meshes = builtin_scenes_dir() / "cornell-box" / "meshes"
@@ -370,32 +387,27 @@ def check_scene() -> Scene:
     return scene
 
 
-@contextmanager
-def _plugged(reflect=None, refract=None, fresnel=None) -> Iterator[None]:
-    """A ``with`` block in which the Whitted tracer and the mirror use the given functions
-    (those not None)."""
-    import ptlab.integrators.whitted as whitted
-    import ptlab.materials.mirror as mirror
-    from ptlab.course.plug import plugged
-
-    in_whitted = {
+def surface_pieces(reflect=None, refract=None, fresnel=None) -> Pieces:
+    """A render's pieces with the given laws of the smooth surface (those not None) in the
+    library's place: the Whitted tracer reflects at mirrors and glass, and refracts into
+    glass with them."""
+    given = {
         name: f
         for name, f in (("reflect", reflect), ("refract", refract), ("fresnel_dielectric", fresnel))
         if f is not None
     }
-    in_mirror = {"reflect": reflect} if reflect is not None else {}
-    with plugged(whitted, **in_whitted), plugged(mirror, **in_mirror):
-        yield
+    return Pieces(path=PathPieces(**given))
 
 
 def whitted_image(scene: Scene, reflect=None, refract=None, fresnel=None, **options) -> np.ndarray:
     """The Whitted render of ``scene`` in this process, with the given functions (those not
-    None) plugged in where the tracer and the mirror look them up."""
+    None) as its pieces."""
     import ptlab
 
     options = dict(dict(spp=2, res=48, workers=1), **options)
-    with _plugged(reflect, refract, fresnel):
-        return ptlab.render(scene, integrator="whitted", **options)
+    return ptlab.render(
+        scene, integrator="whitted", **options, pieces=surface_pieces(reflect, refract, fresnel)
+    )
 
 
 def check_render(module) -> str:
@@ -435,12 +447,13 @@ def render_yours(module, scene: Scene, options: dict) -> np.ndarray:
     """``scene`` rendered by the Whitted tracer with the student's ``reflect``, ``refract``
     and ``fresnel`` (``ptlab exercise render``); a scene without a mirror or glass, which
     would never call them, is refused."""
-    from ptlab.course.side_by_side import render_within
+    from ptlab.course.side_by_side import render_with_pieces
     from ptlab.materials import Dielectric, Mirror
 
     if not any(isinstance(m, Mirror | Dielectric) for m in scene.materials):
         raise CheckFailed(text("ch03.no_mirror_or_glass", scene=scene.name))
-    return render_within(scene, options, _plugged(*require(module, "reflect", "refract", "fresnel")))
+    pieces = surface_pieces(*require(module, "reflect", "refract", "fresnel"))
+    return render_with_pieces(scene, options, pieces)
 
 
 CHAPTER = Chapter(

@@ -30,6 +30,7 @@ from ptlab.course.chapter import (
     require,
 )
 from ptlab.course.messages import aside, text
+from ptlab.rendering.pieces import BVHPieces, Pieces
 
 UNIT_BOX = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
 FLAT_BOX = ((0.0, 0.0, 1.0), (1.0, 1.0, 1.0))  # the square z = 1, 0 <= x, y <= 1
@@ -253,8 +254,6 @@ def boxes_entered(slab_test, seed: int) -> float:
     """The boxes a camera ray enters on average, rendering ``_row_of_balls``' normals with
     ``slab_test`` in the NumPy BVH."""
     import ptlab
-    import ptlab.accel.numpy_bvh
-    from ptlab.course.plug import plugged
 
     entered = 0
 
@@ -264,14 +263,15 @@ def boxes_entered(slab_test, seed: int) -> float:
         entered += int(np.count_nonzero(hit))
         return hit, t_enter
 
-    with plugged(ptlab.accel.numpy_bvh, slab_test=counting, SMALL_SCENE=0):
-        ptlab.render(_row_of_balls(), seed=seed, **ROW_VIEW)
+    # (A tree given a slab test of its own walks the tree whatever the scene's size.)
+    ptlab.render(_row_of_balls(), seed=seed, **ROW_VIEW, pieces=Pieces(bvh=BVHPieces(slab_test=counting)))
     width, height = ROW_VIEW["res"]
     return entered / (width * height * ROW_VIEW["spp"])
 
 
-def _plugged_slab_test(module) -> dict:
-    """The student's ``slab_test``, as the NumPy BVH looks it up, its results checked."""
+def _student_slab_test(module) -> Pieces:
+    """A render's pieces with the student's ``slab_test`` in the NumPy BVH, its results
+    checked."""
     (slab_test,) = require(module, "slab_test")
 
     def student_slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax):
@@ -279,25 +279,23 @@ def _plugged_slab_test(module) -> dict:
             result = slab_test(origins, inv_dirs, box_min, box_max, tmin, tmax)
         return _checked(result, len(origins))
 
-    return dict(slab_test=student_slab_test)
+    return Pieces(bvh=BVHPieces(slab_test=student_slab_test))
 
 
 def check_render(module) -> str:
-    import ptlab.accel.numpy_bvh
     from ptlab.course.renders import check_render_through
 
-    plug = _plugged_slab_test(module)
+    pieces = _student_slab_test(module)
     hint = _swap_hint(module)
     note = check_render_through(
         text("ch04.yours"),
-        ptlab.accel.numpy_bvh,
-        plug,
+        pieces,
         hint=hint or text("ch04.hint.render"),
         missing_hint=hint or text("ch04.hint.missing"),
     )
     seed = grading_seed_for(41)
-    library = boxes_entered(ptlab.accel.numpy_bvh.slab_test, seed)
-    student = boxes_entered(plug["slab_test"], seed)
+    library = boxes_entered(BVHPieces().slab_test, seed)
+    student = boxes_entered(pieces.bvh.slab_test, seed)
     if not student <= library * (1 + WORK_TOLERANCE):
         raise CheckFailed(text("ch04.work", student=student, library=library))
     return note + text("ch04.work_ok", student=student, library=library)
@@ -319,12 +317,11 @@ def _swap_hint(module) -> str:
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
-    """``scene`` rendered through the student's slab test (``ptlab exercise render``), on the NumPy
-    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
-    import ptlab.accel.numpy_bvh
-    from ptlab.course.side_by_side import render_plugged
+    """``scene`` rendered through the student's slab test (``ptlab exercise render``), on the
+    NumPy BVH, which walks its tree through it whatever the scene's size."""
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_plugged_slab_test(module))
+    return render_with_pieces(scene, options, _student_slab_test(module))
 
 
 CHAPTER = Chapter(

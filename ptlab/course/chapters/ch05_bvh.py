@@ -19,8 +19,10 @@ import copy
 
 import numpy as np
 
+from ptlab.accel.numpy_bvh import BVHPieces, NumpyBVH, build_bvh
 from ptlab.course.chapter import Chapter, ChapterCheck, ChapterRender, CheckFailed, grading_rng, require
 from ptlab.course.messages import aside, check_name, text
+from ptlab.rendering.pieces import Pieces
 
 #: Tree quality: the student's tree may cost this much more than the library's (ties
 #: between equally good splits broken another way change the tree a little; on the test
@@ -228,7 +230,12 @@ def _checked_child_order(child_order):
 # -- unit checks --------------------------------------------------------------------------
 
 
-def _binned_example(stream: int, flat_node: bool = False):
+#: Two nodes binned as ``build_bvh`` bins them (``_binned_example``): (bin_count, bin_lo,
+#: bin_hi, node_lo, node_hi), the arguments of ``split_costs`` before ``traversal_cost``.
+BinnedExample = tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]
+
+
+def _binned_example(stream: int, flat_node: bool = False) -> BinnedExample:
     """Two nodes (9 and 12 triangles, given as boxes) binned into 5 bins per axis as
     ``build_bvh`` bins them: ``(bin_count, bin_lo, bin_hi, node_lo, node_hi)``.
 
@@ -326,7 +333,7 @@ MERGE_MISTAKES = {
 }
 
 
-def _cost_mistake(got: np.ndarray, example: tuple, traversal_cost: float) -> str:
+def _cost_mistake(got: np.ndarray, example: BinnedExample, traversal_cost: float) -> str:
     """The hint for the mistake whose costs ``got`` are (every finite one of them within
     rounding), of ``MERGE_MISTAKES`` and ``traversal_cost`` left out (0) or hard-coded
     (the homework's 1); "" for none."""
@@ -345,7 +352,7 @@ def _cost_mistake(got: np.ndarray, example: tuple, traversal_cost: float) -> str
     return ""
 
 
-def _compare_costs(got: np.ndarray, example: tuple, traversal_cost: float, what: str) -> None:
+def _compare_costs(got: np.ndarray, example: BinnedExample, traversal_cost: float, what: str) -> None:
     """Fail where ``got`` are not the SAH costs of the binned ``example``
     (``_binned_example``) with ``traversal_cost`` (``what``: what the costs are, in words)."""
     want = _expected_costs(*example, traversal_cost=traversal_cost)
@@ -420,10 +427,10 @@ def check_best_split(module) -> str:
     cost, size, want_leaf = cost[:, order], size[order], want_leaf[order]
     wants = {int(np.flatnonzero(order == node)[0]): want for node, want in wants.items()}
     split_bin, split_axis, make_leaf = best_split(cost.copy(), size.copy(), 4)
-    want_leaf = list(want_leaf)
-    if list(make_leaf) != want_leaf:
-        node = int(np.flatnonzero(make_leaf != want_leaf)[0])
-        should = "ch05.should_be_leaf" if want_leaf[node] else "ch05.should_not_be_leaf"
+    leaves = list(want_leaf)
+    if list(make_leaf) != leaves:
+        node = int(np.flatnonzero(make_leaf != leaves)[0])
+        should = "ch05.should_be_leaf" if leaves[node] else "ch05.should_not_be_leaf"
         raise CheckFailed(text(should, node=node, size=size[node], cheapest=cost[:, node].min()))
     for node, want in sorted(wants.items()):
         if (split_bin[node], split_axis[node]) != want:
@@ -479,17 +486,13 @@ def check_child_order(module) -> str:
 
 
 def check_closest_hits(module) -> str:
-    import ptlab.accel.numpy_bvh as numpy_bvh
-    from ptlab.course.plug import plugged
-
     tris = uneven_mesh()
     origins, dirs = _random_rays(3000)
     tmax = grading_rng(11).uniform(0, 600, len(dirs)).astype(np.float32)
     t_all = _brute_force(tris, origins, dirs)
-    with plugged(numpy_bvh, **_pieces(module, *PIECES)):
-        bvh = numpy_bvh.NumpyBVH(tris.copy())
-        hits = bvh.intersect(origins.copy(), dirs.copy())
-        occluded = bvh.occluded(origins.copy(), dirs.copy(), tmax.copy())
+    bvh = NumpyBVH(tris.copy(), pieces=BVHPieces(**_pieces(module, *PIECES)))
+    hits = bvh.intersect(origins.copy(), dirs.copy())
+    occluded = bvh.occluded(origins.copy(), dirs.copy(), tmax.copy())
     t_want = t_all.min(axis=1)
     # Equal up to float32 rounding: where two triangles meet, the one a box test lets
     # through first may be an ulp farther, whatever the order (pbrt-v4's slab test alike).
@@ -543,20 +546,14 @@ def check_tree_quality(module) -> str:
 
 
 def _tree_cost(tris: np.ndarray, **pieces) -> float:
-    """The SAH cost of the tree ``build_bvh`` makes of ``tris`` with ``pieces`` plugged in."""
-    import ptlab.accel.numpy_bvh as numpy_bvh
-    from ptlab.course.plug import plugged
-
-    with plugged(numpy_bvh, **pieces):
-        return sah_cost(numpy_bvh.build_bvh(tris))
+    """The SAH cost of the tree ``build_bvh`` makes of ``tris`` with ``pieces`` (by name) in
+    the library's place."""
+    return sah_cost(build_bvh(tris, pieces=BVHPieces(**pieces)))
 
 
 def check_traversal_order(module) -> str:
-    import ptlab.accel.numpy_bvh as numpy_bvh
-    from ptlab.course.plug import plugged
-
     tris, origins, dirs = row_of_balls()
-    library_slab_test = numpy_bvh.slab_test
+    library_slab_test = BVHPieces().slab_test
     entered = [0]
 
     def counting_slab_test(*args):
@@ -564,12 +561,11 @@ def check_traversal_order(module) -> str:
         entered[0] += int(np.count_nonzero(hit))
         return hit, t_enter
 
-    bvh = numpy_bvh.NumpyBVH(tris)
-    with plugged(numpy_bvh, slab_test=counting_slab_test):
-        bvh.intersect(origins, dirs)
-        library, entered[0] = entered[0], 0
-        with plugged(numpy_bvh, **_pieces(module, "child_order")):
-            bvh.intersect(origins, dirs)
+    # The same tree (the library's build) walked in the library's order, then the student's.
+    NumpyBVH(tris, pieces=BVHPieces(slab_test=counting_slab_test)).intersect(origins, dirs)
+    library, entered[0] = entered[0], 0
+    student_order = BVHPieces(slab_test=counting_slab_test, **_pieces(module, "child_order"))
+    NumpyBVH(tris, pieces=student_order).intersect(origins, dirs)
     student = entered[0]
     if not student <= library * (1 + VISIT_TOLERANCE):
         raise CheckFailed(text("ch05.order", student=student / len(dirs), library=library / len(dirs)))
@@ -577,19 +573,17 @@ def check_traversal_order(module) -> str:
 
 
 def check_render(module) -> str:
-    import ptlab.accel.numpy_bvh as numpy_bvh
     from ptlab.course.renders import check_render_through
 
-    return check_render_through(text("ch05.yours"), numpy_bvh, _pieces(module, *PIECES))
+    return check_render_through(text("ch05.yours"), Pieces(bvh=BVHPieces(**_pieces(module, *PIECES))))
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
-    """``scene`` rendered through the student's BVH pieces (``ptlab exercise render``), on the NumPy
-    BVH, with ``SMALL_SCENE`` 0 so that it is used for every scene."""
-    import ptlab.accel.numpy_bvh
-    from ptlab.course.side_by_side import render_plugged
+    """``scene`` rendered through the student's BVH pieces (``ptlab exercise render``), on the
+    NumPy BVH, which walks its tree through them whatever the scene's size."""
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(scene, options, ptlab.accel.numpy_bvh, SMALL_SCENE=0, **_pieces(module, *PIECES))
+    return render_with_pieces(scene, options, Pieces(bvh=BVHPieces(**_pieces(module, *PIECES))))
 
 
 CHAPTER = Chapter(

@@ -144,7 +144,7 @@ def check_sample(module) -> str:
         n = np.tile(normal, (count, 1))
         wo = _frame(normal, np.full(count, 0.7), np.full(count, 1.0))
         u = rng.random((count, 2))
-        u[:4] = [[0, 0], [0, 0.5], [0.5, 0], [1 - 2**-53, 1 - 2**-53]]
+        u[:4] = [[0.0, 0.0], [0.0, 0.5], [0.5, 0.0], [1 - 2**-53, 1 - 2**-53]]
         wi = _call(material, "sample", wo, n, u)
         length = np.linalg.norm(wi, axis=1)
         if np.abs(length - 1).max() > 1e-4:

@@ -1,8 +1,8 @@
 """Chapter 7's checks: the path tracer of Homework 7 (``castRay``), over a batch of paths.
 
 The student writes the pieces of the path loop (``direct_light``, ``russian_roulette``,
-``scatter``) and the loop itself (``trace_paths``), which the renderer then runs in place
-of ``ptlab.integrators.path.trace_paths`` (looked up by name in ``ptlab.rendering.jobs``).
+``scatter``) and the loop itself (``trace_paths``), which a render given it as its path
+loop (``Pieces.trace_paths``, ``ptlab.rendering.pieces``) runs in place of the library's.
 
 * The pieces first, each against the library's own on the same hits and the same random
   numbers (deterministic, so the comparisons are exact up to float rounding): light
@@ -56,7 +56,6 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from contextlib import AbstractContextManager, nullcontext
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -73,6 +72,8 @@ from ptlab.course.chapter import (
 from ptlab.course.finite import at_pixel, at_row, channel_name, require_finite
 from ptlab.course.given import FlakyDiffuse
 from ptlab.course.messages import aside, check_name, text
+from ptlab.integrators.path import PathPieces
+from ptlab.rendering.pieces import Pieces
 
 if TYPE_CHECKING:
     from ptlab.accel import Accelerator
@@ -211,14 +212,7 @@ def first_hits(scene: Scene, count: int = 20_000, stream: int = 70) -> tuple[Acc
         rng.integers(0, size, count),
         rng.random((count, 2), dtype=np.float32),
     )
-    paths = Paths(
-        origins=origins,
-        dirs=dirs,
-        throughput=np.ones((count, 3), np.float32, order="F"),
-        pixel=np.arange(count),
-        sees_emission=np.ones(count, dtype=bool),
-        sample=np.arange(count, dtype=np.uint64),
-    )
+    paths = Paths.camera(origins, dirs, np.arange(count), np.arange(count, dtype=np.uint64))
     hit = surface_hit(scene, paths, accel.intersect(origins, dirs))
     hit.pixel = np.arange(len(hit.prim))
     return accel, hit
@@ -445,22 +439,17 @@ def _student_loop(module):
     return trace_paths
 
 
-def _loop(trace_paths=None) -> AbstractContextManager:
-    """A ``with`` block in which the renderer runs ``trace_paths`` as its path loop (the
-    library's own if None)."""
-    import ptlab.rendering.jobs
-    from ptlab.course.plug import plugged
-
-    return nullcontext() if trace_paths is None else plugged(ptlab.rendering.jobs, trace_paths=trace_paths)
+def _loop(trace_paths=None) -> Pieces:
+    """A render's pieces with ``trace_paths`` as its path loop (the library's own if None)."""
+    return Pieces(trace_paths=trace_paths)
 
 
 def _render(scene, trace_paths=None, **options) -> np.ndarray:
-    """``ptlab.render`` in this process, with the student's loop plugged in if given."""
+    """``ptlab.render`` in this process, with the student's loop if given."""
     import ptlab
 
     options.setdefault("workers", 1)
-    with _loop(trace_paths):
-        return ptlab.render(scene, **options)
+    return ptlab.render(scene, **options, pieces=_loop(trace_paths))
 
 
 #: What a black light misses, in the messages of ``check_light_not_black``.
@@ -535,15 +524,21 @@ FURNACE_SEED = 8
 
 
 def furnace_images(
-    trace_paths=None, seed: int = 0, albedo: float = ALBEDO, emission: float = LE, **options
+    trace_paths=None,
+    seed: int = 0,
+    albedo: float = ALBEDO,
+    emission: float = LE,
+    pieces: Pieces | None = None,
+    **options,
 ) -> np.ndarray:
     """(passes, 16, 16, 3): the independent passes of one render of the furnace of
     ``albedo`` and ``emission`` (``ptlab.course.renders.pass_images``), with
-    ``trace_paths`` plugged in if given."""
+    ``trace_paths`` as the path loop if given (else ``pieces``, if given)."""
     from ptlab.course.renders import pass_images
 
-    with _loop(trace_paths):
-        return pass_images(furnace_scene(albedo, emission), **dict(FURNACE_RENDER, seed=seed, **options))
+    pieces = _loop(trace_paths) if trace_paths is not None else pieces
+    scene = furnace_scene(albedo, emission)
+    return pass_images(scene, **dict(FURNACE_RENDER, seed=seed, **options), pieces=pieces)
 
 
 def furnace_radiance(
@@ -644,13 +639,12 @@ PATTERNED_FALSE_ALARM = 1e-4
 
 def patterned_furnace_passes(trace_paths=None, seed: int = 0) -> np.ndarray:
     """The ``pass_images`` of this grading's ``patterned_furnace_scene``, with
-    ``trace_paths`` plugged in if given (a scene of its own for each render: the code that
+    ``trace_paths`` as the path loop if given (a scene of its own for each render: the code that
     renders it may change what it is given)."""
     from ptlab.course.renders import pass_images
 
     scene = patterned_furnace_scene(grading_rng(PATTERN_STREAM))
-    with _loop(trace_paths):
-        return pass_images(scene, **PATTERNED_RENDER, seed=seed)
+    return pass_images(scene, **PATTERNED_RENDER, seed=seed, pieces=_loop(trace_paths))
 
 
 def check_furnace(module) -> str:
@@ -691,15 +685,13 @@ def roulette_furnace_images(
     """``furnace_images`` of the library's loop at the homework's p_rr = 0.8, with
     ``russian_roulette(throughput, p_rr, u)`` (the exercise's signature) in place of the
     library's roulette if given."""
-    import ptlab.integrators.path as path
-    from ptlab.course.plug import plugged
 
     def roulette(hit, settings, u):  # the library's signature, the student's rule
         survive, hit.throughput = russian_roulette(hit.throughput, settings.rr, u)
         return np.asarray(survive, dtype=bool)
 
-    with nullcontext() if russian_roulette is None else plugged(path, russian_roulette=roulette):
-        return furnace_images(seed=seed, albedo=albedo, emission=emission, rr=0.8)
+    pieces = None if russian_roulette is None else Pieces(path=PathPieces(russian_roulette=roulette))
+    return furnace_images(seed=seed, albedo=albedo, emission=emission, rr=0.8, pieces=pieces)
 
 
 def _furnace_with_roulette(russian_roulette, albedo: float, le: float) -> tuple[float, float]:
@@ -717,13 +709,12 @@ CORNELL_SEED = 9
 
 
 def cornell_passes(trace_paths=None, seed: int = 0) -> np.ndarray:
-    """The ``pass_images`` of the Cornell box, with ``trace_paths`` plugged in if given."""
+    """The ``pass_images`` of the Cornell box, with ``trace_paths`` as the path loop if given."""
     import ptlab
     from ptlab.course.renders import pass_images
 
     scene = ptlab.load_scene("cornell-box")
-    with _loop(trace_paths):
-        return pass_images(scene, seed=seed, **CORNELL_RENDER)
+    return pass_images(scene, seed=seed, **CORNELL_RENDER, pieces=_loop(trace_paths))
 
 
 def check_cornell(module) -> str:
@@ -743,10 +734,9 @@ def check_cornell(module) -> str:
 
 def render_yours(module, scene, options: dict) -> np.ndarray:
     """``scene`` rendered by the student's ``trace_paths`` (``ptlab exercise render``)."""
-    import ptlab.rendering.jobs
-    from ptlab.course.side_by_side import render_plugged
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(scene, options, ptlab.rendering.jobs, trace_paths=_student_loop(module))
+    return render_with_pieces(scene, options, _loop(_student_loop(module)))
 
 
 CHAPTER = Chapter(

@@ -20,7 +20,6 @@ leaves behind (and the grader ends every process the check started when it is do
 
 from __future__ import annotations
 
-from types import ModuleType
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -36,7 +35,7 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.finite import at_pixel, require_finite
 from ptlab.course.messages import check_name, text
-from ptlab.course.sandbox import submission_of
+from ptlab.course.sandbox import RemoteModule, submission_of
 
 if TYPE_CHECKING:
     from ptlab.rendering.jobs import RenderSetup
@@ -84,7 +83,8 @@ def check_tiles(module) -> str:
     (make_tiles,) = require(module, "make_tiles")
     cases = [(37, 23, 8), (64, 64, 16), (5, 3, 8), (100, 1, 7), (16, 48, 16)]
     rng = grading_rng(80)  # and three sizes new for each grading
-    cases += [tuple(int(n) for n in rng.integers(1, (100, 100, 20))) for _ in range(3)]
+    new_sizes = (rng.integers(1, (100, 100, 20)) for _ in range(3))
+    cases += [(int(width), int(height), int(size)) for width, height, size in new_sizes]
     for width, height, size in cases:
         tiles = list(make_tiles(width, height, size))
         where = f"make_tiles({width}, {height}, {size})"
@@ -183,7 +183,7 @@ def check_tile_job(module) -> str:
 # -- the pool -----------------------------------------------------------------------------------
 
 
-def importable(module: ModuleType) -> ModuleType:
+def importable(module: RemoteModule) -> RemoteModule:
     """The student's module again, imported under its file's name from its folder.
 
     The grader imports the student's file under a made-up name, which a worker process

@@ -4,7 +4,7 @@
 Known answers come from Veach's heuristics themselves (Veach 1997, section 9.2): the weights
 of the two strategies for one sample sum to 1, a strategy that cannot draw a sample (pdf 0,
 as a mirror's BSDF for a light sample) leaves it all to the other, and nothing is NaN. Then
-the student's ``mis_weight`` is plugged into the path tracer (``ptlab.integrators.path``
+the student's ``mis_weight`` is the path tracer's piece (``PathPieces``: ``ptlab.integrators.path``
 calls it for both strategies: light samples in ``direct_light``, BSDF-sampled hits of a
 light in ``add_emission``) and ``veach-mis`` rendered with ``strategy="mis"`` must match
 the library's picture: exactly, up to rounding, since the weights change no path.
@@ -40,6 +40,8 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.finite import at_pixel, require_finite
 from ptlab.course.messages import aside, check_name, text
+from ptlab.integrators.path import PathPieces
+from ptlab.rendering.pieces import Pieces
 
 #: Above this density its square overflows float32 (the square root of float32's largest
 #: number, 3.4e38): p^2 / (p^2 + q^2) is then inf / inf = NaN, or 0 where it should be 1.
@@ -281,8 +283,6 @@ def _checked_mis_weight(module):
 
 def check_render(module) -> str:
     import ptlab
-    import ptlab.integrators.path
-    from ptlab.course.plug import plugged
     from ptlab.course.renders import describe_region, regions_of
 
     checked_mis_weight = _checked_mis_weight(module)
@@ -290,8 +290,7 @@ def check_render(module) -> str:
     options = render_options(grading_seed_for(10))
     library_image = ptlab.render(scene, **options)
     library = regions_of(library_image.astype(np.float64))
-    with plugged(ptlab.integrators.path, mis_weight=checked_mis_weight):
-        image = ptlab.render(scene, **options)
+    image = ptlab.render(scene, **options, pieces=_with_weights(checked_mis_weight))
     require_finite(image, text("ch10.yours"), at_pixel)
     student = regions_of(image.astype(np.float64))
     difference = np.abs(student - library)
@@ -305,7 +304,7 @@ def check_render(module) -> str:
         raise CheckFailed(
             text(
                 "ch10.render",
-                region=describe_region(*worst),
+                region=describe_region(*map(int, worst)),
                 ratio=ratio,
                 overall=overall,
                 check=check_name(10, "weights sum to 1"),
@@ -318,10 +317,14 @@ def check_render(module) -> str:
 def render_yours(module, scene, options: dict) -> np.ndarray:
     """``scene`` rendered with MIS weighted by the student's ``mis_weight`` (``ptlab
     exercise render``)."""
-    import ptlab.integrators.path
-    from ptlab.course.side_by_side import render_plugged
+    from ptlab.course.side_by_side import render_with_pieces
 
-    return render_plugged(scene, options, ptlab.integrators.path, mis_weight=_checked_mis_weight(module))
+    return render_with_pieces(scene, options, _with_weights(_checked_mis_weight(module)))
+
+
+def _with_weights(mis_weight) -> Pieces:
+    """A render's pieces with ``mis_weight`` weighing the path tracer's two strategies."""
+    return Pieces(path=PathPieces(mis_weight=mis_weight))
 
 
 CHAPTER = Chapter(

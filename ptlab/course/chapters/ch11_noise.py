@@ -50,7 +50,12 @@ MARGIN = adaptive.REFERENCE_WINDOW // 2 + adaptive.POOL_RADIUS
 TOLERANCE = 1e-4
 
 
-def _film(samples: np.ndarray, counts: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+#: A film's sums: (sums, squares, counts), each pixel's sum of samples and of their squares
+#: ((H, W, 3)) and its number of samples ((H, W)).
+Film = tuple[np.ndarray, np.ndarray, np.ndarray]
+
+
+def _film(samples: np.ndarray, counts: np.ndarray) -> Film:
     """(sums, squares, counts) of a film whose pixel (y, x) took the first counts[y, x] of
     ``samples[y, x]`` ((H, W, K, 3) values)."""
     taken = np.arange(samples.shape[2]) < counts[..., None]
@@ -116,10 +121,17 @@ def _nan_hint(result, variance: np.ndarray, sums: np.ndarray, counts: np.ndarray
 
 #: Pixels of known samples: [1, 3] has mean 2, s^2 = 2, and the variance of its mean is 1;
 #: [0, 0, 6]: s^2 = 12, 4; [1, 2, 3, 4]: 5/3, 5/12; one sample, or none: 0 (no spread is known).
-KNOWN_PIXELS = ([1.0, 3.0], [0.0, 0.0, 6.0], [1.0, 2.0, 3.0, 4.0], [2.0, 2.0, 2.0, 2.0, 2.0], [5.0], [])
+KNOWN_PIXELS: tuple[list[float], ...] = (
+    [1.0, 3.0],
+    [0.0, 0.0, 6.0],
+    [1.0, 2.0, 3.0, 4.0],
+    [2.0, 2.0, 2.0, 2.0, 2.0],
+    [5.0],
+    [],
+)
 
 
-def _known_film(rng: np.random.Generator) -> tuple[list[np.ndarray], tuple[np.ndarray, ...]]:
+def _known_film(rng: np.random.Generator) -> tuple[list[np.ndarray], Film]:
     """The known pixels, each channel scaled and shifted by numbers of the grading seed."""
     scale = rng.uniform(0.5, 2.0, 3)
     shift = rng.uniform(0.0, 1.0, 3)
@@ -196,7 +208,7 @@ def _known_pixel(samples: np.ndarray, channel: int) -> str:
     return text("ch11.known_pixel", samples=_shown(samples), channel=channel_name(channel))
 
 
-def _require_not_negative(yours: np.ndarray, film: tuple[np.ndarray, ...], pixel: Callable) -> None:
+def _require_not_negative(yours: np.ndarray, film: Film, pixel: Callable) -> None:
     """Fail if a variance of ``yours`` (H, W, 3) is below 0, naming the pixel (``pixel(y, x,
     channel)`` in words) and, where its samples are all alike (n sum x^2 = (sum x)^2 up to
     rounding), the cancellation that made it. ``film``: (sums, squares, counts)."""
@@ -310,7 +322,7 @@ def _same_up_to_scale(yours: np.ndarray, expected: np.ndarray, rounding: float =
     return scale > 0 and bool(np.all(np.abs(yours - scale * expected) <= allowed))
 
 
-def _halves(rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+def _halves(rng: np.random.Generator) -> Film:
     """A film of two halves with the same kind of noise: dark on the left (mean 0.02),
     bright on the right (mean 2), 32 samples a pixel. Right weights: 0.67 times as large on
     the left as on the right, sigma / (mu + 0.01); by sigma alone 0.01 times."""
@@ -344,7 +356,7 @@ def check_relative(module) -> str:
     raise CheckFailed(text("ch11.relative", expected=expected, yours=yours, hint=hint))
 
 
-def _firefly_film(rng: np.random.Generator) -> tuple[tuple[np.ndarray, ...], tuple[int, int]]:
+def _firefly_film(rng: np.random.Generator) -> tuple[Film, tuple[int, int]]:
     """A film of even noise (mean 0.5, 16 samples a pixel) in which one pixel's sample is a
     firefly 200 times the mean: the light of a rare path that happened to be found there."""
     size = 24
@@ -370,7 +382,7 @@ def check_firefly(module) -> str:
 QUIET_BAND = 8
 
 
-def _weights_film(rng: np.random.Generator) -> tuple[np.ndarray, ...]:
+def _weights_film(rng: np.random.Generator) -> Film:
     """A film as a render leaves it after a few adaptive passes: a gradient with a step edge,
     noise from smooth to heavy-tailed, counts from 2 to 16 by 4 x 4 blocks, three fireflies;
     along its bottom and right a band QUIET_BAND wide of pixels whose samples are all alike

@@ -70,5 +70,5 @@ def check_name(chapter: int, name: str) -> str:
     """A check's name (``ChapterCheck.name``, English: the key of ``requires`` and of the
     JSON) in the active language; the name itself for a check the catalogues do not know
     (a chapter made by a test: every chapter of ``ptlab.course`` has its names in both,
-    tests/test_exercise_messages.py)."""
+    tests/course/test_exercise_messages.py)."""
     return CATALOGUES[active_language()].get(f"ch{chapter:02d}.check.{name}", name)

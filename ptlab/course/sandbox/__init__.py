@@ -46,7 +46,6 @@ from ptlab.course.sandbox.proxies import (
     RemoteModule,
     RemoteObject,
     StudentError,
-    submission_of,
 )
 from ptlab.course.sandbox.rules import Arguments, Rules
 from ptlab.course.sandbox.student_user import StudentUser, student_user
@@ -59,6 +58,7 @@ from ptlab.course.sandbox.submission import (
     copied_answer,
     import_nothing_from_here,
     library_answer,
+    submission_of,
 )
 
 __all__ = [

@@ -22,11 +22,32 @@ from __future__ import annotations
 
 import ast
 from collections.abc import Iterable
+from typing import overload
 
 from ptlab.course.sandbox.canonical_blocks import simplified_blocks
 from ptlab.course.sandbox.canonical_names import inlined, resolved
 from ptlab.course.sandbox.canonical_syntax import as_syntax
 from ptlab.course.sandbox.syntax_trees import FunctionNode, tree_copy
+
+
+# A module's canonical form is a module, a function's a function: the rewriting replaces
+# expressions and statements inside them, never the module or the function itself.
+@overload
+def canonical(
+    tree: ast.Module, inline: bool = True, helpers: Iterable[tuple[str, FunctionNode]] = ()
+) -> ast.Module: ...
+
+
+@overload
+def canonical(
+    tree: FunctionNode, inline: bool = True, helpers: Iterable[tuple[str, FunctionNode]] = ()
+) -> FunctionNode: ...
+
+
+@overload
+def canonical(
+    tree: ast.AST, inline: bool = True, helpers: Iterable[tuple[str, FunctionNode]] = ()
+) -> ast.AST: ...
 
 
 def canonical(

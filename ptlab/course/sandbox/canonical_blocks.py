@@ -69,9 +69,9 @@ def _as_assignment(statement: ast.stmt) -> ast.stmt:
         call = statement.value
         dotted, arguments = dotted_name(call.func), call.args
         if len(arguments) == 3 and not call.keywords:
-            target = None
-            if dotted == "builtins.setattr" and identifier(arguments[1]):
-                target = ast.Attribute(arguments[0], identifier(arguments[1]), ast.Store())
+            target: ast.expr | None = None
+            if dotted == "builtins.setattr" and (name := identifier(arguments[1])):
+                target = ast.Attribute(arguments[0], name, ast.Store())
             elif dotted in ("operator.setitem", "operator.__setitem__"):
                 target = ast.Subscript(arguments[0], arguments[1], ast.Store())
             if target is not None:
@@ -87,19 +87,29 @@ def _choice(then: ast.stmt, otherwise: ast.stmt, test: ast.expr) -> ast.stmt | N
     """``x = a if test else b`` for ``x = a`` and ``x = b`` (``return`` for two returns)."""
     if isinstance(then, ast.Return) and isinstance(otherwise, ast.Return) and then.value and otherwise.value:
         return ast.Return(ast.IfExp(test, then.value, otherwise.value))
-    names = [assigned_name(s) for s in (then, otherwise)]
-    if names[0] is not None and names[0] == names[1]:
-        value = ast.IfExp(test, then.value, otherwise.value)  # type: ignore[attr-defined]
-        return ast.Assign([ast.Name(names[0], ast.Store())], value)
+    name = assigned_name(then)
+    if (
+        isinstance(then, ast.Assign)
+        and isinstance(otherwise, ast.Assign)
+        and name is not None
+        and name == assigned_name(otherwise)
+    ):
+        value = ast.IfExp(test, then.value, otherwise.value)
+        return ast.Assign([ast.Name(name, ast.Store())], value)
     return None
 
 
 def _merged(previous: ast.stmt, statement: ast.stmt) -> ast.stmt | None:
     """One statement for ``x = b`` then ``if c: x = a`` (``x = a if c else b``), and for
     ``if c: return a`` then ``return b``; else None."""
-    returns = isinstance(previous, ast.If) and not previous.orelse and len(previous.body) == 1
-    if returns and isinstance(statement, ast.Return) and isinstance(previous.body[0], ast.Return):  # type: ignore[attr-defined]
-        return _choice(previous.body[0], statement, previous.test)  # type: ignore[attr-defined]
+    if (
+        isinstance(previous, ast.If)
+        and not previous.orelse
+        and len(previous.body) == 1
+        and isinstance(statement, ast.Return)
+        and isinstance(previous.body[0], ast.Return)
+    ):
+        return _choice(previous.body[0], statement, previous.test)
     if isinstance(statement, ast.If) and not statement.orelse and len(statement.body) == 1:
         name = assigned_name(previous)
         if name is not None and name == assigned_name(statement.body[0]):
@@ -120,10 +130,13 @@ def _comprehensions(statements: list[ast.stmt]) -> list[ast.stmt]:
         for j in range(i - 1, max(-1, i - 1 - LOOK_BACK), -1):
             if not any(isinstance(n, ast.Name) and n.id == name for n in ast.walk(out[j])):
                 continue
-            empty = isinstance(out[j], ast.Assign) and assigned_name(out[j]) == name
-            empty = empty and _is_empty(out[j].value, type(comprehension))  # type: ignore[attr-defined]
-            if empty:
-                out[j] = ast.copy_location(ast.Assign([ast.Name(name, ast.Store())], comprehension), out[j])
+            earlier = out[j]
+            if (
+                isinstance(earlier, ast.Assign)
+                and assigned_name(earlier) == name
+                and _is_empty(earlier.value, type(comprehension))
+            ):
+                out[j] = ast.copy_location(ast.Assign([ast.Name(name, ast.Store())], comprehension), earlier)
                 del out[i]
             break
     return out
@@ -171,10 +184,12 @@ def _filled(
 ) -> tuple[str, ast.ListComp | ast.DictComp] | None:
     """(name, comprehension) for a loop's only step ``out.append(e)`` or ``out[k] = v``."""
     call = step.value if isinstance(step, ast.Expr) else None
-    func = call.func if isinstance(call, ast.Call) and len(call.args) == 1 and not call.keywords else None
-    if isinstance(func, ast.Attribute) and func.attr == "append" and isinstance(func.value, ast.Name):
-        return func.value.id, ast.ListComp(call.args[0], generators)  # type: ignore[union-attr]
-    target = step.targets[0] if isinstance(step, ast.Assign) and len(step.targets) == 1 else None
-    if isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name):
-        return target.value.id, ast.DictComp(target.slice, step.value, generators)  # type: ignore[attr-defined]
+    if isinstance(call, ast.Call) and len(call.args) == 1 and not call.keywords:
+        func = call.func
+        if isinstance(func, ast.Attribute) and func.attr == "append" and isinstance(func.value, ast.Name):
+            return func.value.id, ast.ListComp(call.args[0], generators)
+    if isinstance(step, ast.Assign) and len(step.targets) == 1:
+        target = step.targets[0]
+        if isinstance(target, ast.Subscript) and isinstance(target.value, ast.Name):
+            return target.value.id, ast.DictComp(target.slice, step.value, generators)
     return None

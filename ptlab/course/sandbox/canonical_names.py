@@ -235,17 +235,20 @@ def _tables(tree: ast.AST, names: Names) -> dict[str, dict[object, ast.expr]]:
     for node in ast.walk(tree):
         if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Load):
             read[node.id] += 1
-        elif _table_index(node) is not None:
-            indexed[node.value.id] += 1  # type: ignore[attr-defined]
+        elif (index := _table_index(node)) is not None:
+            indexed[index[0]] += 1
     tables = {}
     for assignment in ast.walk(tree):  # (as the tree reads now: its operators as syntax)
         name = assigned_name(assignment)
         sites = names.sites.get(name or "", [])
         if name is None or len(sites) != 1 or sites[0][0] != "value" or read[name] != indexed[name]:
             continue
-        value = assignment.value  # type: ignore[attr-defined]
+        if not isinstance(assignment, ast.Assign):  # (never: only an assignment has a name)
+            continue
+        value = assignment.value
         entries: list[tuple[object, ast.expr]] = []
         if isinstance(value, ast.Dict) and all(isinstance(k, ast.Constant) for k in value.keys):
+            # (Every key is a constant, as tested: none is None, the ``**`` of a dict display.)
             entries = [(k.value, v) for k, v in zip(value.keys, value.values, strict=True)]  # type: ignore[union-attr]
         elif isinstance(value, ast.Tuple | ast.List) and not any(
             isinstance(e, ast.Starred) for e in value.elts
@@ -332,8 +335,8 @@ class _Inline(ast.NodeTransformer):
         self.within = outer
         return node
 
-    def visit_AsyncFunctionDef(self, node: ast.AsyncFunctionDef) -> ast.AsyncFunctionDef:
-        return self.visit_FunctionDef(node)  # type: ignore[return-value]
+    def visit_AsyncFunctionDef(self, node: ast.AsyncFunctionDef) -> FunctionNode:
+        return self.visit_FunctionDef(node)
 
     def visit_Subscript(self, node: ast.Subscript) -> ast.expr:
         # (``OPS["mul"]`` is the function the table holds there: see ``_tables``)
@@ -354,7 +357,9 @@ class _Inline(ast.NodeTransformer):
         if self.depth >= INLINE_DEPTH:
             return node
         found = self._helper(node.func)
-        bound = _bind(*found, node) if found is not None else None
+        if found is None:
+            return node
+        bound = _bind(*found, node)
         if bound is None:
             return node
         helper = found[0]
@@ -388,7 +393,9 @@ class _Inline(ast.NodeTransformer):
         if not (isinstance(func, ast.Attribute) and isinstance(func.value, ast.Name)):
             return None
         definition = self.names.method(func.value.id, func.attr)
-        helper = self.names.helper(definition) if definition is not None else None
+        if definition is None:
+            return None
+        helper = self.names.helper(definition)
         if helper is None:
             return None
         decorators = _decorators(definition)
@@ -421,14 +428,14 @@ def helper_of(definition: FunctionNode | ast.Lambda) -> Helper | None:
     if arguments.vararg or arguments.kwarg:
         return None
     if isinstance(definition, ast.Lambda):
-        expression = definition.body
+        expression: ast.expr | None = definition.body
     else:
         decorators = _decorators(definition)
         if isinstance(definition, ast.AsyncFunctionDef) or decorators - {"staticmethod", "classmethod"}:
             return None
         expression = returned(definition.body)
-        if expression is None:
-            return None
+    if expression is None:
+        return None
     positional = tuple(a.arg for a in arguments.posonlyargs + arguments.args)
     defaults = dict(
         zip(positional[len(positional) - len(arguments.defaults) :], arguments.defaults, strict=True)
@@ -456,15 +463,16 @@ def returned(body: list[ast.stmt]) -> ast.expr | None:
         return None
     stored: dict[str, int] = defaultdict(int)
     for statement in before:
-        if assigned_name(statement) and dotted_name(statement.value) == assigned_name(statement):  # type: ignore[attr-defined]
+        assigned = assigned_name(statement)
+        if isinstance(statement, ast.Assign) and assigned and dotted_name(statement.value) == assigned:
             continue  # (``x = x`` assigns nothing)
         for node in ast.walk(statement):
             if isinstance(node, ast.Name) and not isinstance(node.ctx, ast.Load):
                 stored[node.id] += 1
     values = {
-        assigned_name(s): s.value  # type: ignore[attr-defined]
+        assigned: s.value
         for s in before
-        if assigned_name(s) and stored[assigned_name(s)] == 1  # type: ignore[index]
+        if isinstance(s, ast.Assign) and (assigned := assigned_name(s)) and stored[assigned] == 1
     }
     value = body[-1].value
     for _ in range(len(values) + 1):

@@ -16,6 +16,7 @@ names are resolved first (``ptlab.course.sandbox.canonical_names``): ``np.add`` 
 from __future__ import annotations
 
 import ast
+from typing import TypeGuard
 
 from ptlab.course.sandbox.syntax_trees import dotted_name, dotted_node, identifier
 
@@ -178,11 +179,13 @@ def _call_as_syntax(node: ast.Call) -> ast.expr:
         kind, op, reflected = _OPERATOR_METHODS[func.attr]
         operands = [func.value, *arguments]
         built = _operation(kind, op, operands[::-1] if reflected else operands)
-    elif plain and dotted in _ATTRIBUTE_READERS and len(arguments) == 2 and identifier(arguments[1]):
-        built = ast.Attribute(arguments[0], identifier(arguments[1]), ast.Load())
+    elif (
+        plain and dotted in _ATTRIBUTE_READERS and len(arguments) == 2 and (name := identifier(arguments[1]))
+    ):
+        built = ast.Attribute(arguments[0], name, ast.Load())
     elif plain and isinstance(func, ast.Attribute) and func.attr in ("__getattribute__", "__getattr__"):
-        if len(arguments) == 1 and identifier(arguments[0]):
-            built = ast.Attribute(func.value, identifier(arguments[0]), ast.Load())
+        if len(arguments) == 1 and (name := identifier(arguments[0])):
+            built = ast.Attribute(func.value, name, ast.Load())
     elif isinstance(func, ast.Attribute) and func.attr == "__call__":
         built = ast.Call(func.value, arguments, node.keywords)
     elif plain and isinstance(func, ast.Call) and len(arguments) == 1:
@@ -197,7 +200,7 @@ def _call_as_syntax(node: ast.Call) -> ast.expr:
         and len(arguments) == 1
         and _is_number(arguments[0])
     ):
-        built = ast.Constant(arguments[0].value)  # type: ignore[attr-defined]
+        built = ast.Constant(arguments[0].value)
     return ast.copy_location(built, node) if built is not None else node
 
 
@@ -209,11 +212,16 @@ def _synonym(node: ast.Call) -> ast.expr | None:
         return ast.Call(dotted_node(_SYNONYMS[dotted], func), arguments, node.keywords)
     if dotted == "numpy.select":
         return _select_as_where(node)
-    plain = not node.keywords and not any(isinstance(a, ast.Starred) for a in arguments)
-    if plain and (dotted == "numpy.take" or (isinstance(func, ast.Attribute) and func.attr == "take")):
-        operands = arguments if dotted == "numpy.take" else [func.value, *arguments]  # type: ignore[attr-defined]
-        if len(operands) == 2:  # (no axis: the flattened array's items, as ``a[r]`` for a vector)
-            return ast.Subscript(operands[0], operands[1], ast.Load())
+    if node.keywords or any(isinstance(a, ast.Starred) for a in arguments):
+        return None
+    if dotted == "numpy.take":
+        operands = arguments
+    elif isinstance(func, ast.Attribute) and func.attr == "take":
+        operands = [func.value, *arguments]
+    else:
+        return None
+    if len(operands) == 2:  # (no axis: the flattened array's items, as ``a[r]`` for a vector)
+        return ast.Subscript(operands[0], operands[1], ast.Load())
     return None
 
 
@@ -227,11 +235,16 @@ def _select_as_where(node: ast.Call) -> ast.expr | None:
     if len(arguments) == 2:
         arguments.append(ast.Constant(0))
     conditions, choices, default = arguments
-    single = all(isinstance(a, ast.List | ast.Tuple) and len(a.elts) == 1 for a in (conditions, choices))
-    if not single or any(isinstance(a, ast.Starred) for a in arguments):
+    if not (isinstance(conditions, ast.List | ast.Tuple) and isinstance(choices, ast.List | ast.Tuple)):
+        return None
+    if (
+        len(conditions.elts) != 1
+        or len(choices.elts) != 1
+        or any(isinstance(a, ast.Starred) for a in arguments)
+    ):
         return None
     where = dotted_node("numpy.where", node.func)
-    return ast.Call(where, [conditions.elts[0], choices.elts[0], default], [])  # type: ignore[attr-defined]
+    return ast.Call(where, [conditions.elts[0], choices.elts[0], default], [])
 
 
 def _flat_nonzero(node: ast.Subscript) -> ast.expr:
@@ -272,10 +285,8 @@ def _curried(maker: ast.Call, operand: ast.expr) -> ast.expr | None:
             return operand
     if dotted == "operator.itemgetter" and len(arguments) == 1 and not maker.keywords:
         return ast.Subscript(operand, arguments[0], ast.Load())
-    if dotted == "operator.methodcaller" and arguments and identifier(arguments[0]):
-        return ast.Call(
-            ast.Attribute(operand, identifier(arguments[0]), ast.Load()), arguments[1:], maker.keywords
-        )
+    if dotted == "operator.methodcaller" and arguments and (name := identifier(arguments[0])):
+        return ast.Call(ast.Attribute(operand, name, ast.Load()), arguments[1:], maker.keywords)
     return None
 
 
@@ -294,7 +305,7 @@ def _operation(kind: str, op: type, operands: list[ast.expr]) -> ast.expr | None
     return None
 
 
-def _is_number(node: ast.AST, value: float | None = None) -> bool:
+def _is_number(node: ast.AST, value: float | None = None) -> TypeGuard[ast.Constant]:
     """Whether ``node`` is a number (equal to ``value``, if given); booleans are not numbers."""
     if not isinstance(node, ast.Constant) or isinstance(node.value, bool):
         return False
@@ -307,7 +318,7 @@ def _is_none(node: ast.AST | None) -> bool:
     return node is None or (isinstance(node, ast.Constant) and node.value is None)
 
 
-def _negated(node: ast.AST) -> bool:
+def _negated(node: ast.AST) -> TypeGuard[ast.UnaryOp]:
     return isinstance(node, ast.UnaryOp) and isinstance(node.op, ast.USub)
 
 
@@ -339,7 +350,7 @@ def _folded(node: ast.BinOp) -> ast.Constant | None:
     if not (_is_number(node.left) and _is_number(node.right) and type(node.op) in _FOLDED):
         return None
     try:
-        value = _FOLDED[type(node.op)](node.left.value, node.right.value)  # type: ignore[attr-defined]
+        value = _FOLDED[type(node.op)](node.left.value, node.right.value)
     except (ZeroDivisionError, OverflowError, ValueError):
         return None
     return ast.copy_location(ast.Constant(value), node) if isinstance(value, int | float) else None
@@ -348,11 +359,12 @@ def _folded(node: ast.BinOp) -> ast.Constant | None:
 def _sum(node: ast.BinOp) -> ast.expr:
     """``a + (-b)`` as ``a - b``, ``a - (-b)`` as ``a + b``, ``0 - a`` as ``-a``, ``a + 0`` as ``a``."""
     left, right = node.left, node.right
-    if isinstance(node.op, ast.Add) and (_negated(right) or _negated(left)):
-        plus, minus = (left, right) if _negated(right) else (right, left)
-        return _arithmetic(ast.copy_location(ast.BinOp(plus, ast.Sub(), minus.operand), node))  # type: ignore[attr-defined]
+    if isinstance(node.op, ast.Add) and _negated(right):
+        return _arithmetic(ast.copy_location(ast.BinOp(left, ast.Sub(), right.operand), node))
+    if isinstance(node.op, ast.Add) and _negated(left):
+        return _arithmetic(ast.copy_location(ast.BinOp(right, ast.Sub(), left.operand), node))
     if isinstance(node.op, ast.Sub) and _negated(right):
-        return _arithmetic(ast.copy_location(ast.BinOp(left, ast.Add(), right.operand), node))  # type: ignore[attr-defined]
+        return _arithmetic(ast.copy_location(ast.BinOp(left, ast.Add(), right.operand), node))
     if _is_number(right, 0):
         return left
     if _is_number(left, 0):
@@ -388,7 +400,8 @@ def _unary(node: ast.UnaryOp) -> ast.expr:
     """``node`` with constants folded, ``+x`` and ``--x`` as ``x``, ``not a < b`` as ``a >= b``."""
     operand = node.operand
     if isinstance(node.op, ast.USub | ast.UAdd) and _is_number(operand):
-        value = -operand.value if isinstance(node.op, ast.USub) else operand.value  # type: ignore[attr-defined]
+        # (``_is_number``: the constant is an int or a float, which negate.)
+        value = -operand.value if isinstance(node.op, ast.USub) else operand.value  # type: ignore[operator]
         return ast.copy_location(ast.Constant(value), node)
     if isinstance(node.op, ast.UAdd):
         return operand

@@ -32,6 +32,8 @@ MAX_OUTPUT = 64 * 1024
 #: Pipe buffers of 1 MiB instead of Linux's 64 KiB: large arrays cross in fewer wake-ups.
 PIPE_SIZE = 1 << 20
 READ_AHEAD = 1 << 16
+#: A part as read: a ``bytearray``, or for a large one NumPy's bytes, not zeroed (``_buffer``).
+Part = bytearray | np.ndarray
 
 
 class ChannelClosedError(Exception):
@@ -73,7 +75,10 @@ class Channel:
         for fd in (send_fd, receive_fd, output_fd):
             if fd is not None:
                 os.set_blocking(fd, False)
-        self.send_fd, self.receive_fd, self.output_fd = send_fd, receive_fd, output_fd
+        # (None once ``close`` closed them.)
+        self.send_fd: int | None = send_fd
+        self.receive_fd: int | None = receive_fd
+        self.output_fd = output_fd
         self.on_output = on_output
         self._output = bytearray()
         self._output_passed = 0
@@ -85,9 +90,9 @@ class Channel:
         chunks = _chunks(parts)
         while chunks:
             try:
-                written = os.writev(self.send_fd, chunks[:512])
+                written = os.writev(_open(self.send_fd), chunks[:512])
             except BlockingIOError:  # the pipe is full: wait until the child reads
-                self._wait(self.send_fd, select.POLLOUT, deadline)
+                self._wait(_open(self.send_fd), select.POLLOUT, deadline)
                 continue
             except (BrokenPipeError, ConnectionResetError):
                 raise ChannelClosedError from None
@@ -95,32 +100,33 @@ class Channel:
 
     # -- receiving --------------------------------------------------------------------
 
-    def receive(self, deadline: float, limit: int) -> list:
+    def receive(self, deadline: float, limit: int) -> list[Part]:
         """The next message; at most ``limit`` bytes of parts in all."""
-        (count,) = COUNT.unpack(self._read(COUNT.size, deadline))
+        (count,) = COUNT.unpack(_view(self._read(COUNT.size, deadline)))
         if count > MAX_PARTS:
             raise ChannelError(f"a message of {count} parts")
-        lengths = struct.unpack(f"<{count}Q", self._read(LENGTH.size * count, deadline))
+        lengths = struct.unpack(f"<{count}Q", _view(self._read(LENGTH.size * count, deadline)))
         if sum(lengths) > limit:
             raise ChannelError(f"a message of {sum(lengths):,} bytes (the limit is {limit:,})")
         return [self._read(length, deadline) for length in lengths]
 
-    def _read(self, size: int, deadline: float) -> bytearray:
+    def _read(self, size: int, deadline: float) -> Part:
         """``size`` bytes: small reads go through a read-ahead buffer (one system call for
         a whole small message), large ones straight into their own buffer."""
         if len(self._pending) >= size:
             return _take(self._pending, size)
         buffer, view, filled = _seeded_buffer(self._pending, size)
         while filled < size:
-            self._wait(self.receive_fd, select.POLLIN, deadline)
+            receive_fd = _open(self.receive_fd)
+            self._wait(receive_fd, select.POLLIN, deadline)
             try:
                 if size - filled < READ_AHEAD:
-                    data = os.read(self.receive_fd, READ_AHEAD)
+                    data = os.read(receive_fd, READ_AHEAD)
                     got = min(len(data), size - filled)
                     view[filled : filled + got] = data[:got]
                     self._pending += data[got:]
                 else:
-                    got = os.readv(self.receive_fd, [view[filled:]])
+                    got = os.readv(receive_fd, [view[filled:]])
             except BlockingIOError:
                 continue
             if got == 0:
@@ -143,17 +149,17 @@ class Channel:
             ready = poller.poll(min(left, 3600) * 1000)
             for ready_fd, flags in ready:
                 if ready_fd == self.output_fd:
-                    if not self._drain_output():
+                    if not self._drain_output(ready_fd):
                         poller.unregister(self.output_fd)
                         os.close(self.output_fd)
                         self.output_fd = None
                 elif flags & (event | select.POLLHUP | select.POLLERR):
                     return
 
-    def _drain_output(self) -> bool:
-        """Read what the child printed; False once its end is closed."""
+    def _drain_output(self, output_fd: int) -> bool:
+        """Read what the child printed (the pipe ``output_fd``); False once its end is closed."""
         try:
-            data = os.read(self.output_fd, READ_AHEAD)
+            data = os.read(output_fd, READ_AHEAD)
         except BlockingIOError:
             return True
         self._take_output(data)
@@ -185,7 +191,7 @@ class Channel:
             self._pass(self._output)
             self._output = bytearray()
 
-    def _pass(self, line: bytes) -> None:
+    def _pass(self, line: bytes | bytearray) -> None:
         """Pass on one line, shown (``ptlab.course.sandbox.shown``: an ANSI escape or a carriage
         return in it cannot rewrite the grader's lines on a terminal). An ``on_output`` that
         raises (its reader went away) gets nothing more: the grading goes on, and ends."""
@@ -216,7 +222,7 @@ class Reader:
         self.fd = fd
         self._pending = bytearray()
 
-    def _read(self, size: int) -> bytearray:
+    def _read(self, size: int) -> Part:
         while len(self._pending) < size:
             want = size - len(self._pending)
             if want >= READ_AHEAD:
@@ -233,10 +239,10 @@ class Reader:
             self._pending += data
         return _take(self._pending, size)
 
-    def read_message(self) -> list[bytearray]:
+    def read_message(self) -> list[Part]:
         """The next message from the grader (blocking)."""
-        (count,) = COUNT.unpack(self._read(COUNT.size))
-        lengths = struct.unpack(f"<{count}Q", self._read(LENGTH.size * count))
+        (count,) = COUNT.unpack(_view(self._read(COUNT.size)))
+        lengths = struct.unpack(f"<{count}Q", _view(self._read(LENGTH.size * count)))
         return [self._read(length) for length in lengths]
 
 
@@ -248,22 +254,40 @@ def write_message(fd: int, parts: list) -> None:
         _advance(chunks, written)
 
 
-def _buffer(size: int) -> bytearray | np.ndarray:
-    """A buffer to read ``size`` bytes into: a large one is not zeroed first (NumPy's
-    ``empty``; a ``bytearray`` of 24 MB costs milliseconds of zeroing, every call)."""
-    return bytearray(size) if size < READ_AHEAD else np.empty(size, np.uint8)
+def _buffer(size: int) -> tuple[Part, memoryview]:
+    """A buffer to read ``size`` bytes into, and a view of it: a large one is not zeroed
+    first (NumPy's ``empty``; a ``bytearray`` of 24 MB costs milliseconds of zeroing, every
+    call)."""
+    if size < READ_AHEAD:
+        buffer = bytearray(size)
+        return buffer, memoryview(buffer)
+    array = np.empty(size, np.uint8)
+    return array, array.data  # (its memoryview: see _view)
 
 
-def _seeded_buffer(pending: bytearray, size: int) -> tuple[bytearray | np.ndarray, memoryview, int]:
+def _seeded_buffer(pending: bytearray, size: int) -> tuple[Part, memoryview, int]:
     """A buffer for ``size`` bytes that begins with the bytes already read ahead,
     ``pending`` (which it empties): the buffer, a view to read the rest into, and how many
     bytes it holds already."""
-    buffer = _buffer(size)
-    view = memoryview(buffer)
+    buffer, view = _buffer(size)
     filled = len(pending)
     view[:filled] = pending
     pending.clear()
     return buffer, view, filled
+
+
+def _view(part: Part) -> bytearray | memoryview:
+    """``part`` as a buffer for ``struct`` (an array's ``.data``, its memoryview: NumPy's stubs
+    declare an array's buffer protocol for Python 3.12 on only)."""
+    return part.data if isinstance(part, np.ndarray) else part
+
+
+def _open(fd: int | None) -> int:
+    """``fd``, one of a channel's pipes, unless ``Channel.close`` closed it (then an error, as
+    Python's own files raise)."""
+    if fd is None:
+        raise ValueError("I/O operation on a closed channel")
+    return fd
 
 
 def _take(pending: bytearray, size: int) -> bytearray:

@@ -41,8 +41,10 @@ import sys
 import threading
 import traceback
 import types
+from collections.abc import Sequence
 from dataclasses import dataclass, fields, is_dataclass
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 import numpy as np
 
@@ -50,9 +52,12 @@ from ptlab.course.sandbox.channel import ChannelClosedError, Reader, write_messa
 from ptlab.course.sandbox.confinement import Refused, confine
 from ptlab.course.sandbox.copies import Answers
 from ptlab.course.sandbox.ownership import MATERIAL_METHODS
-from ptlab.course.sandbox.plain_data import RECORDS, Encoder, UnsendableError
+from ptlab.course.sandbox.plain_data import RECORDS, Encoder, UnsendableError, frozen
 from ptlab.errors import PtlabError
 from ptlab.rendering.memory import keep_freed_memory
+
+if TYPE_CHECKING:
+    from ptlab.integrators.wavefront import SurfaceHit
 
 #: The ptlab package: code under it is the library's own, not a student's.
 PTLAB = Path(__file__).resolve().parents[2]
@@ -150,7 +155,7 @@ def main() -> None:
     os.dup2(null, 0)
     os.close(null)
     for stream in (sys.stdout, sys.stderr):
-        if stream is not None:
+        if isinstance(stream, io.TextIOWrapper):  # (Python's own, unless its pipe is missing: None)
             stream.reconfigure(line_buffering=True)
     keep_freed_memory()  # every call's arrays arrive in new buffers: no page faults for them
     _set_up(setup)
@@ -223,7 +228,7 @@ class _Server:
         self.handles: list = []
         self.shared: dict[int, object] = {}
 
-    def send(self, envelope: dict, parts: tuple = ()) -> None:
+    def send(self, envelope: dict, parts: Sequence = ()) -> None:
         write_message(self.send_fd, [json.dumps(envelope).encode(), *parts])
 
     def keep(self, value) -> int:
@@ -292,7 +297,8 @@ class _Server:
 
         groups = [(np.flatnonzero(which == k), self.handles[h]) for k, h in enumerate(handles)]
         hit = SimpleNamespace(prim=which, materials=[g for g in groups if len(g[0])])
-        return {"value": encoder.encode(shade(hit, method, *args))}
+        # (A SurfaceHit as far as shade reads one: its prim and its materials' groups.)
+        return {"value": encoder.encode(shade(cast("SurfaceHit", hit), method, *args))}
 
     def do_import_by_stem(self, encoder: Encoder) -> dict:
         """The student's file imported again under its own name (``08_parallel``), with its
@@ -629,4 +635,4 @@ def _rebindable(value) -> bool:
     that is not frozen)."""
     if isinstance(value, list | dict):
         return True
-    return is_dataclass(value) and not type(value).__dataclass_params__.frozen
+    return is_dataclass(value) and not frozen(value)

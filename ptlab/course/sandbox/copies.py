@@ -168,11 +168,11 @@ def _given() -> _Given:
         # A hint is read with the file's imports (``np.zeros`` in a hint is ``numpy.zeros``).
         imports = [s for s in tree.body if isinstance(s, ast.Import | ast.ImportFrom)]
         for part in (tree, *(ast.Module([*imports, *hint], []) for hint in _hints(tree))):
-            part = canonical(part)
-            for line in PLAIN.lines(part):
+            form = canonical(part)
+            for line in PLAIN.lines(form):
                 found_grams |= {gram for _, _, gram in runs(line)}
                 names |= {token for token in line if token.startswith(".")}
-            for node in ast.walk(part):
+            for node in ast.walk(form):
                 run = PLAIN.expression(node) if isinstance(node, ast.expr) else []
                 if len(run) >= 2:
                     expressions.add(run_hash(run))
@@ -224,7 +224,7 @@ def answers_of(names: Iterable[str], solution: Path | None = None) -> Answers:
 def library_helpers(names: Iterable[str]) -> tuple[tuple[str, FunctionNode], ...]:
     """The small helpers (``_column``) of the modules that define the answers ``names``, as
     ``Answers.helpers`` holds them."""
-    modules = sorted({inspect.getmodule(_unwrapped(resolve(name))).__name__ for name in names})  # type: ignore[union-attr]
+    modules = sorted({_module_of(_unwrapped(resolve(name))) for name in names})
     return tuple(helper for module in modules for helper in _module_helpers(module))
 
 
@@ -234,13 +234,22 @@ def _module_helpers(module: str) -> tuple[tuple[str, FunctionNode], ...]:
     found = []
     for node in tree.body:
         if isinstance(node, FunctionNode) and _is_small_helper(node):
-            context = answer_context(tree, node.name, module)
-            found.append((f"{module}.{node.name}", _defined(canonical(context, inline=False), node.name)))
+            context = answer_context(tree, node.name, module)  # (not None: the module defines it)
+            if context is not None:
+                found.append((f"{module}.{node.name}", _defined(canonical(context, inline=False), node.name)))
     return tuple(found)
 
 
 def _unwrapped(value):
     return inspect.unwrap(getattr(value, "__func__", value))
+
+
+def _module_of(value) -> str:
+    """The name of the module that defines the library's function or class ``value``."""
+    module = inspect.getmodule(value)
+    if module is None:
+        raise ValueError(f"{value!r} is defined in no module")
+    return module.__name__
 
 
 def answer_sources(names: Iterable[str], solution: Path | None = None) -> list[tuple[str, ast.Module, str]]:
@@ -340,7 +349,7 @@ def _library_functions(name: str) -> list[tuple[str, ast.Module, str]]:
     found = []
     for origin, function in methods:
         function = _unwrapped(function)
-        module = inspect.getmodule(function).__name__  # type: ignore[union-attr]
+        module = _module_of(function)
         context = answer_context(_module_tree(module), function.__qualname__, module)
         if context is not None:
             found.append((origin, context, function.__qualname__))
@@ -403,7 +412,7 @@ def answer_context(tree: ast.Module, qualname: str, module: str | None = None) -
         return None
     kept: list[ast.stmt] = [n for n in tree.body if n is not target and _is_context(n)]
     if owner is not None:
-        methods = [
+        methods: list[ast.stmt] = [
             n for n in owner.body if n is target or (isinstance(n, FunctionNode) and _is_small_helper(n))
         ]
         kept.append(ast.ClassDef(name=owner.name, bases=[], keywords=[], body=methods, decorator_list=[]))
@@ -421,14 +430,15 @@ def answer_context(tree: ast.Module, qualname: str, module: str | None = None) -
             kept.insert(0, ast.ImportFrom(module, [ast.alias(n) for n in imported], 0))
     context = ast.Module(tree_copy(kept), [])
     for node in ast.walk(context):
-        body = getattr(node, "body", None)
+        block = getattr(node, "body", None)
         if (
-            isinstance(body, list)
-            and body
-            and isinstance(body[0], ast.Expr)
-            and isinstance(body[0].value, ast.Constant)
+            isinstance(block, list)
+            and block
+            and isinstance(block[0], ast.Expr)
+            and isinstance(block[0].value, ast.Constant)
         ):
-            node.body = body[1:] or [ast.Pass()]  # type: ignore[attr-defined]
+            # (The node has a body, read above; ast.AST does not declare one.)
+            node.body = block[1:] or [ast.Pass()]  # type: ignore[attr-defined]
     return ast.fix_missing_locations(context)
 
 
@@ -451,7 +461,7 @@ def _is_small_helper(node: FunctionNode) -> bool:
     then ``return b`` is one); worked out once per node."""
     if _SMALL not in node.__dict__:
         small = node_count(node) <= 2 * HELPER_SIZE  # (a bigger one is none, whatever dead code it drops)
-        node.__dict__[_SMALL] = small and helper_of(canonical(node, inline=False)) is not None  # type: ignore[arg-type]
+        node.__dict__[_SMALL] = small and helper_of(canonical(node, inline=False)) is not None
     return node.__dict__[_SMALL]
 
 
@@ -561,7 +571,8 @@ class _Reach:
 
     def __call__(self, function: FunctionNode) -> frozenset[int]:
         if id(function) not in self.done:
-            seen, todo, union = {id(function)}, [function], set()
+            seen, todo = {id(function)}, [function]
+            union: set[int] = set()
             while todo:
                 node = todo.pop()
                 union |= self.own[id(node)]

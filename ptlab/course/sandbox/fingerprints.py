@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import ast
 import zlib
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 
 from ptlab.course.sandbox.canonical import canonical
 from ptlab.course.sandbox.syntax_trees import FunctionNode, statements_of
@@ -216,7 +216,7 @@ class Tokenizer:
                 flat.append(operand)
         return [label, f"#{len(flat)}", *self.sorted_operands(flat)]
 
-    def sorted_operands(self, operands: list[ast.AST]) -> list[str]:
+    def sorted_operands(self, operands: Sequence[ast.AST]) -> list[str]:
         parts = sorted((self.expression(o) for o in operands), key=unmarked)
         return [token for part in parts for token in part]
 

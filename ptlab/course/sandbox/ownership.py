@@ -82,7 +82,7 @@ def _top_level(tree: ast.Module) -> list[ast.stmt]:
 
 
 def _last_binding(tree: ast.Module, name: str) -> ast.stmt | None:
-    found = None
+    found: ast.stmt | None = None
     for node in _top_level(tree):
         if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef | ast.ClassDef):
             if node.name == name:

@@ -49,6 +49,12 @@ MAX_ITEMS = 1_000_000
 CALLABLE_KINDS = ("function", "method", "class")
 
 
+def frozen(record: object) -> bool:
+    """Whether the object ``record`` of a dataclass is frozen (its fields keep their values)."""
+    # (Every dataclass has __dataclass_params__; typeshed's DataclassInstance leaves it out.)
+    return type(record).__dataclass_params__.frozen  # type: ignore[attr-defined]
+
+
 class MalformedError(Exception):
     """A reply that is not in the schema."""
 
@@ -135,7 +141,8 @@ def npy_part(array: np.ndarray) -> tuple[bytes, memoryview]:
     fortran = bool(array.flags.f_contiguous and not array.flags.c_contiguous)
     if not (array.flags.c_contiguous or fortran):
         array = np.ascontiguousarray(array)
-    data = memoryview(array.reshape(-1, order="F" if fortran else "C")).cast("B")
+    # (``.data`` is the array's memoryview: NumPy's stubs type memoryview(array) on Python 3.12 on.)
+    data = array.reshape(-1, order="F" if fortran else "C").data.cast("B")
     return _npy_header(array.dtype, array.shape, fortran), data
 
 

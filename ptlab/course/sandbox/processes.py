@@ -102,7 +102,7 @@ class ProcessGuard:
     left and restores the previous subreaper setting.
     """
 
-    def __init__(self):
+    def __init__(self) -> None:
         self._previous: int | None = None
         self._helpers: set[int] = set()
         self._servers: set[int] = set()

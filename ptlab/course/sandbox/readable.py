@@ -58,6 +58,7 @@ import sys
 import tokenize
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from typing import TypeGuard
 
 from ptlab.course.sandbox.intake import Taken
 from ptlab.course.sandbox.uses import IMPORTLIB_HINT, FileUses, annotations_of, importable_here, star_names
@@ -92,7 +93,7 @@ def unreadable_in_text(taken: Taken, name: str) -> Unreadable | None:
     """Why the text of the submission ``taken`` does not show the code of its graded
     ``name``, or None if it does (see the module docstring)."""
     files = _Files(taken)
-    graded = files.read[taken.name]
+    graded = files.graded
     for file in files.imported_at_import(graded):
         hidden = hidden_text(file.name, taken.files.get(file.name, b""))
         if hidden is not None:
@@ -180,7 +181,7 @@ class _Files:
     def __init__(self, taken: Taken):
         self.taken = taken
         self.read: dict[str, _File | None] = {taken.name: None}  # (None while it is read)
-        self.read[taken.name] = _File(taken.name, taken.tree, self)
+        self.graded = self.read[taken.name] = _File(taken.name, taken.tree, self)
 
     def get(self, name: str) -> _File | None:
         if name not in self.read:
@@ -332,7 +333,7 @@ def _aliases(tree: ast.Module, files: _Files) -> dict[str, str]:
     return found
 
 
-def _is_main_block(node: ast.AST) -> bool:
+def _is_main_block(node: ast.AST) -> TypeGuard[ast.If]:
     """``if __name__ == "__main__":`` (either way round), which never runs when graded."""
     if not (isinstance(node, ast.If) and isinstance(node.test, ast.Compare) and len(node.test.ops) == 1):
         return False

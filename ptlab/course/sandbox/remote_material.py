@@ -10,6 +10,7 @@ of one process that the renderer shades in one batch of hits are grouped
 from __future__ import annotations
 
 import copy
+from typing import Self
 
 import numpy as np
 
@@ -38,6 +39,8 @@ class RemoteMaterial(AdaptedMaterial):
             self._weight_takes_front,
         )
 
+    # (Not a RemoteMaterial as Material.stack's Self says: stand-ins stack into a group that
+    # shades each row with its own member, as the renderer needs no more of a stack.)
     @classmethod
     def stack(cls, materials: list[AdaptedMaterial]) -> Material:  # type: ignore[override]
         return materials[0] if len(materials) == 1 else MaterialGroup(materials)
@@ -54,12 +57,14 @@ class MaterialGroup(Material):
         self._derived_weight = members[0]._sample_weight is None
         self._takes_front = members[0]._weight_takes_front
 
-    def take(self, index: np.ndarray) -> MaterialGroup:
+    def take(self, index: np.ndarray, uv: np.ndarray | None = None) -> Self:
         taken = copy.copy(self)
         taken.which = index
         return taken
 
     def _each(self, method: str, *arrays):
+        if self.which is None:
+            raise ValueError("a group of materials shades the rows take() gives it, and it has none")
         objects = [m.material for m in self.members]
         return submission_of(objects[0]).call_each(objects, self.which, method, *arrays)
 
@@ -69,7 +74,10 @@ class MaterialGroup(Material):
     def pdf(self, wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
         return self._each("pdf", wo, wi, n)
 
-    def sample(self, wo: np.ndarray, n: np.ndarray, u: np.ndarray) -> np.ndarray:
+    def sample(
+        self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
+    ) -> np.ndarray:
+        # The homework's sample(wo, n, u) has no front (ptlab.materials.base): it is not passed on.
         return self._each("sample", wo, n, u)
 
     def sample_weight(

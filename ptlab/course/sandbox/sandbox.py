@@ -273,7 +273,7 @@ def python_prefixes() -> list[str]:
 def site_packages() -> list[str]:
     """Every folder Python imports installed packages from, in this environment and the
     base one (hidden in the view, then the allowed packages bound back)."""
-    found = set()
+    found: set[str] = set()
     for scheme_vars in ({}, {"base": sys.base_prefix, "platbase": sys.base_exec_prefix}):
         paths = sysconfig.get_paths(vars=scheme_vars)
         found.update(paths[key] for key in ("purelib", "platlib"))

@@ -53,6 +53,7 @@ def _escape(character: str) -> str:
 def relay(prefix: str, stream: TextIO | None = None) -> Callable[[str], None]:
     """A function that prints a line of a student's output, shown, after ``prefix``, on
     ``stream`` (default stderr); once the stream is gone (a closed pipe) it drops the rest."""
+    gone = False
 
     def show(line: str) -> None:
         nonlocal gone
@@ -63,7 +64,6 @@ def relay(prefix: str, stream: TextIO | None = None) -> Callable[[str], None]:
         except (OSError, ValueError):  # (BrokenPipeError; a closed file)
             gone = True
 
-    gone = False
     return show
 
 

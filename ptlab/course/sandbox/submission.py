@@ -35,6 +35,7 @@ import time
 from collections.abc import Callable
 from dataclasses import fields, is_dataclass
 from pathlib import Path
+from typing import Literal, NoReturn
 
 import numpy as np
 
@@ -52,7 +53,7 @@ from ptlab.course.sandbox.copies import copies_in, describe_copies, is_a_copy
 from ptlab.course.sandbox.intake import RefusedSubmission, Taken, private_folder, remove_folder, take_in
 from ptlab.course.sandbox.kit import kit_for
 from ptlab.course.sandbox.ownership import library_answer as borrowed_answer
-from ptlab.course.sandbox.plain_data import RECORDS, Decoder, MalformedError
+from ptlab.course.sandbox.plain_data import RECORDS, Decoder, MalformedError, frozen
 from ptlab.course.sandbox.processes import LINUX, ProcessGuard, process_table
 from ptlab.course.sandbox.proxies import (
     STAND_INS,
@@ -63,11 +64,11 @@ from ptlab.course.sandbox.proxies import (
     StudentError,
     remote_object,
     student_error,
-    submission_of,
 )
+from ptlab.course.sandbox.proxies import submission_of as process_of
 from ptlab.course.sandbox.readable import Unreadable, unreadable_in_text
 from ptlab.course.sandbox.rules import Arguments, Rules
-from ptlab.course.sandbox.student_user import student_user
+from ptlab.course.sandbox.student_user import StudentUser, student_user
 from ptlab.rendering.memory import keep_freed_memory
 
 #: Environment variables the student's process keeps (the rest may hold the grader's secrets).
@@ -159,8 +160,9 @@ class Submission:
         on_output: called with each line the student's code prints (default: dropped).
         limits: the process's resource limits.
         rules: what the grader asks of the submission (``ptlab.course.sandbox.rules``).
-        user: the user the student's code runs as, by name (``--student-user``); None for
-            the default: ``nobody`` when the grader is root, else the grader's own user.
+        user: the user the student's code runs as, by name (``--student-user``) or a
+            ``StudentUser`` (``student_user``); None for the default: ``nobody`` when the
+            grader is root, else the grader's own user.
         import_time_limit: seconds the import may take (default ``IMPORT_TIME_LIMIT``, or
             ``time_limit`` if that is less).
 
@@ -179,7 +181,7 @@ class Submission:
         limits: Limits | None = None,
         *,
         rules: Rules | None = None,
-        user: str | None = None,
+        user: str | StudentUser | None = None,
         import_time_limit: float | None = None,
     ):
         self.rules = rules or Rules()
@@ -269,8 +271,9 @@ class Submission:
             for fd in (request_r, reply_w, output_w):
                 os.close(fd)
         try:
-            process.stdin.write(pickle.dumps(setup))
-            process.stdin.close()
+            if process.stdin is not None:  # (always: stdin is a pipe)
+                process.stdin.write(pickle.dumps(setup))
+                process.stdin.close()
         except OSError:  # it ended at once: waiting for its import says how
             pass
         return process, Channel(request_w, reply_r, output_r, on_output)
@@ -490,7 +493,7 @@ class Submission:
             not_implemented,
         )
 
-    def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None):
+    def _fail(self, kind: str, during: str, detail: str = "", limit: float | None = None) -> NoReturn:
         """Record the failure, end the process, raise ``SubmissionFailed`` (now and for
         every later request); ``limit`` is the time limit that ran out, if one did."""
         if kind == "timeout":
@@ -617,7 +620,7 @@ class _Pickler(pickle.Pickler):
         if kind is np.ndarray:
             return self._array(value)
         if kind in STAND_INS:
-            if submission_of(value) is not self.submission:
+            if process_of(value) is not self.submission:
                 raise pickle.PicklingError("an object of another student's process")
             return ("handle", value._handle)
         return self.submission._share(value, self.arrays)
@@ -625,12 +628,13 @@ class _Pickler(pickle.Pickler):
     def _array(self, value: np.ndarray):
         if value.dtype.hasobject or value.dtype.fields is not None:
             return None  # (pickled as usual)
-        order = "F" if value.flags.f_contiguous and not value.flags.c_contiguous else "C"
+        order: Literal["C", "F"] = "F" if value.flags.f_contiguous and not value.flags.c_contiguous else "C"
         if _same_rows(value):
             return ("rows", value[:1].copy(), len(value), order)
         if not (value.flags.c_contiguous or value.flags.f_contiguous):
             value = np.ascontiguousarray(value)
-        self.arrays.append(memoryview(value.reshape(-1, order=order)).cast("B"))
+        # (``.data`` is the array's memoryview: NumPy's stubs type memoryview(array) on Python 3.12 on.)
+        self.arrays.append(value.reshape(-1, order=order).data.cast("B"))
         # One string, not a tuple: pickle asks persistent_id about each item of a tuple.
         shape = ",".join(map(str, value.shape))
         return f"array {len(self.arrays) - 1} {value.dtype.str} {shape} {order}"
@@ -682,10 +686,19 @@ def _step(container, kind: str, key):
 def _rebind(container, kind: str, key, value) -> None:
     if (kind == "item" and isinstance(container, list)) or (kind == "key" and isinstance(container, dict)):
         container[key] = value
-    elif kind == "field" and is_dataclass(container) and not type(container).__dataclass_params__.frozen:
+    elif kind == "field" and is_dataclass(container) and not frozen(container):
         setattr(container, key, value)
     else:
         raise MalformedError(f"a new value at {kind} {key!r}, which cannot be given one")
+
+
+def submission_of(proxy: RemoteObject | RemoteFunction) -> Submission:
+    """The ``Submission`` a stand-in belongs to (``proxies.submission_of``, which knows it
+    only as a ``StudentProcess``: every stand-in is a Submission's)."""
+    submission = process_of(proxy)
+    if not isinstance(submission, Submission):
+        raise TypeError(f"a stand-in of {type(submission).__name__}, not of a Submission")
+    return submission
 
 
 def library_answer(module: RemoteModule, name: str) -> str | None:

@@ -71,7 +71,7 @@ def statements_of(body: list) -> list:
     ]
 
 
-def assigned_name(statement: ast.stmt) -> str | None:
+def assigned_name(statement: ast.AST) -> str | None:
     """The name ``statement`` assigns, if it assigns one name (``x = ...``), else None."""
     if isinstance(statement, ast.Assign) and len(statement.targets) == 1:
         target = statement.targets[0]

@@ -57,6 +57,7 @@ import types
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeGuard
 
 #: In ``MODULES``: every public attribute of the module is allowed.
 ALL = None
@@ -708,7 +709,7 @@ class FileUses:
             return None
         return ".".join([self.aliases[node.id], *reversed(attributes)])
 
-    def _is_builtin_call(self, node: ast.AST, names) -> bool:
+    def _is_builtin_call(self, node: ast.AST | None, names) -> TypeGuard[ast.Call]:
         return (
             isinstance(node, ast.Call)
             and isinstance(node.func, ast.Name)
@@ -773,7 +774,7 @@ class FileUses:
         """Whether ``node`` (``find_spec``) is called on a constant name and the result only
         tested: ``find_spec("numba") is not None``, ``if find_spec("numba"):``."""
         call = self._called(node)
-        if call is None or call.keywords or len(call.args) != 1 or not _is_text(call.args[0]):
+        if call is None or call.keywords or len(call.args) != 1 or _text(call.args[0]) is None:
             return False
         parent = self.parent(call)
         if isinstance(parent, ast.Compare):
@@ -795,24 +796,26 @@ class FileUses:
 
     def _constant_names(self, node: ast.AST) -> bool:
         call = self._called(node)
+        if call is None or not call.args or call.keywords:
+            return False
+        name = _text(call.args[0])
         return (
-            call is not None
-            and bool(call.args)
-            and not call.keywords
-            and all(_is_text(a) and not any(_is_dunder(p) for p in a.value.split(".")) for a in call.args[:1])
+            name is not None
+            and not any(_is_dunder(p) for p in name.split("."))
             and all(not isinstance(a, ast.Starred) for a in call.args)
         )
 
 
-def _is_text(node: ast.AST) -> bool:
-    return isinstance(node, ast.Constant) and isinstance(node.value, str)
+def _text(node: ast.AST) -> str | None:
+    """The string ``node`` is a constant of, or None."""
+    return node.value if isinstance(node, ast.Constant) and isinstance(node.value, str) else None
 
 
 def _constant_name_among(arguments: list[ast.expr]) -> bool:
     """Whether the name in ``object.__setattr__(self, "name", v)`` (or a bound method's
     ``("name", v)``) is a constant that is no dunder."""
-    texts = [a for a in arguments if _is_text(a)]
-    return bool(texts) and not any(_is_dunder(a.value) or a.value in INTERNALS for a in texts)
+    texts = [text for text in map(_text, arguments) if text is not None]
+    return bool(texts) and not any(_is_dunder(text) or text in INTERNALS for text in texts)
 
 
 def _unpickles(call: ast.Call) -> str | None:

@@ -11,7 +11,13 @@ import pytest
 
 import ptlab
 from ptlab.rendering import render_result
-from ptlab.samplers import SAMPLERS, BounceUniforms, make_sampler
+from ptlab.samplers import (
+    ONE_MINUS_EPSILON,
+    SAMPLERS,
+    BounceUniforms,
+    largest_below_one,
+    make_sampler,
+)
 
 
 def pixel_points(
@@ -151,6 +157,13 @@ def test_seeds_give_other_patterns(name):
     a = pixel_points(name, 16, 2, seed=0)
     b = pixel_points(name, 16, 2, seed=1)
     assert not np.allclose(a, b)
+
+
+def test_the_largest_uniform_is_the_float_just_below_one():
+    assert ONE_MINUS_EPSILON.dtype == np.float32
+    assert ONE_MINUS_EPSILON == 1 - 2**-24
+    assert np.nextafter(ONE_MINUS_EPSILON, np.float32(2)) == 1  # nothing in between
+    assert largest_below_one(np.float64) == 1 - 2**-53
 
 
 def test_unknown_sampler_is_a_clear_error():

@@ -351,7 +351,7 @@ def test_grade_cannot_load_gives_exit_2_and_one_line(tmp_path, capsys, target, a
 
 # -- any object with the homework's three functions; float32 arithmetic ------------------------
 
-PLAIN = Path(__file__).parent / "exercises" / "06_right_plain_class_float32.py"
+PLAIN = Path(__file__).parents[1] / "exercises" / "06_right_plain_class_float32.py"
 
 
 class PlainDiffuse:

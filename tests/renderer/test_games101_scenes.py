@@ -114,7 +114,7 @@ def render_job(
 @pytest.mark.parametrize("name", ["games101-hw5", "games101-hw6"])
 def test_every_integrator_renders_the_scene_without_nan(name, backend):
     # Every integrator, from the scene's camera and from two that graze its floor
-    # (tests/test_strategies.py's check of the other scenes), through one ray-query
+    # (tests/renderer/test_strategies.py's check of the other scenes), through one ray-query
     # structure per scene and backend. No path contribution may be NaN or infinite, even
     # one the film would drop.
     scene = ptlab.load_scene(name)

@@ -1,7 +1,7 @@
 """The path tracer's pieces (``ptlab.integrators.path``): MIS weights, Russian roulette,
 leaving a surface, next-event estimation against a closed form, and whole paths in a
-furnace. (The integrator end to end, through ``ptlab.render``: ``test_render.py`` and
-``test_strategies.py``.)
+furnace. (The integrator end to end, through ``ptlab.render``: ``renderer/test_render.py`` and
+``renderer/test_strategies.py``.)
 
 The statistical tests have fixed seeds, so each always passes or always fails. Each compares
 a mean of 2^14 or more independent samples of finite variance with its exact value within
@@ -32,16 +32,9 @@ Z = 5.0
 def camera_paths(origins, dirs, seed: int = 0) -> Paths:
     """Paths leaving ``origins`` along ``dirs`` (N, 3) as camera rays do: throughput 1, each
     path a film row of its own, sampler keys of sample 0 of pixels 0..N-1."""
-    n = len(origins)
-    pixel = np.arange(n)
-    return Paths(
-        origins=np.asarray(origins, np.float32),
-        dirs=np.asarray(dirs, np.float32),
-        throughput=np.ones((n, 3), np.float32),
-        pixel=pixel,
-        sees_emission=np.ones(n, dtype=bool),
-        sample=make_sampler("independent", seed).keys(pixel, np.zeros(n, np.intp)),
-    )
+    pixel = np.arange(len(origins))
+    keys = make_sampler("independent", seed).keys(pixel, np.zeros(len(pixel), np.intp))
+    return Paths.camera(np.asarray(origins, np.float32), np.asarray(dirs, np.float32), pixel, keys)
 
 
 def floor_under_a_light(light: np.ndarray, radiance: float, albedo: float = 0.5) -> Scene:
@@ -144,18 +137,18 @@ def test_throughput_roulette_survives_with_the_largest_channel_at_most_one(floor
 
 @pytest.mark.parametrize(("rr", "start"), [(0.1, 3), ("throughput", None)])
 def test_roulette_never_ends_a_path_before_its_start_depth(floor, rr, start):
-    settings = PathSettings(rr=rr, rr_min_depth=start)
+    settings = PathSettings(rr=rr, rr_depth=start)
     dim = np.full((100, 3), 0.01, np.float32)  # would die almost surely
     u = np.full(100, 0.999, np.float32)
-    for depth in range(settings.roulette_starts):
+    for depth in range(settings.rr_depth):
         hit = at_depth(carrying(floor, dim), depth)
         assert russian_roulette(hit, settings, u).all()
         np.testing.assert_array_equal(hit.throughput, dim)
-    assert not russian_roulette(at_depth(carrying(floor, dim), settings.roulette_starts), settings, u).any()
+    assert not russian_roulette(at_depth(carrying(floor, dim), settings.rr_depth), settings, u).any()
     # A batch of paths at several depths (path regeneration): each row by its own depth.
-    depth = np.arange(100) % (settings.roulette_starts + 1)
+    depth = np.arange(100) % (settings.rr_depth + 1)
     survive = russian_roulette(at_depth(carrying(floor, dim), depth), settings, u)
-    np.testing.assert_array_equal(survive, depth < settings.roulette_starts)
+    np.testing.assert_array_equal(survive, depth < settings.rr_depth)
 
 
 def at_depth(hit, depth):

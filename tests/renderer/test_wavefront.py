@@ -1,6 +1,6 @@
 """The wavefront toolkit (``ptlab.integrators.wavefront``): the film's sums per pixel (NaN and
 infinite samples left out and counted) and new rays leaving a surface. (Its use by the
-integrators: ``test_path.py``, ``test_whitted.py``.)
+integrators: ``renderer/test_path.py``, ``renderer/test_whitted.py``.)
 """
 
 from __future__ import annotations
@@ -8,7 +8,27 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.integrators.wavefront import add_to_film, counting_nonfinite, leave_surface
+from ptlab.integrators.wavefront import Paths, add_to_film, counting_nonfinite, leave_surface
+
+# -- new paths -----------------------------------------------------------------------------
+
+
+def test_camera_paths_start_at_depth_0_with_throughput_1_and_see_emission():
+    origins = np.zeros((5, 3), np.float32)
+    dirs = np.tile(np.array([[0, 0, 1]], np.float32), (5, 1))
+    pixel, keys = np.arange(10, 15), np.arange(5, dtype=np.uint64) * 7
+    paths = Paths.camera(origins, dirs, pixel, keys)
+    assert paths.origins is origins
+    assert paths.dirs is dirs
+    assert paths.pixel is pixel
+    assert paths.sample is keys
+    assert paths.throughput.shape == (5, 3)
+    assert paths.throughput.dtype == np.float32
+    assert (paths.throughput == 1).all()
+    assert paths.sees_emission.all()
+    assert paths.depths().tolist() == [0] * 5
+    assert paths.pdf is None
+
 
 # -- the film ------------------------------------------------------------------------------
 

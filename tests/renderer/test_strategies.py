@@ -342,7 +342,7 @@ INTEGRATORS = [("path", "nee"), ("path", "bsdf"), ("path", "mis"), ("whitted", "
     ("integrator", "strategy"), INTEGRATORS, ids=[f"{i}-{s}" if i == "path" else i for i, s in INTEGRATORS]
 )
 #: games101-hw5's 100k triangles would take the numpy backend 3 s a render to build:
-#: tests/test_games101_scenes.py checks it the same way, with one structure per backend.
+#: tests/renderer/test_games101_scenes.py checks it the same way, with one structure per backend.
 @pytest.mark.parametrize("scene_name", [n for n in builtin_scene_names() if n != "games101-hw5"])
 def test_no_pixel_is_nan_or_infinite(scene_name, integrator, strategy, backend):
     scene = ptlab.load_scene(scene_name)

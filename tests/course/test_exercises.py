@@ -28,7 +28,7 @@ from ptlab.cli import main
 from ptlab.course import all_chapters, chapter
 from ptlab.course.grader import grade
 
-WRONG = Path(__file__).parent / "exercises"
+WRONG = Path(__file__).parents[1] / "exercises"
 #: The wrong answers that are right answers with the mistake patched in, by name.
 PATCHED = tomllib.loads((WRONG / "wrong_answers.toml").read_text(encoding="utf-8"))
 CHAPTERS = all_chapters()
@@ -174,7 +174,7 @@ def test_right_answers_of_the_students_own_get_full_marks_and_no_warning(path):
 @pytest.mark.subprocess
 def test_an_answer_that_imports_a_moved_name_from_its_old_place_keeps_full_marks(tmp_path):
     # ``reflect`` lived in ptlab.vectors before ptlab.scattering gathered the formulas.
-    source = (Path(__file__).parent / "exercises" / "09_right_walter.py").read_text()
+    source = (Path(__file__).parents[1] / "exercises" / "09_right_walter.py").read_text()
     assert "from ptlab.scattering import reflect" in source
     path = tmp_path / "09_microfacet.py"
     old, new = "from ptlab.scattering import reflect", "from ptlab.vectors import reflect"

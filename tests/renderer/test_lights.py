@@ -179,7 +179,7 @@ def test_area_power_is_pi_area_radiance_and_pdf_li_is_sample_lis_density():
 
 def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified():
     kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
-    sampler = LightSampler(*kinds, shares=(0.2, 0.3, 0.5))
+    sampler = LightSampler(kinds, shares=(0.2, 0.3, 0.5))
     u = np.stack([(np.arange(1000) + 0.5) / 1000, np.full(1000, 0.25)]).T.astype(np.float32)
     kind, stretched = sampler.pick(u, np.array([True, True, True]))
     assert np.bincount(kind).tolist() == [200, 300, 500]
@@ -200,9 +200,22 @@ def test_the_light_sampler_picks_only_the_sampled_kinds_and_keeps_u_stratified()
     assert stretched is u
 
 
+def test_the_light_sampler_takes_one_share_per_light_and_finds_each_kind():
+    area, sky = two_lights(), Sky([1.0, 1, 1])
+    sampler = LightSampler([sky, area], shares=(0.25, 0.75))
+    assert sampler.kinds == [sky, area]
+    assert (sampler.area_lights, sampler.point_lights, sampler.sky) == (area, None, sky)
+    np.testing.assert_array_equal(sampler.is_delta, [False, False])
+    assert LightSampler([area]).pmf.tolist() == [1.0]  # one light: always picked
+    with pytest.raises(ValueError, match="2 shares for 3 kinds"):
+        LightSampler([area, PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), sky], shares=(0.5, 0.5))
+    with pytest.raises(TypeError):  # the shares are named, never taken for a light
+        LightSampler([area], (1.0,))
+
+
 def test_a_light_samples_density_is_the_kinds_probability_times_its_own():
     kinds = [two_lights(), PointLights([[0.0, 1, 0]], [[1.0, 1, 1]]), Sky([1.0, 1, 1])]
-    sampler = LightSampler(*kinds, shares=(0.2, 0.3, 0.5))
+    sampler = LightSampler(kinds, shares=(0.2, 0.3, 0.5))
     rng = np.random.default_rng(5)
     p = rng.uniform(-1, 1, size=(3000, 3)).astype(np.float32)
     u = rng.random((3000, 2)).astype(np.float32)

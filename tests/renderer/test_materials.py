@@ -1,8 +1,8 @@
 """The materials (``ptlab.materials``): every one of them against the contract of
 ``Material`` (docs: DESIGN.md, "Directions and materials") and its one signature, and the
-diffuse one against its closed forms. The closed forms of the others: ``test_microfacet.py``
-(GGX) and ``test_delta_materials.py`` (mirror and glass); the statistical graders' verdicts
-on them: ``test_grading.py``.
+diffuse one against its closed forms. The closed forms of the others: ``renderer/test_microfacet.py``
+(GGX) and ``renderer/test_delta_materials.py`` (mirror and glass); the statistical graders' verdicts
+on them: ``renderer/test_grading.py``.
 
 The contract tests are exact, but for the energy bound: a mean of 2^16 weights per
 direction against 1 + 5 standard errors, which a material that keeps energy fails (over

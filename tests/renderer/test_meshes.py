@@ -3,7 +3,7 @@ coordinates for any valid file, the quick scan taken by common files, one named 
 malformed ones.
 
 The Hypothesis examples are derandomized and bounded (tests/conftest.py's "fixed" profile);
-the malformed files that tests/test_fuzz.py makes from the Cornell box's meshes are tested
+the malformed files that tests/renderer/test_fuzz.py makes from the Cornell box's meshes are tested
 there.
 """
 
@@ -21,9 +21,10 @@ import trimesh
 from hypothesis import given
 from hypothesis import strategies as st
 
-from ptlab.meshes import parse_obj, read_obj
+from ptlab.errors import SceneError
+from ptlab.meshes import parse_obj, read_mesh, read_obj
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 SHIPPED_OBJ = sorted((ROOT / "scenes").glob("*/meshes/*.obj"))
 
 #: How a number may be written: Python's repr (exponents included), fixed point, integers.
@@ -147,6 +148,18 @@ def test_texture_coordinates_that_do_not_exist_are_none_as_in_trimesh():
         assert len(triangles) == faces.count("f ")
 
 
+def test_a_vertex_beyond_the_limit_is_an_error_only_where_a_face_uses_it(tmp_path):
+    # read_mesh looks at the vertices first and at the triangles' corners only to name the
+    # one beyond: a vertex that no face uses is no part of the scene, wherever it lies.
+    path = tmp_path / "far.obj"
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -7\nf 1 2 3\n")
+    triangles, _ = read_mesh(path, limit=5)
+    np.testing.assert_array_equal(triangles, [[[0, 0, 0], [1, 0, 0], [0, 1, 0]]])
+    path.write_text("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 -7\nf 1 2 3\nf 1 2 4\n")
+    with pytest.raises(SceneError, match=r"far.obj has a vertex at \[0.0, 0.0, -7.0\]: .* within \+-5$"):
+        read_mesh(path, limit=5)
+
+
 @pytest.mark.subprocess
 def test_loading_obj_scenes_imports_no_trimesh(tmp_path):
     # Start-up: trimesh, and SciPy through it, cost a render about a second; OBJ files, with
@@ -171,9 +184,9 @@ def test_loading_obj_scenes_imports_no_trimesh(tmp_path):
 
 
 def test_a_big_obj_file_is_read_within_a_bounded_memory_per_triangle():
-    # tracemalloc counts NumPy's arrays, so the peak is the same on any machine: about 310
+    # tracemalloc counts NumPy's arrays, so the peak is the same on any machine: about 200
     # bytes a triangle (the file's text is 37), where a reader that kept a Python string per
-    # line took 500 (docs/performance.md).
+    # line took 500, and one that gathered every face's numbers into new arrays 310.
     sphere = trimesh.creation.icosphere(subdivisions=6)  # 81 920 triangles
     data = trimesh.exchange.obj.export_obj(sphere).encode()
     tracemalloc.start()
@@ -183,4 +196,4 @@ def test_a_big_obj_file_is_read_within_a_bounded_memory_per_triangle():
     finally:
         tracemalloc.stop()
     assert len(faces) == len(sphere.faces)
-    assert peak / len(faces) < 450, f"{peak / len(faces):.0f} bytes a triangle"
+    assert peak / len(faces) < 260, f"{peak / len(faces):.0f} bytes a triangle"

@@ -379,9 +379,9 @@ def test_bench_prints_speed_of_both_backends_and_the_parallel_speed_up(capsys):
 
 def test_bench_tail_times_bounces_of_batches_kept_full_and_run_dry(capsys):
     import ptlab.integrators.path as path_module
-    import ptlab.rendering.jobs as jobs_module
+    from ptlab.integrators import INTEGRATORS
 
-    before = path_module.surface_hit, jobs_module.trace_paths, path_module.BATCH_PATHS
+    before = path_module.surface_hit, INTEGRATORS["path"], path_module.BATCH_PATHS
     args = ["bench", "--tail", "--res", "96", "--spp", "4", "--repeat", "1", "--estimator", "default"]
     assert main(args) == 0
     out = capsys.readouterr().out
@@ -399,7 +399,7 @@ def test_bench_tail_times_bounces_of_batches_kept_full_and_run_dry(capsys):
         assert 0 <= shares[0] <= shares[1] <= shares[2] <= 100  # (fewer paths: a subset)
     assert re.search(r"time kept full / run dry: median \d\.\d{3}", out)
     # Nothing of the measurement is left in the library's modules.
-    assert (path_module.surface_hit, jobs_module.trace_paths, path_module.BATCH_PATHS) == before
+    assert (path_module.surface_hit, INTEGRATORS["path"], path_module.BATCH_PATHS) == before
 
 
 @pytest.mark.subprocess

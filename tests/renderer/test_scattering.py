@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from ptlab.scattering import F_schlick, fresnel_dielectric, reflect, refract
+from ptlab.scattering import F_schlick, FresnelSplit, fresnel_dielectric, reflect, refract
 from ptlab.vectors import cross, dot
 
 GLASS = 1.5
@@ -114,3 +114,35 @@ def test_schlick_fresnel_runs_from_f0_to_one():
     # One F0 per row.
     rows = F_schlick(np.array([1.0, 0.0]), np.array([[0.2, 0.3, 0.4], [0.5, 0.6, 0.7]]))
     np.testing.assert_allclose(rows, [[0.2, 0.3, 0.4], [1.0, 1.0, 1.0]])
+
+
+def test_the_fresnel_split_uses_the_formulas_it_is_given_and_weighs_both_ways():
+    # With a Fresnel reflectance of 1/4 everywhere (given in place of the library's, as a
+    # student's is), both branches carry 1/4 and 3/4 T / eta_rel^2, and the random choice
+    # reflects exactly where u < 1/4, with weights 1 and T / eta_rel^2.
+    n, wo = frames(7)
+    outside = np.arange(ROWS) % 2 == 0
+
+    def quarter(cos_theta, eta_rel):
+        return np.full(len(cos_theta), 0.25)
+
+    split = FresnelSplit.at(wo, n, GLASS, outside, fresnel=quarter)
+    eta_rel = np.where(outside, GLASS, 1 / GLASS)
+    np.testing.assert_allclose(split.reflected, reflect(wo, n))
+    np.testing.assert_allclose(split.refracted, refract(wo, n, eta_rel))
+    transmittance = np.array([1.0, 0.5, 0.25])
+    (_, reflected), (_, refracted) = split.both(transmittance)
+    np.testing.assert_allclose(reflected, 0.25)
+    np.testing.assert_allclose(refracted, 0.75 * transmittance / (eta_rel**2)[:, None])
+    u = (np.arange(ROWS) + 0.5) / ROWS
+    wi, weight = split.choose(u, transmittance)
+    chose_reflection = u < 0.25
+    np.testing.assert_array_equal(wi[chose_reflection], split.reflected[chose_reflection])
+    np.testing.assert_array_equal(wi[~chose_reflection], split.refracted[~chose_reflection])
+    np.testing.assert_allclose(weight[chose_reflection], 1)
+    expected = transmittance / (eta_rel**2)[:, None]
+    np.testing.assert_allclose(weight[~chose_reflection], expected[~chose_reflection])
+    # The library's own formulas by default.
+    np.testing.assert_allclose(
+        FresnelSplit.at(wo, n, GLASS, outside).R, fresnel_dielectric(dot(wo, n), eta_rel)
+    )

@@ -5,7 +5,15 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ptlab.sampling import cosine_hemisphere, to_world, uniform_hemisphere, uniform_triangle
+from ptlab.samplers import ONE_MINUS_EPSILON
+from ptlab.sampling import (
+    cosine_hemisphere,
+    discrete_cdf,
+    pick_from_cdf,
+    to_world,
+    uniform_hemisphere,
+    uniform_triangle,
+)
 
 N = 200_000
 
@@ -96,3 +104,35 @@ def test_sampling_around_a_normal_matches_the_local_frame_warps(u):
         # Around the normal, the azimuth is uniform: no preferred tangent direction.
         tangent = np.cross(n, [0.0, 0.0, 1.0])
         assert abs((w * tangent).sum(axis=1).mean()) < 5 * 0.5 / np.sqrt(N)
+
+
+@pytest.mark.parametrize("items", [5, 40])  # (counted pass by pass; found by binary search)
+@pytest.mark.parametrize("dtype", [np.float32, np.float64])
+def test_pick_from_cdf_picks_by_weight_and_stretches_u_back_evenly(items, dtype):
+    # Evenly spaced u: each item gets exactly its share of them (weight 0: none), and the u
+    # that picked an item, stretched, are evenly spaced in [0, 1) again. Deterministic.
+    weights = np.zeros(items)
+    weights[0], weights[2], weights[items - 2] = 1, 3, 4  # (the last item: weight 0)
+    cdf = discrete_cdf(weights).astype(dtype)
+    count = 8000
+    u = ((np.arange(count) + 0.5) / count).astype(np.float32)
+    index, stretched = pick_from_cdf(cdf, u)
+    expected = {0: 1000, 2: 3000, items - 2: 4000}
+    assert np.bincount(index, minlength=items).tolist() == [expected.get(i, 0) for i in range(items)]
+    assert stretched.dtype == np.float32
+    for item, picked in expected.items():
+        np.testing.assert_allclose(
+            np.sort(stretched[index == item]), (np.arange(picked) + 0.5) / picked, atol=1e-4
+        )
+
+
+def test_pick_from_cdf_keeps_u_below_one_where_the_cdf_falls_short_of_it():
+    # A float32 cdf may end just below 1: a u above its last entry still picks the last item,
+    # and no stretched u reaches 1 (a uniform of 1 would put a light point off its triangle).
+    cdf = np.array([0.5, 1 - 2**-23], dtype=np.float32)
+    u = np.array([0.0, 0.5, 1 - 2**-23, ONE_MINUS_EPSILON], dtype=np.float32)
+    index, stretched = pick_from_cdf(cdf, u)
+    assert index.tolist() == [0, 1, 1, 1]
+    assert stretched[:2].tolist() == [0, 0]
+    assert (stretched < 1).all()
+    assert stretched[3] == ONE_MINUS_EPSILON

@@ -25,7 +25,7 @@ from ptlab.course.chapters import ch11_noise as ch11
 from ptlab.course.renders import compare_renders
 from ptlab.rendering import adaptive
 
-ANSWERS = Path(__file__).parent / "exercises"
+ANSWERS = Path(__file__).parents[1] / "exercises"
 PASSES, SIZE = 12, 16
 #: A pass size of the range the render checks draw (24 to 40): the messages must say it.
 SPP = 31

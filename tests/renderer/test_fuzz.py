@@ -9,7 +9,7 @@ cases further down are the crashes and silent misreadings such inputs found, kep
 regressions.
 
 The examples are derandomized and bounded (the "fixed" profile in tests/conftest.py); run
-``HYPOTHESIS_PROFILE=long pytest tests/test_fuzz.py`` to search further.
+``HYPOTHESIS_PROFILE=long pytest tests/renderer/test_fuzz.py`` to search further.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from ptlab.cli import main
 from ptlab.image import read_image
 from ptlab.meshes import check_obj_lines, parse_obj, read_mesh_triangles, read_obj
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CORNELL = ROOT / "scenes" / "cornell-box"
 CORNELL_TOML = (CORNELL / "scene.toml").read_text()
 CORNELL_DATA = tomllib.loads(CORNELL_TOML)

@@ -16,8 +16,8 @@ import pytest
 from ptlab.course import chapter
 from ptlab.course.grader import grade
 
-EXERCISES = Path(__file__).parent / "exercises"
-#: The grading seed of the tests whose verdicts rest on statistics (as tests/test_exercises.py).
+EXERCISES = Path(__file__).parents[1] / "exercises"
+#: The grading seed of the tests whose verdicts rest on statistics (as tests/course/test_exercises.py).
 GRADING_SEED = 25
 
 

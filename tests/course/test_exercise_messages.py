@@ -30,7 +30,7 @@ from ptlab.course.messages import (
 )
 
 HERE = Path(ptlab.course.__file__).parent
-WRONG = Path(__file__).parent / "exercises"
+WRONG = Path(__file__).parents[1] / "exercises"
 #: The modules whose messages come from the catalogues: the grader's own, and the chapters'.
 MODULES = [
     HERE / "chapter.py",

@@ -25,7 +25,7 @@ from ptlab.course.sandbox.plain_data import Decoder, Encoder, MalformedError, Un
 from ptlab.course.sandbox.processes import process_table
 
 pytestmark = pytest.mark.usefixtures("nothing_left_behind")
-RIGHT_CAMERA = Path(__file__).parent / "exercises" / "01_right_own_code.py"
+RIGHT_CAMERA = Path(__file__).parents[1] / "exercises" / "01_right_own_code.py"
 
 
 def alive(pids) -> list[int]:

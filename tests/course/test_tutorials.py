@@ -12,7 +12,7 @@ import pytest
 
 from ptlab.image import read_image
 
-TUTORIALS = sorted((Path(__file__).parents[1] / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
+TUTORIALS = sorted((Path(__file__).parents[2] / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
 
 
 def test_there_is_a_tutorial_per_chapter():

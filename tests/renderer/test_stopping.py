@@ -99,7 +99,7 @@ def test_a_signal_to_the_group_stops_ptlab_render_quietly_with_its_exit_code(tmp
     assert "Warning" not in err
     assert "Traceback" not in err
     # Progress lines (stderr is a pipe here), then what it kept; what it wrote, if a pass had
-    # finished, is test_parallel.py's to check.
+    # finished, is renderer/test_parallel.py's to check.
     said = [line for line in err.strip().splitlines() if not re.match(r"pass \d+/\d+: ", line)]
     assert said, err
     assert all(line.startswith("ptlab: interrupted") for line in said), err

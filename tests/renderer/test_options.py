@@ -39,7 +39,7 @@ def test_defaults_come_from_the_modules_that_own_them():
         PathSettings.strategy,
         PathSettings.heuristic,
         PathSettings.rr,
-        PathSettings.rr_min_depth,
+        PathSettings.rr_depth,
     )
     assert options.sampler == DEFAULT_SAMPLER
     assert options.max_depth is None
