@@ -190,6 +190,19 @@ def find_cycle(graph: dict[str, set[str]]) -> list[str] | None:
     return None
 
 
+def test_the_renderer_imports_nothing_of_the_course():
+    # The two trees (docs/architecture.md): the course imports the renderer, never the reverse.
+    course = ("ptlab.course", "ptlab.cli", "ptlab.__main__")
+    arrows = [
+        f"{module} imports {target}"
+        for module, targets in import_graph().items()
+        if not module.startswith(course)
+        for target in targets
+        if target.startswith(course)
+    ]
+    assert not arrows, "\n".join(arrows)
+
+
 def test_no_import_cycles():
     cycle = find_cycle(import_graph())
     assert cycle is None, " -> ".join(cycle)

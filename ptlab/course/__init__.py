@@ -1,12 +1,14 @@
-"""Exercises: from Whitted ray tracing to path tracing, one function at a time.
+"""The course: from Whitted ray tracing to path tracing, one function at a time.
 
-Each chapter (``docs/NN-name.md``, which ``ptlab exercise docs NN`` prints) asks the student
-to write one or a few functions of the renderer. ``ptlab exercise start NN`` copies the
-chapter's exercise file (signatures, docstrings, hints, ``NotImplementedError`` bodies);
-``ptlab exercise check NN FILE`` plugs the student's functions into the renderer in place of
-the library's own and runs the chapter's checks (``ptlab.course.grader``): unit checks
+The course is the second of ptlab's two trees: it imports the renderer (everything of ptlab
+outside ``ptlab.course``), which imports nothing of it (docs/architecture.md). Each chapter
+(``docs/NN-name.md``, which ``ptlab exercise docs NN`` prints) asks the student to write one
+or a few functions of the renderer. ``ptlab exercise start NN`` copies the chapter's
+exercise file (signatures, docstrings, hints, ``NotImplementedError`` bodies); ``ptlab
+exercise check NN FILE`` runs the chapter's checks (``ptlab.course.grader``): unit checks
 against known answers, the material harness where it applies, and a statistical comparison
-of a render with the library's.
+of a render made with the student's functions as its pieces (``ptlab.rendering.pieces``)
+with the library's. The student's code runs in a sandbox (``ptlab.course.sandbox``).
 
 A chapter is a module ``ptlab.course.chapters.chNN_name`` that defines ``CHAPTER``;
 its exercise file is ``templates/NN_name.py`` and the library's own answer, in the same

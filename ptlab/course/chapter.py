@@ -21,7 +21,6 @@ from contextvars import ContextVar
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 from pathlib import Path
-from types import ModuleType
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -99,7 +98,8 @@ class ChapterCheck:
     Attributes:
         name: what is checked, in a few words ("centre ray", "render").
         points: what it is worth.
-        run: ``run(student_module) -> note``; raises ``CheckFailed`` when the code is wrong.
+        run: ``run(module) -> note``, ``module`` the stand-in for the student's module
+            (``RemoteModule``); raises ``CheckFailed`` when the code is wrong.
         timeout: seconds it may take before it counts as hanging.
         requires: the names of earlier checks of the core behaviour this one builds on.
             A check of a secondary property ("unit directions", "parallel rays") that a
@@ -109,7 +109,7 @@ class ChapterCheck:
 
     name: str
     points: int
-    run: Callable[[ModuleType], str]
+    run: Callable[[RemoteModule], str]
     timeout: float = 60.0
     requires: tuple[str, ...] = ()
 
@@ -133,7 +133,7 @@ class ChapterRender:
             backend that calls the student's pieces).
     """
 
-    yours: Callable[[ModuleType, Scene, dict], np.ndarray]
+    yours: Callable[[RemoteModule, Scene, dict], np.ndarray]
     scene: str = "cornell-box"
     options: dict[str, Any] = field(default_factory=dict)
 

@@ -24,6 +24,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Required, TypedDict
 
 import numpy as np
 
@@ -189,6 +190,18 @@ def replace_materials(scene, replace: Callable):
     )
 
 
+class PassSettings(TypedDict, total=False):
+    """A render check's render, as ``pass_images`` takes it (beyond the scene, the seed and
+    the pieces): ``passes`` passes of ``spp_per_pass`` samples per pixel of a ``res`` x
+    ``res`` image, and the path tracer's options it sets (``ptlab.render``'s keywords)."""
+
+    res: Required[int]
+    passes: Required[int]
+    spp_per_pass: Required[int]
+    max_depth: int
+    rr: float
+
+
 def pass_images(
     scene, res: int, passes: int, spp_per_pass: int, seed: int = 0, pieces: Pieces | None = None, **options
 ) -> np.ndarray:
@@ -266,7 +279,7 @@ def compare_renders(
         return text("render.matches", what=what, threshold=threshold, overall=overall)
     if difference is None:
         raise CheckFailed(text("render.differs", what=what, difference=said))
-    then: str | None  # (the noise, said second, may have nothing to say)
+    then: str | None  # (said second, the noise may have nothing to say)
     if said is not None and not noise.too_clean:  # (too noisy first: added noise moves the mean too)
         first, then = said, difference
     else:  # (the difference first; a picture of other light, less noisy, after it)
@@ -398,7 +411,9 @@ class NoiseTest:
         if self.too_clean:
             clean = dict(low=self.low, clean_ratio=CLEAN_RATIO, bound=1 / (CLEAN_RATIO * self.chance))
             samples = spp or text("render.its")
-            return text("render.less_noisy" if differs else "render.too_clean", spp=samples, **clean, **numbers)
+            return text(
+                "render.less_noisy" if differs else "render.too_clean", spp=samples, **clean, **numbers
+            )
         if self.too_noisy:
             return text(
                 "render.too_noisy",

@@ -234,7 +234,11 @@ def check_flat(module) -> str:
 #: fewer where it rounds otherwise at a box's faces (the library's widens them by a
 #: rounding bound). The student's may enter at most WORK_TOLERANCE more.
 WORK_TOLERANCE = 0.05
-ROW_VIEW = dict(spp=1, res=(32, 32), integrator="normals", workers=1, backend="numpy")
+#: The row of balls' view (``ptlab.render``'s keywords): ROW_SPP camera rays through each
+#: pixel of a ROW_RES (width, height) image, on the NumPy BVH.
+ROW_RES = (32, 32)
+ROW_SPP = 1
+ROW_VIEW = dict(spp=ROW_SPP, res=ROW_RES, integrator="normals", workers=1, backend="numpy")
 
 
 def _row_of_balls():
@@ -265,8 +269,8 @@ def boxes_entered(slab_test, seed: int) -> float:
 
     # (A tree given a slab test of its own walks the tree whatever the scene's size.)
     ptlab.render(_row_of_balls(), seed=seed, **ROW_VIEW, pieces=Pieces(bvh=BVHPieces(slab_test=counting)))
-    width, height = ROW_VIEW["res"]
-    return entered / (width * height * ROW_VIEW["spp"])
+    width, height = ROW_RES
+    return entered / (width * height * ROW_SPP)
 
 
 def _student_slab_test(module) -> Pieces:

@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import partial
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -77,6 +78,7 @@ from ptlab.rendering.pieces import Pieces
 
 if TYPE_CHECKING:
     from ptlab.accel import Accelerator
+    from ptlab.course.renders import PassSettings
     from ptlab.integrators.wavefront import SurfaceHit
     from ptlab.scene import Scene
 
@@ -170,14 +172,14 @@ def patterned_furnace_scene(rng: np.random.Generator) -> Scene:
     ``furnace_scene``).
     """
     from ptlab.course.chapters.ch03_whitted import icosphere
-    from ptlab.materials import Diffuse
+    from ptlab.materials import Diffuse, Material
     from ptlab.scene import Scene
 
     wall = icosphere(4)[:, ::-1]  # wound inward, as furnace_scene's
     directions = rng.normal(size=(PATCHES, 3))
     patch = np.argmax(wall.mean(axis=1) @ directions.T / np.linalg.norm(directions, axis=1), axis=1)
     inner = icosphere(2) * INNER_RADIUS + np.asarray(INNER_CENTRE)  # wound outward: seen from outside
-    materials = [
+    materials: list[Material] = [
         Diffuse(albedo=rng.uniform(0.25, 0.75, 3), emission=rng.uniform(0.05, 0.5, 3))
         for _ in range(PATCHES + 1)
     ]
@@ -252,10 +254,8 @@ def check_direct_light(module) -> str:
     if close.mean() < 0.99:
         ratio = film[lit].sum(axis=0) / expected[lit].sum(axis=0)
         hint = _ratio_hint(float(np.mean(ratio)))
-        raise CheckFailed(
-            text("ch07.direct", wrong=(~close).sum(), n=len(close), ratio=np.mean(ratio), hint=hint)
-        )
-    return text("ch07.direct_ok", right=close.sum(), n=len(close))
+        raise CheckFailed(text("ch07.direct", wrong=(~close).sum(), n=count, ratio=np.mean(ratio), hint=hint))
+    return text("ch07.direct_ok", right=close.sum(), n=count)
 
 
 def _at_path(index: tuple[int, ...], shape: tuple[int, ...]) -> str:
@@ -452,7 +452,6 @@ def _render(scene, trace_paths=None, **options) -> np.ndarray:
     return ptlab.render(scene, **options, pieces=_loop(trace_paths))
 
 
-#: What a black light misses, in the messages of ``check_light_not_black``.
 def check_light_not_black(module) -> str:
     import ptlab
 
@@ -469,6 +468,8 @@ def check_light_not_black(module) -> str:
         raise CheckFailed(text("ch07.emission_only", le=le, low=furnace.min(), high=furnace.max()))
     scene = ptlab.load_scene("cornell-box")
     light = scene.materials[scene.material_names.index("light")].emission
+    if light is None:  # (the scene file's light emits: a Cornell box without one is broken)
+        raise RuntimeError("the Cornell box's light does not emit")
     options = dict(spp=4, res=64, seed=grading_seed_for(7), rr=0.8)
     expected = _render(scene, max_depth=0, **options)
     image = _render(scene, trace_paths, max_depth=0, **options)
@@ -519,7 +520,7 @@ def check_one_sided_lights(module) -> str:
 #: The furnace renders (``furnace_images``): 16 x 16, 8 independent passes of 8 samples
 #: per pixel; the checks' seed is stream FURNACE_SEED of the grading seed
 #: (scripts/render_false_alarm.py renders with many).
-FURNACE_RENDER = dict(res=16, passes=8, spp_per_pass=8)
+FURNACE_RENDER: PassSettings = dict(res=16, passes=8, spp_per_pass=8)
 FURNACE_SEED = 8
 
 
@@ -538,7 +539,7 @@ def furnace_images(
 
     pieces = _loop(trace_paths) if trace_paths is not None else pieces
     scene = furnace_scene(albedo, emission)
-    return pass_images(scene, **dict(FURNACE_RENDER, seed=seed, **options), pieces=pieces)
+    return pass_images(scene, **{**FURNACE_RENDER, **options}, seed=seed, pieces=pieces)
 
 
 def furnace_radiance(
@@ -585,7 +586,7 @@ def furnace_verdict(
     to tell a black light from lost direct light."""
     from ptlab.course.renders import NOISE_RATIO, noise_test, regions_of
 
-    expected, formula = expected
+    value, formula = expected
     require_finite(student, text("ch07.your_furnace", what=what), at_pixel)
     means, library_means = (images[..., 0].mean(axis=(1, 2)) for images in (student, library))
     passes = len(means)
@@ -599,8 +600,7 @@ def furnace_verdict(
     # a right answer fails both with probability at most the first's.
     kept = np.delete(means, np.argmax(np.abs(means - np.median(means))))
     within = any(
-        abs(float(some.mean()) - expected)
-        <= FURNACE_T * spread / math.sqrt(len(some)) + FURNACE_FLOOR * expected
+        abs(float(some.mean()) - value) <= FURNACE_T * spread / math.sqrt(len(some)) + FURNACE_FLOOR * value
         for some in (means, kept)
     )
     noise = noise_test(regions_of(student)[..., 0], regions_of(library)[..., 0])
@@ -609,7 +609,7 @@ def furnace_verdict(
         raise CheckFailed(text("ch07.furnace_noise", what=what, noise=said, averages=averages))
     if within:
         return mean, standard_error
-    if mean > expected:
+    if mean > value:
         hint = text("ch07.hint.too_bright")
     elif emission_only is not None and np.abs(emission_only()).max() == 0:
         hint = text("ch07.hint.black_light")
@@ -627,7 +627,7 @@ FURNACE_DEPTH = 10
 #: The patterned furnace's render (``patterned_furnace_passes``): the furnace's settings
 #: (``FURNACE_RENDER``, no roulette, FURNACE_DEPTH bounces) in 12 passes, which give the
 #: paired test of ``compare_renders`` its power; its seed is stream PATTERNED_SEED.
-PATTERNED_RENDER = dict(FURNACE_RENDER, passes=12, rr=1.0, max_depth=FURNACE_DEPTH)
+PATTERNED_RENDER: PassSettings = {**FURNACE_RENDER, "passes": 12, "rr": 1.0, "max_depth": FURNACE_DEPTH}
 PATTERNED_SEED = 80
 #: The false-alarm rate of the patterned furnace's mean test (``compare_renders``), below
 #: the Cornell box's: the check looks for pictures that are not the furnace's at all (a
@@ -656,15 +656,15 @@ def check_furnace(module) -> str:
     trace_paths = _student_loop(module)
     albedo, le = furnace_parameters()
     expected = furnace_radiance(FURNACE_DEPTH, albedo, le)
-    settings = dict(seed=grading_seed_for(FURNACE_SEED), albedo=albedo, emission=le)
-    library = furnace_images(rr=1.0, max_depth=FURNACE_DEPTH, **settings)
-    student = furnace_images(trace_paths, rr=1.0, max_depth=FURNACE_DEPTH, **settings)
+    furnace = partial(furnace_images, seed=grading_seed_for(FURNACE_SEED), albedo=albedo, emission=le)
+    library = furnace(rr=1.0, max_depth=FURNACE_DEPTH)
+    student = furnace(trace_paths, rr=1.0, max_depth=FURNACE_DEPTH)
     mean, error = furnace_verdict(
         student,
         library,
         expected,
         text("ch07.no_roulette", depth=FURNACE_DEPTH),
-        lambda: furnace_images(trace_paths, passes=2, max_depth=0, **settings),
+        lambda: furnace(trace_paths, passes=2, max_depth=0),
     )
     seed = grading_seed_for(PATTERNED_SEED)
     library = patterned_furnace_passes(seed=seed)
@@ -704,7 +704,7 @@ def _furnace_with_roulette(russian_roulette, albedo: float, le: float) -> tuple[
 
 #: The Cornell box render (``cornell_passes``): 32 x 32, 12 passes of 8 samples per pixel
 #: at the homework's p_rr = 0.8; the check's seed is stream CORNELL_SEED of the grading seed.
-CORNELL_RENDER = dict(res=32, passes=12, spp_per_pass=8, rr=0.8)
+CORNELL_RENDER: PassSettings = dict(res=32, passes=12, spp_per_pass=8, rr=0.8)
 CORNELL_SEED = 9
 
 
