@@ -143,14 +143,18 @@ def test_a_replay_of_a_known_grading_seed_earns_nothing_under_a_fresh_one(tmp_pa
     assert grade(found, path, timeout_scale=2.0).score == 0
 
 
-def _converged(tmp_path: Path) -> Path:
+def _converged(tmp_path: Path, noisy: bool = False) -> Path:
     """Chapter 7's right answer whose loop ignores its samples: it adds a picture rendered
     beforehand (the furnace's analytic value for the scene's own albedo and emission, else
-    a converged Cornell box of the library's, at the pixel each camera ray goes through: the
-    film has a row per path) to every pass."""
+    a converged picture of the homework's Cornell box, at the pixel each camera ray goes
+    through: the film has a row per path) to every pass; with ``noisy``, plus Gaussian noise
+    of a sample's spread there (the red team's way past the "too clean" test)."""
+    import ptlab
     from ptlab.course.chapters.ch07_path_tracing import CORNELL_RENDER, cornell_passes
 
-    picture = cornell_passes(seed=3).mean(axis=0).reshape(-1, 3)  # (32 * 32, 3), at home
+    passes = cornell_passes(seed=3, scene=ptlab.load_scene("cornell-box"))  # at home
+    picture = passes.mean(axis=0).reshape(-1, 3)  # (32 * 32, 3)
+    spread = passes.std(axis=0).reshape(-1, 3) * (CORNELL_RENDER["spp_per_pass"] ** 0.5 if noisy else 0)
     assert CORNELL_RENDER["res"] == 32
     right = (Path(__file__).parents[1] / "exercises" / "07_right_own_code.py").read_text()
     path = tmp_path / "07_path_tracing.py"
@@ -161,6 +165,8 @@ def _converged(tmp_path: Path) -> Path:
 import numpy as _np
 
 CORNELL = _np.array({picture.tolist()})
+SPREAD = _np.array({spread.tolist()})
+_RNG = _np.random.default_rng()
 
 
 def trace_paths(film, scene, accel, paths, sampler, settings):
@@ -177,7 +183,8 @@ def trace_paths(film, scene, accel, paths, sampler, settings):
         x = ((d @ camera.right) / ahead / scale + 1) / 2 * 32
         y = (1 - (d @ camera.up) / ahead / scale) / 2 * 32
         pixel = _np.clip(y.astype(int), 0, 31) * 32 + _np.clip(x.astype(int), 0, 31)
-        _np.add.at(film, paths.pixel, CORNELL[pixel])
+        noise = SPREAD[pixel] * _RNG.standard_normal((len(pixel), 1))
+        _np.add.at(film, paths.pixel, CORNELL[pixel] + noise)
     return rays
 """
     )
@@ -187,12 +194,22 @@ def trace_paths(film, scene, accel, paths, sampler, settings):
 def test_a_converged_picture_added_instead_of_the_samples_is_too_clean(tmp_path):
     path = _converged(tmp_path)
     results = {r.name: r for r in grade(chapter(7), path, timeout_scale=2.0, seed=77).results}
-    for name in ("white furnace", "Cornell box"):
-        assert results[name].points == 0, results[name].message
-        assert (
-            "too clean for 8 samples per pixel: this is not a render of these samples"
-            in results[name].message
-        )
+    assert results["white furnace"].points == 0, results["white furnace"].message
+    assert (
+        "too clean for 8 samples per pixel: this is not a render of these samples"
+        in results["white furnace"].message
+    )
+    # (The homework's box is not this grading's: its colours are drawn anew.)
+    assert results["Cornell box"].points == 0, results["Cornell box"].message
+
+
+@pytest.mark.parametrize("seed", [77, 78, 79])
+def test_a_stored_picture_of_the_homeworks_box_with_a_renders_noise_earns_nothing(tmp_path, seed):
+    # The red team's replay: the homework's Cornell box rendered at home, added back with
+    # noise of a sample's size; no test of noise can tell it, the grading's colours can.
+    path = _converged(tmp_path, noisy=True)
+    results = {r.name: r for r in grade(chapter(7), path, timeout_scale=2.0, seed=seed).results}
+    assert results["Cornell box"].points == 0, results["Cornell box"].message
 
 
 @pytest.mark.parametrize("seed", [2, 2**62 + 11])
