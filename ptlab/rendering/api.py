@@ -9,6 +9,7 @@ asked to. ``render`` is the same, returning only the image. Its jobs are of the 
 
 from __future__ import annotations
 
+import pickle
 import time
 import warnings
 from collections.abc import Callable
@@ -20,6 +21,7 @@ from typing import Any
 import numpy as np
 
 import ptlab.rendering.adaptive as adaptive
+from ptlab.errors import PtlabError
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
@@ -192,8 +194,8 @@ def render_result(
     more = None
     if options.target_error is not None:
         more = _NoiseTarget(film, options, start, pass_ended)
-    elif executor is None:
-        workers = min(workers, len(jobs))  # a pool for one job would only cost its start-up
+    if executor is None:
+        workers = _pool_size(workers, len(jobs) if more is None else None, setup.pieces)
     complete_passes = int(film.passes_done.min())
     report, bar = _progress_reports(progress, film)
     for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False), more):
@@ -257,6 +259,26 @@ def render_setup(scene: Scene, options: RenderOptions, pieces: Pieces | None = N
         halves=options.target_error is not None,
         pieces=pieces or LIBRARY,
     )
+
+
+def _pool_size(workers: int, jobs: int | None, pieces: Pieces) -> int:
+    """The worker processes of a render of ``jobs`` jobs (None: not known beforehand, as in
+    a render to a noise target): no more than its jobs, as a pool for one job would only cost
+    its start-up. ``PtlabError`` in one line, before any worker starts, if a pool is needed
+    and ``pieces`` cannot be sent to it (a lambda, a function of a notebook's or of a
+    closure: pickled by name, they are not found there)."""
+    if jobs is not None:
+        workers = min(workers, jobs)
+    if workers <= 1:
+        return workers
+    try:
+        pickle.dumps(pieces)
+    except (pickle.PicklingError, AttributeError, TypeError) as error:
+        raise PtlabError(
+            f"the render's pieces cannot go to worker processes ({error}): render with "
+            "workers=1, or give functions of a module the workers can import"
+        ) from None
+    return workers
 
 
 def _target_record(noise_target: _NoiseTarget | None) -> dict:
