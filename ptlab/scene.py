@@ -159,6 +159,11 @@ class Scene:
         materials = [m.with_sampling(sampling) if isinstance(m, Diffuse) else m for m in self.materials]
         if all(new is old for new, old in zip(materials, self.materials, strict=True)):
             return self
+        return self.with_materials(materials)
+
+    def with_materials(self, materials: list[Material]) -> Scene:
+        """This scene with ``materials`` in place of its own, one for one (the triangles keep
+        their material ids; a new Scene rebuilds its light and material tables)."""
         return Scene(
             self.triangles,
             self.material_ids,

@@ -43,6 +43,7 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.chapters.ch07_path_tracing import PATTERNED_FALSE_ALARM
 from ptlab.course.renders import FALSE_ALARM, compare_renders, noise_test, regions_of
+from ptlab.rendering.pieces import Pieces
 
 RIGHT = Path(__file__).resolve().parents[1] / "tests" / "exercises"
 
@@ -101,7 +102,7 @@ def ch07_furnace() -> tuple:
         albedo, le = ch07.furnace_parameters()
         settings = dict(seed=grading_seed_for(ch07.FURNACE_SEED), albedo=albedo, emission=le)
         settings.update(rr=1.0, max_depth=ch07.FURNACE_DEPTH)
-        student = ch07.furnace_images(module.trace_paths, **settings)
+        student = ch07.furnace_images(Pieces(trace_paths=module.trace_paths), **settings)
         library = ch07.furnace_images(**settings)
         return student, library, ch07.furnace_radiance(ch07.FURNACE_DEPTH, albedo, le)
 

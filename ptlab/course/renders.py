@@ -165,7 +165,6 @@ def replace_materials(scene, replace: Callable):
     takes.
     """
     from ptlab.course.sandbox.remote_material import as_student_material
-    from ptlab.scene import Scene
 
     materials = []
     for material in scene.materials:
@@ -176,18 +175,7 @@ def replace_materials(scene, replace: Callable):
             new = as_student_material(new)
             new.emission = material.emission
         materials.append(new)
-    return Scene(
-        scene.triangles,
-        scene.material_ids,
-        materials,
-        scene.camera,
-        scene.name,
-        scene.material_names,
-        scene.point_lights,
-        scene.sky,
-        scene.uvs,
-        scene.defaults,
-    )
+    return scene.with_materials(materials)
 
 
 class PassSettings(TypedDict, total=False):

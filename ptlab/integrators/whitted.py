@@ -140,8 +140,7 @@ def reflect_and_refract(hit: SurfaceHit, u: np.ndarray, pieces: PathPieces | Non
         if isinstance(material, Dielectric):
             branches = fresnel_split(material, wo, n, front, pieces)
         elif isinstance(material, Mirror):
-            _, reflectance = material.sample_weight(wo, n, take_rows(u, index), front)
-            branches = [(pieces.reflect(wo, n), reflectance)]
+            branches = [(pieces.reflect(wo, n), material.reflectance_at(wo, n))]
         else:
             branches = [material.sample_weight(wo, n, take_rows(u, index), front)]
         for branch_wi, branch_weight in branches:

@@ -57,15 +57,18 @@ class Mirror(DeltaMaterial):
     def sample_weight(
         self, wo: np.ndarray, n: np.ndarray, u: np.ndarray, front: np.ndarray | None = None
     ) -> tuple[np.ndarray, np.ndarray]:
-        """(N, 3) mirror directions and (N, 3) weights R (0 where wo is below the surface)."""
+        """(N, 3) mirror directions and (N, 3) weights R (``reflectance_at``)."""
+        return reflect(wo, n), self.reflectance_at(wo, n)
+
+    def reflectance_at(self, wo: np.ndarray, n: np.ndarray) -> np.ndarray:
+        """(N, 3) R, the share of the light the mirror reflects toward ``wo``: the
+        reflectance, or Schlick's R with it as R0; 0 where wo is below the surface."""
         cos_theta_o = dot(wo, n)
         reflectance = self.reflectance.astype(n.dtype, copy=False)
         above = (cos_theta_o > 0).astype(n.dtype)
         if self.fresnel:
-            weight = (F_schlick(cos_theta_o, reflectance).T * above).T
-        else:
-            weight = (channels(reflectance) * above).T
-        return reflect(wo, n), weight
+            return (F_schlick(cos_theta_o, reflectance).T * above).T
+        return (channels(reflectance) * above).T
 
     def batch_key(self) -> object:
         return ("mirror", self.fresnel)

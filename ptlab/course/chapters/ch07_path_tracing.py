@@ -525,19 +525,13 @@ FURNACE_SEED = 8
 
 
 def furnace_images(
-    trace_paths=None,
-    seed: int = 0,
-    albedo: float = ALBEDO,
-    emission: float = LE,
-    pieces: Pieces | None = None,
-    **options,
+    pieces: Pieces | None = None, seed: int = 0, albedo: float = ALBEDO, emission: float = LE, **options
 ) -> np.ndarray:
     """(passes, 16, 16, 3): the independent passes of one render of the furnace of
-    ``albedo`` and ``emission`` (``ptlab.course.renders.pass_images``), with
-    ``trace_paths`` as the path loop if given (else ``pieces``, if given)."""
+    ``albedo`` and ``emission`` (``ptlab.course.renders.pass_images``), made of ``pieces``
+    (the library's if None)."""
     from ptlab.course.renders import pass_images
 
-    pieces = _loop(trace_paths) if trace_paths is not None else pieces
     scene = furnace_scene(albedo, emission)
     return pass_images(scene, **{**FURNACE_RENDER, **options}, seed=seed, pieces=pieces)
 
@@ -658,13 +652,13 @@ def check_furnace(module) -> str:
     expected = furnace_radiance(FURNACE_DEPTH, albedo, le)
     furnace = partial(furnace_images, seed=grading_seed_for(FURNACE_SEED), albedo=albedo, emission=le)
     library = furnace(rr=1.0, max_depth=FURNACE_DEPTH)
-    student = furnace(trace_paths, rr=1.0, max_depth=FURNACE_DEPTH)
+    student = furnace(_loop(trace_paths), rr=1.0, max_depth=FURNACE_DEPTH)
     mean, error = furnace_verdict(
         student,
         library,
         expected,
         text("ch07.no_roulette", depth=FURNACE_DEPTH),
-        lambda: furnace(trace_paths, passes=2, max_depth=0),
+        lambda: furnace(_loop(trace_paths), passes=2, max_depth=0),
     )
     seed = grading_seed_for(PATTERNED_SEED)
     library = patterned_furnace_passes(seed=seed)
@@ -727,7 +721,6 @@ def graded_cornell_box(rng: np.random.Generator) -> Scene:
     """
     import ptlab
     from ptlab.materials import Diffuse, Material
-    from ptlab.scene import Scene
 
     scene = ptlab.load_scene("cornell-box")
     materials: list[Material] = []
@@ -740,18 +733,7 @@ def graded_cornell_box(rng: np.random.Generator) -> Scene:
         if emission is not None:
             emission = emission * rng.uniform(*EMISSION_SCALE, 3)
         materials.append(Diffuse(albedo=albedo, sampling=material.sampling, emission=emission))
-    return Scene(
-        scene.triangles,
-        scene.material_ids,
-        materials,
-        scene.camera,
-        scene.name,
-        scene.material_names,
-        scene.point_lights,
-        scene.sky,
-        scene.uvs,
-        scene.defaults,
-    )
+    return scene.with_materials(materials)
 
 
 def cornell_passes(trace_paths=None, seed: int = 0, scene: Scene | None = None) -> np.ndarray:
