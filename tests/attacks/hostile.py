@@ -3,12 +3,26 @@ are, and what an honest failure looks like."""
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 from ptlab.course.sandbox.processes import process_table
 
 #: The hostile submissions, one file per attack (each docstring says what it does).
 SUBMISSIONS = Path(__file__).parent / "submissions"
+#: The lines a grader that is not root prints after its verdict: one, "NOT FOR CREDIT ..."
+#: (its students' code runs as its own user; docs/grading-security.md). Root prints none.
+NOT_FOR_CREDIT_LINES = 0 if os.geteuid() == 0 else 1
+
+
+def verdict_lines(text: str) -> list[str]:
+    """``text``'s lines up to the verdict (the table's total, ``ptlab grade``'s PASSED or
+    FAILED), without the not-for-credit line a grader that is not root adds after it."""
+    lines = text.rstrip().splitlines()
+    if NOT_FOR_CREDIT_LINES:
+        assert lines[-1].lstrip().startswith("NOT FOR CREDIT"), text
+        return lines[:-NOT_FOR_CREDIT_LINES]
+    return lines
 
 
 def alive(pids) -> list[int]:

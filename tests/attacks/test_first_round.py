@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from attacks.hostile import assert_honest_failure, printed_pids, students_processes
+from attacks.hostile import assert_honest_failure, printed_pids, students_processes, verdict_lines
 from ptlab.cli import main
 from ptlab.course import chapter
 from ptlab.course.grader import grade, run_check
@@ -189,8 +189,9 @@ def test_what_the_students_code_says_cannot_forge_lines_of_the_table(tmp_path):
         "  10/10  full marks\\x1b[2J')\n"
     )
     result = grade(chapter(1), path, timeout_scale=0.2)
-    lines = result.table().splitlines()
+    lines = verdict_lines(result.table())
     assert len(lines) == 3 + len(chapter(1).checks) + 1
+    assert lines[-1].lstrip().startswith("total")
     assert result.score == 0
     assert all("\x1b" not in line and "oops render 2/2 pass ok total" in line for line in lines[3:-1])
 

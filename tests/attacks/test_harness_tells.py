@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import pytest
 
+from attacks.hostile import verdict_lines
 from ptlab.cli import main
 from ptlab.course import chapter
 from ptlab.course.grader import grade
@@ -72,7 +73,7 @@ def test_a_black_material_passes_ptlab_grade_with_a_warning(attack, capsys):
     path = attack("harness_black.py")
     assert main(["grade", f"{path}:Lambertian", "--samples", "20000"]) == 0
     out = capsys.readouterr().out
-    assert out.rstrip().endswith("PASSED, with warnings: reflectance"), out
+    assert verdict_lines(out)[-1] == "PASSED, with warnings: reflectance", out
     assert "reflects nothing: albedo 0 for every probe" in " ".join(out.split()), out
 
 

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import pytest
 
-from attacks.hostile import SUBMISSIONS
+from attacks.hostile import NOT_FOR_CREDIT_LINES, SUBMISSIONS, verdict_lines
 from ptlab.course import chapter
 from ptlab.course.batch import find_work, safe_cell
 from ptlab.course.grader import grade
@@ -89,12 +89,12 @@ def test_a_file_name_cannot_forge_lines_of_the_table(tmp_path):
     path.write_text("raise SystemExit('no')\n")
     result = grade(chapter(1), path, timeout_scale=0.2)
     table = result.table()
+    lines = verdict_lines(table)
     assert result.score == 0
-    assert len(table.splitlines()) == len(result.results) + 4, table  # title, blank, header, total
-    assert [line for line in table.splitlines() if line.lstrip().startswith("total")] == [
-        table.splitlines()[-1]
-    ]
-    assert "full marks" not in table.splitlines()[-1]
+    assert len(table.splitlines()) == len(result.results) + 4 + NOT_FOR_CREDIT_LINES, table
+    assert len(lines) == len(result.results) + 4, table  # title, blank, header, total
+    assert [line for line in lines if line.lstrip().startswith("total")] == [lines[-1]]
+    assert "full marks" not in lines[-1]
     assert _hidden(table) == []
     assert f"x\\n{forged}\\n\\x1b[2K.py" in table.splitlines()[0]
 
@@ -112,8 +112,9 @@ def test_printed_escapes_reach_the_terminal_only_as_text(tmp_path):
     assert forged, checked.stderr
     assert all(line.startswith("    | ") for line in forged), checked.stderr
     # The verdict: the table's last line, every check failed, the import's message one line.
-    assert checked.stdout.splitlines()[-1].split()[:2] == ["total", "0/10"]
-    assert "full marks" not in checked.stdout.splitlines()[-1]
+    verdict = verdict_lines(checked.stdout)[-1]
+    assert verdict.split()[:2] == ["total", "0/10"]
+    assert "full marks" not in verdict
 
 
 # -- 7: CSV cells -------------------------------------------------------------------------

@@ -820,6 +820,8 @@ def test_with_bubblewrap_a_grade_is_for_credit(tmp_path):
 
     if sandbox.missing() is not None:
         pytest.skip(str(sandbox.missing()))
+    if os.geteuid() != 0:  # (tests/attacks/test_operating_system.py holds what it does then)
+        pytest.skip("a grader that is not root grades not for credit: its students' code runs as itself")
     result = grade(chapter(1), RIGHT_CAMERA, timeout_scale=0.5)
     assert result.full_marks, result.table()
     assert result.for_credit
