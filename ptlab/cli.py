@@ -85,9 +85,12 @@ def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = N
     from ptlab.rendering.options import RenderOptions, with_default
 
     about = RenderOptions.about(name)
-    keywords = dict(
-        choices=about.choices, default=RenderOptions.default(name), type=about.parse, metavar=about.metavar
-    )
+    default = RenderOptions.default(name)
+    keywords: dict[str, Any]
+    if default is False:  # (an on/off option: a flag)
+        keywords = dict(action="store_true", default=default)
+    else:
+        keywords = dict(choices=about.choices, default=default, type=about.parse, metavar=about.metavar)
     keywords.update(overrides)
     if keywords.get("action") == "append":  # (a list of its own: no default to add to)
         keywords["default"] = None
@@ -155,7 +158,14 @@ def _add_render(commands, shared: argparse.ArgumentParser) -> None:
         "--preview-every",
         type=float,
         metavar="SECONDS",
-        help="after a pass, rewrite the output image if SECONDS have passed",
+        help="after a pass, rewrite the output image if SECONDS have passed (denoised, with --denoise)",
+    )
+    render.add_argument(
+        "--aov",
+        action="store_true",
+        help="also write the denoiser's feature images into the .exr output, as layers beside R, G, "
+        "B: albedo.R/G/B, normal.X/Y/Z and direct.R/G/B (the emission seen directly), and, "
+        "with --denoise, noisy.R/G/B (the image before denoising)",
     )
     # An option left out is None here (its --help still names the default), so that a
     # resumed render can tell it from one given: it takes the checkpoint's (``_resumed``).
@@ -180,6 +190,7 @@ _RENDER_OPTIONS = (
     "target_error",
     "max_spp",
     "time_limit",
+    "denoise",
 )
 
 
@@ -347,8 +358,9 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
         default="path:bsdf,path:nee,path:mis",
         metavar="LIST",
         help="comma-separated estimators: path:bsdf, path:nee, path:mis, "
-        "whitted, each optionally @SAMPLER, e.g. path:nee@independent, and +adaptive to "
-        "render to a ladder of target errors, e.g. path:nee+adaptive "
+        "whitted, each optionally @SAMPLER, e.g. path:nee@independent, +adaptive to "
+        "render to a ladder of target errors, e.g. path:nee+adaptive, and +denoise to denoise "
+        "each render (the denoise extra), e.g. path:nee+denoise "
         "(default path:bsdf,path:nee,path:mis)",
     )
     _add_option(converge, "sampler", help="the sampler of estimators without @SAMPLER")
@@ -390,7 +402,6 @@ def _render(args) -> int:
     from ptlab.rendering.display import write_spp_map
     from ptlab.rendering.executors import dask_executor
     from ptlab.rendering.progress import ProgressBar
-    from ptlab.rendering.settings import check_workers
     from ptlab.scene_file import load_scene
 
     if args.resume is not None:
@@ -405,10 +416,7 @@ def _render(args) -> int:
     checkpoint = args.checkpoint or args.resume
     if checkpoint is not None:
         check_writable_file(checkpoint)
-    if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
-        raise PtlabError("--preview-every must be zero or more seconds")
-    check_workers(options.workers)  # (before the scene's work: a bad --workers fails at once)
-    spp_map = check_output_path(args.spp_map) if args.spp_map else None
+    spp_map = _check_render_request(args, options, out)
     progress = ProgressBar(
         width * height * options.spp,
         len(pass_schedule(options.spp)),
@@ -420,8 +428,9 @@ def _render(args) -> int:
         checkpoint=checkpoint,
         resume=args.resume,
         progress=progress,
-        on_pass=_Preview(out, args.preview_every, args.exposure),
+        on_pass=_Preview(out, args.preview_every, args.exposure, denoise=options.denoise),
         command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
+        features=args.aov,
     )
     with _StopOnSignal(args.whole_process) as signals, warnings.catch_warnings():
         # (A render stopped before its first pass: _interrupted says so in its own words.)
@@ -442,7 +451,7 @@ def _render(args) -> int:
             print(f"ptlab: {result.nonfinite_message()}", file=sys.stderr)
         if not result.complete:
             return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
-        _write(out, result, args.exposure)
+        _write(out, result, args.exposure, layers=args.aov)
         if spp_map is not None:
             write_spp_map(spp_map, result.counts)
     if not (result.image > 0).any() and options.integrator in ("path", "whitted"):
@@ -453,10 +462,32 @@ def _render(args) -> int:
         )
     if not args.quiet:
         print(f"{width}x{height}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
+        if options.denoise:
+            print(_denoised_said(result))
         if options.target_error is not None:
             print(_target_said(result, options))
         print(f"wrote {out.resolve()}" + (f" and {spp_map.resolve()}" if spp_map is not None else ""))
     return 0
+
+
+def _check_render_request(args, options, out: Path) -> Path | None:
+    """Check, before the scene's work, what ``ptlab render`` asks beyond the options (a bad
+    one fails at once, in one line); return the spp map's path, if one is asked for."""
+    from ptlab.image import check_output_path
+    from ptlab.rendering.settings import check_workers
+
+    if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
+        raise PtlabError("--preview-every must be zero or more seconds")
+    check_workers(options.workers)
+    if options.denoise:
+        from ptlab.denoise.oidn import require_oidn
+
+        require_oidn()
+    if args.aov and out.suffix.lower() != ".exr":
+        raise PtlabError(
+            f"--aov: the feature images go into an .exr output as its layers, not {out.suffix or out.name}"
+        )
+    return check_output_path(args.spp_map) if args.spp_map else None
 
 
 def _spp_said(result) -> str:
@@ -466,9 +497,28 @@ def _spp_said(result) -> str:
     return f"{result.spp}-{result.spp_max} spp (mean {result.spp_mean:.1f})"
 
 
+def _denoised_said(result) -> str:
+    """The line after a denoised render: with what, in how long, and its error's estimate,
+    or why there is none (an estimate that cannot be trusted is not printed)."""
+    settings = result.settings
+    if not result.denoised:
+        return "not denoised: no pixel had a sample"
+    said = f"denoised by {settings['denoised']} in {settings['denoise_seconds']:.2f} s"
+    if result.relmse_estimate is not None:
+        return said + f", estimated relMSE {result.relmse_estimate:.4g}"
+    return said + f"; its error is not estimated: {result.estimate_refused}"
+
+
 def _target_said(result, options) -> str:
     """The line after a render to a target error: the estimate, and why it stopped."""
     estimate = result.relmse_estimate
+    if estimate is None:  # (a denoised render whose error could not be estimated)
+        noisy = result.settings.get("noisy_relmse_estimate")
+        said = f"target {options.target_error:g} for the noisy image (the denoised one's error is not known)"
+        if noisy is not None:
+            said = f"the noisy image's estimated relMSE {noisy:.4g}, " + said
+        reached = noisy is not None and noisy <= options.target_error
+        return said + (": reached" if reached else ": not reached")
     said = f"estimated relMSE {estimate:.4g}, target {options.target_error:g}"
     if result.target_reached:
         return said + ": reached"
@@ -522,8 +572,9 @@ def _scene_argument(scene: str) -> str:
     return str(Path(scene).resolve()) if Path(scene).is_file() else scene
 
 
-def _write(out: Path, result, exposure: float = 0.0) -> None:
-    """Write the image with the render's settings, its spp and whether it is complete."""
+def _write(out: Path, result, exposure: float = 0.0, layers: bool = False) -> None:
+    """Write the image with the render's settings, its spp and whether it is complete (and,
+    with ``layers``, the feature images and the noisy image as the EXR's layers)."""
     from ptlab import __version__
     from ptlab.image import write_image
 
@@ -544,7 +595,12 @@ def _write(out: Path, result, exposure: float = 0.0) -> None:
         # Distances do not fit in [0, 1]: scale the farthest to white (the EXR keeps them).
         scale = float(image.max()) or 1.0
         image, metadata["depth_scale"] = image / scale, scale
-    write_image(out, image, metadata, exposure=exposure)
+    extra = None
+    if layers and result.features is not None:
+        extra = dict(result.features)
+        if result.noisy is not None:
+            extra["noisy"] = result.noisy
+    write_image(out, image, metadata, exposure=exposure, layers=extra)
 
 
 def _interrupted(result, out: Path, checkpoint, exit_code: int, exposure: float = 0.0) -> int:
@@ -602,18 +658,24 @@ class _StopOnSignal:
 
 
 class _Preview:
-    """After a pass, rewrites the output image if ``every`` seconds have passed."""
+    """After a pass, rewrites the output image if ``every`` seconds have passed (denoised, for
+    a denoised render: what it will look like)."""
 
-    def __init__(self, out: Path, every: float | None, exposure: float = 0.0):
-        self.out, self.every, self.exposure = out, every, exposure
+    def __init__(self, out: Path, every: float | None, exposure: float = 0.0, denoise: bool = False):
+        self.out, self.every, self.exposure, self.denoise = out, every, exposure, denoise
         self.last = time.monotonic()
 
     def __call__(self, film) -> None:
         if self.every is None or time.monotonic() - self.last < self.every:
             return
         from ptlab.image import write_image
+        from ptlab.rendering.denoising import denoise_film
 
-        write_image(self.out, film.image(), dict(spp=film.spp, complete=0, preview=1), exposure=self.exposure)
+        image, metadata = film.image(), dict(spp=film.spp, complete=0, preview=1)
+        if self.denoise and film.spp > 0:
+            denoised = denoise_film(film, estimate=False)
+            image, metadata["denoised"] = denoised.image, denoised.about
+        write_image(self.out, image, metadata, exposure=self.exposure)
         self.last = time.monotonic()
 
 

@@ -65,7 +65,11 @@ def check_output_path(path: str | Path) -> Path:
 
 
 def write_image(
-    path: str | Path, image: np.ndarray, metadata: dict | None = None, exposure: float = 0.0
+    path: str | Path,
+    image: np.ndarray,
+    metadata: dict | None = None,
+    exposure: float = 0.0,
+    layers: dict[str, np.ndarray] | None = None,
 ) -> Path:
     """Write (H, W, 3) linear RGB, atomically: as float32 to ``.exr`` (and the other
     ``LINEAR_FORMATS``), as 8-bit sRGB to ``.png`` (and the other ``SRGB_FORMATS``), scaled
@@ -73,6 +77,9 @@ def write_image(
 
     ``metadata`` entries become header attributes ``ptlab:<key>`` (ints and floats stay
     numbers in EXR; other formats store them as text, where they store them at all).
+    ``layers`` are more (H, W, 3) images, for an EXR only, each as three channels of the
+    file beside R, G and B: ``<name>.R``, ``.G``, ``.B``, but ``<name>.X``, ``.Y``, ``.Z``
+    for a ``"normal"`` (the EXR convention of layers that compositing programs read).
     """
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
@@ -80,9 +87,18 @@ def write_image(
     image = np.asarray(image)
     height, width = image.shape[:2]
     suffix = path.suffix.lower()
+    if layers and suffix != ".exr":
+        raise PtlabError(f"{path}: only an .exr file holds more images than the colour (its layers)")
     if suffix in LINEAR_FORMATS:
-        pixels = np.ascontiguousarray(image, dtype=np.float32)
-        spec = oiio.ImageSpec(width, height, 3, oiio.FLOAT)
+        names = ["R", "G", "B"]
+        planes = [np.asarray(image, np.float32)]
+        for layer, plane in (layers or {}).items():
+            axes = "XYZ" if layer == "normal" else "RGB"
+            names += [f"{layer}.{axis}" for axis in axes]
+            planes.append(np.asarray(plane, np.float32))
+        pixels = np.ascontiguousarray(np.concatenate(planes, axis=-1))
+        spec = oiio.ImageSpec(width, height, len(names), oiio.FLOAT)
+        spec.channelnames = tuple(names)
         if suffix == ".exr":
             spec.attribute("compression", "zip")
     else:

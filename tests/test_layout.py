@@ -33,6 +33,8 @@ LAYERS = [
             "ptlab.scene_file",
             # (the relMSE's definition: the renderer's own estimate of it uses it too)
             "ptlab.measure.metrics",
+            # (arrays in, arrays out: the denoiser and its error's estimate)
+            "ptlab.denoise",
         ],
     ),
     ("integrators", ["ptlab.integrators"]),

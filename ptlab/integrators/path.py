@@ -47,6 +47,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ptlab.accel.base import Accelerator
+from ptlab.integrators.features import features
 from ptlab.integrators.wavefront import (
     # The toolkit lived in this module until it moved to wavefront.py: chapter 7's files, as
     # students have them, import SHADOW_EPSILON, Paths, add_to_film, shade and surface_hit here.
@@ -208,6 +209,8 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     radiance = take_rows(hit.throughput, rows) * emitted
     if (rec := recorder()) is not None:
         rec.emission(hit, rows, radiance)
+    if (aov := features()) is not None:  # (a denoiser keeps lights seen directly apart)
+        aov.emission(hit.pixel.take(rows), hit.sees_emission.take(rows), radiance)
     add_to_film(film, hit.pixel.take(rows), radiance, _rows_of(hit.depth, rows))
 
 
@@ -313,6 +316,8 @@ def add_sky(film: np.ndarray, scene: Scene, paths: Paths, hits, settings: PathSe
     radiance = take_rows(paths.throughput, rows) * radiance
     if (rec := recorder()) is not None:
         rec.sky(paths, rows, radiance)
+    if (aov := features()) is not None:
+        aov.emission(paths.pixel.take(rows), paths.sees_emission.take(rows), radiance)
     # (A path that escapes after its vertex at depth d sees the sky at depth d + 1.)
     add_to_film(film, paths.pixel.take(rows), radiance, _rows_of(paths.depth, rows))
 
@@ -362,6 +367,8 @@ def scatter(
     throughput = hit.throughput * weight
     if (rec := recorder()) is not None:
         rec.bsdf(hit, wi, weight, pdf, throughput, survive)
+    if (aov := features()) is not None:  # (a denoiser's albedo is this weight at the first hit)
+        aov.first_hits(hit.pixel, hit.sees_emission, hit.delta, hit.n, weight)
     go_on = np.flatnonzero(
         survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0) | (throughput[:, 2] > 0))
     )

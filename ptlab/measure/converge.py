@@ -3,7 +3,8 @@
 Each estimator (``path:nee``, ``path:bsdf``, ``path:mis``, ...) renders the scene at a
 doubling ladder of samples per pixel, 1, 2, 4, ..., until its time budget is spent (an
 adaptive one, ``path:nee+adaptive``, at a halving ladder of target errors, rendering to each
-with ``target_error``: ``ptlab.rendering.adaptive``); every
+with ``target_error``: ``ptlab.rendering.adaptive``; a denoised one, ``path:nee+denoise``,
+denoising each render, the denoiser's time counted in the render's); every
 render is timed and compared with a reference image (``ptlab.measure.metrics``). The result is a
 table of (estimator, spp, seconds, rmse, relmse) and, from it, the time each estimator needs
 to reach a target error: the honest way to compare methods whose samples cost different
@@ -42,6 +43,8 @@ from ptlab.scene import Scene
 #: then by +adaptive for a render to each of a ladder of target errors.
 ESTIMATOR_INTEGRATORS = ("path", "whitted")
 ADAPTIVE_SUFFIX = "+adaptive"
+#: ... and by this, in either order, for a render denoised (``render_result(..., denoise=True)``).
+DENOISE_SUFFIX = "+denoise"
 #: An adaptive ladder's targets: the first, then halving; each render's first pass has
 #: ``ADAPTIVE_FIRST_SPP`` samples per pixel.
 ADAPTIVE_FIRST_TARGET = 0.5
@@ -61,22 +64,27 @@ class Estimator:
     strategy: str = RenderOptions.strategy
     sampler: str = RenderOptions.sampler
     adaptive: bool = False
+    denoise: bool = False
 
     def options(self) -> dict:
         """Keyword arguments of ``render_result`` that select this estimator."""
-        return dict(integrator=self.integrator, strategy=self.strategy, sampler=self.sampler)
+        return dict(
+            integrator=self.integrator, strategy=self.strategy, sampler=self.sampler, denoise=self.denoise
+        )
 
 
 def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Estimator]:
     """``"path:bsdf,path:nee,path:mis@independent"`` -> estimators.
 
     ``path`` alone is ``path`` with the default strategy (``path:nee``); an estimator without
-    ``@SAMPLER`` uses ``sampler``; ``+adaptive`` at the end renders to target errors.
+    ``@SAMPLER`` uses ``sampler``; ``+adaptive`` at the end renders to target errors, and
+    ``+denoise`` denoises each render (both may be given, in either order).
     """
     estimators = []
     for label in (part.strip() for part in text.split(",")):
-        adaptive = label.endswith(ADAPTIVE_SUFFIX)
-        method, at, chosen = label.removesuffix(ADAPTIVE_SUFFIX).partition("@")
+        method, suffixes = _suffixes(label)
+        adaptive, denoise = ADAPTIVE_SUFFIX in suffixes, DENOISE_SUFFIX in suffixes
+        method, at, chosen = method.partition("@")
         if at and chosen not in SAMPLERS:
             raise PtlabError(f"estimator {label!r}: the sampler after @ must be one of {', '.join(SAMPLERS)}")
         integrator, _, strategy = method.partition(":")
@@ -93,12 +101,29 @@ def parse_estimators(text: str, sampler: str = RenderOptions.sampler) -> list[Es
             raise PtlabError(
                 f"estimator {label!r}: an adaptive render needs sobol or independent, not stratified"
             )
+        if denoise and integrator != "path":
+            raise PtlabError(f"estimator {label!r}: only path-traced images are denoised")
         estimators.append(
-            Estimator(label, integrator, strategy or RenderOptions.strategy, chosen or sampler, adaptive)
+            Estimator(
+                label, integrator, strategy or RenderOptions.strategy, chosen or sampler, adaptive, denoise
+            )
         )
     if len({e.label for e in estimators}) != len(estimators):
         raise PtlabError(f"estimators {text!r}: each may appear once")
     return estimators
+
+
+def _suffixes(label: str) -> tuple[str, set[str]]:
+    """``label`` without its ``+adaptive`` and ``+denoise`` (at its end, in either order), and
+    which of them it had."""
+    found: set[str] = set()
+    while True:
+        for suffix in (ADAPTIVE_SUFFIX, DENOISE_SUFFIX):
+            if label.endswith(suffix) and suffix not in found:
+                label, found = label.removesuffix(suffix), found | {suffix}
+                break
+        else:
+            return label, found
 
 
 @dataclass
@@ -170,13 +195,17 @@ def measure_ladder(
         rung_index += 1
 
 
-def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool] | None:
+def time_to_reach(
+    ladder: list[Measurement], target: float, unbiased: bool = True
+) -> tuple[float, bool] | None:
     """Seconds the estimator needs for relMSE ``target``, and whether that is extrapolated.
 
     Between two rungs that bracket the target, interpolate on the log-log line through
     them. Past the last rung, extrapolate from it with the slope -1 of an unbiased
-    estimator (error x time is constant). None if even the first rung is below the target
-    (the answer is then below the ladder's resolution) or if the error stops falling.
+    estimator (error x time is constant); a denoised image's error has no such known slope
+    (not ``unbiased``): not past its last rung. None if even the first rung is below the
+    target (the answer is then below the ladder's resolution), if the error stops falling,
+    or if a biased estimator's ladder never reached it.
     """
     if not ladder or ladder[0].relmse <= target:
         return None
@@ -185,7 +214,7 @@ def time_to_reach(ladder: list[Measurement], target: float) -> tuple[float, bool
             slope = math.log(after.seconds / before.seconds) / math.log(after.relmse / before.relmse)
             return before.seconds * (target / before.relmse) ** slope, False
     last = ladder[-1]
-    if len(ladder) >= 2 and last.relmse >= ladder[-2].relmse:
+    if not unbiased or (len(ladder) >= 2 and last.relmse >= ladder[-2].relmse):
         return None
     return last.seconds * last.relmse / target, True
 
@@ -312,6 +341,10 @@ def run_converge(
 
     if not 0 < budget < math.inf:
         raise PtlabError(f"budget {budget!r}: must be a positive, finite number of seconds")
+    if any(estimator.denoise for estimator in estimators):  # (a missing extra: at once)
+        from ptlab.denoise.oidn import require_oidn
+
+        require_oidn()
     reference_pixels: np.ndarray | None = None
     if estimated:
         fixed = [e.label for e in estimators if not e.adaptive]
@@ -344,14 +377,7 @@ def run_converge(
         common = equal_time_strip(ladders, reference_pixels, out_dir / "equal-time.png")
         write_image(out_dir / "reference.exr", reference_pixels)
         written += ["equal-time.png", "reference.exr"]
-    echo(f"time to reach relMSE {target:g}" + (" (estimated)" if estimated else "") + ":")
-    for ladder in ladders:
-        reached = time_to_reach(ladder, target)
-        if reached is None:
-            text = "n/a (already below it at the first rung, or the error stopped falling)"
-        else:
-            text = f"{reached[0]:.2f} s" + (" (extrapolated with slope -1)" if reached[1] else "")
-        echo(f"  {ladder[0].estimator:12} {text}")
+    _echo_times_to_reach(estimators, ladders, target, estimated, echo)
     most_spp = max(ladder[-1].spp for ladder in ladders)
     if reference is None and not estimated and most_spp * 8 > reference_spp:
         echo(
@@ -363,3 +389,25 @@ def run_converge(
     for name in written:
         echo(f"wrote {(out_dir / name).resolve()}")
     return ladders
+
+
+def _echo_times_to_reach(
+    estimators: list[Estimator],
+    ladders: list[list[Measurement]],
+    target: float,
+    estimated: bool,
+    echo: Callable[[str], None],
+) -> None:
+    """Echo each estimator's time to reach relMSE ``target`` (``time_to_reach``)."""
+    echo(f"time to reach relMSE {target:g}" + (" (estimated)" if estimated else "") + ":")
+    for estimator, ladder in zip(estimators, ladders, strict=True):
+        reached = time_to_reach(ladder, target, unbiased=not estimator.denoise)
+        if reached is None:
+            text = "n/a (already below it at the first rung, or the error stopped falling)"
+            if estimator.denoise:
+                text = (
+                    "n/a (below it at the first rung, or not reached: a denoised error is not extrapolated)"
+                )
+        else:
+            text = f"{reached[0]:.2f} s" + (" (extrapolated with slope -1)" if reached[1] else "")
+        echo(f"  {ladder[0].estimator:12} {text}")

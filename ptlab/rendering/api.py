@@ -22,7 +22,9 @@ import numpy as np
 
 import ptlab.rendering.adaptive as adaptive
 from ptlab.errors import PtlabError
+from ptlab.integrators.features import FEATURES
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
+from ptlab.rendering.denoising import DenoisedFilm, denoise_film
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
@@ -31,7 +33,7 @@ from ptlab.rendering.pieces import LIBRARY, Pieces
 from ptlab.rendering.scheduler import run_jobs
 from ptlab.rendering.settings import check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
-from ptlab.samplers import make_sampler
+from ptlab.samplers import Sampler, make_sampler
 from ptlab.scene import Scene
 from ptlab.scene_file import load_scene
 
@@ -71,7 +73,16 @@ class RenderResult:
             (``ptlab.rendering.adaptive``), for a render to a target error; else None.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
-            depth at which Russian roulette started and the workers.
+            depth at which Russian roulette started and the workers (and, denoised, with
+            what, and how long it took).
+        noisy: for a denoised render, the image before denoising (``image`` is the denoised
+            one); else None.
+        features: the denoiser's feature images, where the render gathered them (``denoise``,
+            or ``features=True``): ``"albedo"``, ``"normal"`` and ``"direct"`` (the emission
+            seen directly, kept out of the denoiser), each (H, W, 3) float32
+            (``ptlab.integrators.features``); else None.
+        estimate_refused: for a denoised render without ``relmse_estimate``, why its error
+            could not be estimated honestly; else "".
     """
 
     image: np.ndarray
@@ -88,6 +99,14 @@ class RenderResult:
     counts: np.ndarray | None = None
     relmse_estimate: float | None = None
     settings: dict = field(default_factory=dict)
+    noisy: np.ndarray | None = None
+    features: dict[str, np.ndarray] | None = None
+    estimate_refused: str = ""
+
+    @property
+    def denoised(self) -> bool:
+        """Whether ``image`` is denoised (``noisy`` is then the image before)."""
+        return self.noisy is not None
 
     @property
     def spp_mean(self) -> float:
@@ -145,6 +164,7 @@ def render_result(
     stop: Callable[[], bool] | None = None,
     command: dict | None = None,
     pieces: Pieces | None = None,
+    features: bool = False,
     **keywords: Any,
 ) -> RenderResult:
     """Render and return the image with its statistics (arguments as for ``render``).
@@ -162,13 +182,16 @@ def render_result(
         pieces: the functions the render is made of, if not the library's
             (``ptlab.rendering.pieces``); a render with worker processes needs them to be
             functions of a module that the workers can import.
+        features: gather the denoiser's feature images (``RenderResult.features``) without
+            denoising (``denoise=True`` gathers them anyway).
     """
     options = RenderOptions.of(args, options, keywords)
+    gather = _gathers_features(options, features)
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
     options = options.for_scene(scene)
     workers = check_workers(options.workers)
-    setup = render_setup(scene, options, pieces)
+    setup = render_setup(scene, options, pieces, features=gather)
     scene, sampler, settings = setup.scene, setup.sampler, setup.settings
     assert sampler is not None  # (render_setup gives one)
     keep_freed_memory()
@@ -178,12 +201,9 @@ def render_result(
     # (A render to a noise target has only passes of its own, the first of spp everywhere.)
     adaptive_render = options.target_error is not None
     passes = [] if adaptive_render else pass_schedule(options.spp, options.spp_per_pass)
-    film = Film(width, height, tiles, passes, halves=adaptive_render)
+    film = Film(width, height, tiles, passes, halves=setup.halves, features=gather)
     record = options.record()
-    # Any number of workers may resume a render; the sampler's identity says what of it the
-    # image depends on (its name, and for some the spp).
-    identity = dict(record, scene=scene_digest(scene), sampler=sampler.identity)
-    del identity["workers"], identity["time_limit"]
+    identity = _identity(record, scene, sampler, gather)
     if resume is not None:
         load_checkpoint(resume, film, identity)
     samples_at_start = film.samples
@@ -197,7 +217,7 @@ def render_result(
     if executor is None:
         workers = _pool_size(workers, len(jobs) if more is None else None, setup.pieces)
     complete_passes = int(film.passes_done.min())
-    report, bar = _progress_reports(progress, film)
+    report, bar = _progress_reports(progress, film, options.denoise)
     for result in run_jobs(jobs, setup, max(workers, 1), executor, stop or (lambda: False), more):
         film.add(result)
         if report is not None:
@@ -215,9 +235,9 @@ def render_result(
         warnings.warn("the render stopped before any tile had a pass: its image is black", RuntimeWarning, 2)
     if not complete:
         pass_ended.save(film)
+    denoised = _denoised(film, more) if options.denoise else None
     seconds = time.perf_counter() - start
     return RenderResult(
-        image=film.image(),
         spp=film.spp,
         spp_max=film.spp_max,
         complete=complete,
@@ -229,7 +249,6 @@ def render_result(
         nonfinite=film.nonfinite,
         first_nonfinite=film.first_nonfinite,
         counts=film.counts,
-        relmse_estimate=_estimate(film),
         settings=dict(
             record,
             scene=scene.name,
@@ -237,15 +256,21 @@ def render_result(
             rr_depth=settings.rr_depth,
             workers=workers if executor is None else "executor",
             **_target_record(more),
+            **_denoise_record(denoised, film),
         ),
+        features=_feature_images(film),
+        **_images(film, denoised),
     )
 
 
-def render_setup(scene: Scene, options: RenderOptions, pieces: Pieces | None = None) -> RenderSetup:
+def render_setup(
+    scene: Scene, options: RenderOptions, pieces: Pieces | None = None, features: bool = False
+) -> RenderSetup:
     """What every job of a render of ``scene`` shares (options decided ``for_scene``): the
     scene with the options' diffuse sampling, the sampler, the path settings, the pieces
     (the library's unless given); each pixel's samples in two independent halves for a
-    render to a target error."""
+    render to a target error or a denoised one (whose error the halves measure); the
+    denoiser's feature images gathered if ``features``."""
     width, height = options.size
     return RenderSetup(
         scene=scene.with_sampling(options.sampling),
@@ -256,8 +281,9 @@ def render_setup(scene: Scene, options: RenderOptions, pieces: Pieces | None = N
         settings=options.path_settings(),
         integrator=options.integrator,
         sampler=make_sampler(options.sampler, options.seed, options.spp),
-        halves=options.target_error is not None,
+        halves=options.target_error is not None or options.denoise,
         pieces=pieces or LIBRARY,
+        features=features,
     )
 
 
@@ -287,6 +313,73 @@ def _target_record(noise_target: _NoiseTarget | None) -> dict:
     if noise_target is None:
         return {}
     return {"max_spp": noise_target.most, "target_end": noise_target.end}
+
+
+def _identity(record: dict, scene: Scene, sampler: Sampler, features: bool) -> dict:
+    """What a checkpoint must match to be resumed by a render: its options but the workers
+    and time limit (any number of workers may resume a render), the scene's fingerprint, and
+    the sampler's identity (what of it the image depends on: its name, for some the spp)."""
+    identity = dict(record, scene=scene_digest(scene), sampler=sampler.identity)
+    del identity["workers"], identity["time_limit"]
+    if features:  # (a checkpoint with feature images resumes only a render that gathers them)
+        identity["features"] = True
+    return identity
+
+
+def _gathers_features(options: RenderOptions, features: bool) -> bool:
+    """Whether a render gathers the denoiser's feature images: if it denoises, or is asked
+    to. Checked before the scene is loaded: a missing extra fails in one line, at once."""
+    if options.denoise:
+        from ptlab.denoise.oidn import require_oidn
+
+        require_oidn()
+    gather = options.denoise or features
+    if gather and options.integrator != "path":
+        raise PtlabError(f"features: only the path integrator gathers them, not {options.integrator!r}")
+    return gather
+
+
+def _denoised(film: Film, noise_target: _NoiseTarget | None) -> DenoisedFilm | None:
+    """The film denoised after the last pass: by the last pass of a render to a target
+    error, if it denoised it; not a picture with pixels that have no sample yet (None)."""
+    if film.spp == 0:
+        return None
+    if noise_target is not None and noise_target.denoised is not None:
+        return noise_target.denoised
+    return denoise_film(film)
+
+
+def _denoise_record(denoised: DenoisedFilm | None, film: Film) -> dict:
+    """What a denoised render adds to its settings (its image's header): with what, in how
+    long, and, if its error has no estimate, why, and the noisy image's estimate instead."""
+    if denoised is None:
+        return {}
+    record: dict[str, Any] = {"denoised": denoised.about, "denoise_seconds": round(denoised.seconds, 3)}
+    if denoised.refused:
+        record["relmse_estimate_refused"] = denoised.refused
+        if (noisy := _estimate(film)) is not None:
+            record["noisy_relmse_estimate"] = noisy
+    return record
+
+
+def _images(film: Film, denoised: DenoisedFilm | None) -> dict[str, Any]:
+    """``RenderResult``'s image and its error estimate: the film's, or denoised, with the
+    film's image kept as ``noisy``."""
+    if denoised is None:
+        return {"image": film.image(), "relmse_estimate": _estimate(film)}
+    return {
+        "image": denoised.image,
+        "noisy": film.image(),
+        "relmse_estimate": denoised.relmse_estimate,
+        "estimate_refused": denoised.refused,
+    }
+
+
+def _feature_images(film: Film) -> dict[str, np.ndarray] | None:
+    """``RenderResult.features``: the film's feature images, as float32."""
+    if film.features is None:
+        return None
+    return {name: film.feature_image(name).astype(np.float32) for name in FEATURES}
 
 
 def _estimate(film: Film) -> float | None:
@@ -336,7 +429,11 @@ class _NoiseTarget:
     """A render to a target error: ``run_jobs``' ``more``, called each time a pass over the
     image has been added whole. It estimates the image's relMSE from the film and, until the
     estimate is at the target (or no pixel may have more samples, or the time is up), plans
-    the next pass (``ptlab.rendering.adaptive``) and returns its jobs."""
+    the next pass (``ptlab.rendering.adaptive``) and returns its jobs.
+
+    A denoised render's target is the *denoised* image's error: each pass's film is denoised
+    and that image's error estimated (``ptlab.rendering.denoising``), and the next samples go
+    where it is. Where that estimate is refused, the noisy image's own estimate decides."""
 
     def __init__(self, film: Film, options: RenderOptions, start: float, pass_ended: _PassEnd):
         self.film, self.options, self.start, self.pass_ended = film, options, start, pass_ended
@@ -344,6 +441,9 @@ class _NoiseTarget:
         self.most = options.max_spp or DEFAULT_MAX_SPP
         #: Why the render ended: "target", "max spp" or "time limit" (what the last call saw).
         self.end = ""
+        #: The last pass's film denoised (a denoised render), which is the final image if
+        #: the render ends there.
+        self.denoised: DenoisedFilm | None = None
 
     def __call__(self) -> list[Job]:
         film, target = self.film, self.options.target_error
@@ -355,12 +455,20 @@ class _NoiseTarget:
         film.end_plan()
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
         film.estimate = adaptive.estimated_relmse(variance, film.sums, film.counts)
+        error_map = None
+        if self.options.denoise:
+            self.denoised = denoise_film(film)
+            if self.denoised.relmse_estimate is not None:
+                film.estimate, error_map = self.denoised.relmse_estimate, self.denoised.error_map
         if ended:
             self.pass_ended(film)
         if film.estimate <= target:
             self.end = "target"
             return []
-        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
+        if error_map is not None:  # (the denoised image's error, as a relative variance per sample)
+            weights = np.sqrt(np.maximum(adaptive.pooled(error_map * film.counts), 0.0))
+        else:
+            weights = adaptive.allocation_weights(variance, film.sums, film.counts)
         # (No pixel more than GROWTH times its samples in one pass: one pass's estimate of a
         # pixel is not trusted with more.)
         most = np.minimum(self.most, adaptive.GROWTH * film.counts)
@@ -394,15 +502,18 @@ def plan_jobs(film: Film) -> list[Job]:
     return jobs
 
 
-def _progress_reports(progress, film: Film) -> tuple[Callable[[Film], None] | None, Any]:
+def _progress_reports(progress, film: Film, denoise: bool) -> tuple[Callable[[Film], None] | None, Any]:
     """What to call after each job: ``progress`` itself, or for True a new progress bar
-    (``ptlab.rendering.progress``), returned again as the second value, to be closed."""
+    (``ptlab.rendering.progress``; in a notebook it shows each pass's image, denoised for a
+    render that denoises), returned again as the second value, to be closed."""
     if progress is not True:
         return progress or None, None
     from ptlab.rendering.progress import ProgressBar
 
     height, width = film.sums.shape[:2]
-    bar = ProgressBar(width * height * sum(film.passes), len(film.passes), initial=film.samples)
+    bar = ProgressBar(
+        width * height * sum(film.passes), len(film.passes), initial=film.samples, denoise=denoise
+    )
     return bar, bar
 
 

@@ -19,6 +19,7 @@ import hashlib
 import json
 import zipfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -55,9 +56,11 @@ def save_checkpoint(path: str | Path, film: Film, identity: dict, command: dict 
     not say (the scene and the output)."""
 
     def write(temporary: str) -> None:
+        arrays: dict[str, Any] = _feature_arrays(film)
         with open(temporary, "wb") as out:
             np.savez(
                 out,
+                **arrays,
                 sums=film.sums,
                 differences=film.differences,
                 counts=film.counts,
@@ -94,7 +97,16 @@ def read_checkpoint(path: str | Path) -> tuple[dict, dict, dict[str, np.ndarray]
             }
             # (checkpoints written before the count was kept have none: 0)
             arrays["nonfinite"] = data["nonfinite"] if "nonfinite" in data else np.int64(0)
-            for name in ("differences", "counts", "plan", "plan_done", "adaptive_passes", "estimate"):
+            for name in (
+                "differences",
+                "counts",
+                "plan",
+                "plan_done",
+                "adaptive_passes",
+                "estimate",
+                "features",
+                "feature_differences",
+            ):
                 if name in data:
                     arrays[name] = data[name]
     except (OSError, ValueError, KeyError, EOFError, zipfile.BadZipFile) as error:
@@ -114,8 +126,8 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
         # Compared as text: checkpoints written before RenderOptions kept rr_depth as text.
         if key == "spp":
             continue
-        # (An option newer than a format-3 checkpoint is unset there.)
-        same = str(saved[key]) == str(value) if key in saved else saved.get("format") == 3 and value is None
+        # (An option newer than the checkpoint is unset there: None, or off.)
+        same = str(saved[key]) == str(value) if key in saved else value is None or value is False
         if not same:
             raise PtlabError(
                 f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, this render has {value!r}"
@@ -154,6 +166,16 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
     film.query_seconds = float(arrays["query_seconds"])
     film.sampler_seconds = float(arrays["sampler_seconds"])
     film.nonfinite = int(arrays["nonfinite"])
+    if film.features is not None and film.feature_differences is not None:
+        film.features[:] = arrays["features"]
+        film.feature_differences[:] = arrays["feature_differences"]
+
+
+def _feature_arrays(film: Film) -> dict[str, np.ndarray]:
+    """The film's feature images' sums, where it gathers them (``Film.features``)."""
+    if film.features is None or film.feature_differences is None:
+        return {}
+    return {"features": film.features, "feature_differences": film.feature_differences}
 
 
 def _fits(arrays: dict, film: Film) -> bool:
@@ -182,6 +204,11 @@ def _fits(arrays: dict, film: Film) -> bool:
             return False
         if np.any(arrays["counts"] < 0) or np.any(plan < 0):
             return False
+    if film.features is not None:
+        expected |= {
+            "features": (film.features.shape, np.floating),
+            "feature_differences": (film.features.shape, np.floating),
+        }
     passes = arrays["passes"]
     return (
         all(

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ptlab.integrators.features import FEATURES
 from ptlab.rendering.jobs import JobResult, Tile, make_tiles
 
 #: Edge of the tiles a noise-target pass is cut into (``Film.plan_tiles``): small enough that
@@ -47,9 +48,20 @@ class Film:
         nonfinite: samples that were NaN or infinite and were left out of ``sums``
             (``ptlab.integrators.wavefront.add_to_film``).
         first_nonfinite: (x, y, depth) of the first of them, by pass and tile (None if none).
+        features: (H, W, 9) float64 sums of the denoiser's feature images
+            (``ptlab.integrators.features``: direct, albedo, normal), or None where the render
+            gathers none; ``feature_differences`` the even samples' sums less the odd ones'.
     """
 
-    def __init__(self, width: int, height: int, tiles: list[Tile], passes: list[int], halves: bool = False):
+    def __init__(
+        self,
+        width: int,
+        height: int,
+        tiles: list[Tile],
+        passes: list[int],
+        halves: bool = False,
+        features: bool = False,
+    ):
         self.tiles = tiles
         self.passes = list(passes)
         self.sums = np.zeros((height, width, 3))
@@ -70,6 +82,8 @@ class Film:
         self.first_nonfinite: tuple[int, int, int] | None = None
         self._first_nonfinite_job = (np.inf, np.inf)
         self.pending: dict[tuple[int, int], JobResult] = {}
+        self.features = np.zeros((height, width, 3 * len(FEATURES))) if features else None
+        self.feature_differences = np.zeros_like(self.features) if features else None
 
     def add(self, result: JobResult) -> None:
         """Add a job's sums once every earlier pass of its tile has been added."""
@@ -88,6 +102,11 @@ class Film:
         rows, columns = slice(tile.y0, tile.y1), slice(tile.x0, tile.x1)
         self.sums[rows, columns] += ready.sums
         self.differences[rows, columns] += ready.differences
+        if self.features is not None and self.feature_differences is not None:
+            if ready.features is None or ready.feature_differences is None:
+                raise RuntimeError("a job of a render that gathers features came back without them")
+            self.features[rows, columns] += ready.features
+            self.feature_differences[rows, columns] += ready.feature_differences
         self.counts[rows, columns] += ready.job.spp if ready.job.counts is None else ready.job.counts
         self.rays += ready.rays
         self.query_seconds += ready.query_seconds
@@ -142,3 +161,24 @@ class Film:
                 self.sums[rows, columns], counts, out=np.zeros((*counts.shape[:2], 3)), where=counts > 0
             )
         return image
+
+    def feature_image(self, name: str) -> np.ndarray:
+        """(H, W, 3) float64: the mean of feature image ``name`` (``FEATURES``) per pixel (0
+        where a pixel has no sample yet)."""
+        assert self.features is not None, "this render gathers no features"
+        k = FEATURES.index(name)
+        return _per_sample(self.features[..., 3 * k : 3 * k + 3], self.counts)
+
+    def halves_of(self, sums: np.ndarray, differences: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
+        """The means of each pixel's even and of its odd samples, from the sums of all of them
+        and the even ones' less the odd ones' (``halves``): None unless every pixel has an
+        even number of samples, at least 2 (then both halves have as many)."""
+        if not self.halves or self.counts.min() < 2 or np.any(self.counts & 1):
+            return None
+        half = self.counts // 2
+        return _per_sample((sums + differences) / 2, half), _per_sample((sums - differences) / 2, half)
+
+
+def _per_sample(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+    """``sums`` (H, W, C) divided by ``counts`` (H, W), 0 where a count is 0."""
+    return np.divide(sums, counts[..., None], out=np.zeros(sums.shape), where=counts[..., None] > 0)

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import threading
 import uuid
+from contextlib import AbstractContextManager, nullcontext
 from dataclasses import dataclass, field, replace
 from typing import cast
 
@@ -29,6 +30,7 @@ import numpy as np
 from ptlab.accel import Accelerator, make_accelerator
 from ptlab.accel.timed import TimedAccelerator
 from ptlab.integrators import INTEGRATORS, Integrator
+from ptlab.integrators.features import FeatureBuffers, gathering_features
 from ptlab.integrators.path import BATCH_PATHS, PathSettings
 from ptlab.integrators.wavefront import NonFinite, Paths, counting_nonfinite
 from ptlab.rendering.pieces import LIBRARY, Pieces
@@ -106,6 +108,10 @@ class JobResult:
     nonfinite: int = 0  # samples NaN or infinite, left out of the sums (``add_to_film``)
     #: The first of them, (x, y, depth): the least depth, then the first row (sample-major).
     first_nonfinite: tuple[int, int, int] | None = None
+    #: Where the setup gathers ``features``: their sums, (tile height, tile width, 9) float64,
+    #: ``FEATURES``' three images side by side, and the even samples' sums less the odd ones'.
+    features: np.ndarray | None = None
+    feature_differences: np.ndarray | None = None
 
 
 @dataclass(frozen=True)
@@ -132,6 +138,8 @@ class RenderSetup:
     #: noise target measures its error by how the two halves differ: ``ptlab.rendering.adaptive``).
     halves: bool = False
     pieces: Pieces = LIBRARY
+    #: Gather the denoiser's feature images (``ptlab.integrators.features``; the path tracer).
+    features: bool = False
 
     def __post_init__(self):
         if self.settings.pieces != self.pieces.path:
@@ -251,13 +259,14 @@ class CameraSamples:
         rows = film[self.starts[j] : self.starts[j + 1]]
         if job.counts is not None:
             return self._plan_sums(j, rows, n_pixels)
-        total, differences = np.zeros((n_pixels, 3)), np.zeros((n_pixels, 3))
+        channels = film.shape[1]  # (3 for radiance; the feature images have more)
+        total, differences = np.zeros((n_pixels, channels)), np.zeros((n_pixels, channels))
         for k in range(job.spp):
             block = rows[k * n_pixels : (k + 1) * n_pixels]
             total += block
             if self.setup.halves:
                 differences += -block if (job.first_sample + k) & 1 else block
-        return total.reshape(*job.tile.shape, 3), differences.reshape(*job.tile.shape, 3)
+        return total.reshape(*job.tile.shape, channels), differences.reshape(*job.tile.shape, channels)
 
     def _plan_sums(self, j: int, rows: np.ndarray, n_pixels: int) -> tuple[np.ndarray, np.ndarray]:
         """``sums`` for a job with a count per pixel: a slice of the pixels (``_order``) per k."""
@@ -267,15 +276,16 @@ class CameraSamples:
         # k-th sample here is even when k is.)
         assert job.firsts is not None
         assert not np.any(job.firsts & 1)
-        halves = np.zeros((2, n_pixels, 3))
+        channels = rows.shape[1]
+        halves = np.zeros((2, n_pixels, channels))
         start = 0
         for k, size in enumerate(having):
             halves[k & 1, :size] += rows[start : start + size]
             start += size
-        total, differences = np.empty((n_pixels, 3)), np.empty((n_pixels, 3))
+        total, differences = np.empty((n_pixels, channels)), np.empty((n_pixels, channels))
         total[by_count] = halves[0] + halves[1]
         differences[by_count] = halves[0] - halves[1]
-        return total.reshape(*job.tile.shape, 3), differences.reshape(*job.tile.shape, 3)
+        return total.reshape(*job.tile.shape, channels), differences.reshape(*job.tile.shape, channels)
 
     def job_of(self, rows: np.ndarray) -> np.ndarray:
         """The job (its place in the list) of each film row ``rows``."""
@@ -302,7 +312,7 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
     film = np.zeros((camera.count, 3), order="F")
     timed = TimedAccelerator(accel)
     integrator = integrator_of(setup)
-    with counting_nonfinite() as nonfinite:
+    with counting_nonfinite() as nonfinite, _features_of(setup, camera.count) as buffers:
         if integrator.refills:
             # An empty batch, which the loop fills from the jobs' samples (``more``).
             empty = camera.paths(0, 0)
@@ -317,6 +327,7 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
                     film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings
                 )
     sums = [camera.sums(film, j) for j in range(len(jobs))]
+    feature_rows = buffers.stacked() if buffers is not None else None
     return [
         JobResult(
             job=job,
@@ -327,9 +338,23 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
             query_seconds=timed.seconds if j == 0 else 0.0,
             sampler_seconds=sampler.seconds if j == 0 else 0.0,
             **_nonfinite_in(camera, nonfinite, j),
+            **_features_in(camera, feature_rows, j),
         )
         for j, job in enumerate(jobs)
     ]
+
+
+def _features_of(setup: RenderSetup, rows: int) -> AbstractContextManager[FeatureBuffers | None]:
+    """Gathering the feature images of ``rows`` film rows, if the setup asks for them."""
+    return gathering_features(rows) if setup.features else nullcontext()
+
+
+def _features_in(camera: CameraSamples, feature_rows: np.ndarray | None, j: int) -> dict:
+    """``JobResult``'s ``features`` and ``feature_differences`` for job ``j``."""
+    if feature_rows is None:
+        return {}
+    sums, differences = camera.sums(feature_rows, j)
+    return {"features": sums, "feature_differences": differences}
 
 
 def integrator_of(setup: RenderSetup) -> Integrator:

@@ -30,6 +30,7 @@ from ptlab.rendering.settings import (
     MAX_SPP,
     MAX_WORKERS,
     check_choice,
+    check_flag,
     check_integer,
     check_positive_number,
     check_roulette,
@@ -202,6 +203,14 @@ class RenderOptions:
         parse=float,
         metavar="SECONDS",
     )
+    denoise: bool = option(
+        False,
+        "denoise the image with Intel Open Image Denoise (the denoise extra: pip install "
+        "'ptlab[denoise]'), guided by albedo and normal images of the same samples, lights seen "
+        "directly kept out of it; each pixel's samples in two halves, to estimate the denoised "
+        "image's error",
+        lambda label, value: check_flag(label, value),
+    )
 
     def __post_init__(self):
         for f in fields(self):
@@ -221,6 +230,11 @@ class RenderOptions:
             raise PtlabError(
                 "sampler 'stratified' lays out a fixed number of samples per pixel; a render to a "
                 "target error adds samples as it goes: use sobol or independent"
+            )
+        if self.denoise and self.integrator != "path":
+            raise PtlabError(
+                f"denoise: the denoiser is for path-traced images; {self.integrator!r} gathers no "
+                "albedo and normal images for it"
             )
         if self.integrator != "path" and (self.strategy, self.heuristic) != (
             PathSettings.strategy,

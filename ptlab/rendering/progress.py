@@ -45,8 +45,10 @@ class ProgressBar:
         initial: int = 0,
         quiet: bool = False,
         target: float | None = None,
+        denoise: bool = False,
     ):
         self.passes, self.total, self.initial, self.target = passes, total_samples, initial, target
+        self.denoise = denoise  # (a notebook shows each pass's image denoised)
         self.start = time.monotonic()
         self.passes_shown = 0
         in_notebook = running_in_notebook()
@@ -109,12 +111,18 @@ class ProgressBar:
                 self.show(film)
 
     def show(self, film: Film) -> None:
-        """Show the image so far below the notebook's cell, in place of the last pass's."""
+        """Show the image so far below the notebook's cell, in place of the last pass's
+        (denoised, for a render that denoises: what it will look like)."""
         from IPython.display import Image, display
 
         from ptlab.rendering.display import png_bytes
 
-        picture = Image(data=png_bytes(film.image()))
+        image = film.image()
+        if self.denoise and film.spp > 0:
+            from ptlab.rendering.denoising import denoise_film
+
+            image = denoise_film(film, estimate=False).image
+        picture = Image(data=png_bytes(image))
         if self.picture is None:
             self.picture = display(picture, display_id=True)
         else:

@@ -99,3 +99,10 @@ def check_workers(workers: object) -> int:
     if workers is None:
         return default_workers()
     return check_integer("workers", workers, 1, MAX_WORKERS)
+
+
+def check_flag(label: str, value: object) -> bool:
+    """``value`` if it is True or False, else ``PtlabError`` naming ``label``."""
+    if value is True or value is False or type(value).__name__ == "bool_":  # (NumPy's too)
+        return bool(value)
+    raise PtlabError(f"{label}: {value!r} is not True or False")

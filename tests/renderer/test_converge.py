@@ -37,11 +37,22 @@ def test_error_measures_match_their_definitions():
 def test_estimators_are_parsed_and_bad_ones_named():
     labels = [(e.label, e.integrator, e.strategy) for e in parse_estimators("path:bsdf, path,whitted")]
     assert labels == [("path:bsdf", "path", "bsdf"), ("path", "path", "nee"), ("whitted", "whitted", "nee")]
+    flags = [
+        (e.label, e.strategy, e.adaptive, e.denoise, e.options()["denoise"])
+        for e in parse_estimators("path:mis+denoise,path:nee+adaptive+denoise,path+denoise+adaptive")
+    ]
+    assert flags == [
+        ("path:mis+denoise", "mis", False, True, True),
+        ("path:nee+adaptive+denoise", "nee", True, True, True),
+        ("path+denoise+adaptive", "nee", True, True, True),
+    ]
     for bad, word in [
         ("path:foo", "strategy"),
         ("bdpt", "integrator"),
         ("whitted:mis", "no strategy"),
         ("path:mis,path:mis", "once"),
+        ("whitted+denoise", "only path-traced images are denoised"),
+        ("path+denoise+denoise", "integrator"),
     ]:
         with pytest.raises(PtlabError, match=word):
             parse_estimators(bad)
@@ -62,6 +73,9 @@ def test_time_to_reach_interpolates_log_log_and_extrapolates_with_slope_minus_on
     assert extrapolated
     assert time_to_reach(ladder, 2.0) is None  # below the target from the start
     assert time_to_reach(_ladder((1, 1.0), (2, 1.2)), 0.1) is None  # error not falling
+    # A denoised image's error has no known slope: not past its last rung, but between rungs.
+    assert time_to_reach(ladder, 0.01, unbiased=False) is None
+    assert time_to_reach(ladder, 0.05, unbiased=False) == pytest.approx((20.0, False))
 
 
 @pytest.fixture(scope="module")

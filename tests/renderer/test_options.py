@@ -118,6 +118,12 @@ BAD = [
         "strategy 'mis' / heuristic 'power': these choose how the path integrator finds light; "
         "'whitted' has no such choice",
     ),
+    (dict(denoise="yes"), "denoise: 'yes' is not True or False"),
+    (
+        dict(denoise=True, integrator="albedo"),
+        "denoise: the denoiser is for path-traced images; 'albedo' gathers no albedo and normal "
+        "images for it",
+    ),
     (
         dict(integrator="normals", heuristic="balance"),
         "strategy 'nee' / heuristic 'balance': these choose how the path integrator finds light; "
