@@ -54,9 +54,11 @@ measured at 128x128 from 24 renders of 8 spp each of the Cornell box).
 from __future__ import annotations
 
 import numpy as np
-from scipy.ndimage import median_filter, uniform_filter
 
 from ptlab.measure.metrics import RELMSE_EPSILON
+
+# (scipy.ndimage is imported where it is used: importing it takes about 0.2 s, which every
+# render would pay at start-up, and only a render to a noise target calls it.)
 
 #: Edge of the window whose median mean stands in for the reference in the denominator.
 REFERENCE_WINDOW = 3
@@ -94,6 +96,8 @@ def reference_estimate(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """(H, W, 3) what stands in for the unknown reference R: the median, channel by channel,
     of the pixel means in a ``REFERENCE_WINDOW``-wide window, but at least
     ``OWN_MEAN_SHARE`` of the pixel's own mean (module docstring)."""
+    from scipy.ndimage import median_filter
+
     means = sums / np.maximum(np.asarray(counts, np.float64), 1.0)[..., None]
     median = median_filter(means, size=(REFERENCE_WINDOW, REFERENCE_WINDOW, 1), mode="nearest")
     return np.maximum(median, OWN_MEAN_SHARE * means)
@@ -120,6 +124,8 @@ def estimated_relmse(variance: np.ndarray, sums: np.ndarray, counts: np.ndarray)
 def pooled(values: np.ndarray, radius: int = POOL_RADIUS) -> np.ndarray:
     """(H, W) the mean of ``values`` over the (2 radius + 1)^2 window around each pixel
     (the window reflected at the image's edges)."""
+    from scipy.ndimage import uniform_filter
+
     return uniform_filter(np.asarray(values, np.float64), size=2 * radius + 1, mode="reflect")
 
 
