@@ -51,9 +51,10 @@ def main(argv: list[str] | None = None) -> int:
                 f"{workers} worker(s), run {run + 1}: {times[False]:.3f} s without, "
                 f"{times[True]:.3f} s with features ({ratios[-1]:.3f}x)"
             )
+        spread = f"range {min(ratios):.3f}-{max(ratios):.3f}, {len(ratios)} pairs"
         print(
             f"{args.scene} {args.res}x{args.res} {args.spp} spp, {workers} worker(s): features cost "
-            f"{statistics.median(ratios):.3f}x (range {min(ratios):.3f}-{max(ratios):.3f}, {len(ratios)} pairs)"
+            f"{statistics.median(ratios):.3f}x ({spread})"
         )
     return 0
 

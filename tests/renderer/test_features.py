@@ -188,3 +188,34 @@ def test_without_the_extra_denoise_fails_in_one_line_before_rendering(tmp_path):
         "ptlab: error: denoising needs Intel Open Image Denoise: pip install 'ptlab[denoise]'"
     ]
     assert not (tmp_path / "a.png").exists()
+
+
+def test_previews_of_a_denoised_render_are_denoised(tmp_path):
+    pytest.importorskip("pyoidn")
+    from ptlab.cli import _Preview
+    from ptlab.image import read_image
+
+    written = []
+
+    class Recording(_Preview):
+        def __call__(self, film) -> None:
+            super().__call__(film)
+            written.append(read_image(self.out))
+
+    out = tmp_path / "preview.exr"
+    result = render_result(
+        "cornell-box",
+        spp=4,
+        res=32,
+        workers=1,
+        denoise=True,
+        spp_per_pass=2,
+        on_pass=Recording(out, every=0.0, denoise=True),
+    )
+    assert len(written) == 2  # (a preview after each of the two passes)
+    image, metadata = written[-1]
+    assert metadata["preview"] == 1
+    assert metadata["denoised"].startswith("Intel Open Image Denoise")
+    # The last preview is the film of the whole render, denoised: the render's own image.
+    np.testing.assert_allclose(image, result.image, rtol=1e-5, atol=1e-6)
+    assert not np.allclose(image, result.noisy, rtol=0.05)
