@@ -7,6 +7,9 @@ the script says so, in one line with exit code 2, if Mitsuba cannot render here)
     pip install mitsuba
     python scripts/against_mitsuba.py --workers 2                  # cornell-box, 256x256, 64 spp
     python scripts/against_mitsuba.py --ptlab-reference ref.exr --ptlab-reference-spp 8192
+    # to a clean image: ptlab --denoise against Mitsuba + OIDN, ptlab's target Mitsuba's
+    # error at 256 spp, whole processes only
+    python scripts/against_mitsuba.py --denoise --target-from-mitsuba-spp 256 --spp 16 --processes-only
 
 Exit codes: 0 when it ran (and, with --ptlab-reference, the references agree), 1 when a
 renderer failed or the references differ by more than noise, 2 for an option, a scene or a
@@ -91,6 +94,36 @@ def build_parser() -> argparse.ArgumentParser:
         "to reach its error)",
     )
     parser.add_argument(
+        "--target-from-mitsuba-spp",
+        type=int,
+        metavar="N",
+        help="time the whole process 'ptlab render --target-error E_m', E_m the true relMSE of "
+        "Mitsuba's whole process at N spp (the median of --repeat renders made first, with seeds "
+        "of their own), and compare every process's seconds x relMSE with Mitsuba's at N spp",
+    )
+    parser.add_argument(
+        "--denoise",
+        action="store_true",
+        help="denoise ptlab's renders (ptlab render --denoise; the denoise extra), and race "
+        "Mitsuba denoised by the same Intel Open Image Denoise as whole processes, at --spp "
+        "and at --mitsuba-denoise-spp",
+    )
+    parser.add_argument(
+        "--mitsuba-denoise-spp",
+        type=int,
+        metavar="N",
+        default=DEFAULTS.mitsuba_denoise_spp,
+        help="with --denoise, the spp of the Mitsuba + OIDN process that every process's seconds "
+        f"x relMSE is compared with (default {DEFAULTS.mitsuba_denoise_spp})",
+    )
+    parser.add_argument(
+        "--process-sampler",
+        choices=MITSUBA_SAMPLERS,
+        default=DEFAULTS.process_sampler,
+        help=f"Mitsuba's sampler in its whole processes (default {DEFAULTS.process_sampler}, "
+        "its scene file's)",
+    )
+    parser.add_argument(
         "--ptlab-strategy",
         choices=STRATEGIES,
         default=DEFAULTS.ptlab_strategy,
@@ -128,6 +161,11 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument(
         "--no-process", action="store_true", help="skip the whole-process runs of ptlab render and mitsuba"
+    )
+    parser.add_argument(
+        "--processes-only",
+        action="store_true",
+        help="time the whole processes only, not the renders in this process",
     )
     parser.add_argument(
         "--csv", metavar="FILE", help="also write every run (label, round, seed, seconds, errors)"
@@ -168,6 +206,10 @@ def options_from(args: argparse.Namespace) -> ComparisonOptions:
         repeat=args.repeat,
         seed=args.seed,
         ptlab_target_error=args.ptlab_target_error,
+        target_from_mitsuba_spp=args.target_from_mitsuba_spp,
+        denoise=args.denoise,
+        mitsuba_denoise_spp=args.mitsuba_denoise_spp,
+        process_sampler=args.process_sampler,
         ptlab_strategy=args.ptlab_strategy,
         workers=args.workers,
         variant=args.variant,
@@ -176,6 +218,7 @@ def options_from(args: argparse.Namespace) -> ComparisonOptions:
         ptlab_reference=args.ptlab_reference,
         ptlab_reference_spp=args.ptlab_reference_spp,
         time_processes=not args.no_process,
+        in_process=not args.processes_only,
         csv=args.csv,
     )
 

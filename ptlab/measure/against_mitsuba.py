@@ -11,7 +11,8 @@
    that just-in-time compilation is not timed. The whole commands (``ptlab render``, and
    ``mitsuba`` on the same scene file) are also timed, as new processes from start to exit:
    that includes starting Python, imports, loading the scene, the worker processes or the
-   kernels from Dr.Jit's disk cache, and writing the EXR.
+   kernels from Dr.Jit's disk cache (put there by an untimed 1-spp run of each Mitsuba
+   command), and writing the EXR.
 3. Every image is compared with a reference: a given EXR, or a ``reference_spp`` Mitsuba
    render (independent sampler, cached in ``$PTLAB_CACHE`` or ``~/.cache/ptlab/references``
    like ``ptlab converge``'s references).
@@ -25,6 +26,16 @@
    ratio with its z-score, and their relMSE beside what their noise alone would give. They
    must agree; a difference beyond noise is a bug in the scene's translation or in a
    renderer.
+6. With ``denoise``, the race is to a clean image: ptlab's renders are denoised (``ptlab render
+   --denoise``, ``render_result(..., denoise=True)``), and Mitsuba denoised by the same Intel
+   Open Image Denoise runs as a process of its own (``mitsuba_denoised``), at ``spp`` and at
+   ``mitsuba_denoise_spp`` samples. With ``target_from_mitsuba_spp`` N, ``ptlab render
+   --target-error`` is given E_m, the true relMSE of Mitsuba's whole process at N spp: the
+   median of ``repeat`` renders made before the rounds, with seeds the rounds do not use.
+   A second table puts the whole processes side by side: their seconds x relMSE over that of
+   (a) Mitsuba at N spp (``spp`` without a target) and (b) Mitsuba + OIDN at
+   ``mitsuba_denoise_spp``, round by round (below 1: better than it), and each channel's mean
+   over the reference's (a denoiser must not change the picture's brightness).
 
 Russian roulette: Mitsuba numbers the first hit depth 1 and plays roulette once depth >=
 ``rr_depth``, so its ``rr_depth`` R starts roulette at the same vertex as ptlab's ``rr_depth``
@@ -55,6 +66,7 @@ from typing import TypeVar
 import numpy as np
 
 from ptlab.atomic import write_atomically
+from ptlab.denoise.oidn import require_oidn
 from ptlab.errors import PtlabError
 from ptlab.image import read_image, write_image
 from ptlab.measure.converge import REFERENCE_SEED_OFFSET, default_cache_dir, load_reference
@@ -85,6 +97,9 @@ WARM_UP_SEED = 2**31 - 1
 #: |z| above this: the references' means differ by more than noise (for two unbiased
 #: renderers a chance of 6e-5 per channel, of a normal variable beyond 4 standard deviations).
 AGREEMENT_Z = 4.0
+#: Mitsuba's renders that set ptlab's target (``target_from_mitsuba_spp``) take the rounds'
+#: seeds plus this, which neither the rounds nor the reference use.
+CALIBRATION_SEED_OFFSET = 2_000_003
 
 Echo = Callable[[str], None]
 T = TypeVar("T")
@@ -110,6 +125,12 @@ class ComparisonOptions:
         ptlab_samplers: ptlab's samplers, of ``ptlab.samplers.SAMPLERS``.
         ptlab_target_error: also time the whole process ``ptlab render --target-error`` to
             this relMSE, or None.
+        target_from_mitsuba_spp: N, to give ``ptlab render --target-error`` Mitsuba's true
+            relMSE at N spp instead (module docstring, 6), or None.
+        denoise: denoise ptlab's renders, and race Mitsuba + OIDN as whole processes.
+        mitsuba_denoise_spp: Mitsuba + OIDN's samples per pixel in baseline (b).
+        process_sampler: Mitsuba's sampler in its whole processes (its scene file's default,
+            independent, unless given).
         ptlab_strategy: ptlab's path tracer's strategy (``nee`` or ``mis``).
         workers: ptlab's worker processes, None for one per core (Mitsuba uses Dr.Jit's
             default thread count).
@@ -120,6 +141,7 @@ class ComparisonOptions:
         ptlab_reference: a high-spp ptlab EXR to check against the reference, or None.
         ptlab_reference_spp: its samples per pixel, None to read them from its metadata.
         time_processes: also time ``ptlab render`` and ``mitsuba`` as whole processes.
+        in_process: time the renders in this process (False: the whole processes only).
         csv: a file to write every run to as CSV, or None.
     """
 
@@ -132,6 +154,10 @@ class ComparisonOptions:
     rr_depths: tuple[int, ...] = (MITSUBA_RR_DEPTH, 3, 2)
     ptlab_samplers: tuple[str, ...] = SAMPLERS
     ptlab_target_error: float | None = None
+    target_from_mitsuba_spp: int | None = None
+    denoise: bool = False
+    mitsuba_denoise_spp: int = 16
+    process_sampler: str = "independent"
     ptlab_strategy: str = "nee"
     workers: int | None = None
     variant: str = "llvm_ad_rgb"
@@ -140,6 +166,7 @@ class ComparisonOptions:
     ptlab_reference: str | None = None
     ptlab_reference_spp: int | None = None
     time_processes: bool = True
+    in_process: bool = True
     csv: str | None = None
 
     def check(self) -> None:
@@ -159,21 +186,60 @@ class ComparisonOptions:
                 f"--variant {self.variant}: ptlab's colours are RGB; use an RGB variant such as llvm_ad_rgb"
             )
         for sampler in self.samplers:
-            rule = MITSUBA_SPP_RULES.get(sampler)
-            if rule and not rule[0](self.spp):
-                raise PtlabError(
-                    f"--spp {self.spp}: Mitsuba's {sampler} sampler needs {rule[1]} "
-                    f"(it would round it up and render more samples)"
-                )
+            _check_mitsuba_spp("--spp", self.spp, sampler)
+        self._check_processes()
+        if self.denoise:
+            require_oidn()  # (a missing extra: one line, before any work)
         if self.ptlab_reference_spp is not None and self.ptlab_reference_spp < 1:
             raise PtlabError(f"--ptlab-reference-spp {self.ptlab_reference_spp}: must be positive")
         if self.csv and not Path(self.csv).resolve().parent.is_dir():
             raise PtlabError(f"--csv {self.csv}: folder {Path(self.csv).parent} does not exist")
 
+    def _check_processes(self) -> None:
+        """``check`` for what the whole processes are asked."""
+        if not (self.time_processes or self.in_process):
+            raise PtlabError("--no-process and --processes-only: that leaves nothing to time")
+        if self.process_sampler not in MITSUBA_SAMPLERS:
+            raise PtlabError(
+                f"--process-sampler {self.process_sampler}: choose one of {', '.join(MITSUBA_SAMPLERS)}"
+            )
+        if self.ptlab_target_error is not None and not 0 < self.ptlab_target_error < math.inf:
+            raise PtlabError(f"--ptlab-target-error {self.ptlab_target_error}: must be a positive relMSE")
+        amounts = {"--spp": self.spp, "--mitsuba-denoise-spp": self.mitsuba_denoise_spp}
+        if self.target_from_mitsuba_spp is not None:
+            amounts["--target-from-mitsuba-spp"] = self.target_from_mitsuba_spp
+            if self.ptlab_target_error is not None:
+                raise PtlabError(
+                    "--ptlab-target-error and --target-from-mitsuba-spp: give one target, not both"
+                )
+        for option, spp in amounts.items():
+            if not 1 <= spp <= MAX_SPP:
+                raise PtlabError(f"{option} {spp}: must be from 1 to {MAX_SPP}")
+            if self.time_processes:
+                _check_mitsuba_spp(option, spp, self.process_sampler)
+        if self.time_processes:
+            return
+        for option, asked in (
+            ("--denoise", self.denoise),
+            ("--target-from-mitsuba-spp", self.target_from_mitsuba_spp is not None),
+        ):
+            if asked:
+                raise PtlabError(f"{option} races whole processes: leave out --no-process")
+
     @property
     def configurations(self) -> list[tuple[str, int]]:
         """Every (Mitsuba sampler, rr_depth) timed, in the table's order."""
         return [(sampler, depth) for depth in self.rr_depths for sampler in self.samplers]
+
+
+def _check_mitsuba_spp(option: str, spp: int, sampler: str) -> None:
+    """``PtlabError`` if Mitsuba's ``sampler`` would not render exactly ``spp`` samples."""
+    rule = MITSUBA_SPP_RULES.get(sampler)
+    if rule and not rule[0](spp):
+        raise PtlabError(
+            f"{option} {spp}: Mitsuba's {sampler} sampler needs {rule[1]} "
+            f"(it would round it up and render more samples)"
+        )
 
 
 # ---------------------------------------------------------------------------------------------
@@ -336,6 +402,11 @@ def _summary(values: list[float], digits: int = 3) -> str:
     return f"{fmt(statistics.median(values))} [{fmt(min(values))}, {fmt(max(values))}]"
 
 
+def _markdown(rows: list[list[str]], legend: str) -> str:
+    """The rows as a Markdown table (the first its header), and the legend below."""
+    return "\n".join("| " + " | ".join(row) + " |" for row in rows) + "\n" + legend
+
+
 def table(contenders: list[Contender], baseline: Contender) -> str:
     """The Markdown table of every contender, medians and ranges over the rounds."""
     header = [
@@ -369,7 +440,46 @@ def table(contenders: list[Contender], baseline: Contender) -> str:
         f"one's, efficiency: {baseline.label}'s s x relMSE / this one's, in the same round "
         f"(above 1: better than {baseline.label})"
     )
-    return "\n".join("| " + " | ".join(row) + " |" for row in rows) + "\n" + legend
+    return _markdown(rows, legend)
+
+
+def process_table(contenders: list[Contender], baselines: dict[str, Contender], reference: np.ndarray) -> str:
+    """The Markdown table of the whole processes against ``baselines`` (name -> contender):
+    seconds x relMSE over each baseline's in the same round, and each channel's mean over the
+    reference's; medians and ranges over the rounds."""
+    header = [
+        "process",
+        "seconds",
+        "relMSE",
+        "s x relMSE",
+        *(f"s x relMSE / {name}'s" for name in baselines),
+        "mean / reference's (R, G, B)",
+    ]
+    rows = [header, ["---"] * len(header)]
+    reference_means = reference.reshape(-1, 3).mean(axis=0, dtype=np.float64)
+    for contender in contenders:
+        runs = contender.runs
+        ratios = []
+        for baseline in baselines.values():
+            by_round = {run.round: run for run in baseline.runs}
+            ratios.append(_summary([r.cost / by_round[r.round].cost for r in runs]))
+        means = [r.image.reshape(-1, 3).mean(axis=0, dtype=np.float64) / reference_means for r in runs]
+        rows.append(
+            [
+                contender.label,
+                _summary([r.seconds for r in runs]),
+                _summary([r.relmse for r in runs]),
+                _summary([r.cost for r in runs]),
+                *ratios,
+                ", ".join(f"{m:.4f}" for m in np.median(means, axis=0)),
+            ]
+        )
+    legend = "; ".join(f"{name}: {baseline.label}" for name, baseline in baselines.items())
+    legend += (
+        "; median [min, max] over the rounds; below 1: less error for its time than the "
+        "baseline's in the same round; channel means: the median over the rounds"
+    )
+    return _markdown(rows, legend)
 
 
 def _mean_standard_error(run: Run, reference: np.ndarray, spp: int, reference_spp: int) -> np.ndarray:
@@ -470,7 +580,8 @@ def mitsuba_contenders(mitsuba: MitsubaRenderer, options: ComparisonOptions) -> 
 
 
 def ptlab_contenders(scene: Scene, options: ComparisonOptions) -> list[Contender]:
-    """ptlab with every sampler, in this process (its workers are processes of their own)."""
+    """ptlab with every sampler, in this process (its workers are processes of their own),
+    denoised with ``denoise``."""
 
     def contender(sampler: str) -> Contender:
         def render(seed: int, spp: int = options.spp) -> tuple[np.ndarray, float]:
@@ -483,12 +594,12 @@ def ptlab_contenders(scene: Scene, options: ComparisonOptions) -> list[Contender
                 workers=options.workers,
                 strategy=options.ptlab_strategy,
                 sampler=sampler,
+                denoise=options.denoise,
             ).image
             return image, time.perf_counter() - start
 
-        return Contender(
-            f"ptlab {sampler} {options.ptlab_strategy}", render, lambda: render(WARM_UP_SEED, spp=1)
-        )
+        label = f"ptlab {sampler} {options.ptlab_strategy}" + (" --denoise" if options.denoise else "")
+        return Contender(label, render, lambda: render(WARM_UP_SEED, spp=1))
 
     return [contender(sampler) for sampler in options.ptlab_samplers]
 
@@ -499,71 +610,163 @@ def _executable(name: str) -> str | None:
     return str(beside) if beside.is_file() else shutil.which(name)
 
 
-def process_contenders(
-    options: ComparisonOptions, scene_xml: Path, folder: Path, echo: Echo
-) -> tuple[list[Contender], list[Contender]]:
-    """``ptlab render`` (its default sampler) and ``mitsuba`` (the scene file's defaults:
-    sampler independent, rr_depth 5) as whole processes, writing their EXRs into ``folder``."""
-    ptlab_command = _executable("ptlab")
-    if ptlab_command is None:
-        raise PtlabError("the ptlab command is not installed: pip install -e . from the repository")
-    workers = [] if options.workers is None else ["--workers", str(options.workers)]
-    width, height = options.res
+@dataclass
+class Processes:
+    """The whole-process contenders, and the two that the denoised race compares with.
 
-    def ptlab_render(
-        seed: int, out: Path, amount: tuple[str, str] = ("--spp", str(options.spp))
-    ) -> list[str]:
-        return [
-            ptlab_command,
-            "render",
-            options.scene,
-            "--res",
-            f"{width}x{height}",
-            *amount,
-            "--seed",
-            str(seed),
-            "--strategy",
-            options.ptlab_strategy,
-            "--quiet",
-            "--out",
-            str(out),
-            *workers,
-        ]
+    Attributes:
+        ptlab: ``ptlab render`` at ``spp`` and, given a target, to it.
+        mitsuba: ``mitsuba`` at ``spp`` (and at ``target_from_mitsuba_spp``) and, with
+            ``denoise``, Mitsuba + OIDN at ``spp`` and ``mitsuba_denoise_spp``.
+        baselines: "(a)": Mitsuba at ``target_from_mitsuba_spp`` (else ``spp``), if the
+            mitsuba command is there; "(b)": Mitsuba + OIDN at ``mitsuba_denoise_spp``, with
+            ``denoise``.
+    """
 
-    label = f"ptlab render {DEFAULT_SAMPLER} {options.ptlab_strategy}"
-    contenders = [command_contender(f"{label} [process]", ptlab_render, folder / "ptlab.exr")]
-    if options.ptlab_target_error is not None:
-        # The same command, to a noise target instead of a number of samples (its first pass:
-        # the default).
-        target = options.ptlab_target_error
-        contenders.append(
-            command_contender(
-                f"{label} to {target:g} [process]",
-                lambda seed, out: ptlab_render(seed, out, ("--target-error", str(target))),
-                folder / "ptlab-target.exr",
-            )
+    ptlab: list[Contender] = field(default_factory=list)
+    mitsuba: list[Contender] = field(default_factory=list)
+    baselines: dict[str, Contender] = field(default_factory=dict)
+
+
+class ProcessCommands:
+    """The whole processes, each a contender that writes an EXR of its own into ``folder``.
+
+    Args:
+        options: what to run (the scene, resolution, seeds, workers, strategy, variant).
+        scene_xml: Mitsuba's scene file, written from the scene (``mitsuba_export``).
+        folder: where the EXRs go.
+    """
+
+    def __init__(self, options: ComparisonOptions, scene_xml: Path, folder: Path):
+        ptlab_command = _executable("ptlab")
+        if ptlab_command is None:
+            raise PtlabError("the ptlab command is not installed: pip install -e . from the repository")
+        self.options, self.scene_xml, self.folder = options, scene_xml, folder
+        self.ptlab_command = ptlab_command
+        #: None where the mitsuba command is not installed.
+        self.mitsuba_command = _executable("mitsuba")
+        self._outputs = 0
+
+    def _output(self) -> Path:
+        self._outputs += 1
+        return self.folder / f"process{self._outputs}.exr"
+
+    def ptlab(self, target: float | None = None) -> Contender:
+        """``ptlab render`` (its default sampler) at ``spp``, or to ``target``: then
+        ``--target-error``, its first pass the command's default."""
+        options = self.options
+        width, height = options.res
+        amount = ["--spp", str(options.spp)] if target is None else ["--target-error", repr(target)]
+        denoise = ["--denoise"] if options.denoise else []
+        workers = [] if options.workers is None else ["--workers", str(options.workers)]
+        label = f"ptlab render {DEFAULT_SAMPLER} {options.ptlab_strategy}" + (
+            f" {options.spp} spp" if target is None else f" to {target:.3g}"
         )
-    mitsuba_command = _executable("mitsuba")
-    if mitsuba_command is None:
-        echo("no mitsuba command beside this Python or on the PATH: its process is not timed")
-        return contenders, []
-    mitsuba = command_contender(
-        f"mitsuba independent rr_depth {MITSUBA_RR_DEPTH} [process]",
-        lambda seed, out: [
-            mitsuba_command,
-            "-m",
-            options.variant,
-            "-o",
-            str(out),
-            "-D",
-            f"spp={options.spp}",
-            "-D",
-            f"seed={seed}",
-            str(scene_xml),
-        ],
-        folder / "mitsuba.exr",
-    )
-    return contenders, [mitsuba]
+        return command_contender(
+            f"{label}{' --denoise' if options.denoise else ''} [process]",
+            lambda seed, out: [
+                self.ptlab_command,
+                "render",
+                options.scene,
+                "--res",
+                f"{width}x{height}",
+                *amount,
+                *denoise,
+                "--seed",
+                str(seed),
+                "--strategy",
+                options.ptlab_strategy,
+                "--quiet",
+                "--out",
+                str(out),
+                *workers,
+            ],
+            self._output(),
+        )
+
+    def mitsuba(self, spp: int) -> Contender | None:
+        """``mitsuba`` at ``spp`` (``process_sampler``, the scene file's rr_depth), or None
+        without the command; its warm-up renders 1 spp (Dr.Jit's kernels do not depend on
+        the spp or the seed: it compiles them once, into its disk cache)."""
+        command, options = self.mitsuba_command, self.options
+        if command is None:
+            return None
+
+        def argv(spp: int, seed: int, out: Path) -> list[str]:
+            parameters = dict(spp=spp, seed=seed, sampler=options.process_sampler)
+            defines = [part for name, value in parameters.items() for part in ("-D", f"{name}={value}")]
+            return [command, "-m", options.variant, "-o", str(out), *defines, str(self.scene_xml)]
+
+        return self._contender(f"{spp} spp", spp, argv)
+
+    def mitsuba_denoised(self, spp: int) -> Contender:
+        """Mitsuba + OIDN at ``spp``: ``python -m ptlab.measure.mitsuba_denoised``."""
+        options = self.options
+
+        def argv(spp: int, seed: int, out: Path) -> list[str]:
+            return [
+                *(sys.executable, "-m", "ptlab.measure.mitsuba_denoised", str(self.scene_xml), str(out)),
+                *("--spp", str(spp), "--seed", str(seed), "--variant", options.variant),
+                *("--sampler", options.process_sampler),
+            ]
+
+        return self._contender(f"{spp} spp + OIDN", spp, argv)
+
+    def _contender(self, what: str, spp: int, argv: Callable[[int, int, Path], list[str]]) -> Contender:
+        """The Mitsuba process ``argv(spp, seed, out)``, labelled with ``what`` it renders; its
+        warm-up renders 1 spp."""
+        label = f"mitsuba {self.options.process_sampler} rr_depth {MITSUBA_RR_DEPTH} {what} [process]"
+        contender = command_contender(label, lambda seed, out: argv(spp, seed, out), self._output())
+        warm_up = argv(1, WARM_UP_SEED, self.folder / "warm-up.exr")
+        contender.warm_up = lambda: run_command(warm_up, f"{label} (warm-up)")
+        return contender
+
+
+def process_contenders(
+    options: ComparisonOptions, commands: ProcessCommands, target: float | None
+) -> Processes:
+    """The whole processes (``Processes``), ptlab's target ``target`` (or None)."""
+    processes = Processes(ptlab=[commands.ptlab()])
+    if target is not None:
+        processes.ptlab.append(commands.ptlab(target))
+    baseline_spp = options.target_from_mitsuba_spp or options.spp
+    for spp in dict.fromkeys([options.spp, baseline_spp]):
+        if (plain := commands.mitsuba(spp)) is not None:
+            processes.mitsuba.append(plain)
+            if spp == baseline_spp:
+                processes.baselines["(a)"] = plain
+    if options.denoise:
+        for spp in dict.fromkeys([options.spp, options.mitsuba_denoise_spp]):
+            processes.mitsuba.append(denoised := commands.mitsuba_denoised(spp))
+            if spp == options.mitsuba_denoise_spp:
+                processes.baselines["(b)"] = denoised
+    return processes
+
+
+def mitsuba_error(
+    commands: ProcessCommands,
+    options: ComparisonOptions,
+    reference: np.ndarray,
+    unlit: np.ndarray,
+    echo: Echo,
+) -> float:
+    """E_m: the median true relMSE of ``repeat`` renders by Mitsuba's whole process at
+    ``target_from_mitsuba_spp``, with seeds that the rounds do not use."""
+    assert options.target_from_mitsuba_spp is not None
+    spp = options.target_from_mitsuba_spp
+    contender = commands.mitsuba(spp)
+    if contender is None:
+        raise PtlabError(
+            f"--target-from-mitsuba-spp {spp}: no mitsuba command beside this Python or on the PATH"
+        )
+    assert contender.warm_up is not None
+    contender.warm_up()
+    for round_ in range(options.repeat):
+        run = measure(contender, round_, options.seed + round_ + CALIBRATION_SEED_OFFSET, reference, unlit)
+        echo(f"target: {contender.label} {run.seconds:.2f} s, relMSE {run.relmse:.4g}")
+    error = statistics.median(run.relmse for run in contender.runs)
+    echo(f"target: {error:.4g}, the median of Mitsuba's {len(contender.runs)} renders at {spp} spp")
+    return error
 
 
 def warm_up(contenders: list[Contender], mitsuba: MitsubaRenderer, echo: Echo) -> None:
@@ -637,7 +840,7 @@ def _compare_in(options: ComparisonOptions, folder: Path, echo: Echo) -> bool:
         mi,
         dr,
         write_mitsuba_scene(scene, folder, width, height),
-        [*options.configurations, ("independent", MITSUBA_RR_DEPTH)],
+        [*(options.configurations if options.in_process else []), ("independent", MITSUBA_RR_DEPTH)],
     )
     echo(f"{scene.summary()}; {width}x{height}, {options.spp} spp, {options.repeat} rounds")
     echo(
@@ -653,13 +856,23 @@ def _compare_in(options: ComparisonOptions, folder: Path, echo: Echo) -> bool:
     unlit = reference.max(axis=-1) <= LIGHT_THRESHOLD
     echo(f"{(~unlit).sum()} of {unlit.size} pixels see the light")
 
-    mitsuba_runs, ptlab_runs = mitsuba_contenders(mitsuba, options), ptlab_contenders(scene, options)
-    ptlab_process, mitsuba_process = (
-        process_contenders(options, mitsuba.scene_xml, folder, echo) if options.time_processes else ([], [])
+    mitsuba_runs, ptlab_runs = (
+        (mitsuba_contenders(mitsuba, options), ptlab_contenders(scene, options))
+        if options.in_process
+        else ([], [])
     )
-    warm_up(mitsuba_runs + ptlab_runs, mitsuba, echo)
+    processes = Processes()
+    if options.time_processes:
+        commands = ProcessCommands(options, mitsuba.scene_xml, folder)
+        if commands.mitsuba_command is None:
+            echo("no mitsuba command beside this Python or on the PATH: its process is not timed")
+        target = options.ptlab_target_error
+        if options.target_from_mitsuba_spp is not None:
+            target = mitsuba_error(commands, options, reference, unlit, echo)
+        processes = process_contenders(options, commands, target)
+    warm_up(mitsuba_runs + ptlab_runs + processes.mitsuba, mitsuba, echo)
     run_rounds(
-        interleave(mitsuba_runs + mitsuba_process, ptlab_runs + ptlab_process),
+        interleave(mitsuba_runs + processes.mitsuba, ptlab_runs + processes.ptlab),
         options,
         reference,
         unlit,
@@ -668,9 +881,14 @@ def _compare_in(options: ComparisonOptions, folder: Path, echo: Echo) -> bool:
     echo(f"timed Mitsuba renders in this process: {mitsuba.kernels()}")
     echo(f"load average after: {_load_average()}")
 
-    contenders = mitsuba_runs + ptlab_runs + ptlab_process + mitsuba_process
-    baseline = next((c for c in ptlab_runs if c.label.startswith(f"ptlab {DEFAULT_SAMPLER} ")), ptlab_runs[0])
+    contenders = mitsuba_runs + ptlab_runs + processes.ptlab + processes.mitsuba
+    baseline = next(
+        (c for c in ptlab_runs if c.label.startswith(f"ptlab {DEFAULT_SAMPLER} ")),
+        (ptlab_runs + processes.ptlab)[0],
+    )
     echo(f"\n{table(contenders, baseline)}\n")
+    if options.denoise or options.target_from_mitsuba_spp is not None:
+        echo(f"{process_table(processes.ptlab + processes.mitsuba, processes.baselines, reference)}\n")
     if options.csv:
         write_csv(Path(options.csv), contenders)
         echo(f"wrote {Path(options.csv).resolve()}")
