@@ -506,20 +506,22 @@ def _denoised_said(result) -> str:
     said = f"denoised by {settings['denoised']} in {settings['denoise_seconds']:.2f} s"
     if result.relmse_estimate is not None:
         return said + f", estimated relMSE {result.relmse_estimate:.4g}"
-    return said + f"; its error is not estimated: {result.estimate_refused}"
+    said += f"; its error is not estimated: {result.estimate_refused}"
+    if (bound := settings.get("relmse_bound")) is not None:
+        said += f"; its relMSE is below {bound:.4g}"
+    return said
 
 
 def _target_said(result, options) -> str:
     """The line after a render to a target error: the estimate, and why it stopped."""
     estimate = result.relmse_estimate
-    if estimate is None:  # (a denoised render whose error could not be estimated)
-        noisy = result.settings.get("noisy_relmse_estimate")
-        said = f"target {options.target_error:g} for the noisy image (the denoised one's error is not known)"
-        if noisy is not None:
-            said = f"the noisy image's estimated relMSE {noisy:.4g}, " + said
-        reached = noisy is not None and noisy <= options.target_error
-        return said + (": reached" if reached else ": not reached")
-    said = f"estimated relMSE {estimate:.4g}, target {options.target_error:g}"
+    bound = result.settings.get("relmse_bound")
+    if estimate is None and bound is not None:  # (a denoised render's refused estimate)
+        said = f"relMSE below {bound:.4g} (not estimated closer), target {options.target_error:g}"
+    elif estimate is None:
+        return f"target {options.target_error:g}: not reached (the denoised image's error is not known)"
+    else:
+        said = f"estimated relMSE {estimate:.4g}, target {options.target_error:g}"
     if result.target_reached:
         return said + ": reached"
     if result.settings.get("target_end") == "time limit":

@@ -33,12 +33,12 @@ LAYERS = [
             "ptlab.scene_file",
             # (the relMSE's definition: the renderer's own estimate of it uses it too)
             "ptlab.measure.metrics",
-            # (arrays in, arrays out: the denoiser and its error's estimate)
-            "ptlab.denoise",
         ],
     ),
     ("integrators", ["ptlab.integrators"]),
-    ("rendering", ["ptlab.rendering", "ptlab", "ptlab.inspector"]),
+    # (the denoiser and its error's estimate, arrays in and out, share the noise target's
+    # stand-in for the truth: ptlab.rendering.adaptive)
+    ("rendering", ["ptlab.rendering", "ptlab", "ptlab.inspector", "ptlab.denoise"]),
     ("tools", ["ptlab.measure", "ptlab.grading"]),
     # The course: it imports the renderer, never the reverse.
     (

@@ -46,19 +46,22 @@ class FeatureBuffers:
     hit that is not a mirror or glass.
 
     Attributes:
-        direct, albedo, normal: (rows, 3) float64.
+        values: (rows, 9) float32, the three images side by side (``FEATURES``' order);
+        direct, albedo, normal: its (rows, 3) columns.
         found: (rows,) bool: the path has had that first hit (its albedo and normal are set).
     """
 
     def __init__(self, rows: int):
-        self.direct = np.zeros((rows, 3))
-        self.albedo = np.zeros((rows, 3))
-        self.normal = np.zeros((rows, 3))
+        # (One array, the three images its columns: summed per pixel as one, with no copy.
+        # Column by column, float32 like the paths' radiance: rows are set 3x faster so than
+        # as float64 rows; each pixel's sums are float64, ``ptlab.rendering.jobs``.)
+        self.values = np.zeros((rows, 3 * len(FEATURES)), dtype=np.float32, order="F")
+        self.direct, self.albedo, self.normal = (self.values[:, 3 * k : 3 * k + 3] for k in range(3))
         self.found = np.zeros(rows, dtype=bool)
 
     def stacked(self) -> np.ndarray:
         """(rows, 9): direct, albedo and normal side by side (``FEATURES``' order)."""
-        return np.concatenate([self.direct, self.albedo, self.normal], axis=1)
+        return self.values
 
     def emission(self, pixel: np.ndarray, sees_emission: np.ndarray, radiance: np.ndarray) -> None:
         """Emission ``radiance`` (N, 3) added to film rows ``pixel`` (N,) by rays that count
@@ -71,7 +74,7 @@ class FeatureBuffers:
             return
         direct = candidates[~self.found.take(pixel.take(candidates))]
         rows = pixel.take(direct)
-        values = np.asarray(take_rows(radiance, direct), dtype=np.float64)
+        values = np.asarray(take_rows(radiance, direct), dtype=np.float32)
         finite = np.isfinite(values).all(axis=1)  # (the film leaves such samples out too)
         np.add.at(self.direct, rows[finite], values[finite])
 
@@ -84,11 +87,13 @@ class FeatureBuffers:
             return
         rows = pixel.take(candidates)
         first = ~self.found.take(rows)
-        candidates, rows = candidates[first], rows[first]
-        albedo = np.clip(np.nan_to_num(take_rows(weight, candidates), nan=0.0), 0.0, 1.0)
-        # (A path's rows are its own: each is set once, by plain assignment.)
-        self.albedo[rows] = albedo
-        self.normal[rows] = take_rows(n, candidates)
+        if not first.all():
+            candidates, rows = candidates[first], rows[first]
+        # (A path's rows are its own: each is set once, by plain assignment, column by column.)
+        for c in range(3):
+            albedo = np.clip(weight[:, c].take(candidates), 0.0, 1.0)
+            self.albedo[:, c][rows] = np.where(np.isnan(albedo), np.float32(0), albedo)
+            self.normal[:, c][rows] = n[:, c].take(candidates)
         self.found[rows] = True
 
 

@@ -11,11 +11,12 @@ ran the render's jobs (processes, threads, a Dask cluster).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
-from ptlab.denoise import DenoiseInputs
+from ptlab.denoise import DenoiseInputs, ErrorEstimate
+from ptlab.denoise.estimate import MAX_RELMSE
 from ptlab.rendering.film import Film
 
 
@@ -32,6 +33,10 @@ class DenoisedFilm:
             for a render to a target error to put its next samples where it is.
         seconds: the denoiser's time (with the estimate's).
         about: what denoised it, for the image's header.
+        settings: how (``ptlab.denoise.Denoised.settings``), for the header too.
+        error_bound: where the estimate is refused only for its own spread or for a small
+            light's edges, what the error is below all the same (``error_bound``), else None:
+            a render to a target error may stop on it.
     """
 
     image: np.ndarray
@@ -40,6 +45,8 @@ class DenoisedFilm:
     error_map: np.ndarray | None
     seconds: float
     about: str
+    settings: dict = field(default_factory=dict)
+    error_bound: float | None = None
 
 
 def film_inputs(film: Film) -> tuple[DenoiseInputs, str]:
@@ -71,20 +78,43 @@ def film_inputs(film: Film) -> tuple[DenoiseInputs, str]:
 
 
 def denoise_film(film: Film, estimate: bool = True) -> DenoisedFilm:
-    """Denoise the film's image; with ``estimate``, estimate the denoised image's error too."""
-    from ptlab.denoise.oidn import denoise_colour, oidn_version
+    """Denoise the film's image; with ``estimate``, estimate the denoised image's error too
+    (``ptlab.denoise.pipeline``: each half denoised, the image their mean)."""
+    from ptlab.denoise import denoise
 
     start = time.perf_counter()
     inputs, why_not = film_inputs(film)
-    direct = inputs.direct
-    colour = np.maximum(inputs.image - direct, 0.0)
-    image = denoise_colour(colour, inputs.albedo, inputs.normal) + direct
-    refused = why_not or "not yet"
+    result = denoise(inputs, estimate=estimate and not why_not)
+    refused = why_not if estimate else "not asked for"
+    error_map, bound = None, None
+    if result.estimate is not None:
+        refused, error_map = result.estimate.reason or "", result.estimate.error_map
+        bound = error_bound(result.estimate)
     return DenoisedFilm(
-        image=np.asarray(image, np.float32),
-        relmse_estimate=None,
+        image=np.asarray(result.image, np.float32),
+        relmse_estimate=None if result.estimate is None else result.estimate.relmse,
         refused=refused,
-        error_map=None,
+        error_map=error_map,
         seconds=time.perf_counter() - start,
-        about=f"Intel Open Image Denoise {oidn_version()}",
+        about=result.settings["denoiser"],
+        settings=result.settings,
+        error_bound=bound,
     )
+
+
+#: Standard errors above an estimate that ``error_bound`` takes the error to be below.
+BOUND_STANDARD_ERRORS = 2.0
+
+
+def error_bound(estimate: ErrorEstimate) -> float | None:
+    """What the denoised image's relMSE is below, with about 98% confidence, where its estimate
+    is refused only because it is too uncertain to print (its standard error) or because the
+    truth's brightness is uncertain (``ptlab.denoise.estimate``: the estimate with the other
+    plausible brightness, ``alternative``): the larger of the two, plus
+    ``BOUND_STANDARD_ERRORS`` standard errors (the block means' spread: one-sided, a normal
+    variable exceeds 2 standard deviations 2.3% of the time). None where the estimate says
+    nothing (not positive, or too large for its own denominators to hold)."""
+    larger = max(estimate.value, estimate.alternative)
+    if not estimate.value > 0 or larger > MAX_RELMSE or not np.isfinite(estimate.standard_error):
+        return None
+    return larger * (1.0 + BOUND_STANDARD_ERRORS * estimate.standard_error)

@@ -3,6 +3,8 @@ the command line they share (``ptlab.course.tutorial``) takes those settings."""
 
 from __future__ import annotations
 
+import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -77,3 +79,64 @@ def test_tutorial_runs_as_a_notebook_in_a_fresh_kernel(script, tmp_path, monkeyp
         if "image/png" in output.get("data", {})
     ]
     assert len(shown) == len(written), f"{script.name} showed {len(shown)} of its {len(written)} pictures"
+
+
+#: The tutorial that is no chapter's: what a denoiser buys and what it costs (docs/denoising.md).
+DENOISING = Path(__file__).parents[2] / "docs" / "tutorials" / "denoising.py"
+DENOISING_PICTURES = {
+    f"denoising-{name}.png" for name in ("cornell-box", "error-time", "veach-mis", "games101-hw5")
+}
+
+
+def _check_denoising_run(printed: str, folder: Path) -> None:
+    """The denoising tutorial wrote its pictures, denoised the Cornell box at 1 spp into a far
+    cleaner image, and printed a row of its estimates' table per scene."""
+    assert {path.name for path in folder.glob("*.png")} == DENOISING_PICTURES
+    # The ladder's row: spp, plain seconds and relMSE, denoised seconds, OIDN's, relMSE, ...
+    rung = re.search(r"^ +1 +[\d.]+ +([\d.]+) +[\d.]+ +[\d.]+ +([\d.]+) ", printed, re.MULTILINE)
+    assert rung, printed[-3000:]
+    noisy, denoised = map(float, rung.groups())
+    assert denoised < noisy / 3, f"denoising took the relMSE from {noisy} to only {denoised}"
+    estimates = printed.partition("beside the true error:")[2]
+    says = r"(refused: .+|[\d.]+( \([\d.]+x the true error\))?)"
+    for scene in ("cornell-box", "veach-mis", "games101-hw5"):
+        row = rf"^ +{scene} +\d+ +-?[\d.]+ +{says}$"
+        assert re.search(row, estimates, re.MULTILINE), f"no row for {scene}:\n{estimates}"
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_denoising_tutorial_runs_at_reduced_settings(tmp_path):
+    run = subprocess.run(
+        [sys.executable, str(DENOISING), "--res", "32", "--spp", "1", "--out", str(tmp_path / "out")],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        env=dict(os.environ, PTLAB_CACHE=str(tmp_path / "references")),  # (rendered, not the user's)
+    )
+    assert run.returncode == 0, run.stderr[-2000:]
+    _check_denoising_run(run.stdout, tmp_path / "out")
+
+
+@pytest.mark.slow
+@pytest.mark.subprocess
+def test_denoising_tutorial_runs_as_a_notebook_in_a_fresh_kernel(tmp_path, monkeypatch):
+    import jupytext
+    from nbclient import NotebookClient
+
+    notebook = jupytext.read(DENOISING)
+    assert sum(cell.cell_type == "markdown" for cell in notebook.cells) >= 5  # (a tutorial: prose and code)
+    out = tmp_path / "out"
+    monkeypatch.setenv("PTLAB_TUTORIAL_ARGS", f"--res 32 --spp 1 --out '{out}'")
+    monkeypatch.setenv("PTLAB_CACHE", str(tmp_path / "references"))
+    NotebookClient(
+        notebook, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
+    ).execute()
+    outputs = [output for cell in notebook.cells for output in cell.get("outputs", [])]
+    assert not [output for output in outputs if output.get("output_type") == "error"]
+    printed = "".join(output.get("text", "") for output in outputs if output.get("name") == "stdout")
+    _check_denoising_run(printed, out)
+    shown = [output for output in outputs if "image/png" in output.get("data", {})]
+    assert len(shown) == len(DENOISING_PICTURES), (
+        f"showed {len(shown)} of its {len(DENOISING_PICTURES)} pictures"
+    )

@@ -216,6 +216,9 @@ def test_previews_of_a_denoised_render_are_denoised(tmp_path):
     image, metadata = written[-1]
     assert metadata["preview"] == 1
     assert metadata["denoised"].startswith("Intel Open Image Denoise")
-    # The last preview is the film of the whole render, denoised: the render's own image.
-    np.testing.assert_allclose(image, result.image, rtol=1e-5, atol=1e-6)
-    assert not np.allclose(image, result.noisy, rtol=0.05)
+    # The last preview is the film of the whole render, denoised at once (a preview needs no
+    # estimate: ptlab.denoise.pipeline), where the render's image is its two halves denoised:
+    # near the render's image, far from the noisy one.
+    from ptlab.measure.metrics import relmse
+
+    assert relmse(image, result.image) < 0.2 * relmse(result.noisy, result.image)
