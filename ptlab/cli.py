@@ -518,8 +518,15 @@ def _target_said(result, options) -> str:
     bound = result.settings.get("relmse_bound")
     if estimate is None and bound is not None:  # (a denoised render's refused estimate)
         said = f"relMSE below {bound:.4g} (not estimated closer), target {options.target_error:g}"
-    elif estimate is None:
-        return f"target {options.target_error:g}: not reached (the denoised image's error is not known)"
+    elif estimate is None:  # (then the noisy image's estimate decided: ``render_result``)
+        noisy = result.settings.get("noisy_relmse_estimate")
+        if noisy is None:
+            return f"target {options.target_error:g}: not reached (the denoised image's error is not known)"
+        reached = "reached" if noisy <= options.target_error else "not reached"
+        return (
+            f"target {options.target_error:g} {reached} by the noisy image's estimated relMSE "
+            f"({noisy:.4g}); the denoised image's error is not known"
+        )
     else:
         said = f"estimated relMSE {estimate:.4g}, target {options.target_error:g}"
     if result.target_reached:

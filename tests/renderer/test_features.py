@@ -9,6 +9,7 @@ and the rest compare renders bit for bit.
 
 from __future__ import annotations
 
+import re
 import subprocess
 import sys
 from concurrent.futures import ThreadPoolExecutor
@@ -19,6 +20,7 @@ import pytest
 
 import ptlab
 from ptlab.cli import main as cli_main
+from ptlab.image import read_image
 from ptlab.rendering import render_result
 
 CEILING_ALBEDO = (0.2, 0.4, 0.6)
@@ -193,7 +195,6 @@ def test_without_the_extra_denoise_fails_in_one_line_before_rendering(tmp_path):
 def test_previews_of_a_denoised_render_are_denoised(tmp_path):
     pytest.importorskip("pyoidn")
     from ptlab.cli import _Preview
-    from ptlab.image import read_image
 
     written = []
 
@@ -222,3 +223,40 @@ def test_previews_of_a_denoised_render_are_denoised(tmp_path):
     from ptlab.measure.metrics import relmse
 
     assert relmse(image, result.image) < 0.2 * relmse(result.noisy, result.image)
+
+
+def test_a_denoised_render_to_a_target_says_what_decided_its_end(tmp_path, capsys):
+    pytest.importorskip("pyoidn")
+    out = tmp_path / "box.exr"
+    code = cli_main(
+        [
+            "render",
+            "cornell-box",
+            "--res",
+            "64",
+            "--workers",
+            "1",
+            "--denoise",
+            "--target-error",
+            "0.02",
+            "--out",
+            str(out),
+        ]
+    )
+    assert code == 0
+    lines = capsys.readouterr().out.splitlines()
+    said = lines[-2]  # (the target's line, before "wrote ...")
+    decided = [
+        r"estimated relMSE [0-9.e-]+, target 0.02: reached",
+        r"relMSE below [0-9.e-]+ \(not estimated closer\), target 0.02: reached",
+        r"target 0.02 reached by the noisy image's estimated relMSE \([0-9.e-]+\); "
+        r"the denoised image's error is not known",
+    ]
+    assert any(re.fullmatch(pattern, said) for pattern in decided), said
+    metadata = read_image(out)[1]
+    assert metadata["target_end"] == "target"
+    # What the line says is in the header: an estimate, a bound, or why there is neither.
+    if "estimated relMSE" in said and "noisy" not in said:
+        assert metadata["relmse_estimate"] <= 0.02
+    else:
+        assert metadata["relmse_estimate_refused"]
