@@ -180,3 +180,17 @@ def module_name(path: Path) -> str:
 def library_modules() -> dict[str, Path]:
     """Every module of the library (the students' exercise files are not part of it)."""
     return {module_name(p): p for p in PACKAGE.rglob("*.py") if not {"templates", "solutions"} & set(p.parts)}
+
+
+def load_script(name: str):
+    """``scripts/NAME.py`` as a module (the scripts are programs, not a package)."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(f"{name}_script", path)
+    assert spec is not None
+    assert spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module

@@ -6,13 +6,13 @@ where Mitsuba or ``pyoidn`` is not installed the tests that need them are skippe
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_script
 
 from ptlab.errors import PtlabError
 from ptlab.measure.against_mitsuba import ComparisonOptions, compare
@@ -30,12 +30,7 @@ VARIANT = "scalar_rgb"
 @pytest.fixture(scope="module")
 def command():
     """``scripts/against_mitsuba.py`` as a module."""
-    spec = importlib.util.spec_from_file_location(
-        "against_mitsuba_command", REPOSITORY / "scripts" / "against_mitsuba.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("against_mitsuba")
 
 
 # -- the options ------------------------------------------------------------------------------

@@ -4,7 +4,6 @@ are the module's, and (where Mitsuba is installed) both renderers draw the same 
 
 from __future__ import annotations
 
-import importlib.util
 import subprocess
 import sys
 import tomllib
@@ -13,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from helpers import load_script
 
 from ptlab.camera import Camera
 from ptlab.errors import PtlabError
@@ -228,12 +228,7 @@ def test_an_llvm_abort_is_one_line_with_a_hint():
 @pytest.fixture(scope="module")
 def command():
     """``scripts/against_mitsuba.py`` as a module."""
-    spec = importlib.util.spec_from_file_location(
-        "against_mitsuba_command", REPOSITORY / "scripts" / "against_mitsuba.py"
-    )
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
+    return load_script("against_mitsuba")
 
 
 def test_the_commands_defaults_are_the_modules(command):
