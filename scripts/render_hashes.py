@@ -43,6 +43,9 @@ RENDERS = [
     ("hw5 mis", "games101-hw5", {"strategy": "mis"}),
     ("hw6 whitted", "games101-hw6", {"integrator": "whitted"}),
     ("hw6 nee numpy", "games101-hw6", {"backend": "numpy"}),
+    # (to a noise target: the first pass at the set's spp, then passes of its own)
+    ("cornell target", "cornell-box", {"target_error": 0.05}),
+    ("veach-mis target", "veach-mis", {"strategy": "mis", "target_error": 0.2}),
 ]
 
 
