@@ -450,11 +450,12 @@ def _render(args) -> int:
         if result.nonfinite:  # (a bug in a material or an integrator: said even with --quiet)
             print(f"ptlab: {result.nonfinite_message()}", file=sys.stderr)
         if not result.complete:
-            return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure)
+            return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure, args.aov)
         _write(out, result, args.exposure, layers=args.aov)
         if spp_map is not None:
             write_spp_map(spp_map, result.counts)
-    if not (result.image > 0).any() and options.integrator in ("path", "whitted"):
+    rendered = result.noisy if result.noisy is not None else result.image  # (a denoiser's haze is no light)
+    if not (rendered > 0).any() and options.integrator in ("path", "whitted"):
         print(
             "ptlab: warning: the image is black: no camera ray saw or received any light "
             "(do the lights face the scene?)",
@@ -570,6 +571,8 @@ def _resumed(args):
             raise PtlabError(f"{args.resume}: this checkpoint does not record its scene: give the scene too")
     if args.out is None:
         args.out = command.get("out")
+    if saved.get("features") is True and not saved.get("denoise"):  # (it was asked for: --aov)
+        args.aov = True
     # How the image is cut into jobs, which the command line does not set (the API does).
     args.layout = {name: saved[name] for name in ("tile_size", "spp_per_pass") if name in saved}
     return args
@@ -612,13 +615,16 @@ def _write(out: Path, result, exposure: float = 0.0, layers: bool = False) -> No
     write_image(out, image, metadata, exposure=exposure, layers=extra)
 
 
-def _interrupted(result, out: Path, checkpoint, exit_code: int, exposure: float = 0.0) -> int:
-    """Keep what an interrupted render has; ``exit_code`` is the signal's (130 for Ctrl-C,
-    143 for SIGTERM), as a shell reports a command that the signal ended."""
+def _interrupted(
+    result, out: Path, checkpoint, exit_code: int, exposure: float = 0.0, layers: bool = False
+) -> int:
+    """Keep what an interrupted render has (with its layers, if asked for: ``--aov``);
+    ``exit_code`` is the signal's (130 for Ctrl-C, 143 for SIGTERM), as a shell reports a
+    command that the signal ended."""
     if result.spp_max == 0:
         print("ptlab: interrupted before any tile finished; nothing written", file=sys.stderr)
         return exit_code
-    _write(out, result, exposure)
+    _write(out, result, exposure, layers)
     spread = (
         f"{result.spp} spp"
         if result.spp == result.spp_max

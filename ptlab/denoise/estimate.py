@@ -221,8 +221,14 @@ def estimate_error(inputs: DenoiseInputs, denoised_a: np.ndarray, denoised_b: np
     value = float(error_map.mean())
     other = float(relative(brightness(inputs, denoised_a, denoised_b, alternative=True)).mean())
     error_spread = standard_error(error_map)
+    blocks = (error_map.shape[0] // BLOCK) * (error_map.shape[1] // BLOCK)
     reason = None
-    if value <= 0:
+    if blocks < MIN_BLOCKS:
+        reason = (
+            f"the image is too small to check the denoiser against: it has {blocks} blocks of "
+            f"{BLOCK} x {BLOCK} pixels, at least {MIN_BLOCKS} are needed"
+        )
+    elif value <= 0:
         reason = f"it came out at {value:.2g}, not positive: its noise is larger than the error"
     elif max(value, other) > MAX_BRIGHTNESS_SPREAD * min(value, other):
         reason = (

@@ -24,14 +24,14 @@ import ptlab.rendering.adaptive as adaptive
 from ptlab.errors import PtlabError
 from ptlab.integrators.features import FEATURES
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
-from ptlab.rendering.denoising import DenoisedFilm, denoise_film
+from ptlab.rendering.denoising import DenoisedFilm, check_denoised_size, denoise_film
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.rendering.options import DEFAULT_MAX_SPP, DEFAULT_RES, RenderOptions, resolution, takes_options
 from ptlab.rendering.pieces import LIBRARY, Pieces
 from ptlab.rendering.scheduler import run_jobs
-from ptlab.rendering.settings import check_integer, check_workers
+from ptlab.rendering.settings import check_flag, check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
 from ptlab.samplers import Sampler, make_sampler
 from ptlab.scene import Scene
@@ -70,7 +70,9 @@ class RenderResult:
         counts: (H, W) int64 samples each pixel has (the same everywhere, but for a render
             stopped mid-pass, unless the render had a target error).
         relmse_estimate: the image's relMSE as its own samples estimate it
-            (``ptlab.rendering.adaptive``), for a render to a target error; else None.
+            (``ptlab.rendering.adaptive``), for a render to a target error; for a denoised
+            render, the denoised image's (``ptlab.denoise.estimate``), or None where that
+            cannot be trusted (``estimate_refused`` says why); else None.
         settings: what made the image, for its file's header: the options
             (``RenderOptions.record``) with the scene's name, the spp every pixel has, the
             depth at which Russian roulette started and the workers (and, denoised, with
@@ -193,8 +195,7 @@ def render_result(
     gather = _gathers_features(options, features)
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
-    options = options.for_scene(scene)
-    workers = check_workers(options.workers)
+    options, workers = _decided_for(scene, options)
     setup = render_setup(scene, options, pieces, features=gather)
     scene, sampler, settings = setup.scene, setup.sampler, setup.settings
     assert sampler is not None  # (render_setup gives one)
@@ -239,7 +240,7 @@ def render_result(
         warnings.warn("the render stopped before any tile had a pass: its image is black", RuntimeWarning, 2)
     if not complete:
         pass_ended.save(film)
-    denoised = _denoised(film, more) if options.denoise else None
+    denoised = _denoised(film, more, options.workers) if options.denoise else None
     seconds = time.perf_counter() - start
     return RenderResult(
         spp=film.spp,
@@ -316,7 +317,19 @@ def _target_record(noise_target: _NoiseTarget | None) -> dict:
     why it ended (``_NoiseTarget.end``)."""
     if noise_target is None:
         return {}
-    return {"max_spp": noise_target.most, "target_end": noise_target.end}
+    record: dict[str, Any] = {"max_spp": noise_target.most, "target_end": noise_target.end}
+    if noise_target.decided_by:  # (a denoised render: its estimate, its bound, or the noisy one's)
+        record["target_decided_by"] = noise_target.decided_by
+    return record
+
+
+def _decided_for(scene: Scene, options: RenderOptions) -> tuple[RenderOptions, int]:
+    """The options decided for ``scene`` (``RenderOptions.for_scene``), checked against it,
+    and the workers (checked)."""
+    options = options.for_scene(scene)
+    if options.denoise:
+        check_denoised_size(*options.size)
+    return options, check_workers(options.workers)
 
 
 def _identity(record: dict, scene: Scene, sampler: Sampler, features: bool) -> dict:
@@ -337,20 +350,22 @@ def _gathers_features(options: RenderOptions, features: bool) -> bool:
         from ptlab.denoise.oidn import require_oidn
 
         require_oidn()
-    gather = options.denoise or features
+    gather = options.denoise or check_flag("features", features)
     if gather and options.integrator != "path":
         raise PtlabError(f"features: only the path integrator gathers them, not {options.integrator!r}")
     return gather
 
 
-def _denoised(film: Film, noise_target: _NoiseTarget | None) -> DenoisedFilm | None:
-    """The film denoised after the last pass: by the last pass of a render to a target
-    error, if it denoised it; not a picture with pixels that have no sample yet (None)."""
+def _denoised(film: Film, noise_target: _NoiseTarget | None, threads: int | None) -> DenoisedFilm | None:
+    """The film denoised after the last pass (by at most ``threads`` threads, the render's
+    workers: None, as many as the denoiser finds worth it): by the last pass of a render to
+    a target error, if it denoised it; not a picture with pixels that have no sample yet
+    (None)."""
     if film.spp == 0:
         return None
     if noise_target is not None and noise_target.denoised is not None:
         return noise_target.denoised
-    return denoise_film(film)
+    return denoise_film(film, threads=threads)
 
 
 def _denoise_record(denoised: DenoisedFilm | None, film: Film) -> dict:
@@ -454,8 +469,9 @@ class _NoiseTarget:
         #: Why the render ended: "target", "max spp" or "time limit" (what the last call saw).
         self.end = ""
         #: The last pass's film denoised (a denoised render), which is the final image if
-        #: the render ends there.
+        #: the render ends there, and what decided whether it was done (``_denoised_measure``).
         self.denoised: DenoisedFilm | None = None
+        self.decided_by = ""
 
     def __call__(self) -> list[Job]:
         film, target = self.film, self.options.target_error
@@ -511,12 +527,14 @@ class _NoiseTarget:
         product hardly moves its weight (there: 0.00106 for a true 0.0012)."""
         variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
         noisy = adaptive.estimated_relmse(variance, film.sums, film.counts)
-        self.denoised = denoised = denoise_film(film)
+        self.denoised = denoised = denoise_film(film, threads=self.options.workers)
         deciding = denoised.relmse_estimate if denoised.relmse_estimate is not None else denoised.error_bound
         error_map = denoised.error_map
         weights = adaptive.allocation_weights(variance, film.sums, film.counts)
         if deciding is None or error_map is None or not error_map.mean() > 0:
+            self.decided_by = "the noisy image's estimate"
             return noisy, weights, target
+        self.decided_by = "the estimate" if denoised.relmse_estimate is not None else "the bound"
         return deciding, weights, target * float(error_map.mean()) / deciding
 
 

@@ -128,6 +128,10 @@ def load_checkpoint(path: str | Path, film: Film, identity: dict) -> None:
             continue
         # (An option newer than the checkpoint is unset there: None, or off.)
         same = str(saved[key]) == str(value) if key in saved else value is None or value is False
+        if not same and key not in saved:
+            raise PtlabError(
+                f"{path}: the checkpoint was made without {key}, this render has {key} = {value!r}"
+            )
         if not same:
             raise PtlabError(
                 f"{path}: the checkpoint was made with {key} = {saved.get(key)!r}, this render has {value!r}"

@@ -207,8 +207,10 @@ class RenderOptions:
         False,
         "denoise the image with Intel Open Image Denoise (the denoise extra: pip install "
         "'ptlab[denoise]'), guided by albedo and normal images of the same samples, lights seen "
-        "directly kept out of it; each pixel's samples in two halves, to estimate the denoised "
-        "image's error",
+        "directly kept out of it; each pixel's samples in two halves, each denoised, to estimate "
+        "the denoised image's error (an even spp is needed for it); with a target error, the "
+        "target is the denoised image's: the render ends on its estimate, on a bound of it, or, "
+        "where neither can be trusted, on the noisy image's estimate, and says which",
         lambda label, value: check_flag(label, value),
     )
 

@@ -20,6 +20,7 @@ import pytest
 
 import ptlab
 from ptlab.cli import main as cli_main
+from ptlab.errors import PtlabError
 from ptlab.image import read_image
 from ptlab.rendering import render_result
 
@@ -260,3 +261,51 @@ def test_a_denoised_render_to_a_target_says_what_decided_its_end(tmp_path, capsy
         assert metadata["relmse_estimate"] <= 0.02
     else:
         assert metadata["relmse_estimate_refused"]
+
+
+def test_a_bound_is_given_only_where_the_estimates_spread_is_known():
+    from ptlab.denoise import ErrorEstimate
+    from ptlab.rendering.denoising import error_bound
+
+    def estimate(size: int, standard_error: float) -> ErrorEstimate:
+        return ErrorEstimate(
+            relmse=None,
+            reason="refused",
+            value=0.002,
+            alternative=0.003,
+            standard_error=standard_error,
+            error_map=np.full((size, size), 0.002),
+        )
+
+    # The larger value plus two standard errors, from enough blocks of 8 x 8 (here 256).
+    assert error_bound(estimate(128, 0.25)) == pytest.approx(0.003 * 1.5)
+    # From 64 blocks (64 x 64 pixels), or a spread above a third, none: such bounds failed.
+    assert error_bound(estimate(64, 0.25)) is None
+    assert error_bound(estimate(128, 0.4)) is None
+
+
+def test_a_denoised_render_refuses_images_too_small_and_leaves_black_ones_black():
+    pytest.importorskip("pyoidn")
+    with pytest.raises(PtlabError, match=r"^denoise: a 8x8 image is too small to denoise"):
+        render_result("cornell-box", spp=2, res=8, workers=1, denoise=True)
+    scene = mirror_under_a_ceiling()
+    dark = ptlab.materials.Diffuse(CEILING_ALBEDO)  # (the same room, with no light in it)
+    black = render_result(
+        scene.with_materials([scene.materials[0], dark]), spp=2, res=16, workers=1, denoise=True
+    )
+    assert not black.image.any()  # (the denoiser would make up a faint haze)
+    assert black.relmse_estimate is None
+    assert black.estimate_refused == "the image is black: no light to denoise"
+
+
+def test_aov_is_kept_by_a_resumed_render(tmp_path):
+    checkpoint, out = tmp_path / "box.npz", tmp_path / "box.exr"
+    started = ["render", "cornell-box", "--res", "16", "--spp", "4", "--workers", "1", "--quiet"]
+    assert cli_main([*started, "--aov", "--checkpoint", str(checkpoint), "--out", str(out)]) == 0
+    out.unlink()
+    assert cli_main(["render", "--resume", str(checkpoint), "--spp", "8", "--workers", "1", "--quiet"]) == 0
+    source = oiio.ImageInput.open(str(out))
+    names = list(source.spec().channelnames)
+    source.close()
+    assert "albedo.R" in names
+    assert "normal.X" in names
