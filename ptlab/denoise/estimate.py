@@ -80,7 +80,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.ndimage import median_filter, uniform_filter
 
 from ptlab.denoise.inputs import DenoiseInputs
 from ptlab.measure.metrics import RELMSE_EPSILON
@@ -163,6 +162,10 @@ def brightness(
     the lesser of the denoised and the local noisy value of the light that is not seen
     directly, plus the stand-in for the light that is; or, if ``alternative``, the other
     plausible brightness at light edges and small highlights."""
+    # (Imported here: every render imports this package, few estimate, and scipy.ndimage takes
+    # about 0.2 s to import; ``ptlab.rendering.adaptive`` does the same.)
+    from scipy.ndimage import median_filter, uniform_filter
+
     direct = inputs.direct
     through_denoiser = (np.asarray(denoised_a, np.float64) + denoised_b) / 2 - direct
     noisy = np.maximum(inputs.image - direct, 0.0)

@@ -309,3 +309,16 @@ def test_aov_is_kept_by_a_resumed_render(tmp_path):
     source.close()
     assert "albedo.R" in names
     assert "normal.X" in names
+
+
+@pytest.mark.subprocess
+def test_a_plain_render_imports_neither_the_denoiser_nor_scipy_ndimage():
+    # (Each took 0.1-0.2 s of every render's start-up, for a render that denoises or aims at a
+    # target: docs/performance.md.)
+    program = (
+        "import sys, ptlab; ptlab.render('cornell-box', res=8, spp=1, workers=1); "
+        "print(sorted(m for m in ('pyoidn', 'scipy.ndimage') if m in sys.modules))"
+    )
+    done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip() == "[]"
