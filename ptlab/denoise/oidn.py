@@ -57,6 +57,13 @@ def oidn_version() -> str:
     return f"{version // 10000}.{version // 100 % 100}.{version % 100}"
 
 
+def prepare(threads: int | None = None) -> None:
+    """Make OIDN's device with ``threads`` threads and its filters now, not at the first
+    denoising (a render does it while its workers render: ``ptlab.rendering.denoising``)."""
+    with _lock:
+        _filters(threads)
+
+
 @dataclass
 class _Filters:
     """A committed device and its three RT filters: the colour's and the two prefilters."""

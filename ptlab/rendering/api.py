@@ -24,7 +24,7 @@ import ptlab.rendering.adaptive as adaptive
 from ptlab.errors import PtlabError
 from ptlab.integrators.features import FEATURES
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
-from ptlab.rendering.denoising import DenoisedFilm, check_denoised_size, denoise_film
+from ptlab.rendering.denoising import DenoisedFilm, check_denoised_size, denoise_film, warm_up_denoiser
 from ptlab.rendering.film import Film
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
@@ -345,11 +345,13 @@ def _identity(record: dict, scene: Scene, sampler: Sampler, features: bool) -> d
 
 def _gathers_features(options: RenderOptions, features: bool) -> bool:
     """Whether a render gathers the denoiser's feature images: if it denoises, or is asked
-    to. Checked before the scene is loaded: a missing extra fails in one line, at once."""
+    to. Checked before the scene is loaded: a missing extra fails in one line, at once; the
+    denoiser is then made ready while the render goes on (``warm_up_denoiser``)."""
     if options.denoise:
         from ptlab.denoise.oidn import require_oidn
 
         require_oidn()
+        warm_up_denoiser(options.workers)
     gather = options.denoise or check_flag("features", features)
     if gather and options.integrator != "path":
         raise PtlabError(f"features: only the path integrator gathers them, not {options.integrator!r}")

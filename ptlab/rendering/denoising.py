@@ -10,6 +10,7 @@ ran the render's jobs (processes, threads, a Dask cluster).
 
 from __future__ import annotations
 
+import threading
 import time
 from dataclasses import dataclass, field
 
@@ -81,6 +82,28 @@ def film_inputs(film: Film) -> tuple[DenoiseInputs, str]:
 #: The smallest image edge, in pixels, that is denoised: OIDN's network sees a neighbourhood
 #: of pixels, and on a 1 x 1 or 2 x 2 image it gave a picture 2-9 times too dark.
 MIN_DENOISED_SIZE = 16
+
+
+def warm_up_denoiser(threads: int | None) -> threading.Thread:
+    """Start making ready, in a thread of this process, what denoising the render will need:
+    the imports its error's estimate takes (scipy.ndimage: 0.15-0.2 s) and OIDN's device and
+    filters, while the workers render and the main process waits for them. The render does
+    not wait for it: denoising later finds them made, or waits on the same imports and locks.
+    A failure here is left for the denoiser itself to report, where it runs."""
+
+    def warm() -> None:
+        from ptlab.denoise.oidn import prepare
+
+        try:
+            import scipy.ndimage  # noqa: F401 (only imported: ``ptlab.denoise.estimate``)
+
+            prepare(threads)
+        except Exception:  # (reported by the denoiser, in the main thread)
+            return
+
+    thread = threading.Thread(target=warm, name="ptlab-denoiser-warm-up", daemon=True)
+    thread.start()
+    return thread
 
 
 def check_denoised_size(width: int, height: int) -> None:
