@@ -94,8 +94,10 @@ def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = N
     keywords.update(overrides)
     if keywords.get("action") == "append":  # (a list of its own: no default to add to)
         keywords["default"] = None
+    # (A flag's default is its absence: "(default False)" would say nothing.)
+    default = None if keywords.get("action") == "store_true" else keywords["default"]
     parser.add_argument(
-        "--" + name.replace("_", "-"), **keywords, help=with_default(help or about.help, keywords["default"])
+        "--" + name.replace("_", "-"), **keywords, help=with_default(help or about.help, default)
     )
 
 

@@ -168,7 +168,10 @@ def test_the_commands_options_are_render_options():
         # An option left out is None, so that --resume can tell it from one given; the
         # render then takes RenderOptions' default, which --help names.
         assert actions[name].default is None, name
-        if RenderOptions.default(name) is not None:
+        if RenderOptions.default(name) is False:  # (a flag: off unless given, no default said)
+            assert "(default" not in actions[name].help, name
+            assert actions[name].const is True, name
+        elif RenderOptions.default(name) is not None:
             assert f"(default {RenderOptions.default(name)})" in actions[name].help, name
     for name, owner in [
         ("integrator", tuple(INTEGRATORS)),
