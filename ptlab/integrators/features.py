@@ -37,7 +37,7 @@ import numpy as np
 
 from ptlab.vectors import take_rows
 
-#: The feature images, in the order of ``FeatureBuffers.stacked``'s channels.
+#: The feature images, in the order of ``FeatureBuffers.values``' columns.
 FEATURES = ("direct", "albedo", "normal")
 
 
@@ -58,10 +58,6 @@ class FeatureBuffers:
         self.values = np.zeros((rows, 3 * len(FEATURES)), dtype=np.float32, order="F")
         self.direct, self.albedo, self.normal = (self.values[:, 3 * k : 3 * k + 3] for k in range(3))
         self.found = np.zeros(rows, dtype=bool)
-
-    def stacked(self) -> np.ndarray:
-        """(rows, 9): direct, albedo and normal side by side (``FEATURES``' order)."""
-        return self.values
 
     def emission(self, pixel: np.ndarray, sees_emission: np.ndarray, radiance: np.ndarray) -> None:
         """Emission ``radiance`` (N, 3) added to film rows ``pixel`` (N,) by rays that count

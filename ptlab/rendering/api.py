@@ -461,8 +461,8 @@ class _NoiseTarget:
     the next pass (``ptlab.rendering.adaptive``) and returns its jobs.
 
     A denoised render's target is the *denoised* image's error: each pass's film is denoised
-    and that image's error estimated (``ptlab.rendering.denoising``), and the next samples go
-    where it is. Where that estimate is refused, the noisy image's own estimate decides."""
+    and that image's error estimated (``ptlab.rendering.denoising``). Where that estimate is
+    refused, and no bound of it is known, the noisy image's own estimate decides."""
 
     def __init__(self, film: Film, options: RenderOptions, start: float, pass_ended: _PassEnd):
         self.film, self.options, self.start, self.pass_ended = film, options, start, pass_ended
@@ -471,7 +471,7 @@ class _NoiseTarget:
         #: Why the render ended: "target", "max spp" or "time limit" (what the last call saw).
         self.end = ""
         #: The last pass's film denoised (a denoised render), which is the final image if
-        #: the render ends there, and what decided whether it was done (``_denoised_measure``).
+        #: the render ends there, and what decided whether it was done (``_denoised_decision``).
         self.denoised: DenoisedFilm | None = None
         self.decided_by = ""
 
@@ -483,18 +483,17 @@ class _NoiseTarget:
             return plan_jobs(film)
         ended = film.plan is not None
         film.end_plan()
+        variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
+        estimate, aim = adaptive.estimated_relmse(variance, film.sums, film.counts), target
         if self.options.denoise:
-            estimate, weights, aim = self._denoised_measure(film, target)
-        else:
-            variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-            estimate = adaptive.estimated_relmse(variance, film.sums, film.counts)
-            weights, aim = adaptive.allocation_weights(variance, film.sums, film.counts), target
+            estimate, aim = self._denoised_decision(film, estimate, target)
         film.estimate = estimate
         if ended:
             self.pass_ended(film)
         if estimate <= target:
             self.end = "target"
             return []
+        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
         # (No pixel more than GROWTH times its samples in one pass: one pass's estimate of a
         # pixel is not trusted with more.)
         most = np.minimum(self.most, adaptive.GROWTH * film.counts)
@@ -512,32 +511,28 @@ class _NoiseTarget:
         film.start_plan(2 * pairs)
         return plan_jobs(film)
 
-    def _denoised_measure(self, film: Film, target: float) -> tuple[float, np.ndarray, float]:
+    def _denoised_decision(self, film: Film, noisy: float, target: float) -> tuple[float, float]:
         """A denoised render's pass: the film denoised, and what decides whether it is done:
         the denoised image's estimated error, or where that is refused for its spread or for
-        the truth's brightness, what the error is below (``error_bound``); else the noisy
-        image's estimate. Returns that, the next pass's weights and the error
-        ``pass_budget`` aims the estimate's value at, so that the decision's value reaches
-        ``target``.
+        the truth's brightness, what the error is below (``error_bound``); else ``noisy``,
+        the noisy image's estimate. Returns that, and the error ``pass_budget`` aims the
+        estimate's value at, so that the decision's value reaches ``target``.
 
-        The weights are the noisy image's (``allocation_weights``), not the denoised error's
-        map: that map is a product of the two halves' residuals, which the denoiser makes
-        alike over many pixels, so a pixel whose pooled map is high is one whose own product
-        came out high; giving it more samples dilutes exactly those, and the next estimate
-        is biased low (on the Cornell box at 32 spp: -0.005 for a true 0.0014). The noisy
-        variance is pooled over 49 pixels whose noises are independent: a pixel's own
-        product hardly moves its weight (there: 0.00106 for a true 0.0012)."""
-        variance = adaptive.variance_of_mean_from_halves(film.differences, film.counts)
-        noisy = adaptive.estimated_relmse(variance, film.sums, film.counts)
+        The next pass's samples go by the noisy image's weights (``allocation_weights``), not
+        by the denoised error's map: that map is a product of the two halves' residuals,
+        which the denoiser makes alike over many pixels, so a pixel whose pooled map is high
+        is one whose own product came out high; giving it more samples dilutes exactly those,
+        and the next estimate is biased low (on the Cornell box at 32 spp: -0.005 for a true
+        0.0014). The noisy variance is pooled over 49 pixels whose noises are independent: a
+        pixel's own product hardly moves its weight (there: 0.00106 for a true 0.0012)."""
         self.denoised = denoised = denoise_film(film, threads=self.options.workers)
         deciding = denoised.relmse_estimate if denoised.relmse_estimate is not None else denoised.error_bound
-        error_map = denoised.error_map
-        weights = adaptive.allocation_weights(variance, film.sums, film.counts)
-        if deciding is None or error_map is None or not error_map.mean() > 0:
+        if deciding is None or denoised.error_value is None:
             self.decided_by = "the noisy image's estimate"
-            return noisy, weights, target
+            return noisy, target
         self.decided_by = "the estimate" if denoised.relmse_estimate is not None else "the bound"
-        return deciding, weights, target * float(error_map.mean()) / deciding
+        # (Both are positive there: a trusted estimate and a bound are.)
+        return deciding, target * denoised.error_value / deciding
 
 
 def plan_jobs(film: Film) -> list[Job]:

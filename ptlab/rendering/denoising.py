@@ -19,7 +19,7 @@ import numpy as np
 from ptlab.denoise import DenoiseInputs, ErrorEstimate
 from ptlab.denoise.estimate import BLOCK, MAX_RELMSE
 from ptlab.errors import PtlabError
-from ptlab.rendering.film import Film
+from ptlab.rendering.film import Film, per_sample
 
 
 @dataclass(frozen=True)
@@ -31,8 +31,8 @@ class DenoisedFilm:
         relmse_estimate: its relMSE as the samples estimate it, or None where the estimate
             cannot be trusted (``refused`` says why).
         refused: why there is no estimate ("" when there is one).
-        error_map: (H, W) each pixel's estimated relative squared error (where estimated),
-            for a render to a target error to put its next samples where it is.
+        error_value: the estimate's value, trusted or not (where there is one), which a render
+            to a target error aims its next pass's samples by.
         seconds: the denoiser's time (with the estimate's).
         about: what denoised it, for the image's header.
         settings: how (``ptlab.denoise.Denoised.settings``), for the header too.
@@ -44,7 +44,7 @@ class DenoisedFilm:
     image: np.ndarray
     relmse_estimate: float | None
     refused: str
-    error_map: np.ndarray | None
+    error_value: float | None
     seconds: float
     about: str
     settings: dict = field(default_factory=dict)
@@ -56,14 +56,9 @@ def film_inputs(film: Film) -> tuple[DenoiseInputs, str]:
     no independent halves (then both halves are the image: it can be denoised, but not its
     error estimated)."""
     direct = film.feature_image("direct")
-    image = np.divide(
-        film.sums, film.counts[..., None], out=np.zeros(film.sums.shape), where=film.counts[..., None] > 0
-    )
+    image = per_sample(film.sums, film.counts)
     halves = film.halves_of(film.sums, film.differences)
-    assert film.features is not None
-    assert film.feature_differences is not None
-    direct_sums, direct_differences = film.features[..., 0:3], film.feature_differences[..., 0:3]
-    direct_halves = film.halves_of(direct_sums, direct_differences)
+    direct_halves = film.halves_of(*film.feature_sums("direct"))
     why_not = ""
     if halves is None or direct_halves is None:
         halves, direct_halves = (image, image), (direct, direct)
@@ -84,7 +79,7 @@ def film_inputs(film: Film) -> tuple[DenoiseInputs, str]:
 MIN_DENOISED_SIZE = 16
 
 
-def warm_up_denoiser(threads: int | None) -> threading.Thread:
+def warm_up_denoiser(threads: int | None) -> None:
     """Start making ready, in a thread of this process, what denoising the render will need:
     the imports its error's estimate takes (scipy.ndimage: 0.15-0.2 s) and OIDN's device and
     filters, while the workers render and the main process waits for them. The render does
@@ -101,9 +96,7 @@ def warm_up_denoiser(threads: int | None) -> threading.Thread:
         except Exception:  # (reported by the denoiser, in the main thread)
             return
 
-    thread = threading.Thread(target=warm, name="ptlab-denoiser-warm-up", daemon=True)
-    thread.start()
-    return thread
+    threading.Thread(target=warm, name="ptlab-denoiser-warm-up", daemon=True).start()
 
 
 def check_denoised_size(width: int, height: int) -> None:
@@ -129,22 +122,22 @@ def denoise_film(film: Film, estimate: bool = True, threads: int | None = None) 
             image=np.zeros(film.sums.shape, np.float32),
             relmse_estimate=None,
             refused="the image is black: no light to denoise",
-            error_map=None,
+            error_value=None,
             seconds=time.perf_counter() - start,
             about=black,
             settings={"denoiser": black},
         )
     result = denoise(inputs, estimate=estimate and not why_not, threads=threads)
     refused = why_not if estimate else "not asked for"
-    error_map, bound = None, None
+    value, bound = None, None
     if result.estimate is not None:
-        refused, error_map = result.estimate.reason or "", result.estimate.error_map
+        refused, value = result.estimate.reason or "", result.estimate.value
         bound = error_bound(result.estimate)
     return DenoisedFilm(
         image=np.asarray(result.image, np.float32),
         relmse_estimate=None if result.estimate is None else result.estimate.relmse,
         refused=refused,
-        error_map=error_map,
+        error_value=value,
         seconds=time.perf_counter() - start,
         about=result.settings["denoiser"],
         settings=result.settings,

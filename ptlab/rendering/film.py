@@ -162,12 +162,18 @@ class Film:
             )
         return image
 
+    def feature_sums(self, name: str) -> tuple[np.ndarray, np.ndarray]:
+        """(H, W, 3) float64 each: the sums of feature image ``name`` (``FEATURES``) over every
+        sample, and over the even samples less the odd ones."""
+        assert self.features is not None, "this render gathers no features"
+        assert self.feature_differences is not None
+        k = slice(3 * FEATURES.index(name), 3 * FEATURES.index(name) + 3)
+        return self.features[..., k], self.feature_differences[..., k]
+
     def feature_image(self, name: str) -> np.ndarray:
         """(H, W, 3) float64: the mean of feature image ``name`` (``FEATURES``) per pixel (0
         where a pixel has no sample yet)."""
-        assert self.features is not None, "this render gathers no features"
-        k = FEATURES.index(name)
-        return _per_sample(self.features[..., 3 * k : 3 * k + 3], self.counts)
+        return per_sample(self.feature_sums(name)[0], self.counts)
 
     def halves_of(self, sums: np.ndarray, differences: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         """The means of each pixel's even and of its odd samples, from the sums of all of them
@@ -176,9 +182,9 @@ class Film:
         if not self.halves or self.counts.min() < 2 or np.any(self.counts & 1):
             return None
         half = self.counts // 2
-        return _per_sample((sums + differences) / 2, half), _per_sample((sums - differences) / 2, half)
+        return per_sample((sums + differences) / 2, half), per_sample((sums - differences) / 2, half)
 
 
-def _per_sample(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
+def per_sample(sums: np.ndarray, counts: np.ndarray) -> np.ndarray:
     """``sums`` (H, W, C) divided by ``counts`` (H, W), 0 where a count is 0."""
     return np.divide(sums, counts[..., None], out=np.zeros(sums.shape), where=counts[..., None] > 0)

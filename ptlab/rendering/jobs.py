@@ -327,7 +327,7 @@ def run_job_group(setup: RenderSetup, jobs: list[Job], accel: Accelerator) -> li
                     film, setup.scene, timed, paths, cast(Sampler, sampler), setup.settings
                 )
     sums = [camera.sums(film, j) for j in range(len(jobs))]
-    feature_rows = buffers.stacked() if buffers is not None else None
+    feature_rows = buffers.values if buffers is not None else None
     return [
         JobResult(
             job=job,
