@@ -95,9 +95,9 @@ def _add_option(parser: argparse.ArgumentParser, name: str, help: str | None = N
     if keywords.get("action") == "append":  # (a list of its own: no default to add to)
         keywords["default"] = None
     # (A flag's default is its absence: "(default False)" would say nothing.)
-    default = None if keywords.get("action") == "store_true" else keywords["default"]
+    shown = None if keywords.get("action") == "store_true" else keywords["default"]
     parser.add_argument(
-        "--" + name.replace("_", "-"), **keywords, help=with_default(help or about.help, default)
+        "--" + name.replace("_", "-"), **keywords, help=with_default(help or about.help, shown)
     )
 
 
@@ -482,10 +482,6 @@ def _check_render_request(args, options, out: Path) -> Path | None:
     if args.preview_every is not None and not args.preview_every >= 0:  # (NaN too)
         raise PtlabError("--preview-every must be zero or more seconds")
     check_workers(options.workers)
-    if options.denoise:
-        from ptlab.denoise.oidn import require_oidn
-
-        require_oidn()
     if args.aov and out.suffix.lower() != ".exr":
         raise PtlabError(
             f"--aov: the feature images go into an .exr output as its layers, not {out.suffix or out.name}"
@@ -686,12 +682,12 @@ class _Preview:
         if self.every is None or time.monotonic() - self.last < self.every:
             return
         from ptlab.image import write_image
-        from ptlab.rendering.denoising import denoise_film
+        from ptlab.rendering.denoising import preview
 
-        image, metadata = film.image(), dict(spp=film.spp, complete=0, preview=1)
-        if self.denoise and film.spp > 0:
-            denoised = denoise_film(film, estimate=False)
-            image, metadata["denoised"] = denoised.image, denoised.about
+        image, denoised_by = preview(film, self.denoise)
+        metadata: dict[str, Any] = dict(spp=film.spp, complete=0, preview=1)
+        if denoised_by:
+            metadata["denoised"] = denoised_by
         write_image(self.out, image, metadata, exposure=self.exposure)
         self.last = time.monotonic()
 

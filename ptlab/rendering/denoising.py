@@ -145,6 +145,17 @@ def denoise_film(film: Film, estimate: bool = True, threads: int | None = None) 
     )
 
 
+def preview(film: Film, denoise: bool) -> tuple[np.ndarray, str]:
+    """The image of a render under way, as a preview shows it (a file's, ``ptlab render
+    --preview-every``; a notebook's, ``ptlab.rendering.progress``): denoised at once, with no
+    estimate, for a render that denoises (once every pixel has a sample), with what denoised
+    it; else the film's image and ""."""
+    if not denoise or film.spp == 0:
+        return film.image(), ""
+    denoised = denoise_film(film, estimate=False)
+    return denoised.image, denoised.about
+
+
 #: Standard errors above an estimate that ``error_bound`` takes the error to be below.
 BOUND_STANDARD_ERRORS = 2.0
 #: ... if the estimate's standard error, a share of it, is at most this, and it is measured

@@ -115,14 +115,10 @@ class ProgressBar:
         (denoised, for a render that denoises: what it will look like)."""
         from IPython.display import Image, display
 
+        from ptlab.rendering.denoising import preview
         from ptlab.rendering.display import png_bytes
 
-        image = film.image()
-        if self.denoise and film.spp > 0:
-            from ptlab.rendering.denoising import denoise_film
-
-            image = denoise_film(film, estimate=False).image
-        picture = Image(data=png_bytes(image))
+        picture = Image(data=png_bytes(preview(film, self.denoise)[0]))
         if self.picture is None:
             self.picture = display(picture, display_id=True)
         else:
