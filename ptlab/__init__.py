@@ -23,7 +23,7 @@ if TYPE_CHECKING:
     from ptlab.rendering.display import show
     from ptlab.rendering.options import RenderOptions
     from ptlab.scene import Scene
-    from ptlab.scene_file import load_scene
+    from ptlab.scene_file import load_dict, load_scene
 
 __version__ = "0.1.0"
 
@@ -33,6 +33,7 @@ __all__ = [
     "Scene",
     "__version__",
     "inspect_pixel",
+    "load_dict",
     "load_scene",
     "render",
     "render_result",
@@ -43,6 +44,7 @@ __all__ = [
 _HOMES = {
     "Scene": "ptlab.scene",
     "load_scene": "ptlab.scene_file",
+    "load_dict": "ptlab.scene_file",
     "inspect_pixel": "ptlab.inspector",
     "RenderResult": "ptlab.rendering.api",
     "render": "ptlab.rendering.api",
@@ -61,4 +63,6 @@ def __getattr__(name: str):
 
 
 def __dir__() -> list[str]:
-    return sorted(list(globals()) + list(_HOMES))
+    # The public API only: not this file's machinery (TYPE_CHECKING, annotations, _HOMES),
+    # which tab completion in a notebook would otherwise offer beside it.
+    return sorted(__all__)

@@ -57,10 +57,18 @@ def path_kind(path: str | Path) -> str | None:
 def check_writable_file(path: str | Path) -> Path:
     """``path``, if ``write_atomically`` can write it; otherwise a ``PtlabError``."""
     path = Path(path)
-    if path_kind(path) == "folder":
+    kind = path_kind(path)
+    if kind == "folder":
         raise PtlabError(f"{path}: is a folder")
-    if path_kind(path.parent) != "folder":
-        raise PtlabError(f"{path}: folder {path.parent} does not exist")
+    if kind == "other":  # (a rename would replace a device such as /dev/null, as root)
+        raise PtlabError(f"{path}: is not a regular file (a device or a pipe?): give a file name")
+    parent = path_kind(path.parent)
+    if parent != "folder":
+        raise PtlabError(
+            f"{path}: {path.parent} is not a folder"
+            if parent
+            else f"{path}: folder {path.parent} does not exist"
+        )
     _try_writing_in(path.parent, path)
     return path
 

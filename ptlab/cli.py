@@ -2,6 +2,7 @@
 
     ptlab render cornell-box --spp 16 --res 512 --out cornell.exr
     ptlab inspect cornell-box --res 64 --spp 4 --pixel 32,20 --plot paths.png
+    ptlab compare cornell.exr reference.exr --diff diff.png
     ptlab bench
     ptlab converge cornell-box --integrators path:bsdf,path:nee,path:mis --budget 30
     ptlab grade my_material.py:MyMaterial
@@ -35,8 +36,20 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
 
 
+class _CommandParser(_Parser):
+    """A command's parser (``ptlab render``, ``ptlab exercise check``, ...), which says itself
+    that an option is unknown, so that the line points at the command's own ``--help``
+    (argparse would leave it to the top parser: "see ptlab --help")."""
+
+    def parse_known_args(self, args=None, namespace=None):
+        namespace, extras = super().parse_known_args(args, namespace)
+        if extras:  # (everything after a command is its own: no parent parser takes it)
+            self.error(f"unrecognized arguments: {' '.join(extras)}")
+        return namespace, extras
+
+
 #: The commands, as ``main`` finds the one it is given.
-COMMANDS = ("render", "inspect", "bench", "converge", "grade", "exercise", "scenes")
+COMMANDS = ("render", "inspect", "compare", "bench", "converge", "grade", "exercise", "scenes")
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -46,9 +59,11 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
     parser = _Parser(prog="ptlab", description="A physically based path tracer in NumPy.")
     parser.add_argument("--version", action="version", version=f"ptlab {__version__}")
-    commands = parser.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    # (A command's own subcommands, exercise's, get the same class: argparse's default.)
+    commands = parser.add_subparsers(dest="command", required=True, parser_class=_CommandParser)
     _add_render(commands, _shared_arguments())
     _add_inspect(commands)
+    _add_compare(commands)
     _add_bench(commands)
     _add_converge(commands, _shared_arguments())
     grade = commands.add_parser(
@@ -193,6 +208,7 @@ _RENDER_OPTIONS = (
     "max_spp",
     "time_limit",
     "denoise",
+    "crop",
 )
 
 
@@ -220,22 +236,25 @@ def _add_inspect(commands) -> None:
 #: The render options that ``ptlab inspect`` takes: ``render``'s that change the pixel.
 #: (A render to a target error gives each pixel its own samples: inspect has a fixed spp.)
 _INSPECT_OPTIONS = tuple(
-    name for name in _RENDER_OPTIONS if name not in ("workers", "target_error", "max_spp", "time_limit")
+    name
+    for name in _RENDER_OPTIONS
+    if name not in ("workers", "target_error", "max_spp", "time_limit", "crop")  # (--pixel is the image's)
 )
 
 
 def _inspect(args) -> int:
+    from ptlab.atomic import check_writable_file
     from ptlab.inspector import inspect_pixel, parse_pixel
     from ptlab.rendering import RenderOptions
     from ptlab.scene_file import load_scene
 
     pixel = parse_pixel(args.pixel)
     options = RenderOptions(**{name: getattr(args, name) for name in _INSPECT_OPTIONS}, workers=1)
-    for out, _suffix in ((args.json, ".json"), (args.plot, ".png")):
-        if out is not None and not Path(out).parent.is_dir():
-            raise PtlabError(f"{out}: folder {Path(out).parent} does not exist")
     if args.plot is not None and Path(args.plot).suffix.lower() != ".png":
         raise PtlabError(f"--plot {args.plot}: give a .png file")
+    for out in (args.json, args.plot):
+        if out is not None:
+            check_writable_file(out)  # (before the work, as render's --out)
     scene = load_scene(args.scene)
     found = inspect_pixel(scene, pixel, options=options)
     print(found.table(args.sample))
@@ -252,6 +271,73 @@ def _inspect(args) -> int:
         found.plot(args.plot, scene, preview)
         print(f"wrote {Path(args.plot).resolve()}")
     return 0
+
+
+def _add_compare(commands) -> None:
+    from ptlab.image import LINEAR_FORMATS
+
+    compare = commands.add_parser(
+        "compare",
+        help="compare an image with a reference: relMSE, mean ratio, largest difference",
+        description="Compare image A with the reference B, as pbrt's 'imgtool diff' does, with "
+        "ptlab's metric: print both sizes, the relMSE of A against B (the mean over pixels "
+        "and channels of (A - B)^2 / (B + 0.01)^2), the ratio of A's mean to B's per channel "
+        "(1 where A is unbiased), the largest absolute difference and its pixel, and the "
+        "share of pixels that differ at all. Files are read through OpenImageIO: "
+        f"{', '.join(LINEAR_FORMATS)} as linear values, 8- and 16-bit files (.png, .jpg) "
+        "decoded from sRGB to linear. A window of an image (ptlab render --crop, as an .exr "
+        "or .tif that records its place) is compared with that window of the other. Exit 0; "
+        "1 if --tolerance is given and the relMSE is above it; 2 if a file cannot be read, "
+        "the sizes differ, or a pixel is NaN or infinite.",
+    )
+    compare.add_argument("a", metavar="A", help="the image to judge")
+    compare.add_argument("b", metavar="B", help="the reference")
+    compare.add_argument(
+        "--diff",
+        metavar="FILE",
+        help="also write where they differ: each pixel's relative squared error (A - B)^2 / "
+        "(B + 0.01)^2 (the mean over channels, whose mean is the relMSE); as a picture "
+        "(.png, .jpg): false colour on a log scale, with the scale beside it, identical "
+        "pixels grey; as a linear file (.exr, .hdr, .pfm, .tif): the values themselves, in "
+        "each channel",
+    )
+    compare.add_argument(
+        "--tolerance",
+        type=float,
+        metavar="RELMSE",
+        help="exit 1 if the relMSE is above RELMSE (for scripts and CI; 0: any difference)",
+    )
+    compare.add_argument("--json", action="store_true", help="print the figures as JSON instead")
+
+
+def _compare(args) -> int:
+    import json
+
+    from ptlab.measure.compare import compare_files, write_difference
+
+    if args.tolerance is not None and not 0 <= args.tolerance < float("inf"):
+        raise PtlabError(f"--tolerance {args.tolerance}: must be a relMSE, 0 or more")
+    if args.diff is not None:
+        from ptlab.image import check_output_path
+
+        check_output_path(args.diff)
+    comparison = compare_files(args.a, args.b)
+    if args.diff is not None:
+        write_difference(args.diff, comparison)
+    if args.json:
+        figures = comparison.figures()
+        if args.tolerance is not None:
+            figures["tolerance"] = args.tolerance
+            figures["within_tolerance"] = comparison.relmse <= args.tolerance
+        print(json.dumps(figures, indent=1))
+    else:
+        print(comparison.report())
+        if args.tolerance is not None:
+            within = "within" if comparison.relmse <= args.tolerance else "above"
+            print(f"relMSE {comparison.relmse:.6g}: {within} the tolerance {args.tolerance:g}")
+        if args.diff is not None:
+            print(f"wrote {Path(args.diff).resolve()}")
+    return 1 if args.tolerance is not None and comparison.relmse > args.tolerance else 0
 
 
 def _add_bench(commands) -> None:
@@ -400,7 +486,7 @@ def _add_converge(commands, shared: argparse.ArgumentParser) -> None:
 def _render(args) -> int:
     from ptlab.atomic import check_writable_file
     from ptlab.image import check_output_path
-    from ptlab.rendering import RenderOptions, pass_schedule, render_result, resolution
+    from ptlab.rendering import RenderOptions, pass_schedule, render_result
     from ptlab.rendering.display import write_spp_map
     from ptlab.rendering.executors import dask_executor
     from ptlab.rendering.progress import ProgressBar
@@ -413,12 +499,13 @@ def _render(args) -> int:
     given = {name: getattr(args, name) for name in _RENDER_OPTIONS if getattr(args, name) is not None}
     options = RenderOptions(**given, **args.layout)
     scene = load_scene(args.scene)
-    width, height = resolution(scene, options.res)
+    decided = options.for_scene(scene)  # (a crop outside the image fails here, in one line)
     out = check_output_path(args.out or f"{scene.name}.png")
     checkpoint = args.checkpoint or args.resume
     if checkpoint is not None:
         check_writable_file(checkpoint)
     spp_map = _check_render_request(args, options, out)
+    _, _, width, height = decided.window
     progress = ProgressBar(
         width * height * options.spp,
         len(pass_schedule(options.spp)),
@@ -430,7 +517,7 @@ def _render(args) -> int:
         checkpoint=checkpoint,
         resume=args.resume,
         progress=progress,
-        on_pass=_Preview(out, args.preview_every, args.exposure, denoise=options.denoise),
+        on_pass=_Preview(out, args.preview_every, args.exposure, options.denoise, _window(decided)),
         command=dict(scene=_scene_argument(args.scene), out=str(out.resolve())),
         features=args.aov,
     )
@@ -464,7 +551,7 @@ def _render(args) -> int:
             file=sys.stderr,
         )
     if not args.quiet:
-        print(f"{width}x{height}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
+        print(f"{_size_said(decided)}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
         if options.denoise:
             print(_denoised_said(result))
         if options.target_error is not None:
@@ -487,6 +574,22 @@ def _check_render_request(args, options, out: Path) -> Path | None:
             f"--aov: the feature images go into an .exr output as its layers, not {out.suffix or out.name}"
         )
     return check_output_path(args.spp_map) if args.spp_map else None
+
+
+def _size_said(options) -> str:
+    """``64x64``, or for a crop, ``16x8 window at (8, 4) of 64x64`` (options ``for_scene``)."""
+    x, y, width, height = options.window
+    if options.crop is None:
+        return f"{width}x{height}"
+    return f"{width}x{height} window at ({x}, {y}) of {options.size[0]}x{options.size[1]}"
+
+
+def _window(options):
+    """Where a crop's image sits in the whole image, for its file (``ptlab.image.Window``),
+    or None for the whole image (options ``for_scene``)."""
+    from ptlab.image import Window
+
+    return None if options.crop is None else Window(*options.window[:2], *options.size)
 
 
 def _spp_said(result) -> str:
@@ -610,7 +713,7 @@ def _write(out: Path, result, exposure: float = 0.0, layers: bool = False) -> No
         extra = dict(result.features)
         if result.noisy is not None:
             extra["noisy"] = result.noisy
-    write_image(out, image, metadata, exposure=exposure, layers=extra)
+    write_image(out, image, metadata, exposure=exposure, layers=extra, window=result.window)
 
 
 def _interrupted(
@@ -674,8 +777,11 @@ class _Preview:
     """After a pass, rewrites the output image if ``every`` seconds have passed (denoised, for
     a denoised render: what it will look like)."""
 
-    def __init__(self, out: Path, every: float | None, exposure: float = 0.0, denoise: bool = False):
+    def __init__(
+        self, out: Path, every: float | None, exposure: float = 0.0, denoise: bool = False, window=None
+    ):
         self.out, self.every, self.exposure, self.denoise = out, every, exposure, denoise
+        self.window = window  # (a crop's place in the image: ``ptlab.image.Window``)
         self.last = time.monotonic()
 
     def __call__(self, film) -> None:
@@ -688,7 +794,7 @@ class _Preview:
         metadata: dict[str, Any] = dict(spp=film.spp, complete=0, preview=1)
         if denoised_by:
             metadata["denoised"] = denoised_by
-        write_image(self.out, image, metadata, exposure=self.exposure)
+        write_image(self.out, image, metadata, exposure=self.exposure, window=self.window)
         self.last = time.monotonic()
 
 
@@ -866,6 +972,12 @@ def _start_workers_early(argv: list[str]) -> None:
         start_worker_server()
 
 
+def _warning_line(message, category, filename, lineno, file=None, line=None) -> None:
+    """A warning as the command's own line on stderr (``ptlab: warning: ...``), not Python's
+    two lines naming the file and line of ptlab's code that warned."""
+    print(f"ptlab: warning: {message}", file=sys.stderr)
+
+
 def main(argv: list[str] | None = None) -> int:
     whole_process = argv is None
     argv = sys.argv[1:] if argv is None else argv
@@ -882,12 +994,15 @@ def main(argv: list[str] | None = None) -> int:
         handler = {
             "render": _render,
             "inspect": _inspect,
+            "compare": _compare,
             "bench": _bench,
             "converge": _converge,
             "scenes": _scenes,
         }[args.command]
     try:
-        code = handler(args)
+        with warnings.catch_warnings():
+            warnings.showwarning = _warning_line
+            code = handler(args)
         sys.stdout.flush()
         return code
     except BrokenPipeError:  # the reader (head, a pager) stopped reading: not an error

@@ -10,12 +10,17 @@
   a second of imports, matplotlib's among them, at every PNG). (The homework writes
   ``pow(x, 0.6)``, which is neither sRGB nor a gamma any display expects.)
 
+A render of a window of the image (``ptlab render --crop``) is written with its ``Window``:
+``.exr`` and ``.tif`` files keep it as their data window inside the display window (the
+whole image), so that ``ptlab compare`` or a compositor can place it.
+
 Files are written atomically: to a temporary file beside the target, then renamed, so a
 crash never leaves a half-written image under the final name.
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -33,6 +38,24 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
     """Linear values in [0, 1] -> sRGB-encoded values in [0, 1] (IEC 61966-2-1:1999):
     12.92 L below the break point 0.0031308, 1.055 L^(1 / 2.4) - 0.055 above it."""
     return np.where(linear <= 0.0031308, 12.92 * linear, 1.055 * np.power(linear, 1 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded: np.ndarray) -> np.ndarray:
+    """sRGB-encoded values in [0, 1] -> linear values in [0, 1] (IEC 61966-2-1:1999), the
+    inverse of ``srgb_encode``: V / 12.92 below 0.04045, ((V + 0.055) / 1.055)^2.4 above."""
+    return np.where(encoded <= 0.04045, encoded / 12.92, np.power((encoded + 0.055) / 1.055, 2.4))
+
+
+@dataclass(frozen=True)
+class Window:
+    """Where an image's pixels sit in a larger image: its top-left pixel (``x``, ``y``) in a
+    ``full_width`` x ``full_height`` image. OpenImageIO's data window (the pixels stored)
+    inside the display window (the whole picture), as an EXR header keeps them."""
+
+    x: int
+    y: int
+    full_width: int
+    full_height: int
 
 
 #: Values that ``encode_srgb8`` encodes at a time.
@@ -70,6 +93,7 @@ def write_image(
     metadata: dict | None = None,
     exposure: float = 0.0,
     layers: dict[str, np.ndarray] | None = None,
+    window: Window | None = None,
 ) -> Path:
     """Write (H, W, 3) linear RGB, atomically: as float32 to ``.exr`` (and the other
     ``LINEAR_FORMATS``), as 8-bit sRGB to ``.png`` (and the other ``SRGB_FORMATS``), scaled
@@ -80,6 +104,8 @@ def write_image(
     ``layers`` are more (H, W, 3) images, for an EXR only, each as three channels of the
     file beside R, G and B: ``<name>.R``, ``.G``, ``.B``, but ``<name>.X``, ``.Y``, ``.Z``
     for a ``"normal"`` (the EXR convention of layers that compositing programs read).
+    ``window``: the image is that window of a larger one (a crop), which ``.exr`` and ``.tif``
+    files record (the other formats hold no window).
     """
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
@@ -105,6 +131,10 @@ def write_image(
         pixels = encode_srgb8(image * np.float32(2.0**exposure) if exposure else image)
         spec = oiio.ImageSpec(width, height, 3, oiio.UINT8)
         spec.attribute("oiio:ColorSpace", "sRGB")
+    if window is not None:
+        spec.x, spec.y = window.x, window.y
+        spec.full_x, spec.full_y = 0, 0
+        spec.full_width, spec.full_height = window.full_width, window.full_height
     # EXR headers hold typed numbers; PNG text chunks hold only strings (OpenImageIO drops
     # other types there), so a PNG gets every value as text. EXR integers are 32-bit: a
     # larger one (a big seed) goes in as text too.
@@ -128,12 +158,46 @@ def write_image(
     return write_atomically(path, write)
 
 
+@dataclass(frozen=True)
+class ImageFile:
+    """An image file as read (``read_image_file``).
+
+    Attributes:
+        pixels: (H, W, 3) float32 as stored: linear for float files, stored value / 255 (or
+            / 65535) for integer ones, which are still sRGB-encoded.
+        metadata: the file's ``ptlab:`` header entries, without the prefix.
+        srgb: whether the pixels are sRGB-encoded: an integer file (8- or 16-bit, as PNG and
+            JPEG are) that does not name a linear colour space.
+        window: where the pixels sit in a larger image (a crop's ``.exr`` or ``.tif``), or
+            None when the file is the whole image.
+    """
+
+    pixels: np.ndarray
+    metadata: dict
+    srgb: bool
+    window: Window | None
+
+    @property
+    def linear(self) -> np.ndarray:
+        """(H, W, 3) linear values: the pixels, sRGB-decoded where they are encoded."""
+        if not self.srgb:
+            return self.pixels
+        return srgb_decode(self.pixels.astype(np.float64)).astype(np.float32)
+
+
 def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
     """(H, W, 3) float32 pixels of an image file and its ``ptlab:`` metadata.
 
     EXR pixels come back as stored (linear); 8-bit files come back as stored values / 255
-    (still sRGB-encoded).
+    (still sRGB-encoded: ``read_image_file(path).linear`` decodes them).
     """
+    found = read_image_file(path)
+    return found.pixels, found.metadata
+
+
+def read_image_file(path: str | Path) -> ImageFile:
+    """The pixels, header, encoding and window of an image file (``ImageFile``), or
+    ``PtlabError`` in one line if it cannot be read as an RGB image."""
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = Path(path)
@@ -159,4 +223,18 @@ def read_image(path: str | Path) -> tuple[np.ndarray, dict]:
         # A PFM file stores its bottom row first, as OpenImageIO writes it, but OpenImageIO
         # 3.2 reads the rows back in file order (tests/renderer/test_cli.py checks both).
         image = image[::-1]
-    return image, metadata
+    # (OpenImageIO takes integer pixels for sRGB unless the file names its colour space:
+    # "srgb_rec709_scene" for a PNG, a "lin_..." or "linear" one for linear values.)
+    space = spec.get_string_attribute("oiio:ColorSpace").lower()
+    integer = spec.format.basetype not in (oiio.HALF, oiio.FLOAT, oiio.DOUBLE)
+    srgb = integer and not space.startswith("lin")
+    whole = (spec.x, spec.y, spec.width, spec.height) == (
+        spec.full_x,
+        spec.full_y,
+        spec.full_width,
+        spec.full_height,
+    )
+    window = None
+    if not whole:
+        window = Window(spec.x - spec.full_x, spec.y - spec.full_y, spec.full_width, spec.full_height)
+    return ImageFile(image, metadata, srgb, window)

@@ -57,7 +57,7 @@ import time
 import numpy as np
 
 SAMPLERS = ("independent", "stratified", "sobol")
-#: The sampler renders use unless told otherwise: the one measured best (README, "Samplers").
+#: The sampler renders use unless told otherwise: the one measured best (docs/rendering.md, "Samplers").
 DEFAULT_SAMPLER = "sobol"
 
 _U32 = np.uint32

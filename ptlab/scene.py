@@ -1,11 +1,11 @@
 """The scene as the renderer sees it: every mesh flattened into one array of triangles.
 
-A ``Scene`` holds the triangles (T, 3, 3) with a material index each, the materials, the
-camera, and the lights: the emissive triangles, point lights and a sky, from which
-``ptlab.lights.build_lights`` makes the lights that light sampling picks. The renderer never
-sees meshes. Scene files (TOML) are read into a ``Scene`` by ``ptlab.scene_file``
-(``load_scene``, the built-in scenes), which imports this module: this one knows nothing of
-files.
+A ``Scene`` holds the triangles (T, 3, 3) with a material index each (and, for smooth
+shading, a normal at each corner), the materials, the camera, and the lights: the emissive
+triangles, point lights and a sky, from which ``ptlab.lights.build_lights`` makes the
+lights that light sampling picks. The renderer never sees meshes. Scene files (TOML) are
+read into a ``Scene`` by ``ptlab.scene_file`` (``load_scene``, the built-in scenes), which
+imports this module: this one knows nothing of files.
 """
 
 from __future__ import annotations
@@ -17,6 +17,7 @@ import numpy as np
 from ptlab.camera import Camera
 from ptlab.lights import AreaLights, PointLights, Sky, build_lights, triangle_normals
 from ptlab.materials import Diffuse, Material
+from ptlab.meshes.base import face_normals_unnormalised, unit_corner_normals
 
 #: Rays start this fraction of a triangle's largest coordinate off it (see ``Scene``).
 OFFSET_SCALE = 1e-4
@@ -62,6 +63,12 @@ class Scene:
         uvs: (T, 3, 2) texture coordinates of each triangle's vertices, or None; textured
             materials need them.
         defaults: the scene file's ``[render]`` defaults.
+        normals: (T, 3, 3) shading normals at each triangle's corners (a mesh file's vertex
+            normals), or None: every triangle flat. Made unit length (a normal of length 0
+            becomes the face's). Where a triangle's corner normals point, on the whole, to its
+            back, its corners are put in the other order (with their uv), so that its front,
+            which decides which side emits and which side is outside glass, is the side the
+            normals give, as in pbrt-v4 and Mitsuba 3, where a mesh's normals decide it.
 
     After construction, ``light_sampler`` picks among all the lights (``build_lights``; None
     for a scene without light) and ``area_lights`` holds the emissive triangles among them
@@ -79,6 +86,7 @@ class Scene:
     sky: Sky | None = None
     uvs: np.ndarray | None = None
     defaults: RenderDefaults = field(default_factory=RenderDefaults)
+    normals: np.ndarray | None = None
 
     def __repr__(self) -> str:
         # One line, not the arrays: what a notebook shows for a scene.
@@ -97,12 +105,16 @@ class Scene:
         tri = np.asarray(self.triangles, dtype=np.float64)
         self.triangles = tri
         self.material_ids = np.asarray(self.material_ids, dtype=np.intp)
+        self.corner_normals = None
+        if self.normals is not None:
+            tri = self._with_corner_normals(tri)
         v0, v1, v2 = tri[:, 0], tri[:, 1], tri[:, 2]
         # Per-triangle data the renderer looks up by triangle id, in float32 like the rays.
         self.v0 = v0.astype(np.float32)
         self.e1 = (v1 - v0).astype(np.float32)
         self.e2 = (v2 - v0).astype(np.float32)
-        self.normals = triangle_normals(tri).astype(np.float32)
+        #: (T, 3) float32 unit geometric normals, on each triangle's front face.
+        self.face_normals = triangle_normals(tri).astype(np.float32)
         # How far a ray leaving the triangle starts off it, so that float32 rounding of the
         # hit point cannot put its origin behind the surface ("shadow acne"). The rounding
         # error of a point interpolated from the vertices is a few ulps of the largest vertex
@@ -114,7 +126,7 @@ class Scene:
         # bounce instead of five. Rows: v0 | e1 | e2 | unit normal | offset.
         # (Filled in place: np.vstack made a float64 table and a float32 copy, 4x slower.)
         self.triangle_data = np.empty((13, len(tri)), np.float32)
-        for k, rows in enumerate((self.v0, self.e1, self.e2, self.normals)):
+        for k, rows in enumerate((self.v0, self.e1, self.e2, self.face_normals)):
             self.triangle_data[3 * k : 3 * k + 3] = rows.T
         self.triangle_data[12] = offset
         emission = np.zeros((len(self.materials), 3))
@@ -152,6 +164,31 @@ class Scene:
         elif any(m.textured for m in self.materials):
             raise ValueError("a textured material needs texture coordinates: give uvs")
 
+    def _with_corner_normals(self, tri: np.ndarray) -> np.ndarray:
+        """Check and pack ``normals`` (``corner_normals``), turning the corners of triangles
+        whose normals point to their back (class docstring); return the triangles."""
+        normals = np.asarray(self.normals, dtype=np.float64)
+        if normals.shape != (len(tri), 3, 3):
+            raise ValueError(f"normals must be (T, 3, 3) = {(len(tri), 3, 3)}, not {normals.shape}")
+        if not np.isfinite(normals).all():
+            raise ValueError("normals must be finite")
+        normals = unit_corner_normals(normals, tri)
+        backward = np.einsum("ij,ij->i", face_normals_unnormalised(tri), normals.sum(axis=1)) < 0
+        if backward.any():
+            turned = [0, 2, 1]
+            tri = np.where(backward[:, None, None], tri[:, turned], tri)
+            normals = np.where(backward[:, None, None], normals[:, turned], normals)
+            if self.uvs is not None and np.shape(self.uvs) == (len(tri), 3, 2):
+                uvs = np.asarray(self.uvs, dtype=np.float64)
+                self.uvs = np.where(backward[:, None, None], uvs[:, turned], uvs)
+            self.triangles = tri
+        self.normals = normals
+        # Packed for one gather per hit, as the uv are: n0 | n1 - n0 | n2 - n0, (9, T).
+        self.corner_normals = np.vstack(
+            [normals[:, 0].T, (normals[:, 1] - normals[:, 0]).T, (normals[:, 2] - normals[:, 0]).T]
+        ).astype(np.float32)
+        return tri
+
     def with_sampling(self, sampling: str) -> Scene:
         """This scene with every diffuse material sampling directions by ``sampling``: the
         scene itself when they already do (a new Scene rebuilds its light and material
@@ -175,6 +212,7 @@ class Scene:
             self.sky,
             self.uvs,
             self.defaults,
+            self.normals,
         )
 
     def uv_at(self, prim: np.ndarray, b1: np.ndarray, b2: np.ndarray) -> np.ndarray:
@@ -182,6 +220,20 @@ class Scene:
         (N,) on triangles ``prim`` (N,): uv0 + b1 (uv1 - uv0) + b2 (uv2 - uv0)."""
         data = self.triangle_uv.take(prim, axis=1)
         return (data[0:2] + b1 * data[2:4] + b2 * data[4:6]).T
+
+    def shading_normals_at(
+        self, prim: np.ndarray, b1: np.ndarray, b2: np.ndarray, geometric: np.ndarray
+    ) -> np.ndarray:
+        """(N, 3) float32 unit shading normals at the points with barycentrics ``b1``, ``b2``
+        (N,) on triangles ``prim`` (N,): the corners' normals interpolated, n0 + b1 (n1 - n0) +
+        b2 (n2 - n0), and normalised (pbrt-v4 section 6.5.3, as pbrt-v3's 3.6.3 "Shading
+        Geometry"); ``geometric`` (N, 3) where that is 0 (corners that cancel out)."""
+        data = self.corner_normals.take(prim, axis=1)
+        n = (data[0:3] + b1 * data[3:6] + b2 * data[6:9]).T
+        length = np.sqrt(np.einsum("ij,ij->i", n, n))[:, None]
+        if (length > 0).all():  # (the rule: spare the where)
+            return n / length
+        return np.where(length > 0, n / np.where(length > 0, length, 1), geometric).astype(np.float32)
 
     @property
     def lights(self) -> AreaLights | None:

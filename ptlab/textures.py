@@ -5,13 +5,22 @@ scene file's ``quad``); the renderer interpolates them at each hit with the hit'
 barycentric coordinates, uv = (1 - b1 - b2) uv0 + b1 uv1 + b2 uv2 (GAMES101 lecture 9), and
 a textured material turns them into its parameter for that hit (``Material.take``).
 
-Only what ptlab's scenes need is here: the checkerboard of GAMES101 Homework 5's floor.
+Two kinds: the checkerboard of GAMES101 Homework 5's floor, and an image (``ImageTexture``):
+a mesh file's diffuse map (an OBJ material's ``map_Kd``, a glTF base colour texture) or a
+scene file's ``albedo = { image = ... }``.
 """
 
 from __future__ import annotations
 
+import copy
+import hashlib
+from pathlib import Path
+
 import numpy as np
 
+from ptlab.atomic import path_kind
+from ptlab.errors import PtlabError
+from ptlab.image import srgb_decode
 from ptlab.vectors import vec3
 
 
@@ -50,3 +59,140 @@ class Checkerboard(Texture):
         pattern = odd[:, 0] ^ odd[:, 1]
         a, b = self.colours.astype(np.float32)
         return vec3(*(np.where(pattern, b[c], a[c]) for c in range(3)))
+
+
+#: What an image's integer texels are divided by, by their type: 8- and 16-bit files.
+_INTEGER_RANGE = {np.dtype(np.uint8): 255, np.dtype(np.uint16): 65535}
+
+
+class ImageTexture(Texture):
+    """A colour image over uv in [0, 1]^2, repeated beyond it, looked up bilinearly.
+
+    Texture coordinates follow OBJ's convention, which glTF's reader turns its own into
+    (``ptlab.meshes``): u runs left to right, v bottom to top, so (0, 0) is the image's
+    bottom-left corner and (0, 1) its top-left. A lookup blends the four texels around the
+    point, each taken at its centre ((i + 1/2) / width, ...) and repeated past the edges (pbrt-v4
+    section 10.4.3, ``Image::Bilerp`` with ``WrapMode::Repeat``), in linear values: 8- and
+    16-bit images are sRGB-encoded, as PNG and JPEG files are, and are decoded first (IEC
+    61966-2-1, ``ptlab.image.srgb_decode``); float images (EXR, HDR) are linear already. A grey
+    image is a grey colour; an alpha channel is ignored.
+
+    Integer texels are kept as they are stored, with a table of their 256 (or 65536) linear
+    values: an 8-bit image takes a quarter of the memory of float texels, which matters
+    because every worker of a render holds the scene.
+
+    Args:
+        path: an image file OpenImageIO reads (PNG, JPEG, EXR, HDR, TIFF, ...). Raises
+            ``PtlabError`` naming the file if it cannot be read.
+    """
+
+    def __init__(self, path: str | Path):
+        self._set(read_texels(Path(path)), Path(path).name)
+
+    @classmethod
+    def from_array(cls, pixels: np.ndarray, name: str = "array") -> ImageTexture:
+        """A texture of (H, W), (H, W, C) ``pixels``, row 0 the image's top: uint8 or uint16
+        ones sRGB-encoded, float ones linear (C = 1: grey; C = 2 or 4: the last is alpha,
+        ignored). ``name`` says whose image it is in messages and ``repr``."""
+        texture = cls.__new__(cls)
+        texture._set(_colour_texels(np.asarray(pixels), name), name)
+        return texture
+
+    def _set(self, texels: np.ndarray, name: str) -> None:
+        self.name = name
+        self.height, self.width = texels.shape[:2]
+        #: (H * W, 3) texels, row by row from the top, as stored (``decode`` makes them linear).
+        self.texels = np.ascontiguousarray(texels.reshape(-1, 3))
+        if texels.dtype in _INTEGER_RANGE:
+            levels = np.arange(_INTEGER_RANGE[texels.dtype] + 1) / _INTEGER_RANGE[texels.dtype]
+            self.decode: np.ndarray | None = srgb_decode(levels).astype(np.float32)
+        else:
+            self.texels = self.texels.astype(np.float32)
+            self.decode = None
+        #: (3,) what every colour is multiplied by (``tinted``).
+        self.tint = np.ones(3, dtype=np.float32)
+        # (A short fingerprint of the texels, so that a checkpoint of a scene, which keeps its
+        # materials' repr, tells images apart: ``ptlab.rendering.checkpoint.scene_digest``.)
+        self.digest = hashlib.sha256(self.texels.tobytes()).hexdigest()[:12]
+
+    def tinted(self, colour) -> ImageTexture:
+        """This image times ``colour`` (3,), per channel (a material's colour factor: OBJ's
+        ``Kd``, glTF's ``baseColorFactor``), sharing the texels."""
+        twin = copy.copy(self)
+        twin.tint = self.tint * np.asarray(colour, dtype=np.float32).reshape(3)
+        return twin
+
+    def __repr__(self) -> str:
+        tint = "" if (self.tint == 1).all() else f", tint={self.tint.tolist()}"
+        return f"ImageTexture({self.name!r}, {self.width}x{self.height}, sha256 {self.digest}{tint})"
+
+    def __call__(self, uv: np.ndarray) -> np.ndarray:
+        uv = np.asarray(uv, dtype=np.float64)
+        # Continuous texel coordinates: x from the left edge, y from the top (v points up).
+        x = uv[:, 0] * self.width - 0.5
+        y = (1.0 - uv[:, 1]) * self.height - 0.5
+        x0, y0 = np.floor(x), np.floor(y)
+        fx, fy = (x - x0).astype(np.float32), (y - y0).astype(np.float32)
+        # Repeat: texel i of a row is i mod width (the floor keeps negatives right).
+        i0 = np.mod(x0, self.width).astype(np.intp)
+        j0 = np.mod(y0, self.height).astype(np.intp)
+        i1 = np.where(i0 + 1 == self.width, 0, i0 + 1)
+        j1 = np.where(j0 + 1 == self.height, 0, j0 + 1)
+        row0, row1 = j0 * self.width, j1 * self.width
+        colour = np.zeros((len(uv), 3), dtype=np.float32)
+        for index, weight in (
+            (row0 + i0, (1 - fx) * (1 - fy)),
+            (row0 + i1, fx * (1 - fy)),
+            (row1 + i0, (1 - fx) * fy),
+            (row1 + i1, fx * fy),
+        ):
+            texel = self.texels.take(index, axis=0)
+            if self.decode is not None:
+                texel = self.decode.take(texel)
+            colour += weight[:, None] * texel
+        colour *= self.tint
+        return colour
+
+
+def read_texels(path: Path) -> np.ndarray:
+    """(H, W, 3) texels of an image file, as stored (uint8, uint16) or float32, or
+    ``PtlabError`` naming the file."""
+    import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
+
+    if path_kind(path) != "file":
+        raise PtlabError(f"image {path}: not found")
+    # (As stored: OpenImageIO would multiply the colour of an image with alpha by it.)
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    source = oiio.ImageInput.open(str(path), config)
+    if source is None:
+        raise PtlabError(f"image {path}: cannot read it: {oiio.geterror() or 'unknown format'}")
+    try:
+        spec = source.spec()
+        integer = spec.format.basetype in (oiio.UINT8, oiio.UINT16)
+        # (Integers of other widths, and half floats, are read as float32.)
+        pixels = source.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN if integer else oiio.FLOAT)
+        if pixels is None:  # e.g. a file cut short
+            raise PtlabError(f"image {path}: cannot read it: {source.geterror() or 'no pixels'}")
+    finally:
+        source.close()
+    pixels = np.asarray(pixels).reshape(spec.height, spec.width, spec.nchannels)
+    space = spec.get_string_attribute("oiio:ColorSpace").lower()
+    if integer and space.startswith("lin"):  # (an integer image that says it is linear)
+        pixels = pixels / np.float32(_INTEGER_RANGE[pixels.dtype])
+    return _colour_texels(pixels, str(path))
+
+
+def _colour_texels(pixels: np.ndarray, name: str) -> np.ndarray:
+    """(H, W, 3) colour texels of (H, W) or (H, W, C) ``pixels``: grey repeated, alpha
+    dropped; ``PtlabError`` for what is not an image."""
+    if pixels.ndim == 2:
+        pixels = pixels[:, :, None]
+    if pixels.ndim != 3 or 0 in pixels.shape or pixels.shape[2] > 4:
+        raise PtlabError(f"image {name}: pixels of shape {pixels.shape} are not an image")
+    if pixels.dtype not in _INTEGER_RANGE:
+        pixels = pixels.astype(np.float32)
+        if not np.isfinite(pixels).all():
+            raise PtlabError(f"image {name}: has NaN or infinite pixels")
+    colour = pixels[:, :, :3] if pixels.shape[2] >= 3 else pixels[:, :, :1]
+    return np.repeat(colour, 3, axis=2) if colour.shape[2] == 1 else colour

@@ -23,6 +23,7 @@ LAYERS = [
             "ptlab.samplers",
             "ptlab.scattering",
             "ptlab.camera",
+            "ptlab.transforms",
             "ptlab.image",
             "ptlab.accel",
             "ptlab.textures",
@@ -271,6 +272,7 @@ def test_top_level_holds_concepts_not_machinery():
         "scene",
         "scene_file",
         "textures",
+        "transforms",
     }, top
 
 

@@ -1,12 +1,24 @@
+# %% [markdown]
+# # Chapter 8 tutorial: rendering over tiles on several processes, reproducibly
+#
+# Pixels are independent, so an image can be cut into tiles and each tile rendered as a job
+# by whichever process is free. Two rules make that right: what a job writes is not
+# shared (each job *returns* its tile's sums, and the main process alone adds them to the
+# image), and the random numbers belong to the pixel and the sample, not to the worker (the
+# render's sampler makes every number a function of the seed, the pixel, the sample index
+# and the dimension). With both, the image is the same bit for bit whatever the number of
+# workers and the order in which the jobs finish. Chapter 8's exercise is the tiles, a
+# tile's job and the pool (the chapter's page: `ptlab exercise docs 8`).
+#
+# This tutorial renders the Cornell box tile by tile on a pool of worker processes, each
+# tile's job taking its random numbers from the render's sampler
+# (`ptlab.rendering.jobs.run_job`), and shows which process rendered which tile. Then the
+# chapter's typical mistake: a sampler seeded per worker process.
+
 # %%
 """Chapter 8 tutorial: rendering over tiles on several processes, reproducibly.
 
-Renders the Cornell box tile by tile on a pool of 2 worker processes, each tile's job taking
-its random numbers from the render's sampler by pixel and sample
-(``ptlab.rendering.jobs.run_job``), and shows which process rendered which tile. Then the
-chapter's typical mistake: a sampler seeded per worker process. With it, the image rendered
-by 1 worker and the one rendered by 2 differ, tile by tile; with the render's own sampler
-they are the same bit for bit.
+As a script (in a notebook, the options come from PTLAB_TUTORIAL_ARGS):
 
     python docs/tutorials/08_parallel.py                 # writes parallel-tiles.png, parallel-wrong.png
     python docs/tutorials/08_parallel.py --res 64 --spp 4 --out /tmp/t
@@ -30,6 +42,15 @@ from ptlab.integrators.path import PathSettings
 from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, run_job
 from ptlab.samplers import make_sampler
 
+# %% [markdown]
+# ## A tile's job, in a worker process
+#
+# Each worker builds the scene's accelerator once and keeps it for the jobs that follow. A
+# job renders one tile with `run_job` and returns the tile, its sums and the worker's
+# process id, so that we can see who did what. With `per_worker_rng`, the job makes the
+# chapter's mistake: whatever tile it is, its numbers depend on the process (its pid).
+
+# %%
 #: In each worker process: the accelerator, built once.
 _accelerator: dict = {}
 
@@ -45,6 +66,20 @@ def render_tile(setup: RenderSetup, tile, spp: int, per_worker_rng: bool):
     return tile, run_job(setup, Job(tile, 0, spp), _accelerator[setup.token]).sums, os.getpid()
 
 
+# %% [markdown]
+# ## The pool
+#
+# The jobs go to a pool of processes, one per 32 x 32 tile, and the main process adds each
+# tile's sums to the image in whatever order the tiles finish. A script's worker processes
+# are started by a fork server, a clean process that forks them: a process forked from one
+# that has rendered would inherit Embree's threads' locks, held forever. Such a worker
+# imports this file to find `render_tile`, so the tutorial's own work below runs only in the
+# main process, under `if __name__ == "__main__":`. A notebook's functions live in its
+# kernel, which no fresh process can import: there the workers are forked from the kernel,
+# and inherit them (Linux and macOS).
+
+
+# %%
 def render_parallel(scene, spp: int, res: int, workers: int, per_worker_rng: bool = False):
     """(image, {tile index: pid}) rendered on a pool of ``workers`` processes, 32 x 32 tiles."""
     setup = RenderSetup(
@@ -52,8 +87,6 @@ def render_parallel(scene, spp: int, res: int, workers: int, per_worker_rng: boo
     )
     sums = np.zeros((res, res, 3))
     pids = {}
-    # A notebook's functions live in its kernel's __main__, which a fresh process cannot
-    # import: there the workers are forked, and inherit them (Linux and macOS).
     start_method = "fork" if in_notebook() else "forkserver"
     with ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(start_method)) as pool:
         futures = [
@@ -78,8 +111,14 @@ def tiles_picture(image: np.ndarray, pids: dict, res: int) -> np.ndarray:
     return picture
 
 
+# %% [markdown]
+# ## One worker or two: the same image
+#
+# The same render on a pool of 1 and of 2 processes. With the render's sampler the two
+# images are equal bit for bit, and equal to `ptlab.render`'s with the same seed and tiles.
+
 # %%
-def main() -> None:
+if __name__ == "__main__":  # (the main process only: a worker imports this file)
     args, out = tutorial_options(__doc__, res=128, spp=16)
     scene = ptlab.load_scene("cornell-box")
     tiles = make_tiles(args.res, args.res, 32)
@@ -110,6 +149,15 @@ def main() -> None:
     )
     write_image(out / "parallel-tiles.png", tiles_picture(images[2], pids, args.res))
 
+# %% [markdown]
+# ## The mistake: a sampler per worker
+#
+# Seeded per worker process, a tile's noise depends on which process happened to take it:
+# the image changes with the number of workers, and from run to run. The second picture is
+# `|1 worker - 2 workers|` with that mistake (black with the render's sampler).
+
+# %%
+if __name__ == "__main__":
     wrong = {
         workers: render_parallel(scene, args.spp, args.res, workers, per_worker_rng=True)[0]
         for workers in (1, 2)
@@ -123,8 +171,3 @@ def main() -> None:
         f"{out / 'parallel-wrong.png'} (|1 worker - 2 workers| with a sampler per worker)"
     )
     show_pictures(out)
-
-
-# %%
-if __name__ == "__main__":
-    main()

@@ -595,6 +595,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from ptlab.course import chapter
     from ptlab.course.grader import grade
+    from ptlab.course.inspect_command import graded_file
 
     parser = argparse.ArgumentParser(
         prog="python -m ptlab.course.batch", description="Grade one file; print the result as JSON."
@@ -611,15 +612,16 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     user = student_user(args.student_user)
-    result = grade(
-        chapter(args.chapter),
-        Path(args.file),
-        timeout_scale=args.timeout_scale,
-        user=args.student_user if user is None else pool_user(user, args.slot),
-        with_folder=args.own_folder,
-        seed=args.grading_seed,
-        lang=args.lang,
-    )
+    with graded_file(args.file):  # (as the teacher's folder names it)
+        result = grade(
+            chapter(args.chapter),
+            Path(args.file),
+            timeout_scale=args.timeout_scale,
+            user=args.student_user if user is None else pool_user(user, args.slot),
+            with_folder=args.own_folder,
+            seed=args.grading_seed,
+            lang=args.lang,
+        )
     print(json.dumps(result.as_dict()))
     return 0
 

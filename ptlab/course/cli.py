@@ -18,9 +18,10 @@ import json
 import os
 import shutil
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
-from ptlab.atomic import check_writable_file, write_atomically
+from ptlab.atomic import check_writable_file, check_writable_folder, path_kind, write_atomically
 from ptlab.course.messages import LANGUAGES
 from ptlab.course.sandbox.shown import print_verdict, relay, shown
 from ptlab.course.sandbox.student_user import add_student_user_argument, student_user
@@ -88,7 +89,8 @@ def add_exercise_arguments(parser: argparse.ArgumentParser) -> None:
     listing = actions.add_parser(
         "list",
         help="list the chapters and which you have passed",
-        description="List the chapters with the last result of each, from the records that "
+        description="List the chapters with the best result of each (of the files checked for "
+        "it, the one that still stands with the most points), from the records that "
         "'check' keeps beside the files it checked: in DIR (default: this folder) and its "
         "subfolders; with --all, also in the folders 'start' copied files into on this "
         "account (on a shared machine, other people's too).",
@@ -289,14 +291,18 @@ def _start(args) -> int:
     from ptlab.course.progress import remember_folder
 
     found = chapter(args.chapter)
-    folder = Path(args.dir)
-    if folder.exists() and not folder.is_dir():
-        raise PtlabError(f"{folder}: exists and is not a folder")
+    folder = check_writable_folder(args.dir)
     target = folder / found.template.name
-    if target.exists() and not args.force:
+    if path_kind(target) == "folder":
+        raise PtlabError(f"{target}: is a folder")
+    if path_kind(target) is not None and not args.force:
         raise PtlabError(f"{target}: already exists (your work?); use --force to overwrite it")
     folder.mkdir(parents=True, exist_ok=True)
-    shutil.copyfile(found.template, target)
+
+    def write(temporary: str) -> None:
+        shutil.copyfile(found.template, temporary)
+
+    write_atomically(target, write)
     remember_folder(folder)
     print(f"wrote {target.resolve()}")
     print(f"Chapter {found.number}: {found.title}. Write {', '.join(found.functions)}.")
@@ -344,6 +350,7 @@ def _seed(text: str) -> int:
 def _check(args) -> int:
     from ptlab.course import chapter
     from ptlab.course.grader import grade
+    from ptlab.course.inspect_command import graded_file
     from ptlab.course.progress import remember
 
     found = chapter(args.chapter)
@@ -356,16 +363,17 @@ def _check(args) -> int:
         _remove_old_result(Path(args.json))
     # A line per check as it finishes, on a terminal (a course's scripts get the table only).
     echo = (lambda line: print(line, file=sys.stderr)) if sys.stderr.isatty() else None
-    result = grade(
-        found,
-        path,
-        timeout_scale=scale,
-        echo=echo,
-        on_output=relay("    | "),
-        user=args.student_user,
-        seed=args.grading_seed,
-        lang=args.lang,
-    )
+    with graded_file(path):  # (a failed render check suggests a command that names it)
+        result = grade(
+            found,
+            path,
+            timeout_scale=scale,
+            echo=echo,
+            on_output=relay("    | "),
+            user=args.student_user,
+            seed=args.grading_seed,
+            lang=args.lang,
+        )
     # grade() has ended every process of the student's code: nothing can change what follows.
     print_verdict(result.table())  # (a reader gone away changes nothing below, nor the exit code)
     if args.json:
@@ -387,9 +395,7 @@ def _render(args) -> int:
     from ptlab.course.side_by_side import render_side_by_side
 
     found = chapter(args.chapter)
-    out = Path(args.out)
-    if out.exists() and not out.is_dir():
-        raise PtlabError(f"--out {out}: exists and is not a folder")
+    out = _output(check_writable_folder, "--out", args.out)
     if not 0 < args.time_limit <= 86400:
         raise PtlabError(f"--time-limit {args.time_limit}: must be in (0, 86400] seconds")
     with language(args.lang):
@@ -418,14 +424,20 @@ def _render(args) -> int:
     return 0
 
 
+def _output(check: Callable[[str | Path], Path], option: str, path: str | Path) -> Path:
+    """``check(path)`` (``check_writable_file`` or ``check_writable_folder``: before the
+    work, which may take hours), its error naming ``option``."""
+    try:
+        return check(path)
+    except PtlabError as error:
+        raise PtlabError(f"{option} {error}") from None
+
+
 def _remove_old_result(path: Path) -> None:
-    """Remove whatever is at the ``--json`` path before grading starts: a grader stopped
-    midway then leaves no result at all, never an older one (or one written there by
-    anybody else) that would pass for this grading's."""
-    if not path.parent.is_dir():
-        raise PtlabError(f"--json {path}: folder {path.parent} does not exist")
-    if path.is_dir() and not path.is_symlink():
-        raise PtlabError(f"--json {path}: is a folder")
+    """Check that the ``--json`` path can be written, and remove whatever is there before
+    grading starts: a grader stopped midway then leaves no result at all, never an older
+    one (or one written there by anybody else) that would pass for this grading's."""
+    _output(check_writable_file, "--json", path)
     try:
         path.unlink(missing_ok=True)
     except OSError as error:
@@ -435,6 +447,7 @@ def _remove_old_result(path: Path) -> None:
 def _list(args) -> int:
     from ptlab.course import all_chapters
     from ptlab.course.progress import (
+        best,
         find_progress,
         folders_below,
         forget_folder,
@@ -468,11 +481,14 @@ def _list(args) -> int:
     )
     print(f"{'NN':2}  {'chapter':52}  {'status':26}  {'file':30}  write")
     for found in all_chapters():
-        entry = progress.get(f"{found.number:02d}")
+        key = f"{found.number:02d}"
+        entries = progress.get(key, [])
         state, where = "-", ""
-        if entry is not None:
-            state = status(*entry, f"{found.number:02d}")
-            where = _shown(entry[1] / str(entry[0].get("file", "")))
+        if entries:  # (of several files checked for the chapter, the best: see progress.best)
+            entry, folder = best(entries, key)
+            state = status(entry, folder, key)
+            where = _shown(folder / str(entry.get("file", "")))
+            where += f" (best of {len(entries)})" if len(entries) > 1 else ""
         print(f"{found.number:02d}  {found.title:52}  {state:26}  {where:30}  {', '.join(found.functions)}")
     return 0
 
@@ -489,6 +505,7 @@ def _shown(path: Path) -> str:
 def _grade_all(args) -> int:
     from ptlab.course import chapter
     from ptlab.course.batch import alike_in_class, alike_lines, default_alike_path, grade_all, write_alike
+    from ptlab.course.progress import check_private_state
 
     found = chapter(args.chapter)
     scale = _timeout_scale(args)
@@ -497,10 +514,8 @@ def _grade_all(args) -> int:
     csv_path = Path(args.csv or f"grades-{found.number:02d}.csv")
     alike_path = Path(args.alike) if args.alike else default_alike_path(csv_path)
     for option, path in (("--csv", csv_path), ("--alike", alike_path)):
-        try:  # (before anything is graded: a class takes hours)
-            check_writable_file(path)
-        except PtlabError as error:
-            raise PtlabError(f"{option} {error}") from None
+        _output(check_writable_file, option, path)
+    check_private_state()  # (where the grader records what it wrote: before anything is graded)
     if alike_path.absolute() == csv_path.absolute():
         raise PtlabError(f"--alike {alike_path}: the same file as --csv")
     rows = grade_all(

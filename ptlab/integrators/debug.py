@@ -1,7 +1,8 @@
 """Debug views: what the camera rays hit, one picture per question (pbrt's "aov" images).
 
-* ``normals``: the surface normal facing the camera, mapped from [-1, 1] to [0, 1] per
-  axis (x red, y green, z blue), the usual false-colour picture of geometry;
+* ``normals``: the shading normal facing the camera (smooth where a mesh has vertex normals,
+  ``SurfaceHit.n``), mapped from [-1, 1] to [0, 1] per axis (x red, y green, z blue), the
+  usual false-colour picture of geometry;
 * ``albedo``: each surface's directional albedo toward the camera, the fraction of light
   it reflects: the mean of the material's bounce weight f cos / pdf over samples, so it
   works for any material without asking it for a colour;
@@ -25,7 +26,7 @@ from ptlab.scene import Scene
 
 
 def normals(hit: SurfaceHit, sampler: Sampler) -> np.ndarray:
-    """(N, 3) the normal facing the camera, each axis from [-1, 1] to [0, 1]."""
+    """(N, 3) the shading normal facing the camera, each axis from [-1, 1] to [0, 1]."""
     return (hit.n + 1.0) * 0.5
 
 

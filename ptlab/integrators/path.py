@@ -197,8 +197,9 @@ def add_emission(film: np.ndarray, scene: Scene, hit: SurfaceHit, settings: Path
     emitted = take_rows(scene.emission, hit.prim.take(rows))
     if settings.strategy == "mis" and hit.pdf is not None:  # (camera rays have no pdf: weight 1)
         # The density with which light sampling would have picked this point.
-        t, n, wo = hit.t.take(rows), take_rows(hit.n, rows), take_rows(hit.wo, rows)
-        found = LightPoint(radiance=emitted, dist2=t * t, cos_theta_light=dot(n, wo))
+        # (With the geometric normal, as light sampling's density has it: ``AreaLights``.)
+        t, ng, wo = hit.t.take(rows), take_rows(hit.ng, rows), take_rows(hit.wo, rows)
+        found = LightPoint(radiance=emitted, dist2=t * t, cos_theta_light=dot(ng, wo))
         pdf_light = scene.light_sampler.pdf_li(scene.area_lights, found, sampled_lights(scene, settings))
         weight = np.where(
             hit.sees_emission.take(rows),
@@ -373,10 +374,12 @@ def scatter(
         survive & ((throughput[:, 0] > 0) | (throughput[:, 1] > 0) | (throughput[:, 2] > 0))
     )
     every = len(go_on) == len(survive)
-    wi, n, p, offset = (kept(a, go_on, every) for a in (wi, hit.n, hit.p, hit.offset))
+    # (New rays leave by the geometric normal: on a smooth surface the shading one may point
+    # below it; pbrt-v4's SpawnRay.)
+    wi, ng, p, offset = (kept(a, go_on, every) for a in (wi, hit.ng, hit.p, hit.offset))
     depth = hit.depth
     return Paths(
-        origins=leave_surface(p, n, offset, wi),
+        origins=leave_surface(p, ng, offset, wi),
         dirs=wi,
         throughput=kept(throughput, go_on, every),
         pixel=kept(hit.pixel, go_on, every),

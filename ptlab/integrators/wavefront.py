@@ -117,7 +117,15 @@ def joined(first: Paths, second: Paths) -> Paths:
 class SurfaceHit:
     """The live paths at their current vertex: the vertex's geometry, one row per path, and
     the paths themselves (``paths``; ``hit.throughput`` is ``hit.paths.throughput``, and so
-    on for every field of ``Paths`` that a vertex needs)."""
+    on for every field of ``Paths`` that a vertex needs).
+
+    Two normals, as pbrt-v4's ``SurfaceInteraction`` has (section 3.11.1): ``n``, the shading
+    normal, which the materials shade with, and ``ng``, the triangle's own (geometric) normal,
+    which decides which side of the surface a point is on: where new rays leave it and how
+    far off (``leave_surface``), and which face a ray hit (``front``). They are the same
+    array on a flat triangle; on a smooth-shaded one (``Scene.normals``), ``n`` is
+    interpolated from the corners' normals.
+    """
 
     prim: np.ndarray  # (N,) intp triangle ids
     p: np.ndarray  # (N, 3) float32 hit points
@@ -129,6 +137,20 @@ class SurfaceHit:
     delta: np.ndarray  # (N,) bool: the material here is a mirror or glass
     t: np.ndarray  # (N,) distance from the previous vertex
     paths: Paths  # the paths that arrived here, row for row
+    #: (N, 3) unit geometric normal, turned to the side of wo, where it differs from ``n``;
+    #: None: the same as ``n`` (a flat surface, and a vertex a chapter's code makes).
+    geometric_normal: np.ndarray | None = None
+
+    @property
+    def ng(self) -> np.ndarray:
+        """(N, 3) the unit geometric normal, turned to the side of wo (``n`` itself where the
+        surface is flat)."""
+        return self.n if self.geometric_normal is None else self.geometric_normal
+
+    @property
+    def smooth(self) -> bool:
+        """The shading normal ``n`` is not the geometric one ``ng``."""
+        return self.geometric_normal is not None
 
     # The paths' fields, read (and throughput and pixel written) through the vertex, as
     # chapter 7's files do.
@@ -259,6 +281,15 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
     front = dot(n, wo) > 0
     # Materials are two-sided: shade on the side the ray came from.
     n = n * np.where(front, np.float32(1), np.float32(-1))[:, None]
+    geometric = None
+    if scene.corner_normals is not None:
+        # Smooth shading: the corners' normals interpolated and, as the geometric normal just
+        # was, turned to the side of wo by their own sign (a material shades in the hemisphere
+        # around n that holds wo, as pbrt-v4's BxDFs and Mitsuba 3's two-sided BSDFs do); the
+        # geometric normal keeps its other duties.
+        geometric = n
+        n = scene.shading_normals_at(prim, u[:, 0], v[:, 0], geometric)
+        n *= np.where(dot(n, wo) >= 0, np.float32(1), np.float32(-1))[:, None]
     uv = scene.uv_at(prim, u[:, 0], v[:, 0]) if scene.triangle_uv is not None else None
     materials = material_groups(scene, prim, uv)
     delta = np.zeros(len(prim), dtype=bool)
@@ -279,6 +310,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
         delta=delta,
         t=kept(hits.t, alive, every),
         paths=paths,
+        geometric_normal=geometric,
     )
     if (rec := _recorder.get()) is not None:
         rec.vertices(scene, hit)
@@ -287,7 +319,7 @@ def surface_hit(scene: Scene, paths: Paths, hits) -> SurfaceHit:
 
 #: The inspector's recorder (``ptlab.inspector``), None when off. The integrators ask for it
 #: once per step of a bounce, never per ray: while off it costs a lookup of about 60 ns a
-#: step, some 160 of them in a 256 x 256 x 16 render (README, "One pixel, vertex by vertex").
+#: step, some 160 of them in a 256 x 256 x 16 render (docs/rendering.md, "One pixel, vertex by vertex").
 _recorder: ContextVar = ContextVar("recorder", default=None)
 
 
@@ -407,11 +439,16 @@ def sees(accel: Accelerator, hit: SurfaceHit, rows: np.ndarray, targets: np.ndar
     """(N,) bool: which vertices see their light sample, by one shadow ray each from the
     vertices ``rows`` (the others count as not seeing it) to ``targets`` (len(rows), 3).
 
-    The ray starts ``offset`` off the surface on the side of the normal (``leave_surface``;
-    only rows whose light lies on that side come here) and stops ``SHADOW_EPSILON`` short of
-    the target, so that neither the surface it leaves nor the light blocks it.
+    The ray starts ``offset`` off the surface on the side of the geometric normal
+    (``leave_surface``; only rows whose light lies above the shading normal come here, which
+    on a flat surface is that side) and stops ``SHADOW_EPSILON`` short of the target, so that
+    neither the surface it leaves nor the light blocks it.
     """
-    origin = take_rows(hit.p + hit.offset[:, None] * hit.n, rows)
+    p, ng, offset = take_rows(hit.p, rows), take_rows(hit.ng, rows), hit.offset.take(rows)
+    if hit.smooth:
+        # Above the shading normal may be below the surface: leave on the target's side.
+        offset = np.where(dot(targets - p, ng) >= 0, offset, -offset)
+    origin = p + offset[:, None] * ng
     visible = np.zeros(len(hit.prim), dtype=bool)
     visible[rows] = ~accel.occluded(origin, targets - origin, 1.0 - SHADOW_EPSILON)
     return visible

@@ -177,14 +177,14 @@ def next_rays(hit: SurfaceHit, rows: np.ndarray, wi: np.ndarray, weight: np.ndar
 
     Rays whose throughput is 0 (a refraction under total internal reflection, a black
     mirror) are dropped; the others start off the surface on the side ``wi`` goes to, as
-    the path tracer's do (``scatter``).
+    the path tracer's do (``scatter``), by the geometric normal.
     """
     throughput = take_rows(hit.throughput, rows) * weight
     if (rec := recorder()) is not None:
         rec.split(hit, rows, wi, weight, throughput)
     go_on = np.flatnonzero((throughput > 0).any(axis=1))
     rows, wi, throughput = rows.take(go_on), take_rows(wi, go_on), take_rows(throughput, go_on)
-    origins = leave_surface(take_rows(hit.p, rows), take_rows(hit.n, rows), hit.offset.take(rows), wi)
+    origins = leave_surface(take_rows(hit.p, rows), take_rows(hit.ng, rows), hit.offset.take(rows), wi)
     return Paths(
         origins=origins,
         dirs=wi,

@@ -22,6 +22,7 @@ import numpy as np
 
 import ptlab.rendering.adaptive as adaptive
 from ptlab.errors import PtlabError
+from ptlab.image import Window
 from ptlab.integrators.features import FEATURES
 from ptlab.rendering.checkpoint import load_checkpoint, save_checkpoint, scene_digest
 from ptlab.rendering.denoising import DenoisedFilm, check_denoised_size, denoise_film, warm_up_denoiser
@@ -30,7 +31,7 @@ from ptlab.rendering.jobs import Job, RenderSetup, make_tiles, pass_sizes
 from ptlab.rendering.memory import keep_freed_memory
 from ptlab.rendering.options import DEFAULT_MAX_SPP, DEFAULT_RES, RenderOptions, resolution, takes_options
 from ptlab.rendering.pieces import LIBRARY, Pieces
-from ptlab.rendering.scheduler import run_jobs
+from ptlab.rendering.scheduler import interruptible, run_jobs
 from ptlab.rendering.settings import check_flag, check_integer, check_workers
 from ptlab.rendering.sizes import SPP_PER_PASS
 from ptlab.samplers import Sampler, make_sampler
@@ -85,6 +86,8 @@ class RenderResult:
             (``ptlab.integrators.features``); else None.
         estimate_refused: for a denoised render without ``relmse_estimate``, why its error
             could not be estimated honestly; else "".
+        window: for a render of a window of the image (``crop``), where ``image`` sits in the
+            whole image, for its file (``ptlab.image.write_image``); else None.
     """
 
     image: np.ndarray
@@ -104,6 +107,7 @@ class RenderResult:
     noisy: np.ndarray | None = None
     features: dict[str, np.ndarray] | None = None
     estimate_refused: str = ""
+    window: Window | None = None
 
     @property
     def denoised(self) -> bool:
@@ -158,6 +162,7 @@ class RenderResult:
 
 
 @takes_options
+@interruptible()  # (SIGINT stops it even where it was ignored when Python started)
 def render_result(
     scene: Scene | str,
     *args,
@@ -196,12 +201,13 @@ def render_result(
     if isinstance(scene, str | Path):
         scene = load_scene(scene)
     options, workers = _decided_for(scene, options)
-    setup = render_setup(scene, options, pieces, features=gather)
+    # (The film holds the window's pixels, a crop's or the whole image's.)
+    x0, y0, width, height = options.window
+    setup = render_setup(scene, options, pieces, features=gather, origin=(x0, y0))
     scene, sampler, settings = setup.scene, setup.sampler, setup.settings
     assert sampler is not None  # (render_setup gives one)
     keep_freed_memory()
 
-    width, height = options.size
     tiles = make_tiles(width, height, options.tile_size)
     # (A render to a noise target has only passes of its own, the first of spp everywhere.)
     adaptive_render = options.target_error is not None
@@ -264,18 +270,25 @@ def render_result(
             **_denoise_record(denoised, film),
         ),
         features=_feature_images(film),
+        window=None if options.crop is None else Window(x0, y0, *options.size),
         **_images(film, denoised),
     )
 
 
 def render_setup(
-    scene: Scene, options: RenderOptions, pieces: Pieces | None = None, features: bool = False
+    scene: Scene,
+    options: RenderOptions,
+    pieces: Pieces | None = None,
+    features: bool = False,
+    origin: tuple[int, int] = (0, 0),
 ) -> RenderSetup:
     """What every job of a render of ``scene`` shares (options decided ``for_scene``): the
     scene with the options' diffuse sampling, the sampler, the path settings, the pieces
     (the library's unless given); each pixel's samples in two independent halves for a
     render to a target error or a denoised one (whose error the halves measure); the
-    denoiser's feature images gathered if ``features``."""
+    denoiser's feature images gathered if ``features``; ``origin``, the image's pixel at
+    the film's top left (``RenderSetup.origin``: a crop's window; tiles of the whole image,
+    as the inspector's, have (0, 0))."""
     width, height = options.size
     return RenderSetup(
         scene=scene.with_sampling(options.sampling),
@@ -289,6 +302,7 @@ def render_setup(
         halves=options.target_error is not None or options.denoise,
         pieces=pieces or LIBRARY,
         features=features,
+        origin=origin,
     )
 
 
@@ -328,7 +342,7 @@ def _decided_for(scene: Scene, options: RenderOptions) -> tuple[RenderOptions, i
     and the workers (checked)."""
     options = options.for_scene(scene)
     if options.denoise:
-        check_denoised_size(*options.size)
+        check_denoised_size(*options.window[2:])
     return options, check_workers(options.workers)
 
 

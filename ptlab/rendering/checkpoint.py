@@ -5,8 +5,8 @@ of the even ones less the odd ones), the samples taken per tile and per pixel, a
 (``Film.plan``) and the render's identity: its options (``RenderOptions.record``) but the number
 of workers, with the scene's fingerprint and the sampler's identity. Resuming adds the
 missing passes in the same order an uninterrupted render would, so the finished image is
-bit-identical to one. Settings that change the image (scene, resolution, seed, estimator,
-sampler, tiles, backend) must match;
+bit-identical to one. Settings that change the image (scene, resolution, crop window, seed,
+estimator, sampler, tiles, backend) must match;
 a resume that asks for more samples per pixel than the checkpoint's render simply goes on
 (the stratified sampler, whose pattern depends on spp, excepted).
 
@@ -43,8 +43,11 @@ def scene_digest(scene) -> str:
         scene.camera.up,
     ):
         digest.update(np.ascontiguousarray(array).tobytes())
-    if scene.uvs is not None:
-        digest.update(np.ascontiguousarray(scene.uvs).tobytes())
+    # (Only where there are some: a scene without them keeps the fingerprint it had before
+    # scenes had them, and so do its checkpoints.)
+    for optional in (scene.uvs, scene.normals):
+        if optional is not None:
+            digest.update(np.ascontiguousarray(optional).tobytes())
     lights = [repr(light) for light in (scene.point_lights, scene.sky) if light is not None]
     digest.update(repr((scene.camera.fov_y, [repr(m) for m in scene.materials], *lights)).encode())
     return digest.hexdigest()[:16]

@@ -26,11 +26,12 @@ def png_bytes(image: np.ndarray, exposure: float = 0.0) -> bytes:
 
 def in_notebook() -> bool:
     """Whether this runs in a Jupyter kernel (which shows images itself): IPython's shell there
-    is a ``ZMQInteractiveShell``. (Not "ipykernel was imported": a program that talks to
-    kernels, such as a test that runs a notebook, imports it too.)"""
+    is a ``ZMQInteractiveShell``, or a subclass of it (Colab's shell is one). (Not "ipykernel
+    was imported": a program that talks to kernels, such as a test that runs a notebook,
+    imports it too.)"""
     ipython = sys.modules.get("IPython")
     shell = ipython.get_ipython() if ipython is not None else None
-    return type(shell).__name__ == "ZMQInteractiveShell"
+    return any(kind.__name__ == "ZMQInteractiveShell" for kind in type(shell).__mro__)
 
 
 def show(image, exposure: float = 0.0, out: str | Path = "ptlab-show.png") -> Path | None:

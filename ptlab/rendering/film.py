@@ -47,7 +47,8 @@ class Film:
             ray queries and inside the sampler).
         nonfinite: samples that were NaN or infinite and were left out of ``sums``
             (``ptlab.integrators.wavefront.add_to_film``).
-        first_nonfinite: (x, y, depth) of the first of them, by pass and tile (None if none).
+        first_nonfinite: (x, y, depth) of the first of them, by pass and tile (None if none);
+            x, y are the image's pixel (a window's film starts elsewhere: ``RenderSetup.origin``).
         features: (H, W, 9) float64 sums of the denoiser's feature images
             (``ptlab.integrators.features``: direct, albedo, normal), or None where the render
             gathers none; ``feature_differences`` the even samples' sums less the odd ones'.

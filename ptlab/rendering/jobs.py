@@ -7,7 +7,8 @@ everything it needs to reproduce its result exactly:
 
 * its random numbers are the render's sampler's (``ptlab.samplers``), a pure function of
   (seed, pixel, sample index, dimension): no generator is shared between jobs, and a pixel
-  gets the same numbers whatever tile or pass it is rendered in;
+  gets the same numbers whatever tile or pass it is rendered in, or window of the image (a
+  crop: ``RenderSetup.origin``);
 * its result is the sum of its paths' radiance per pixel (float64), which the main
   process adds into the film in pass order, tile by tile.
 
@@ -140,6 +141,11 @@ class RenderSetup:
     pieces: Pieces = LIBRARY
     #: Gather the denoiser's feature images (``ptlab.integrators.features``; the path tracer).
     features: bool = False
+    #: (x, y) of the film's top-left pixel in the image, for a render of a window of it
+    #: (``RenderOptions.crop``): tiles are in the film's pixels, while a camera ray and its
+    #: sampler keys are the whole image's (``width`` x ``height``), so a window's pixels are
+    #: those of the whole image's render, bit for bit.
+    origin: tuple[int, int] = (0, 0)
 
     def __post_init__(self):
         if self.settings.pieces != self.pieces.path:
@@ -215,8 +221,9 @@ class CameraSamples:
             pixel_x.append(np.tile(job.tile.x0 + in_tile % width, samples)[cut])
             pixel_y.append(np.tile(job.tile.y0 + in_tile // width, samples)[cut])
             index.append(np.repeat(np.arange(first_sample, last_sample) + job.first_sample, n_pixels)[cut])
-        xs, ys = np.concatenate(pixel_x), np.concatenate(pixel_y)
         setup = self.setup
+        # (The image's pixels: a window's film starts at its ``origin``.)
+        xs, ys = np.concatenate(pixel_x) + setup.origin[0], np.concatenate(pixel_y) + setup.origin[1]
         pixel, index_in_pixel = ys * setup.width + xs, np.concatenate(index)
         if setup.halves:
             # Odd samples are the samples of a pixel that does not exist (its number past the
@@ -380,7 +387,8 @@ def _nonfinite_in(camera: CameraSamples, nonfinite: NonFinite, j: int) -> dict:
     job = camera.jobs[j]
     height, width = job.tile.shape
     y, x = divmod(int(rows[first] - camera.starts[j]) % (width * height), width)
-    return {"nonfinite": len(rows), "first_nonfinite": (job.tile.x0 + x, job.tile.y0 + y, int(depths[first]))}
+    x0, y0 = job.tile.x0 + camera.setup.origin[0], job.tile.y0 + camera.setup.origin[1]  # (the image's pixel)
+    return {"nonfinite": len(rows), "first_nonfinite": (x0 + x, y0 + y, int(depths[first]))}
 
 
 #: The most samples a group of jobs has (``job_groups``): 4 jobs of 128 x 128 pixels and 16

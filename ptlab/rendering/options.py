@@ -22,7 +22,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 from typing import Any
 
 from ptlab.accel import BACKENDS, resolve_backend
-from ptlab.errors import PtlabError
+from ptlab.errors import PtlabError, is_integer
 from ptlab.integrators import INTEGRATORS
 from ptlab.integrators.path import HEURISTICS, STRATEGIES, PathSettings
 from ptlab.materials.diffuse import SAMPLINGS
@@ -213,6 +213,16 @@ class RenderOptions:
         "where neither can be trusted, on the noisy image's estimate, and says which",
         lambda label, value: check_flag(label, value),
     )
+    crop: tuple[int, int, int, int] | str | None = option(
+        None,
+        "render only the window X,Y,W,H of the image (in its pixels, from its top-left corner; "
+        "the image's size is --res): a W x H image whose pixels are those of the whole image's "
+        "render, bit for bit (a target error is the window's, and a denoiser sees the window "
+        "alone); an .exr or .tif records where it sits, as its data window (default: the whole "
+        "image)",
+        lambda label, value: parse_crop(value),
+        metavar="X,Y,W,H",
+    )
 
     def __post_init__(self):
         for f in fields(self):
@@ -283,9 +293,12 @@ class RenderOptions:
             max_depth = scene.defaults.max_depth
         if max_depth is None:
             max_depth = INTEGRATORS[self.integrator].max_depth
+        res = resolution(scene, self.res)
+        if self.crop is not None:
+            check_crop_inside(parse_crop(self.crop), res)
         return replace(
             self,
-            res=resolution(scene, self.res),
+            res=res,
             max_depth=max_depth,
             backend=resolve_backend(self.backend),
             spp_per_pass=min(self.spp, self.spp_per_pass or SPP_PER_PASS),
@@ -293,8 +306,15 @@ class RenderOptions:
 
     @property
     def size(self) -> tuple[int, int]:
-        """(width, height): ``res`` checked (of options ``for_scene``, which decided it)."""
+        """(width, height) of the whole image: ``res`` checked (of options ``for_scene``,
+        which decided it)."""
         return parse_resolution(self.res)
+
+    @property
+    def window(self) -> tuple[int, int, int, int]:
+        """(x, y, width, height) of the pixels rendered: the ``crop`` (checked inside the image
+        by ``for_scene``), else the whole image (of options ``for_scene``)."""
+        return parse_crop(self.crop) if self.crop is not None else (0, 0, *self.size)
 
     def path_settings(self) -> PathSettings:
         """How the integrators trace paths (of options ``for_scene``)."""
@@ -313,6 +333,7 @@ class RenderOptions:
         record = asdict(self)
         record["width"], record["height"] = record.pop("res")
         record["rr"] = str(self.rr)
+        record["crop"] = None if self.crop is None else ",".join(map(str, parse_crop(self.crop)))
         return record
 
 
@@ -322,6 +343,40 @@ _FIELDS = {f.name: f for f in fields(RenderOptions)}
 def with_default(help: str, default: Any) -> str:
     """``help`` and the default, where that is a value (None's meaning is the help's to say)."""
     return help if default is None else f"{help} (default {default})"
+
+
+def parse_crop(crop: object) -> tuple[int, int, int, int]:
+    """``"X,Y,W,H"`` or a sequence of four whole numbers -> (x, y, width, height), a window of
+    at least one pixel with its top-left corner in the image's quadrant (``check_crop_inside``
+    checks the rest, once the image's size is known)."""
+    numbers: object = crop
+    if isinstance(crop, str):
+        try:
+            numbers = [int(part) for part in crop.split(",")]
+        except ValueError:
+            numbers = None
+    if not (isinstance(numbers, tuple | list) and len(numbers) == 4 and all(map(is_integer, numbers))):
+        raise PtlabError(
+            f"crop {crop!r}: expected X,Y,W,H, four whole numbers (a window of the image in "
+            "pixels, from its top-left corner)"
+        )
+    x, y, width, height = (int(n) for n in numbers)
+    if width < 1 or height < 1:
+        raise PtlabError(f"crop {x},{y},{width},{height}: the window is empty (W and H must be 1 or more)")
+    if x < 0 or y < 0:
+        raise PtlabError(f"crop {x},{y},{width},{height}: X and Y must be 0 or more (from the top left)")
+    return x, y, width, height
+
+
+def check_crop_inside(crop: tuple[int, int, int, int], size: tuple[int, int]) -> None:
+    """``PtlabError`` in one line unless the window ``crop`` lies inside an image of ``size``
+    (width, height)."""
+    x, y, width, height = crop
+    if x + width > size[0] or y + height > size[1]:
+        raise PtlabError(
+            f"crop {x},{y},{width},{height}: the window (columns {x}-{x + width - 1}, rows "
+            f"{y}-{y + height - 1}) is not inside the {size[0]}x{size[1]} image"
+        )
 
 
 def resolution(scene: Scene, res=None) -> tuple[int, int]:

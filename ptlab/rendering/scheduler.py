@@ -10,6 +10,7 @@ deterministic, so the image is the same as if nothing had happened.
 
 from __future__ import annotations
 
+import multiprocessing
 import signal
 import threading
 import warnings
@@ -80,8 +81,14 @@ def run_jobs(
 
 
 def _run_on_executor(
-    groups: list[list[Job]], submit: Callable[[list[Job]], Future], window: int, stop: Callable[[], bool]
+    groups: list[list[Job]],
+    submit: Callable[[list[Job]], Future],
+    window: int,
+    stop: Callable[[], bool],
+    cancel_unfinished: bool = True,
 ) -> Iterator[JobResult]:
+    """Each result of ``groups``' jobs, with at most ``window`` groups in flight, until done
+    or ``stop()``; the groups left in flight are then cancelled if ``cancel_unfinished``."""
     pending = deque(groups)
     in_flight: dict[Future, list[Job]] = {}
     try:
@@ -98,9 +105,10 @@ def _run_on_executor(
                 results = [result for future in done for result in future.result()]
             yield from results
     finally:
-        with signals_held():
-            for future in in_flight:
-                future.cancel()
+        if cancel_unfinished:
+            with signals_held():
+                for future in in_flight:
+                    future.cancel()
 
 
 def _submitter(pool: Executor, token: str) -> Callable[[list[Job]], Future]:
@@ -132,6 +140,11 @@ def _run_on_process_pool(
                     _submitter(pool, setup.token),
                     window=2 * workers,
                     stop=stop,
+                    # The pool's own thread cancels them as it shuts down. One cancelled
+                    # here, which that thread then fails as its workers are killed, is an
+                    # InvalidStateError and a traceback in it (CPython gh-107219, fixed in
+                    # 3.12): a stop before the workers took their first jobs did that.
+                    cancel_unfinished=False,
                 ):
                     finished.add(result.job)
                     yield result
@@ -187,6 +200,31 @@ def _kill_workers(pool: ProcessPoolExecutor) -> None:
     results = getattr(pool, "_result_queue", None)
     if results is not None and not any(process.is_alive() for process in processes):
         results._writer.close()
+
+
+@contextmanager
+def interruptible() -> Iterator[None]:
+    """SIGINT raises KeyboardInterrupt in the block, as Ctrl-C does, even in a process that
+    was started with it ignored: then Python leaves it ignored, and ``kill -INT PID`` would
+    not stop a render (while ``ptlab render``, which handles SIGINT itself, stops).
+
+    A shell without job control starts its background commands so (a script's
+    ``python render.py &``: POSIX.1-2017, Shell Command Language, 2.11). A process of a
+    ``multiprocessing`` pool keeps it ignored: a pool's initializer ignores it on purpose,
+    so that Ctrl-C is its main process's to handle (as ptlab's own workers do)."""
+    override = (
+        threading.current_thread() is threading.main_thread()
+        and signal.getsignal(signal.SIGINT) is signal.SIG_IGN
+        and multiprocessing.parent_process() is None
+    )
+    if not override:
+        yield
+        return
+    signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 #: The signals whose Python handlers ``signals_held`` holds back.

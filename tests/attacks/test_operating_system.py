@@ -14,6 +14,7 @@ import pwd
 import signal
 import subprocess
 import sys
+import traceback
 from pathlib import Path
 
 import pytest
@@ -149,12 +150,17 @@ def test_the_kernel_refuses_the_student_user_the_grader_and_its_files(tmp_path):
                 except OSError as error:
                     outcomes.append(error.errno)
             os.write(write, json.dumps(outcomes).encode())
+        except BaseException:
+            traceback.print_exc()
+            os._exit(1)
         finally:  # (whatever it raised: a forked child never runs the rest of the tests)
             os._exit(0)
     os.close(write)
-    os.waitpid(child, 0)
+    _, status = os.waitpid(child, 0)
     with os.fdopen(read) as pipe:
-        outcomes = json.loads(pipe.read())
+        said = pipe.read()
+    assert os.waitstatus_to_exitcode(status) == 0, "the forked child raised (its traceback: captured stderr)"
+    outcomes = json.loads(said)
     assert outcomes == [1, 1, 13, 1]  # EPERM, EPERM, EACCES, EPERM
 
 
@@ -364,7 +370,7 @@ def test_a_grader_that_is_not_root_is_not_dumpable_and_cannot_change_users(tmp_p
         "parent = os.getpid()\nif os.fork() == 0:\n    try:\n"
         "        open(f'/proc/{parent}/environ', 'rb').read()\n        print('read', flush=True)\n"
         "    except OSError as error:\n        print('refused', error.errno, flush=True)\n"
-        "    os._exit(0)\nos.wait()\n"
+        "    finally:\n        os._exit(0)\nos.wait()\n"
     )
     kernel = subprocess.run(
         [sys.executable, "-I", "-c", probe],

@@ -480,7 +480,7 @@ def test_a_later_failure_replaces_a_pass_in_the_record(tmp_path):
     remember(_graded(answer, 10))
     answer.write_text("# a second version\n")
     remember(_graded(answer, 4))
-    entry = read_record(tmp_path)["01"]
+    entry = read_record(tmp_path)["01"]["01_cameras.py"]
     assert entry["score"] == 4
     assert entry["full_marks"] is False
     assert entry["sha256"] == hashlib.sha256(answer.read_bytes()).hexdigest()

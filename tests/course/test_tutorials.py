@@ -1,10 +1,14 @@
-"""Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures;
-the command line they share (``ptlab.course.tutorial``) takes those settings."""
+"""Every tutorial script of docs/tutorials runs, at reduced settings, and writes its pictures,
+as a script and as a notebook that reads as prose and code; the command line they share
+(``ptlab.course.tutorial``) takes those settings; the README's notebook command writes the
+notebook where the user is."""
 
 from __future__ import annotations
 
+import itertools
 import os
 import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
@@ -14,7 +18,8 @@ import pytest
 
 from ptlab.image import read_image
 
-TUTORIALS = sorted((Path(__file__).parents[2] / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
+ROOT = Path(__file__).parents[2]
+TUTORIALS = sorted((ROOT / "docs" / "tutorials").glob("[0-9][0-9]_*.py"))
 
 
 def test_there_is_a_tutorial_per_chapter():
@@ -59,13 +64,20 @@ def test_tutorial_runs_at_reduced_settings(script, tmp_path):
 @pytest.mark.subprocess
 @pytest.mark.parametrize("script", TUTORIALS, ids=lambda p: p.stem)
 def test_tutorial_runs_as_a_notebook_in_a_fresh_kernel(script, tmp_path, monkeypatch):
-    """Each tutorial script is a notebook too (jupytext's percent format); executed in a fresh
-    kernel (nbclient) at small settings, it writes its pictures and shows them."""
+    """Each tutorial script is a notebook too (jupytext's percent format), and reads as one:
+    a title, then prose between small code cells, each step's results below its own cell.
+    Executed in a fresh kernel (nbclient) at small settings, it writes its pictures and
+    shows them."""
     import jupytext
     from nbclient import NotebookClient
 
     notebook = jupytext.read(script)
-    assert sum(cell.cell_type == "code" for cell in notebook.cells) >= 3  # (imports, main, the call)
+    kinds = "".join(cell.cell_type[0] for cell in notebook.cells)  # (m: markdown, c: code)
+    assert notebook.cells[0].cell_type == "markdown", "no title and introduction"
+    assert notebook.cells[0].source.startswith("# Chapter "), notebook.cells[0].source[:80]
+    assert kinds.count("m") >= 4, f"{script.name} is code with little prose: {kinds}"
+    longest_code_run = max(len(list(run)) for kind, run in itertools.groupby(kinds) if kind == "c")
+    assert longest_code_run <= 2, f"{script.name} has {longest_code_run} code cells without prose between"
     monkeypatch.setenv("PTLAB_TUTORIAL_ARGS", f"--res 32 --spp 1 --out '{tmp_path}'")
     NotebookClient(
         notebook, timeout=300, kernel_name="python3", resources={"metadata": {"path": str(tmp_path)}}
@@ -79,10 +91,44 @@ def test_tutorial_runs_as_a_notebook_in_a_fresh_kernel(script, tmp_path, monkeyp
         if "image/png" in output.get("data", {})
     ]
     assert len(shown) == len(written), f"{script.name} showed {len(shown)} of its {len(written)} pictures"
+    printing = [
+        cell for cell in notebook.cells if any("text" in output for output in cell.get("outputs", []))
+    ]
+    assert len(printing) >= 2, f"{script.name} prints everything in one cell, away from the prose"
+
+
+@pytest.mark.subprocess
+def test_the_readmes_notebook_command_writes_the_notebook_where_the_user_is(tmp_path):
+    """The README's `jupytext --to notebook SCRIPT -o NAME.ipynb`, run with the real jupytext
+    from a folder other than the script's, writes there the notebook that the README's
+    `jupyter notebook` line opens, with the tutorial's prose, and nothing beside the script."""
+    import nbformat
+
+    lines = [line.split("#")[0].strip() for line in (ROOT / "README.md").read_text().splitlines()]
+    convert = shlex.split(next(line for line in lines if line.startswith("jupytext ")))
+    opened = shlex.split(next(line for line in lines if line.startswith("jupyter notebook ")))[2]
+    shown = next(word for word in convert if word.endswith(".py"))  # (relative to the checkout)
+    script = tmp_path / "checkout" / shown  # (a copy: a wrong command writes nothing in ours)
+    script.parent.mkdir(parents=True)
+    script.write_bytes((ROOT / shown).read_bytes())
+    here = tmp_path / "here"
+    here.mkdir()
+    run = subprocess.run(
+        [sys.executable, "-m", *[str(script) if word == shown else word for word in convert]],
+        cwd=here,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
+    assert run.returncode == 0, run.stderr
+    assert (here / opened).is_file(), f"{opened} is not where the user is: {list(here.iterdir())}"
+    assert list(script.parent.iterdir()) == [script]
+    cells = nbformat.read(here / opened, as_version=4).cells
+    assert [cell.cell_type for cell in cells[:2]] == ["markdown", "code"]
 
 
 #: The tutorial that is no chapter's: what a denoiser buys and what it costs (docs/denoising.md).
-DENOISING = Path(__file__).parents[2] / "docs" / "tutorials" / "denoising.py"
+DENOISING = ROOT / "docs" / "tutorials" / "denoising.py"
 DENOISING_PICTURES = {
     f"denoising-{name}.png" for name in ("cornell-box", "error-time", "veach-mis", "games101-hw5")
 }

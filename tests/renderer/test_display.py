@@ -151,3 +151,23 @@ def test_progress_in_a_notebook_shows_the_image_refreshed_after_each_pass(tmp_pa
     (tmp_path / "shown.png").write_bytes(base64.b64decode(shown[0]["data"]["image/png"]))
     shown_bytes = np.round(read_image(tmp_path / "shown.png")[0] * 255)  # (a PNG reads back as its codes)
     assert np.array_equal(shown_bytes, encode_srgb8(np.load(tmp_path / "image.npy")))
+
+
+def test_a_kernels_shell_of_a_subclass_counts_as_a_notebook(monkeypatch):
+    # Colab's shell subclasses ipykernel's ZMQInteractiveShell: a check of the class's own
+    # name would take Colab for a plain Python and parse the kernel's arguments as ours.
+    import sys
+    import types
+
+    from ptlab.rendering.display import in_notebook
+
+    class ZMQInteractiveShell:
+        pass
+
+    class Shell(ZMQInteractiveShell):  # (as google.colab._shell.Shell)
+        pass
+
+    for shell, expected in ((Shell(), True), (ZMQInteractiveShell(), True), (object(), False), (None, False)):
+        fake = types.SimpleNamespace(get_ipython=lambda shell=shell: shell)
+        monkeypatch.setitem(sys.modules, "IPython", fake)
+        assert in_notebook() is expected

@@ -133,3 +133,52 @@ def test_cli_prints_json_and_one_sample(tmp_path, capsys):
     assert set(vertex["light"]) >= {"point", "light", "pdf", "visible", "mis_weight", "contribution"}
     image = ptlab.render("cornell-box", res=24, spp=3, seed=3, workers=1)
     assert np.array_equal(np.float32(data["value"]), image[14, 12])
+
+
+#: Cameras in the Cornell box: its own (looking along +z: the image's left is +x), and
+#: others looking along -x, diagonally, and upside down. (position, target, up)
+CAMERAS = {
+    "the scene's": None,
+    "along -x": ((500.0, 273.0, 278.0), (0.0, 273.0, 278.0), (0.0, 1.0, 0.0)),
+    "diagonally": ((480.0, 300.0, 60.0), (100.0, 250.0, 500.0), (0.0, 1.0, 0.0)),
+    "upside down": ((278.0, 273.0, -800.0), (278.0, 273.0, 0.0), (0.0, -1.0, 0.0)),
+}
+
+
+@pytest.mark.parametrize("camera", CAMERAS)
+def test_the_plots_views_are_the_images_not_its_mirror(camera):
+    # From above, what is left in the image is left in the panel; from the side, the camera
+    # looks to the right and what is up in the image is up in the panel.
+    from dataclasses import replace
+
+    import matplotlib.pyplot as plt
+
+    from ptlab.camera import Camera
+    from ptlab.inspector.plot import draw, views
+
+    scene = ptlab.load_scene("cornell-box")
+    if CAMERAS[camera] is not None:
+        position, target, up = CAMERAS[camera]
+        scene = replace(scene, camera=Camera.look_at(position, target, up, fov_y=40.0))
+    options = dict(res=24, spp=1, workers=1, max_depth=1)
+    hits = {
+        name: np.array(inspect_pixel(scene, pixel, **options).samples[0].vertices[0].position)
+        for name, pixel in {"left": (2, 12), "right": (21, 12), "top": (12, 2), "bottom": (12, 21)}.items()
+    }
+    figure = draw(inspect_pixel(scene, (12, 12), **options), scene)
+    try:
+        above, side = figure.axes
+        view_above, view_side = views(scene.camera)
+
+        def shown_at(ax, view, point) -> np.ndarray:
+            """Where ``point`` is drawn on the page (display coordinates, x right, y up)."""
+            return ax.transData.transform((point[view.across], point[view.up]))
+
+        assert shown_at(above, view_above, hits["left"])[0] < shown_at(above, view_above, hits["right"])[0]
+        assert shown_at(side, view_side, hits["top"])[1] > shown_at(side, view_side, hits["bottom"])[1]
+        camera_at = np.asarray(scene.camera.position)
+        far = camera_at + 100 * np.asarray(scene.camera.forward)
+        assert shown_at(side, view_side, camera_at)[0] < shown_at(side, view_side, far)[0]
+        assert shown_at(above, view_above, camera_at)[1] < shown_at(above, view_above, far)[1]
+    finally:
+        plt.close(figure)

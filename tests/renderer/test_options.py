@@ -120,6 +120,11 @@ BAD = [
     ),
     (dict(denoise="yes"), "denoise: 'yes' is not True or False"),
     (
+        dict(crop="1,2,3"),
+        "crop '1,2,3': expected X,Y,W,H, four whole numbers (a window of the image in pixels, "
+        "from its top-left corner)",
+    ),
+    (
         dict(denoise=True, integrator="albedo"),
         "denoise: the denoiser is for path-traced images; 'albedo' gathers no albedo and normal "
         "images for it",

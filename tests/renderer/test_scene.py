@@ -342,15 +342,16 @@ BROKEN_LIGHTS_AND_MESHES = {
         "mesh[2].quad.corners",
         "zero area",
     ),
-    "scaled sphere": (
-        '\n[[mesh]]\nsphere = { center = [0, 0, 0], radius = 1 }\nscale = 2\nmaterial = "grey"\n',
+    "zero scale": (
+        '\n[[mesh]]\nfile = "quad.obj"\nscale = 0\nmaterial = "grey"\n',
         "mesh[2].scale",
-        "mesh `file` only",
+        "must not be 0",
     ),
-    "negative scale": (
-        '\n[[mesh]]\nfile = "quad.obj"\nscale = -2\nmaterial = "grey"\n',
-        "mesh[2].scale",
-        "positive",
+    "a matrix beside a scale": (
+        '\n[[mesh]]\nfile = "quad.obj"\nscale = 2\nmaterial = "grey"\n'
+        "matrix = [[1, 0, 0, 0], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]]\n",
+        "mesh[2]",
+        "either a `matrix`",
     ),
     "checkerboard of one colour": (
         '\n[materials.board]\ntype = "diffuse"\nalbedo = { checkerboard = [[1, 0, 0]] }\n',

@@ -391,7 +391,7 @@ def test_diffuse_surfaces_get_no_indirect_light(cornell):
     # The Cornell box's ceiling is lit only by light that has bounced off the walls: the
     # light hangs under it and emits downward. Whitted shows it black (it would take a
     # diffuse bounce), the path tracer does not.
-    ceiling = (cornell.normals[:, 1] < -0.99) & ~emitters(cornell)
+    ceiling = (cornell.face_normals[:, 1] < -0.99) & ~emitters(cornell)
     on_ceiling = footprint_on(cornell, 32, ceiling) == 1
     assert on_ceiling.sum() >= 20
     whitted = ptlab.render(cornell, integrator="whitted", spp=4, res=32, workers=1)

@@ -604,7 +604,8 @@ MESSAGES: dict[str, str] = {
     "inspect.differs": "sample {sample}, depth {depth}: your {quantity} {yours}, the library's {expected}",
     "inspect.differs_sample": "sample {sample}: your {quantity} {yours}, the library's {expected} (every vertex the same up to there)",
     "inspect.not_run": "could not compare: {message}",
-    "inspect.suggest": "; to see where, vertex by vertex: ptlab exercise inspect {chapter} YOUR_FILE --pixel {x},{y} --seed {seed} (the pixel that differs most)",
+    "inspect.suggest": "; to see where, vertex by vertex: ptlab exercise inspect {chapter} {file} --pixel {x},{y} --seed {seed} (the pixel that differs most)",
+    "inspect.your_file": "YOUR_FILE",
     # Chapter 11: How noisy is it? (chapters/ch11_noise.py).
     "ch11.title": "How noisy is it?",
     "ch11.check.variance of the mean": "variance of the mean",

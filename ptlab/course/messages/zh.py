@@ -593,7 +593,8 @@ MESSAGES: dict[str, str] = {
     "inspect.differs": "样本 {sample}，深度 {depth}：你的 {quantity} 是 {yours}，库的是 {expected}",
     "inspect.differs_sample": "样本 {sample}：你的 {quantity} 是 {yours}，库的是 {expected}（在此之前每个顶点都相同）",
     "inspect.not_run": "无法比较：{message}",
-    "inspect.suggest": "；逐个顶点查看哪里不同：ptlab exercise inspect {chapter} 你的文件 --pixel {x},{y} --seed {seed}（差别最大的像素）",
+    "inspect.suggest": "；逐个顶点查看哪里不同：ptlab exercise inspect {chapter} {file} --pixel {x},{y} --seed {seed}（差别最大的像素）",
+    "inspect.your_file": "你的文件",
     # 第 11 章：噪声有多大？（chapters/ch11_noise.py）
     "ch11.title": "噪声有多大？",
     "ch11.check.variance of the mean": "均值的方差",

@@ -1,9 +1,4 @@
-"""Mesh files: the triangles of an OBJ, STL, PLY, OFF or glTF file, read and checked.
-
-OBJ files are read here (``read_obj``), the other formats by trimesh, which triangulates
-polygons; ptlab then checks what came out (three coordinates per vertex, faces that refer to
-existing vertices, nothing NaN or infinite) and drops triangles of zero area, which no ray
-can hit.
+"""OBJ files: ptlab's own reader, the whole text parsed at once.
 
 ``read_obj`` is one reader for every OBJ file, with texture coordinates or without. It
 parses the whole text at once (``parse_obj``: lines found and classified by whole-array
@@ -22,23 +17,25 @@ vertices. ``read_obj`` refuses each of these and names the line, so that a malfo
 file, which other programs may misread, is an error instead of a wrong picture: the parse
 itself confirms that a file is written the common way (``ObjRecords.plain``), and only where
 it cannot does ``check_obj_lines`` look line by line.
+
+Beyond the triangles, ``read_obj_mesh`` reads what else a file says of its surface: vertex
+normals (``vn`` records, ``f v/vt/vn`` or ``f v//vn``), and materials: ``mtllib`` names
+material files (``ptlab.meshes.mtl``), ``usemtl`` gives the faces after it a material.
 """
 
 from __future__ import annotations
 
 import functools
-import math
 import re
 import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ptlab.errors import SceneError
-
-#: The mesh formats trimesh reads without optional packages (by file extension).
-MESH_FORMATS = ("obj", "stl", "ply", "off", "glb", "gltf")
+from ptlab.meshes.base import FileMaterial, IndexedMesh
+from ptlab.meshes.mtl import read_mtl
 
 #: A number as trimesh's OBJ reader (NumPy's ``fromstring``) parses it: decimal, optional
 #: exponent, or nan/inf (which ``read_mesh_triangles`` then reports).
@@ -51,145 +48,6 @@ _NUMBERS_RECORD = re.compile(rf"v[tn]?(?:[ \t]+{_NUMBER})*[ \t]*")
 _FACE_RECORD = re.compile(rf"f(?:[ \t]+{_REFERENCE})*[ \t]*")
 #: How many numbers each OBJ record takes: (fewest, most); ``v`` may carry w or an RGB colour.
 _RECORD_SIZES = {"v": (3, 7), "vt": (1, 3), "vn": (3, 3)}
-
-
-def read_mesh_triangles(path: Path, where: str | None = None, limit: float = math.inf) -> np.ndarray:
-    """(T, 3, 3) float64 triangles of a mesh file (``read_mesh``)."""
-    return read_mesh(path, where, limit)[0]
-
-
-def read_mesh(
-    path: Path, where: str | None = None, limit: float = math.inf
-) -> tuple[np.ndarray, np.ndarray | None]:
-    """The triangles of a mesh file and their texture coordinates: an OBJ file read here
-    (``read_obj``), any other file by trimesh.
-
-    Returns:
-        triangles: (T, 3, 3) float64, vertex k of triangle i at ``triangles[i, k]``;
-        uv: (T, 3, 2) float64 texture coordinates of those vertices (an OBJ file's ``vt``;
-        a missing v is 0), or None if the file has none.
-
-    Raises ``SceneError`` (naming ``where``, e.g. the scene file and key) for a file trimesh
-    cannot read or would misread, an empty mesh, NaN or infinite vertices or texture
-    coordinates, and coordinates beyond +-``limit``. Triangles of zero area are then dropped.
-    """
-    path = Path(path)
-    where = where or str(path)
-    fmt = path.suffix.lower().lstrip(".")
-    if fmt not in MESH_FORMATS:
-        raise SceneError(
-            where, f"mesh {path.name}: unknown mesh format {path.suffix!r} (use .{', .'.join(MESH_FORMATS)})"
-        )
-    try:
-        data = path.read_bytes()
-    except OSError as error:
-        raise SceneError(where, f"cannot read mesh {path.name}: {error.strerror}") from None
-    if not data or data.isspace():  # (bytes.strip would copy the file)
-        raise SceneError(where, f"mesh {path.name} is empty")
-    if fmt == "obj":
-        try:
-            vertices, faces, uv = read_obj(data)
-        except ValueError as error:
-            raise SceneError(where, f"mesh {path.name}: {error}") from None
-    else:
-        mesh = _read_with_trimesh(path, where, fmt)
-        vertices = np.asarray(getattr(mesh, "vertices", ()), dtype=np.float64)
-        faces = np.asarray(getattr(mesh, "faces", ()))
-    _check_faces(vertices, faces, where, path.name)
-    triangles = vertices[faces]
-    # (A closed mesh has a sixth as many vertices as corners: they are looked at first, the
-    # corners only to name the vertex, or where the one beyond belongs to no face.)
-    if (np.abs(vertices) > limit).any() and (beyond := np.abs(triangles).max(axis=2) > limit).any():
-        vertex = triangles[beyond][0]
-        raise SceneError(
-            where,
-            f"mesh {path.name} has a vertex at {vertex.tolist()}: every "
-            f"coordinate must lie within +-{limit:g}",
-        )
-    if fmt != "obj":
-        uv = _texture_coordinates(mesh, len(vertices), where, path.name)
-        uv = None if uv is None else uv[faces]
-    if uv is not None and not np.isfinite(uv).all():
-        raise SceneError(where, f"mesh {path.name} has texture coordinates that are NaN or infinite")
-    # (Only now: a vertex far out can make its triangles degenerate in float64.)
-    kept = has_area(triangles)
-    if not kept.any():
-        raise SceneError(where, f"mesh {path.name} has only zero-area triangles")
-    if kept.all():  # (spares a copy)
-        return triangles, uv
-    return triangles[kept], None if uv is None else uv[kept]
-
-
-def _check_faces(vertices: np.ndarray, faces: np.ndarray, where: str, name: str) -> None:
-    """Raise ``SceneError`` unless ``faces`` (T, 3) index ``vertices`` (V, 3), all finite."""
-    if len(faces) == 0:
-        raise SceneError(where, f"mesh {name} has no triangles")
-    if vertices.ndim != 2 or vertices.shape[1] != 3:
-        raise SceneError(
-            where,
-            f"mesh {name}: vertices must have 3 coordinates, "
-            f"got {vertices.shape[-1] if vertices.ndim == 2 else 0}",
-        )
-    if faces.ndim != 2 or faces.shape[1] != 3 or not np.issubdtype(faces.dtype, np.integer):
-        raise SceneError(where, f"mesh {name}: trimesh returned faces of shape {faces.shape}")
-    outside = faces[(faces < 0) | (faces >= len(vertices))]
-    if len(outside):
-        raise SceneError(
-            where,
-            f"mesh {name}: a face refers to vertex {int(outside[0])}, "
-            f"but there are {len(vertices)} vertices (0 to "
-            f"{len(vertices) - 1})",
-        )
-    bad = ~np.isfinite(vertices).all(axis=1)
-    if bad.any():
-        raise SceneError(
-            where,
-            f"mesh {name} has {int(bad.sum())} vertices that are NaN "
-            f"or infinite (first: vertex {int(np.flatnonzero(bad)[0])})",
-        )
-
-
-def _texture_coordinates(mesh, vertex_count: int, where: str, name: str) -> np.ndarray | None:
-    """(V, 2) uv per vertex of a trimesh mesh (v = 0 where the file gives u only), or None."""
-    uv = getattr(getattr(mesh, "visual", None), "uv", None)
-    if uv is None:
-        return None
-    uv = np.asarray(uv, dtype=np.float64)
-    if uv.ndim != 2 or len(uv) != vertex_count or uv.shape[1] == 0:
-        raise SceneError(
-            where, f"mesh {name}: texture coordinates of shape {uv.shape} for {vertex_count} vertices"
-        )
-    return np.pad(uv[:, :2], ((0, 0), (0, max(0, 2 - uv.shape[1]))))
-
-
-def has_area(triangles: np.ndarray) -> np.ndarray:
-    """(T,) bool: which of the (T, 3, 3) ``triangles`` have an area that is not zero."""
-    area2 = np.linalg.norm(
-        np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0]), axis=1
-    )
-    return area2 > 0
-
-
-def _read_with_trimesh(path: Path, where: str, fmt: str):
-    """The trimesh mesh of a file of any format trimesh reads."""
-    import trimesh
-
-    try:
-        mesh = trimesh.load(path, force="mesh", process=False)
-    except ModuleNotFoundError:
-        # trimesh imports a character-set detector (an optional package) only for a file
-        # that is neither valid binary data of its format nor UTF-8 text.
-        raise SceneError(
-            where, f"cannot read mesh {path.name}: neither a binary .{fmt} file nor UTF-8 text"
-        ) from None
-    except Exception as error:  # trimesh raises many kinds for unreadable files
-        raise SceneError(where, f"cannot read mesh {path.name}: {error}") from None
-    return mesh
-
-
-def drop_zero_area(triangles: np.ndarray) -> np.ndarray:
-    """(T', 3, 3) the triangles of (T, 3, 3) ``triangles`` whose area is not zero."""
-    return triangles[has_area(triangles)]
 
 
 def read_obj(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -206,18 +64,102 @@ def read_obj(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         record's u and v; v = 0 where it gives u only), or None where some face gives none
         or one that does not exist.
     """
-    text = _obj_text(data)
-    records = parse_obj(text)
-    if records is None or not records.plain:
-        check_obj_lines(text.decode("utf-8"))
-        # (check_obj_lines accepts only text that parse_obj reads.)
-        assert records is not None
+    records = _checked_records(_obj_text(data), statements=False)
     # (Where every face is a triangle, nothing is cut: each is its three references.)
     corners = None if (records.face_sizes == 3).all() else _fan_corners(records.face_sizes)
     faces = _by_triangle(records.vertex_references, corners)
     if records.texture_references is None:
         return records.vertices, faces, None
     return records.vertices, faces, records.texture[_by_triangle(records.texture_references, corners)]
+
+
+def read_obj_mesh(data: bytes, folder: Path) -> IndexedMesh:
+    """Everything ptlab reads of an OBJ file's bytes (``read_obj``'s triangles, their normals
+    and materials), its material files looked for in ``folder``; ``ValueError`` naming the
+    line (of the OBJ file, or of a material file) that is wrong.
+
+    Vertex normals are read where every face gives them (``v//vn``, ``v/vt/vn``) and all of
+    them exist; else they are left out, and ``unused`` says why.
+    """
+    records = _checked_records(_obj_text(data))
+    corners = None if (records.face_sizes == 3).all() else _fan_corners(records.face_sizes)
+    mesh = IndexedMesh(records.vertices, _by_triangle(records.vertex_references, corners))
+    if records.texture_references is not None:
+        mesh.uv = records.texture[_by_triangle(records.texture_references, corners)]
+    if records.normal_references is not None:
+        mesh.normals = records.normals[_by_triangle(records.normal_references, corners)]
+    elif records.normal_problem:
+        mesh.unused.append(f"vertex normals ({records.normal_problem})")
+    if records.smoothing and len(records.normals) == 0:
+        mesh.unused.append("smoothing groups (`s`): without `vn` normals the faces stay flat")
+    if records.libraries or records.face_materials is not None:
+        mesh.materials, material_ids, unused = _obj_materials(records, folder)
+        mesh.unused += unused
+        if material_ids is not None:
+            # (A face's triangles are consecutive, in the faces' order: ``_fan_corners``.)
+            mesh.material_ids = np.repeat(material_ids, records.face_sizes - 2)
+    return mesh
+
+
+def _checked_records(text: bytes, statements: bool = True) -> ObjRecords:
+    """``parse_obj``'s records of OBJ text, or ``ValueError`` for the first line trimesh
+    would misread (``check_obj_lines``)."""
+    records = parse_obj(text, statements)
+    if records is None or not records.plain:
+        check_obj_lines(text.decode("utf-8"))
+        # (check_obj_lines accepts only text that parse_obj reads.)
+        assert records is not None
+    return records
+
+
+def _obj_materials(
+    records: ObjRecords, folder: Path
+) -> tuple[list[FileMaterial], np.ndarray | None, list[str]]:
+    """The materials the faces use, found in the file's material libraries (``mtllib``):
+    ([FileMaterial] in order of first use, (F,) each face's index among them (-1: none),
+    what ptlab does not use of them)."""
+    library: dict[str, FileMaterial] = {}
+    unused_of: dict[str, list[str]] = {}
+    unused: list[str] = []
+    for line in records.libraries:
+        # (One name, which may hold spaces, or several: the specification allows a list.)
+        names = [line] if (folder / line).is_file() else line.split()
+        for name in names:
+            _read_library(folder, name, library, unused_of, unused)
+    if records.face_materials is None:
+        return [], None, unused
+    used: list[FileMaterial] = []
+    ids = np.full(len(records.material_names) + 1, -1, dtype=np.intp)
+    for k, name in enumerate(records.material_names):
+        if name in library:
+            ids[k] = len(used)
+            used.append(library[name])
+            unused += [u for u in unused_of[name] if u not in unused]
+        else:
+            unused.append(f"material {name} (in no material library)")
+    # (-1, a face before any ``usemtl``, takes the last entry: -1.)
+    return used, ids[records.face_materials], unused
+
+
+def _read_library(
+    folder: Path,
+    name: str,
+    library: dict[str, FileMaterial],
+    unused_of: dict[str, list[str]],
+    unused: list[str],
+) -> None:
+    """Add the materials of material file ``name`` (in ``folder``) to ``library`` (the first
+    of a name wins), what ptlab does not use of each to ``unused_of``; a file not found, to
+    ``unused``."""
+    path = folder / name
+    if not path.is_file() and "\\" in name:  # (written on Windows)
+        path = folder / name.replace("\\", "/")
+    if not path.is_file():
+        unused.append(f"material library {name} (not found)")
+        return
+    for material, ignored in read_mtl(path):
+        library.setdefault(material.name, material)
+        unused_of.setdefault(material.name, ignored)
 
 
 def _obj_text(data: bytes) -> bytes:
@@ -248,7 +190,8 @@ def _obj_text(data: bytes) -> bytes:
 
 @dataclass
 class ObjRecords:
-    """The ``v``, ``vt`` and ``f`` records of OBJ text, parsed at once (``parse_obj``).
+    """The ``v``, ``vt``, ``vn`` and ``f`` records of OBJ text, parsed at once (``parse_obj``),
+    and the faces' materials (``usemtl``, ``mtllib``).
 
     Attributes:
         vertices: (V, 3) float64, each ``v`` record's first three numbers.
@@ -257,7 +200,16 @@ class ObjRecords:
             the file's order.
         texture_references: (R,) int64 0-based ``vt`` record of every reference, or None
             where some face gives none or one that does not exist.
+        normals: (VN, 3) float64 ``vn`` records.
+        normal_references: (R,) int64 0-based ``vn`` record of every reference, or None
+            where some face gives none or one that does not exist (``normal_problem``).
+        normal_problem: why faces that give normals have none here ("" if none do, or all do).
         face_sizes: (F,) the number of references of each face.
+        face_materials: (F,) intp each face's material, an index into ``material_names``
+            (-1 before any ``usemtl`` line), or None where the file has no ``usemtl``.
+        material_names: the names ``usemtl`` lines give, each once, in order of first use.
+        libraries: the argument of each ``mtllib`` line (one file name or several).
+        smoothing: an ``s`` line turns smoothing groups on (not ``off`` or 0).
         plain: the text is written the common way, which the parse itself confirms: records
             at the very start of their lines and without comments, numbers made of digits,
             signs, points and exponents, every face's references in one form, with indices
@@ -271,9 +223,16 @@ class ObjRecords:
     texture_references: np.ndarray | None
     face_sizes: np.ndarray
     plain: bool
+    normals: np.ndarray
+    normal_references: np.ndarray | None
+    normal_problem: str
+    face_materials: np.ndarray | None
+    material_names: list[str]
+    libraries: list[str]
+    smoothing: bool
 
 
-def parse_obj(text: bytes) -> ObjRecords | None:
+def parse_obj(text: bytes, statements: bool = True) -> ObjRecords | None:
     """The records of OBJ text (LF line ends), read by a few whole-array operations on its
     bytes, or None where they cannot be read that way (then ``check_obj_lines`` finds a
     line that is wrong).
@@ -282,7 +241,9 @@ def parse_obj(text: bytes) -> ObjRecords | None:
     of each kind of record are gathered into one array of bytes (keyword blanked), whose
     fields one ``np.fromstring`` call reads. Bytes of a few classes (separators, slashes)
     give the fields of each line and their forms. No Python loop runs over lines, so reading
-    takes a time proportional to the file's size (docs/performance.md).
+    takes a time proportional to the file's size (docs/performance.md). ``statements``: look
+    for the ``usemtl``, ``mtllib`` and ``s`` lines too (three more searches of the whole text,
+    left out where only the triangles are wanted).
     """
     continued = b"\\" in text and b"\\\n" in text  # (lines continued with a backslash)
     joined = text.replace(b"\\\n", b"") if continued else text
@@ -323,21 +284,61 @@ def parse_obj(text: bytes) -> ObjRecords | None:
             return None
         numbers[record], plain = values
         plain_numbers &= plain
-    # Per face: how many `v` and `vt` records come before its line.
-    before = {record: np.cumsum(kind == _KINDS[record])[kind == _KINDS["f"]] for record in ("v", "vt")}
-    faces = _face_records(lines_of("f"), before, len(numbers["v"]), len(numbers["vt"]))
+    face_lines = kind == _KINDS["f"]
+
+    @functools.cache
+    def before(record: str) -> np.ndarray:
+        """(F,) how many records of kind ``record`` come before each face's line (made only
+        for negative indices, which count back from there)."""
+        return np.cumsum(kind == _KINDS[record])[face_lines]
+
+    counts = {record: len(values) for record, values in numbers.items()}
+    faces = _face_records(lines_of("f"), before, counts)
     if faces is None:
         return None
-    vertex_references, texture_references, face_sizes, plain_faces = faces
     texture = numbers["vt"][:, :2]
+    face_materials, material_names = _face_materials(joined, starts[face_lines]) if statements else (None, [])
+    smoothing = statements and any(group not in ("off", "0") for _, group in _statements(joined, b"s"))
     return ObjRecords(
         vertices=numbers["v"][:, :3],
         texture=np.pad(texture, ((0, 0), (0, 2 - texture.shape[1]))),
-        vertex_references=vertex_references,
-        texture_references=texture_references,
-        face_sizes=face_sizes,
-        plain=not continued and not misplaced.any() and not commented and plain_numbers and plain_faces,
+        vertex_references=faces.vertex,
+        texture_references=faces.texture,
+        face_sizes=faces.sizes,
+        plain=not continued and not misplaced.any() and not commented and plain_numbers and faces.plain,
+        normals=numbers["vn"],
+        normal_references=faces.normal,
+        normal_problem=faces.normal_problem,
+        face_materials=face_materials,
+        material_names=material_names,
+        libraries=[name for _, name in _statements(joined, b"mtllib")] if statements else [],
+        smoothing=smoothing,
     )
+
+
+def _statements(text: bytes, keyword: bytes) -> list[tuple[int, str]]:
+    """(where its line starts, its argument) for each line of OBJ text (LF line ends) that
+    is ``keyword``, blanks and an argument: a material's name, a file's, a group's."""
+    if keyword not in text:  # (the common case, found at the speed of a byte search)
+        return []
+    # (A literal start lets the search skip ahead as fast; the first line is looked at alone.)
+    found = [(match.start() + 1, match) for match in re.finditer(rb"\n" + keyword + rb"[ \t]+([^\n]*)", text)]
+    if (first := re.match(keyword + rb"[ \t]+([^\n]*)", text)) is not None:
+        found.insert(0, (0, first))
+    return [(start, match.group(1).decode("utf-8").strip()) for start, match in found]
+
+
+def _face_materials(text: bytes, face_starts: np.ndarray) -> tuple[np.ndarray | None, list[str]]:
+    """(F,) each face's material, as an index into the names of the materials that ``usemtl``
+    lines give (-1 before the first), and those names, each once; (None, []) without any."""
+    statements = _statements(text, b"usemtl")
+    if not statements:
+        return None, []
+    names: dict[str, int] = {}
+    material_of_line = np.array([names.setdefault(name, len(names)) for _, name in statements] + [-1])
+    # The last ``usemtl`` line before each face (-1: none, which picks the -1 at the end).
+    line = np.searchsorted([start for start, _ in statements], face_starts) - 1
+    return material_of_line[line], list(names)
 
 
 #: The records ``parse_obj`` reads, and the code of each in its per-line kinds (0: others).
@@ -434,13 +435,30 @@ def _number_records(stream: np.ndarray, fewest: int, most: int) -> tuple[np.ndar
     return values.reshape(-1, size), _made_of(stream, _NUMBER_BYTES)
 
 
+@dataclass
+class _FaceRecords:
+    """The references of F faces (``_face_records``).
+
+    Attributes:
+        vertex: (R,) 0-based vertices; texture, normal: (R,) 0-based ``vt``, ``vn`` records,
+            or None (``ObjRecords``); normal_problem: why normal is None where faces give some.
+        sizes: (F,) references per face. plain: the faces are written the common way.
+    """
+
+    vertex: np.ndarray
+    texture: np.ndarray | None
+    normal: np.ndarray | None
+    normal_problem: str
+    sizes: np.ndarray
+    plain: bool
+
+
 def _face_records(
-    stream: np.ndarray, before: dict[str, np.ndarray], vertex_count: int, texture_count: int
-) -> tuple[np.ndarray, np.ndarray | None, np.ndarray, bool] | None:
-    """The references of F faces, from their lines' bytes (keyword blanked) and the number
-    of ``v`` and ``vt`` records before each line, (F,) each: (R,) 0-based vertices, (R,)
-    0-based ``vt`` records or None, (F,) references per face, and whether the faces are
-    plain; or None."""
+    stream: np.ndarray, before: Callable[[str], np.ndarray], counts: dict[str, int]
+) -> _FaceRecords | None:
+    """The references of F faces, from their lines' bytes (keyword blanked), the number of
+    records of each kind before each line (``before(record)``, (F,)) and in the file
+    (``counts``); or None."""
     if not _made_of(stream, _REFERENCE_BYTES):
         return None
     start, ends, sizes = _fields(stream)
@@ -471,8 +489,12 @@ def _face_records(
         every face has one form, a view of every (per + 1)th number."""
         return numbers[k :: int(per[0]) + 1] if first is None else numbers[first + k]
 
+    def last_numbers() -> np.ndarray:
+        """(R,) the last number of each reference (its vn, where it gives one)."""
+        return numbers_at(int(per[0])) if first is None else numbers[first + np.repeat(per, sizes)]
+
     written = numbers_at(0)
-    vertex = _zero_based(written, before["v"], sizes, vertex_count)
+    vertex = _zero_based(written, lambda: before("v"), sizes, counts["v"])
     if vertex is None:
         return None
     # Plain: positive indices, and every reference in the first one's form: as many slashes
@@ -488,17 +510,38 @@ def _face_records(
     )
     texture = None
     if ((per >= 1) & (doubles == 0)).all():
-        texture = _zero_based(numbers_at(1), before["vt"], sizes, texture_count)
-    return vertex, texture, sizes, plain
+        texture = _zero_based(numbers_at(1), lambda: before("vt"), sizes, counts["vt"])
+    normal, normal_problem = _normal_references(
+        (per == 2) | (doubles > 0), last_numbers, lambda: before("vn"), sizes, counts["vn"]
+    )
+    return _FaceRecords(vertex, texture, normal, normal_problem, sizes, plain)
 
 
-def _zero_based(index: np.ndarray, before: np.ndarray, sizes: np.ndarray, count: int) -> np.ndarray | None:
+def _normal_references(
+    with_normal: np.ndarray,
+    written: Callable[[], np.ndarray],
+    before: Callable[[], np.ndarray],
+    sizes: np.ndarray,
+    count: int,
+) -> tuple[np.ndarray | None, str]:
+    """(R,) 0-based ``vn`` records of every reference, from (F,) which faces give normals (in
+    the form v/vt/vn or v//vn) and their indices as ``written``; or None, and why not (""
+    where no face gives any)."""
+    if not with_normal.all():
+        return None, "some faces give none" if with_normal.any() else ""
+    normal = _zero_based(written(), before, sizes, count)
+    return normal, "" if normal is not None else "a face refers to a `vn` record that does not exist"
+
+
+def _zero_based(
+    index: np.ndarray, before: Callable[[], np.ndarray], sizes: np.ndarray, count: int
+) -> np.ndarray | None:
     """(R,) 0-based records of the (R,) OBJ indices of faces of (F,) ``sizes`` references
-    (from 1, or negative: counted back from the last of the (F,) ``before`` records before
+    (from 1, or negative: counted back from the last of the (F,) ``before()`` records before
     the face's line), or None if one of them is not among the ``count`` records."""
     if index.min() > 0:  # (the common case: spare the negatives)
         return index - 1 if index.max() <= count else None
-    zero_based = np.where(index > 0, index - 1, index + np.repeat(before, sizes))
+    zero_based = np.where(index > 0, index - 1, index + np.repeat(before(), sizes))
     if (index == 0).any() or zero_based.min() < 0 or zero_based.max() >= count:
         return None
     return zero_based
