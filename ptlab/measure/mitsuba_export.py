@@ -21,7 +21,7 @@ XML scene (Mitsuba 3 documentation, "File format") and one OBJ mesh per material
 The XML takes the parameters ``$sampler``, ``$spp``, ``$seed`` and ``$rr_depth``
 (``mi.load_file(path, sampler=...)``, or ``mitsuba -D sampler=...``). Mitsuba itself is not
 needed to write it. What has no counterpart here (a material other than ``Diffuse``, a
-textured albedo, point lights, a sky) raises ``PtlabError`` naming it, rather than being
+textured albedo, vertex normals, point lights, a sky) raises ``PtlabError`` naming it, rather than being
 left out of Mitsuba's scene, which would then render something else.
 """
 
@@ -47,7 +47,12 @@ SCENE_XML = "scene.xml"
 def exported_materials(scene: Scene) -> list[Diffuse]:
     """The scene's materials, each a plain ``Diffuse`` of a constant albedo; or ``PtlabError``
     (one line) for the first thing in ``scene`` that the Mitsuba scene would not have: another
-    material, a textured albedo, point lights or a sky."""
+    material, a textured albedo, vertex normals, point lights or a sky."""
+    if scene.normals is not None:  # (the meshes written here are flat: face normals)
+        raise PtlabError(
+            f"scene {scene.name}: its meshes have vertex normals (smooth shading); "
+            f"this export writes flat triangles only"
+        )
     materials = []
     for name, material in zip(_material_names(scene), scene.materials, strict=True):
         # (exactly Diffuse: a subclass may shade otherwise)

@@ -168,8 +168,9 @@ class _BrighterDiffuse(Diffuse):
         ),
         (_one_triangle(Diffuse(0.5), point_lights=PointLights([[0, 0, 1]], [[1, 1, 1]])), "point lights"),
         (_one_triangle(Diffuse(0.5), sky=Sky([1, 1, 1])), "a sky"),
+        (_one_triangle(Diffuse(0.5), normals=np.tile([0.0, 0.6, 0.8], (1, 3, 1))), "vertex normals"),
     ],
-    ids=["mirror", "subclass", "texture", "point-lights", "sky"],
+    ids=["mirror", "subclass", "texture", "point-lights", "sky", "smooth"],
 )
 def test_what_mitsubas_scene_cannot_say_is_an_error(scene, says, tmp_path):
     with pytest.raises(PtlabError, match=says):
