@@ -702,5 +702,6 @@ def test_the_command_says_what_a_mesh_brought_in_one_line(tmp_path, capsys):
     )
     lines = capsys.readouterr().err.splitlines()
     assert len(lines) == 1, lines
-    assert lines[0].startswith("ptlab: warning: ") and "ignores its materials" in lines[0]
+    assert lines[0].startswith("ptlab: warning: ")
+    assert "ignores its materials" in lines[0]
     assert out.exists()
