@@ -122,7 +122,7 @@ def _shared_arguments() -> argparse.ArgumentParser:
     shared = argparse.ArgumentParser(add_help=False)
     for name in ("seed", "backend", "workers"):
         _add_option(shared, name)
-    shared.add_argument("--quiet", action="store_true", help="print nothing but errors")
+    shared.add_argument("--quiet", action="store_true", help="print nothing but warnings and errors")
     return shared
 
 
@@ -321,6 +321,9 @@ def _compare(args) -> int:
         from ptlab.image import check_output_path
 
         check_output_path(args.diff)
+        for name, image in (("A", args.a), ("B", args.b)):
+            if Path(args.diff).resolve() == Path(image).resolve():
+                raise PtlabError(f"--diff {args.diff}: is image {name}; write the difference elsewhere")
     comparison = compare_files(args.a, args.b)
     if args.diff is not None:
         write_difference(args.diff, comparison)
@@ -542,22 +545,36 @@ def _render(args) -> int:
             return _interrupted(result, out, checkpoint, signals.exit_code, args.exposure, args.aov)
         _write(out, result, args.exposure, layers=args.aov)
         if spp_map is not None:
-            write_spp_map(spp_map, result.counts)
+            write_spp_map(spp_map, result.counts, result.window)
+    _said_of_a_render(args, decided, options, result, out, spp_map)
+    return 0
+
+
+def _said_of_a_render(args, decided, options, result, out: Path, spp_map: Path | None) -> None:
+    """What ``ptlab render`` says of a render it wrote: a black image, always (a warning);
+    unless ``--quiet``, its size, samples and speed, the denoiser's and the target's lines,
+    and the files written."""
+    from ptlab.image import WINDOW_FORMATS
+
     rendered = result.noisy if result.noisy is not None else result.image  # (a denoiser's haze is no light)
     if not (rendered > 0).any() and options.integrator in ("path", "whitted"):
-        print(
-            "ptlab: warning: the image is black: no camera ray saw or received any light "
-            "(do the lights face the scene?)",
-            file=sys.stderr,
+        # (A window may see only what is unlit, in a lit image: say nothing of the lights.)
+        said = (
+            "the window is black: no camera ray in it saw or received any light"
+            if options.crop is not None
+            else "the image is black: no camera ray saw or received any light (do the lights face the scene?)"
         )
-    if not args.quiet:
-        print(f"{_size_said(decided)}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
-        if options.denoise:
-            print(_denoised_said(result))
-        if options.target_error is not None:
-            print(_target_said(result, options))
-        print(f"wrote {out.resolve()}" + (f" and {spp_map.resolve()}" if spp_map is not None else ""))
-    return 0
+        print(f"ptlab: warning: {said}", file=sys.stderr)
+    if args.quiet:
+        return
+    print(f"{_size_said(decided)}, {_spp_said(result)}, {result.seconds:.2f} s, " + _how(result, options))
+    if options.denoise:
+        print(_denoised_said(result))
+    if options.target_error is not None:
+        print(_target_said(result, options))
+    print(f"wrote {out.resolve()}" + (f" and {spp_map.resolve()}" if spp_map is not None else ""))
+    if options.crop is not None and out.suffix.lower() not in WINDOW_FORMATS:
+        print(f"(a {out.suffix} file does not record the window's place: .exr or .tif keep it)")
 
 
 def _check_render_request(args, options, out: Path) -> Path | None:
@@ -980,7 +997,28 @@ def _warning_line(message, category, filename, lineno, file=None, line=None) -> 
 
 def main(argv: list[str] | None = None) -> int:
     whole_process = argv is None
-    argv = sys.argv[1:] if argv is None else argv
+    if whole_process and signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        # (Started with SIGINT ignored, as a shell's background job is: the command stops on
+        # it all the same, from now, not only once a render runs; rendering/scheduler.py,
+        # ``interruptible``.)
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        return _run(sys.argv[1:] if argv is None else argv, whole_process)
+    except BrokenPipeError:  # the reader (head, a pager) stopped reading: not an error
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+    except PtlabError as error:
+        from ptlab.course.sandbox.shown import shown_line  # (it may quote a student's file name)
+
+        print(f"ptlab: error: {shown_line(error)}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:  # (before a render's own handler, or in another command)
+        print("ptlab: interrupted", file=sys.stderr)
+        return 130
+
+
+def _run(argv: list[str], whole_process: bool) -> int:
+    """The command ``argv`` asks for (``main``, which turns its errors into lines)."""
     command = next((word for word in argv if not word.startswith("-")), None)
     if command == "render":
         _start_workers_early(argv)
@@ -999,23 +1037,11 @@ def main(argv: list[str] | None = None) -> int:
             "converge": _converge,
             "scenes": _scenes,
         }[args.command]
-    try:
-        with warnings.catch_warnings():
-            warnings.showwarning = _warning_line
-            code = handler(args)
-        sys.stdout.flush()
-        return code
-    except BrokenPipeError:  # the reader (head, a pager) stopped reading: not an error
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
-    except PtlabError as error:
-        from ptlab.course.sandbox.shown import shown_line  # (it may quote a student's file name)
-
-        print(f"ptlab: error: {shown_line(error)}", file=sys.stderr)
-        return 2
-    except KeyboardInterrupt:
-        print("ptlab: interrupted", file=sys.stderr)
-        return 130
+    with warnings.catch_warnings():
+        warnings.showwarning = _warning_line
+        code = handler(args)
+    sys.stdout.flush()
+    return code
 
 
 if __name__ == "__main__":

@@ -32,6 +32,9 @@ from ptlab.errors import PtlabError
 LINEAR_FORMATS = (".exr", ".hdr", ".pfm", ".tif", ".tiff")
 SRGB_FORMATS = (".png", ".jpg", ".jpeg")
 FORMATS = LINEAR_FORMATS + SRGB_FORMATS
+#: The formats whose files record a window's place in its image (``Window``: a data window
+#: inside the display window); the others hold the window's pixels alone.
+WINDOW_FORMATS = (".exr", ".tif", ".tiff")
 
 
 def srgb_encode(linear: np.ndarray) -> np.ndarray:
@@ -82,6 +85,8 @@ def encode_srgb8(linear: np.ndarray) -> np.ndarray:
 def check_output_path(path: str | Path) -> Path:
     """The path, if its extension is a format we write and it can be written."""
     path = Path(path)
+    if path_kind(path) == "folder":
+        raise PtlabError(f"{path}: is a folder; give an image file's name (e.g. {path / 'image.png'})")
     if path.suffix.lower() not in FORMATS:
         raise PtlabError(f"{path}: unsupported image format {path.suffix!r} (use {', '.join(FORMATS)})")
     return check_writable_file(path)
@@ -201,8 +206,14 @@ def read_image_file(path: str | Path) -> ImageFile:
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
     path = Path(path)
-    if path_kind(path) != "file":
-        raise PtlabError(f"{path}: no such image file")
+    kind = path_kind(path)
+    if kind != "file":
+        raise PtlabError(
+            f"{path}: "
+            + {None: "no such image file", "folder": "is a folder, not an image file"}.get(
+                kind, "is not a regular file (a device or a pipe?)"
+            )
+        )
     source = oiio.ImageInput.open(str(path))
     if source is None:
         raise PtlabError(f"{path}: cannot read image: {oiio.geterror()}")

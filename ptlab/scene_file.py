@@ -193,6 +193,8 @@ def load_dict(scene: dict, folder: str | Path = ".", name: str = "scene") -> Sce
         raise SceneError(DICT_SOURCE, f"must be a dict of the scene file's tables, got {_shown(scene)}")
     if not isinstance(name, str):
         raise SceneError(DICT_SOURCE, f"the scene's name must be text, got {_shown(name)}")
+    if not isinstance(folder, str | os.PathLike):
+        raise SceneError(DICT_SOURCE, f"folder must be a path, got {_shown(folder)}")
     try:
         data = {key: _plain(value) for key, value in scene.items() if key != "mesh"}
         if "mesh" in scene:
@@ -548,6 +550,9 @@ class _SceneReader:
         if kind == "diffuse":
             albedo = spec.get("albedo")
             if isinstance(albedo, Texture):  # (a dict's)
+                if isinstance(albedo, Checkerboard):  # (its colours, as a file's are checked)
+                    for i, colour in enumerate(albedo.colours):
+                        self.colour({"colour": colour.tolist()}, f"{key}.albedo.colours[{i}]", "colour", None)
                 return Diffuse(albedo=albedo)
             if isinstance(albedo, dict):
                 return Diffuse(albedo=self.texture(f"{key}.albedo", albedo))
@@ -904,10 +909,9 @@ class _SceneReader:
                 f"{key}.faces", f"refers to vertex {int(outside[0])}, but there are {count} vertices"
             )
         if normals is not None:
-            lengths = np.linalg.norm(normals, axis=1, keepdims=True)
-            if not (lengths > 0).all():
-                raise self.error(f"{key}.normals", "must not be zero")
-            normals = (normals / lengths)[faces]
+            # (Made unit length by the Scene, as a file's are; a zero normal, which trimesh
+            # gives a vertex no face uses, becomes its face's there.)
+            normals = normals[faces]
         data = MeshData(vertices[faces], None if uv is None else uv[faces], normals, None, [], [])
         kept = has_area(data.triangles)
         if not kept.any():

@@ -49,7 +49,8 @@ def show_pictures(folder: Path) -> None:
         return
     from IPython.display import Image, display
 
-    for path in sorted(Path(folder).glob("*.png")):
+    # (In the order the run wrote them, as the text tells of them: the right picture first.)
+    for path in sorted(Path(folder).glob("*.png"), key=lambda p: (p.stat().st_mtime_ns, p.name)):
         if path.stat().st_mtime >= _started - 1:
             print(path.name)
             display(Image(filename=str(path)))

@@ -60,7 +60,9 @@ class Side:
     def figures(self) -> dict[str, Any]:
         """The file as plain data (``Comparison.figures``)."""
         w = self.window
-        window = None if w is None else [w.x, w.y, w.full_width, w.full_height]
+        window = None
+        if w is not None:
+            window = {"x": w.x, "y": w.y, "full_width": w.full_width, "full_height": w.full_height}
         encoding = "srgb" if self.srgb else "linear"
         return {
             "path": self.path,
@@ -187,9 +189,12 @@ def compare_files(a: str | Path, b: str | Path) -> Comparison:
     infinite)."""
     found_a, found_b = read_image_file(a), read_image_file(b)
     side_a, side_b = Side.of(a, found_a), Side.of(b, found_b)
+    for side in (side_a, side_b):
+        _check_window(side)
     image, reference, (x, y) = _matched(side_a, found_a.linear, side_b, found_b.linear)
     for side, pixels in ((side_a, image), (side_b, reference)):
         _check_finite(side, pixels, x, y)
+    _check_not_negative(side_b, reference, x, y)
     return Comparison(side_a, side_b, image.astype(np.float64), reference.astype(np.float64), x, y)
 
 
@@ -201,6 +206,13 @@ def _matched(
     the window one of them is, cut from the other, if that is the whole image."""
     if (a.width, a.height) == (b.width, b.height):
         if a.window is not None and b.window is not None and a.window != b.window:
+            wa, wb = a.window, b.window
+            if (wa.full_width, wa.full_height) != (wb.full_width, wb.full_height):
+                raise PtlabError(
+                    f"{a.path} and {b.path} are windows of images of different sizes "
+                    f"({wa.full_width}x{wa.full_height} and {wb.full_width}x{wb.full_height}): "
+                    "they show other pixels"
+                )
             raise PtlabError(
                 f"{a.path} and {b.path} are windows at different places of the image "
                 f"({a.window.x}, {a.window.y}) and ({b.window.x}, {b.window.y}): they show other pixels"
@@ -228,6 +240,32 @@ def _matched(
         f"{a.path} is {a.width}x{a.height}, {b.path} {b.width}x{b.height}: the sizes differ"
         + ("" if a.window is None and b.window is None else " (and neither is a window of the other)")
     )
+
+
+def _check_window(side: Side) -> None:
+    """``PtlabError`` if ``side``'s pixels reach outside the image they are a window of (an
+    EXR may store more than its display window: overscan, which has no place to compare)."""
+    w = side.window
+    if w is not None and (
+        w.x < 0 or w.y < 0 or w.x + side.width > w.full_width or w.y + side.height > w.full_height
+    ):
+        raise PtlabError(
+            f"{side.path}: its {side.width}x{side.height} pixels at ({w.x}, {w.y}) reach outside its "
+            f"{w.full_width}x{w.full_height} image (its display window): compare takes windows inside it"
+        )
+
+
+def _check_not_negative(side: Side, pixels: np.ndarray, x: int, y: int) -> None:
+    """``PtlabError`` if the reference has a negative value: relMSE divides by (B + 0.01)^2,
+    which takes B to be radiance, 0 or more (at B = -0.01 it divides by 0)."""
+    bad = (pixels < 0).any(axis=-1)
+    if bad.any():
+        row, column = divmod(int(np.argmax(bad)), pixels.shape[1])
+        raise PtlabError(
+            f"{side.path}: {int(bad.sum())} pixel(s) negative, the first at ({x + column}, {y + row}) "
+            f"({float(pixels.min()):.3g} the least): a reference is radiance, 0 or more (relMSE "
+            f"divides by (B + {RELMSE_EPSILON})^2)"
+        )
 
 
 def _check_finite(side: Side, pixels: np.ndarray, x: int, y: int) -> None:

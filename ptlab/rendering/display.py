@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ptlab.image import SRGB_FORMATS, encode_srgb8, write_image
+from ptlab.image import SRGB_FORMATS, Window, encode_srgb8, write_image
 
 
 def png_bytes(image: np.ndarray, exposure: float = 0.0) -> bytes:
@@ -63,13 +63,14 @@ def show(image, exposure: float = 0.0, out: str | Path = "ptlab-show.png") -> Pa
     return None
 
 
-def write_spp_map(path: str | Path, counts: np.ndarray) -> Path:
+def write_spp_map(path: str | Path, counts: np.ndarray, window: Window | None = None) -> Path:
     """Write where a render's samples went: (H, W) samples per pixel, as a heat map to a PNG
     or JPEG (matplotlib's viridis on a log scale, the fewest dark blue, the most yellow) or
-    as the counts themselves, in every channel, to a linear format (``.exr``)."""
+    as the counts themselves, in every channel, to a linear format (``.exr``, which records
+    the ``window`` of a crop, as the image's own file does)."""
     counts = np.asarray(counts, np.float64)
     if Path(path).suffix.lower() not in SRGB_FORMATS:
-        return write_image(path, np.repeat(counts[..., None], 3, axis=-1).astype(np.float32))
+        return write_image(path, np.repeat(counts[..., None], 3, axis=-1).astype(np.float32), window=window)
     from matplotlib import colormaps
 
     low, high = np.log2(max(counts.min(), 1.0)), np.log2(max(counts.max(), 1.0))

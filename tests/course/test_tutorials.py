@@ -186,3 +186,21 @@ def test_denoising_tutorial_runs_as_a_notebook_in_a_fresh_kernel(tmp_path, monke
     assert len(shown) == len(DENOISING_PICTURES), (
         f"showed {len(shown)} of its {len(DENOISING_PICTURES)} pictures"
     )
+
+
+def test_a_notebook_shows_the_pictures_in_the_order_they_were_made(tmp_path, monkeypatch, capsys):
+    # The text tells of the right picture first, then the mistakes: alphabetical order would
+    # put "path-tracing.png" after "no-cosine.png".
+    import os
+
+    from ptlab.course import tutorial
+
+    monkeypatch.setattr(tutorial, "in_notebook", lambda: True)
+    monkeypatch.setattr(tutorial, "_started", 0.0)
+    for k, name in enumerate(("path-tracing.png", "no-cosine.png", "a-mistake.png")):
+        path = tmp_path / name
+        path.write_bytes(b"\x89PNG\r\n\x1a\n")
+        os.utime(path, ns=(10**18 + k * 10**9, 10**18 + k * 10**9))
+    tutorial.show_pictures(tmp_path)
+    named = [line for line in capsys.readouterr().out.splitlines() if line.endswith(".png")]
+    assert named == ["path-tracing.png", "no-cosine.png", "a-mistake.png"]

@@ -148,6 +148,13 @@ def test_a_crop_is_compared_with_its_window_of_the_whole_image(tmp_path, capsys)
     out = capsys.readouterr().out
     assert "8x6 window at (4, 3) of 16x12, linear" in out
     assert "compared            the 8x6 window at (4, 3)" in out
+    assert main(["compare", str(tmp_path / "crop.exr"), str(tmp_path / "whole.exr"), "--json"]) == 0
+    said = json.loads(capsys.readouterr().out)["a"]["window"]
+    assert said == {"x": 4, "y": 3, "full_width": 16, "full_height": 12}
+    # The same window of an image of another size: other pixels, said so.
+    write_image(tmp_path / "other.exr", part, window=Window(4, 3, 32, 24))
+    assert main(["compare", str(tmp_path / "crop.exr"), str(tmp_path / "other.exr")]) == 2
+    assert "windows of images of different sizes (16x12 and 32x24)" in capsys.readouterr().err
 
 
 def test_the_difference_picture_and_the_difference_values(pair, tmp_path, capsys):
@@ -174,8 +181,11 @@ def test_the_difference_picture_and_the_difference_values(pair, tmp_path, capsys
         ("small.exr", "b.exr", "small.exr is 8x8, {tmp}/b.exr 16x12: the sizes differ"),
         ("nan.exr", "b.exr", "nan.exr: 1 pixel(s) NaN or infinite, the first at (3, 1)"),
         ("missing.exr", "b.exr", "missing.exr: no such image file"),
+        (".", "b.exr", ": is a folder, not an image file"),
         ("text.exr", "b.exr", "text.exr: cannot read image"),
         ("left.exr", "right.exr", "are windows at different places of the image (0, 0) and (8, 4)"),
+        ("b.exr", "negative.exr", "negative.exr: 1 pixel(s) negative, the first at (5, 2)"),
+        ("b.exr", "overscan.exr", "overscan.exr: its 16x12 pixels at (0, 0) reach outside its 8x6 image"),
     ],
 )
 def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, a, b, said):
@@ -188,6 +198,10 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path, capsys, a, b, said):
     (tmp_path / "text.exr").write_text("not an image")
     write_image(tmp_path / "left.exr", reference[:4, :8], window=Window(0, 0, 16, 12))
     write_image(tmp_path / "right.exr", reference[4:8, 8:16], window=Window(8, 4, 16, 12))
+    negative = reference.copy()
+    negative[2, 5, 1] = -0.01  # (where relMSE's (B + 0.01)^2 is 0)
+    write_image(tmp_path / "negative.exr", negative)
+    write_image(tmp_path / "overscan.exr", reference, window=Window(0, 0, 8, 6))
     assert main(["compare", str(tmp_path / a), str(tmp_path / b)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1
@@ -201,8 +215,14 @@ def test_bad_options_are_one_line_and_exit_2(pair, tmp_path, capsys):
     assert "--tolerance -1.0: must be a relMSE, 0 or more" in capsys.readouterr().err
     assert main(["compare", str(a), str(b), "--diff", str(tmp_path / "diff.ppm")]) == 2
     assert "unsupported image format '.ppm'" in capsys.readouterr().err
+    assert main(["compare", str(a), str(b), "--diff", str(tmp_path)]) == 2
+    assert "is a folder; give an image file's name" in capsys.readouterr().err
     assert main(["compare", str(a), str(b), "--diff", str(tmp_path / "no" / "diff.png")]) == 2
     assert capsys.readouterr().err.count("\n") == 1
+    before = a.read_bytes()
+    assert main(["compare", str(a), str(b), "--diff", str(a)]) == 2  # (it would overwrite A)
+    assert "is image A; write the difference elsewhere" in capsys.readouterr().err
+    assert a.read_bytes() == before
 
 
 def test_help_says_what_is_measured(capsys):

@@ -221,3 +221,40 @@ def test_render_takes_a_crop_of_four_whole_numbers(crop):
         return
     with pytest.raises(PtlabError, match="four whole numbers"):
         ptlab.render("cornell-box", spp=1, res=(6, 4), workers=1, crop=crop)
+
+
+def test_a_crops_spp_map_records_its_window_and_a_black_window_blames_no_light(tmp_path, capsys):
+    out, spp_map = tmp_path / "crop.exr", tmp_path / "spp.exr"
+    args = ["render", "cornell-box", "--res", "24x20", "--workers", "1", "--spp", "2", "--quiet"]
+    assert main([*args, "--crop", "5,3,11,9", "--out", str(out), "--spp-map", str(spp_map)]) == 0
+    assert read_image_file(spp_map).window == read_image_file(out).window == Window(5, 3, *RES)
+    # The floor's corner, with direct light only: black, in a lit image.
+    assert main([*args, "--max-depth", "0", "--crop", "0,16,4,4", "--out", str(out)]) == 0
+    said = capsys.readouterr().err
+    assert "ptlab: warning: the window is black" in said
+    assert "do the lights face the scene" not in said
+
+
+def test_a_crop_in_a_file_that_cannot_say_where_says_so(tmp_path, capsys):
+    for name, said in (("crop.png", True), ("crop.exr", False)):
+        out = tmp_path / name
+        assert (
+            main(
+                [
+                    "render",
+                    "cornell-box",
+                    "--res",
+                    "24x20",
+                    "--workers",
+                    "1",
+                    "--spp",
+                    "1",
+                    "--crop",
+                    "5,3,11,9",
+                    "--out",
+                    str(out),
+                ]
+            )
+            == 0
+        )
+        assert ("does not record the window's place" in capsys.readouterr().out) is said

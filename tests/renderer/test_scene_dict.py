@@ -151,6 +151,24 @@ def test_a_trimesh_is_a_mesh_flat_unless_given_normals():
     np.testing.assert_allclose(smooth.normals, sphere.vertices[sphere.faces], atol=1e-12)
 
 
+def test_a_zero_normal_is_its_faces_as_in_a_file():
+    # trimesh gives a vertex no face uses a zero normal; a file's zero normal is its face's:
+    # a dict's is too, so trimesh's normals load (an unused vertex is harmless) and a face
+    # whose normals are all zero is flat.
+    import trimesh
+
+    box = trimesh.creation.box()
+    unused = np.vstack([box.vertices, [[5.0, 5.0, 5.0]]])
+    normals = np.vstack([box.vertices / np.linalg.norm(box.vertices, axis=1, keepdims=True), [[0, 0, 0]]])
+    smooth = load_dict(cube_scene({"vertices": unused, "faces": box.faces, "normals": normals}))
+    assert np.isfinite(smooth.normals).all()
+    flat = load_dict(
+        cube_scene({"vertices": CUBE_VERTICES, "faces": CUBE_FACES, "normals": CUBE_VERTICES * 0})
+    )
+    faces = np.repeat(flat.face_normals[:, None, :], 3, axis=1)
+    np.testing.assert_allclose(flat.normals, faces, atol=1e-6)
+
+
 def test_ptlab_materials_stand_for_tables_and_names():
     data = cube_scene({"vertices": CUBE_VERTICES, "faces": CUBE_FACES})
     shared = Diffuse(albedo=(0.2, 0.4, 0.6))
@@ -187,7 +205,6 @@ BAD_MESHES = {
     "no faces at all": ({"faces": np.zeros((0, 3), int)}, "mesh[0].faces", "empty"),
     "flat faces": ({"faces": [[0, 0, 1]]}, "mesh[0].faces", "zero area"),
     "normals too few": ({"normals": CUBE_VERTICES[:3]}, "mesh[0].normals", "3 rows for 8 vertices"),
-    "zero normal": ({"normals": CUBE_VERTICES * 0}, "mesh[0].normals", "must not be zero"),
     "uv of three numbers": ({"uv": CUBE_VERTICES}, "mesh[0].uv", "(N, 2)"),
     "faces beside a file": ({"vertices": None, "file": "x.obj"}, "mesh[0].faces", "goes with vertices"),
     "unknown material": ({"material": "gray"}, "mesh[0].material", "no material named 'gray'"),
@@ -242,6 +259,12 @@ def test_bad_dicts_are_one_line_too():
                 "materials": {"grey": Diffuse(emission=math.inf)},
             }
         )
+    with pytest.raises(SceneError, match=r"^scene dict: folder must be a path, got 5$"):
+        load_dict(cube_scene({}), folder=5)  # type: ignore[arg-type]
+    bright = cube_scene({"vertices": CUBE_VERTICES, "faces": CUBE_FACES})
+    bright["materials"]["grey"] = {"type": "diffuse", "albedo": Checkerboard([[5, 5, 5], [0, 0, 0]])}
+    with pytest.raises(SceneError, match=r"albedo\.colours\[0\]\.colour: must be at most 1"):
+        load_dict(bright)
     looped = cube_scene({})
     looped["sky"]["radiance"] = looped
     with pytest.raises(SceneError, match=r"^scene dict: nested too deeply"):
