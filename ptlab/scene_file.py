@@ -53,7 +53,7 @@ from ptlab.camera import Camera
 from ptlab.errors import PtlabError, SceneError, is_integer
 from ptlab.lights import PointLights, Sky, area_times_radiance, triangle_areas, triangle_normals
 from ptlab.materials import Dielectric, Diffuse, Material, Microfacet, Mirror
-from ptlab.meshes import FileMaterial, MeshData, drop_zero_area, has_area, read_mesh_data
+from ptlab.meshes import UV_LIMIT, FileMaterial, MeshData, drop_zero_area, has_area, read_mesh_data
 from ptlab.scene import OFFSET_SCALE, RenderDefaults, Scene, bounds
 from ptlab.textures import Checkerboard, ImageTexture, Texture
 from ptlab.transforms import Transform, rotation
@@ -976,8 +976,8 @@ class _SceneReader:
         ):
             raise self.error(f"{key}.uv", f"must be 4 pairs [u, v], one per corner, got {_shown(uv)}")
         values = [[_as_float(x) for x in c] for c in uv]
-        if any(x is None for c in values for x in c):
-            raise self.error(f"{key}.uv", f"must be finite, got {_shown(uv)}")
+        if any(x is None or abs(x) > UV_LIMIT for c in values for x in c):
+            raise self.error(f"{key}.uv", f"must be finite, within +-{UV_LIMIT:.4g}, got {_shown(uv)}")
         corners_of = np.array([[0, 1, 3], [1, 2, 3]])
         triangles, uvs = points[corners_of], np.array(values)[corners_of]
         kept = has_area(triangles)

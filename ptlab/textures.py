@@ -12,8 +12,13 @@ scene file's ``albedo = { image = ... }``.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import hashlib
+import os
+import sys
+import tempfile
+from collections.abc import Iterator
 from pathlib import Path
 
 import numpy as np
@@ -81,6 +86,10 @@ class ImageTexture(Texture):
     values: an 8-bit image takes a quarter of the memory of float texels, which matters
     because every worker of a render holds the scene.
 
+    The image is a diffuse albedo, a reflectance: its linear values, tint included, must lie
+    in [0, 1] (energy conservation), as a constant albedo must; an image beyond (a float
+    image's -0.5 or 50, a signed integer image's negative texels) is refused, naming it.
+
     Args:
         path: an image file OpenImageIO reads (PNG, JPEG, EXR, HDR, TIFF, ...). Raises
             ``PtlabError`` naming the file if it cannot be read.
@@ -109,8 +118,14 @@ class ImageTexture(Texture):
         else:
             self.texels = self.texels.astype(np.float32)
             self.decode = None
+        #: The least and the greatest linear value of any channel, untinted.
+        self.lowest, self.highest = (
+            float(self.linear(self.texels.min())),
+            float(self.linear(self.texels.max())),
+        )
         #: (3,) what every colour is multiplied by (``tinted``).
         self.tint = np.ones(3, dtype=np.float32)
+        self._check_range()
         # (A short fingerprint of the texels, so that a checkpoint of a scene, which keeps its
         # materials' repr, tells images apart: ``ptlab.rendering.checkpoint.scene_digest``.)
         self.digest = hashlib.sha256(self.texels.tobytes()).hexdigest()[:12]
@@ -120,7 +135,29 @@ class ImageTexture(Texture):
         ``Kd``, glTF's ``baseColorFactor``), sharing the texels."""
         twin = copy.copy(self)
         twin.tint = self.tint * np.asarray(colour, dtype=np.float32).reshape(3)
+        twin._check_range()
         return twin
+
+    def linear(self, texels: np.ndarray) -> np.ndarray:
+        """The float32 linear values of texels as stored, of any shape (integer ones sRGB-decoded)."""
+        return texels if self.decode is None else self.decode.take(texels)
+
+    def _check_range(self) -> None:
+        """``PtlabError`` naming the image unless its tinted values lie in [0, 1]."""
+        tint = self.tint
+        if self.lowest >= 0 and tint.min() >= 0 and self.highest * tint.max() <= 1:
+            return  # (most images: spared a pass over each channel for the exact range)
+        # (A channel at a time: a reduction along the short axis of (N, 3) is 6x slower.)
+        extremes = [
+            self.linear(np.array([c.min(), c.max()])) * t for c, t in zip(self.texels.T, tint, strict=True)
+        ]
+        low, high = float(np.min(extremes)), float(np.max(extremes))
+        if not 0 <= low <= high <= 1:  # (NaN too, from a NaN tint)
+            tinted = "" if (tint == 1).all() else f" (tinted by {tint.tolist()})"
+            raise PtlabError(
+                f"image {self.name}: an albedo's texels must be from 0 to 1 (energy conservation), "
+                f"found {low:.3g} to {high:.3g}{tinted}"
+            )
 
     def __repr__(self) -> str:
         tint = "" if (self.tint == 1).all() else f", tint={self.tint.tolist()}"
@@ -128,12 +165,19 @@ class ImageTexture(Texture):
 
     def __call__(self, uv: np.ndarray) -> np.ndarray:
         uv = np.asarray(uv, dtype=np.float64)
+        # Repeat: wrapped into [0, 1] first, in float64, so that every finite uv gives texels
+        # that exist (times the width, a large one would lose its fraction, or overflow). One
+        # that is not finite (a triangle's uv so far apart that their float32 differences
+        # overflowed) gives NaN there, which fmax takes to 0: a texel, not an index error.
+        with np.errstate(invalid="ignore"):  # (inf - inf)
+            u = np.fmax(uv[:, 0] - np.floor(uv[:, 0]), 0.0)
+            v = np.fmax(uv[:, 1] - np.floor(uv[:, 1]), 0.0)
         # Continuous texel coordinates: x from the left edge, y from the top (v points up).
-        x = uv[:, 0] * self.width - 0.5
-        y = (1.0 - uv[:, 1]) * self.height - 0.5
+        x = u * self.width - 0.5
+        y = (1.0 - v) * self.height - 0.5
         x0, y0 = np.floor(x), np.floor(y)
         fx, fy = (x - x0).astype(np.float32), (y - y0).astype(np.float32)
-        # Repeat: texel i of a row is i mod width (the floor keeps negatives right).
+        # Texel i of a row is i mod width (x0 runs from -1 to width).
         i0 = np.mod(x0, self.width).astype(np.intp)
         j0 = np.mod(y0, self.height).astype(np.intp)
         i1 = np.where(i0 + 1 == self.width, 0, i0 + 1)
@@ -146,10 +190,7 @@ class ImageTexture(Texture):
             (row1 + i0, (1 - fx) * fy),
             (row1 + i1, fx * fy),
         ):
-            texel = self.texels.take(index, axis=0)
-            if self.decode is not None:
-                texel = self.decode.take(texel)
-            colour += weight[:, None] * texel
+            colour += weight[:, None] * self.linear(self.texels.take(index, axis=0))
         colour *= self.tint
         return colour
 
@@ -159,28 +200,72 @@ def read_texels(path: Path) -> np.ndarray:
     ``PtlabError`` naming the file."""
     import OpenImageIO as oiio  # noqa: N813 (the name OpenImageIO documents)
 
-    if path_kind(path) != "file":
-        raise PtlabError(f"image {path}: not found")
+    kind = path_kind(path)
+    if kind != "file":
+        found = {None: "not found", "folder": "is a folder, not an image"}.get(kind, "is not a file")
+        raise PtlabError(f"image {path}: {found}")
     # (As stored: OpenImageIO would multiply the colour of an image with alpha by it.)
     config = oiio.ImageSpec()
     config.attribute("oiio:UnassociatedAlpha", 1)
-    source = oiio.ImageInput.open(str(path), config)
-    if source is None:
-        raise PtlabError(f"image {path}: cannot read it: {oiio.geterror() or 'unknown format'}")
-    try:
-        spec = source.spec()
-        integer = spec.format.basetype in (oiio.UINT8, oiio.UINT16)
-        # (Integers of other widths, and half floats, are read as float32.)
-        pixels = source.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN if integer else oiio.FLOAT)
-        if pixels is None:  # e.g. a file cut short
-            raise PtlabError(f"image {path}: cannot read it: {source.geterror() or 'no pixels'}")
-    finally:
-        source.close()
+    with _libpng_quiet():
+        source = oiio.ImageInput.open(str(path), config)
+        if source is None:
+            raise _unreadable(path, oiio.geterror(), "unknown format")
+        try:
+            spec = source.spec()
+            integer = spec.format.basetype in (oiio.UINT8, oiio.UINT16)
+            # (Integers of other widths, and half floats, are read as float32.)
+            pixels = source.read_image(0, 0, 0, spec.nchannels, oiio.UNKNOWN if integer else oiio.FLOAT)
+            if pixels is None:  # e.g. a file cut short
+                raise _unreadable(path, source.geterror(), "no pixels")
+        finally:
+            source.close()
     pixels = np.asarray(pixels).reshape(spec.height, spec.width, spec.nchannels)
     space = spec.get_string_attribute("oiio:ColorSpace").lower()
     if integer and space.startswith("lin"):  # (an integer image that says it is linear)
         pixels = pixels / np.float32(_INTEGER_RANGE[pixels.dtype])
     return _colour_texels(pixels, str(path))
+
+
+def _unreadable(path: Path, message: str, default: str) -> PtlabError:
+    """The error of an image OpenImageIO cannot read, from its message (``default`` for none):
+    the message's first line, as it may hold one per layer that saw the fault (libpng's words,
+    then the plugin's), and the first says it best ("Read error: hit end of file in png
+    reader")."""
+    first = next((line.strip() for line in message.splitlines() if line.strip()), default)
+    return PtlabError(f"image {path}: cannot read it: {first}")
+
+
+@contextlib.contextmanager
+def _libpng_quiet() -> Iterator[None]:
+    """Drop the lines libpng writes on the process's standard error while an image is read.
+
+    libpng prints every error itself ("libpng error: IDAT: ..."), after OpenImageIO's
+    handler has recorded it: its ``png_error`` calls its default handler, which prints, when
+    the application's returns (libpng 1.6, pngerror.c), and OpenImageIO's returns. So the
+    file descriptor 2 points to a temporary file meanwhile, and what else lands there is
+    written on after. (Another thread's output in that moment comes later, not lost.)
+    """
+    if sys.stderr is not None:
+        sys.stderr.flush()  # (what Python holds for it goes out first)
+    try:
+        saved = os.dup(2)
+    except OSError:  # (no standard error to keep quiet)
+        saved = None
+    if saved is None:
+        yield
+        return
+    with tempfile.TemporaryFile() as caught:
+        os.dup2(caught.fileno(), 2)
+        try:
+            yield
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+            caught.seek(0)
+            kept = b"".join(line for line in caught if not line.startswith(b"libpng error: "))
+            if kept:
+                os.write(2, kept)
 
 
 def _colour_texels(pixels: np.ndarray, name: str) -> np.ndarray:

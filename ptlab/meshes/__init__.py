@@ -2,13 +2,13 @@
 what the file says of their surface.
 
 Each format has its reader: OBJ files ptlab's own (``ptlab.meshes.obj``, with their material
-files, ``mtl``), PLY files trimesh checked against their header (``ply``), glTF files ptlab's
-own (``gltf``), STL and OFF files trimesh. Every reader gives vertices and the faces that
-index them (``IndexedMesh``); ``read_mesh_data`` then checks what came out (three
-coordinates per vertex, faces that refer to existing vertices, nothing NaN or infinite),
-drops triangles of zero area, which no ray can hit, and returns one row per triangle
-(``MeshData``): the triangles, and where the file gives them their texture coordinates,
-vertex normals and materials, and what else it brought that ptlab does not use.
+files, ``mtl``), PLY files ptlab's own (``ply``, text or binary, read against their header:
+``ply_elements``), glTF files ptlab's own (``gltf``), STL and OFF files trimesh. Every reader
+gives vertices and the faces that index them (``IndexedMesh``); ``read_mesh_data`` then
+checks what came out (three coordinates per vertex, faces that refer to existing vertices,
+nothing NaN or infinite), drops triangles of zero area, which no ray can hit, and returns one
+row per triangle (``MeshData``): the triangles, and where the file gives them their texture
+coordinates, vertex normals and materials, and what else it brought that ptlab does not use.
 
 What each format gives (docs/scene-format.md, "Mesh files"):
 
@@ -32,6 +32,7 @@ import numpy as np
 
 from ptlab.errors import SceneError
 from ptlab.meshes.base import (
+    UV_LIMIT,
     FileMaterial,
     IndexedMesh,
     MeshData,
@@ -89,8 +90,9 @@ def read_mesh_data(
             material files are not opened).
 
     Raises ``SceneError`` (naming ``where``) for a file that cannot be read or would be
-    misread, an empty mesh, NaN or infinite vertices or texture coordinates, and coordinates
-    beyond +-``limit``. Triangles of zero area are then dropped.
+    misread, an empty mesh, NaN or infinite vertices, coordinates beyond +-``limit``, and
+    texture coordinates that are NaN, infinite or beyond ``UV_LIMIT``. Triangles
+    of zero area are then dropped.
     """
     path = Path(path)
     where = where or str(path)
@@ -142,8 +144,12 @@ def _checked(mesh: IndexedMesh, where: str, name: str, limit: float) -> MeshData
             f"mesh {name} has a vertex at {vertex.tolist()}: every coordinate must lie within +-{limit:g}",
         )
     uv = _by_corner(mesh.uv, faces, len(vertices), where, f"mesh {name}: texture coordinates")
-    if uv is not None and not np.isfinite(uv).all():
-        raise SceneError(where, f"mesh {name} has texture coordinates that are NaN or infinite")
+    if uv is not None and not (np.abs(uv) <= UV_LIMIT).all():  # (NaN too)
+        raise SceneError(
+            where,
+            f"mesh {name} has texture coordinates that are NaN, infinite or beyond "
+            f"+-{UV_LIMIT:.4g} (half of float32's largest)",
+        )
     normals = _by_corner(mesh.normals, faces, len(vertices), where, f"mesh {name}: vertex normals")
     unused = list(mesh.unused)
     material_ids = mesh.material_ids

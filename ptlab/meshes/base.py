@@ -14,6 +14,11 @@ from pathlib import Path
 
 import numpy as np
 
+#: The largest texture coordinate a mesh may have: half of float32's largest number. Renderers
+#: (Mitsuba's meshes) and file formats (glTF) keep uv in float32, and ptlab keeps a triangle's
+#: as a corner and two differences (``Scene.triangle_uv``), which must stay finite too.
+UV_LIMIT = float(np.finfo(np.float32).max) / 2
+
 
 @dataclass
 class FileMaterial:
@@ -108,10 +113,17 @@ def face_normals_unnormalised(triangles: np.ndarray) -> np.ndarray:
 
 
 def unit_corner_normals(normals: np.ndarray, triangles: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) the corner ``normals`` of ``triangles`` made unit length; a normal of length
-    0, which gives no direction, becomes its triangle's face normal (a triangle of zero area
-    keeps 0)."""
-    length = np.linalg.norm(normals, axis=2, keepdims=True)
+    """(T, 3, 3) the corner ``normals`` (finite) of ``triangles`` made unit length; a normal
+    of length 0, which gives no direction, becomes its triangle's face normal (a triangle of
+    zero area keeps 0)."""
+    with np.errstate(over="ignore"):
+        length = np.linalg.norm(normals, axis=2, keepdims=True)
+    if not ((length > 1e-150) & (length < 1e150)).all():
+        # The squares of a huge normal (1e200) overflowed, or those of a tiny one (1e-170)
+        # underflowed to 0: each is scaled by its largest component first (3x slower).
+        largest = np.abs(normals).max(axis=2, keepdims=True)
+        normals = np.divide(normals, largest, out=np.zeros(normals.shape), where=largest > 0)
+        length = np.linalg.norm(normals, axis=2, keepdims=True)
     if (length > 0).all():
         return normals / length
     face = face_normals_unnormalised(triangles)

@@ -17,7 +17,6 @@ named in the material's ``unused`` list; statements that do not (``Ka``, ``illum
 
 from __future__ import annotations
 
-import shlex
 from pathlib import Path
 
 import numpy as np
@@ -60,6 +59,10 @@ IGNORED = {
 QUIET = {"Ka", "map_Ka", "illum", "sharpness"}
 #: Statements whose values, when these, change nothing: black specular and emission, opaque.
 NEUTRAL = {"Ks": 0.0, "Ke": 0.0, "Tr": 0.0, "d": 1.0, "Tf": 1.0}
+#: Statements that change nothing on an opaque surface, said only of a material that lets
+#: light through (``d`` below 1, ``Tr`` above 0): the index of refraction (every exporter
+#: writes one, e.g. Blender's ``Ni 1.45``).
+OF_TRANSPARENCY = {"Ni"}
 #: The options a texture statement may give before its file, and how many values each
 #: takes: words (on/off, a channel) or up to that many numbers (``-o``, ``-s``, ``-t``).
 WORD_OPTIONS = {"-blendu", "-blendv", "-clamp", "-cc", "-imfchan", "-type"}
@@ -72,6 +75,7 @@ def read_mtl(path: Path) -> list[tuple[FileMaterial, list[str]]]:
     numbers, a ``map_Kd`` without a file)."""
     text = path.read_bytes().decode("utf-8", errors="replace")
     found: list[tuple[FileMaterial, list[str]]] = []
+    of_transparency: dict[int, list[str]] = {}  # (material -> its ``OF_TRANSPARENCY`` statements)
     for number, line in enumerate(text.splitlines(), start=1):
         words = line.split(None, 1)
         if not words or words[0].startswith("#"):
@@ -80,26 +84,38 @@ def read_mtl(path: Path) -> list[tuple[FileMaterial, list[str]]]:
         where = f"{path.name}, line {number}"
         if keyword == "newmtl":
             found.append((FileMaterial(rest, None, None, where), []))
-            continue
-        if not found:
-            continue  # (statements before any newmtl belong to no material)
-        material, unused = found[-1]
-        if keyword == "Kd" and rest.split()[:1] in (["spectral"], ["xyz"]):
-            _add(unused, f"diffuse colour given as {rest.split()[0]} (Kd)")
-        elif keyword == "Kd":
-            material.albedo = _colour(rest, where)
-        elif keyword == "map_Kd":
-            file, options = _texture_file(rest, where)
-            material.texture = path.parent / file
-            if not material.texture.exists() and "\\" in file:  # (written on Windows)
-                material.texture = path.parent / file.replace("\\", "/")
-            if options:
-                _add(unused, f"texture options of map_Kd ({' '.join(options)})")
-        elif keyword in IGNORED and not _neutral(keyword, rest):
-            _add(unused, IGNORED[keyword])
-        elif keyword not in IGNORED and keyword not in QUIET:
-            _add(unused, f"`{keyword}`")
+        elif found and keyword in OF_TRANSPARENCY:
+            of_transparency.setdefault(len(found) - 1, []).append(keyword)
+        elif found:  # (statements before any newmtl belong to no material)
+            _read_statement(path, where, keyword, rest, *found[-1])
+    for k, keywords in of_transparency.items():
+        unused = found[k][1]
+        if any(phrase.startswith("transparency") for phrase in unused):
+            for keyword in keywords:
+                _add(unused, IGNORED[keyword])
     return found
+
+
+def _read_statement(
+    path: Path, where: str, keyword: str, rest: str, material: FileMaterial, unused: list[str]
+) -> None:
+    """One statement ``keyword rest`` of material file ``path`` (at ``where``): into
+    ``material`` what ptlab uses, into ``unused`` what it does not."""
+    if keyword == "Kd" and rest.split()[:1] in (["spectral"], ["xyz"]):
+        _add(unused, f"diffuse colour given as {rest.split()[0]} (Kd)")
+    elif keyword == "Kd":
+        material.albedo = _colour(rest, where)
+    elif keyword == "map_Kd":
+        file, options = _texture_file(rest, where)
+        material.texture = path.parent / file
+        if not material.texture.exists() and "\\" in file:  # (written on Windows)
+            material.texture = path.parent / file.replace("\\", "/")
+        if options:
+            _add(unused, f"texture options of map_Kd ({' '.join(options)})")
+    elif keyword in IGNORED and not _neutral(keyword, rest):
+        _add(unused, IGNORED[keyword])
+    elif keyword not in IGNORED and keyword not in QUIET:
+        _add(unused, f"`{keyword}`")
 
 
 def _add(unused: list[str], phrase: str) -> None:
@@ -132,7 +148,7 @@ def _neutral(keyword: str, text: str) -> bool:
 
 def _texture_file(text: str, where: str) -> tuple[str, list[str]]:
     """The file name of a texture statement's arguments ``[options] file``, and the options
-    given before it (ptlab uses none). A name may hold spaces; quotes are taken off."""
+    given before it (ptlab uses none). A name may hold spaces; quotes around it are taken off."""
     words = text.split()
     options = []
     while words and (words[0] in WORD_OPTIONS or words[0] in NUMBER_OPTIONS):
@@ -146,8 +162,11 @@ def _texture_file(text: str, where: str) -> tuple[str, list[str]]:
                 option.append(words.pop(0))
         options.append(" ".join(option))
     name = " ".join(words)
-    if name[:1] in ('"', "'"):
-        name = " ".join(shlex.split(name))
+    quote = name[:1]
+    if quote in ('"', "'"):
+        if len(name) < 2 or not name.endswith(quote):
+            raise ValueError(f"{where}: `map_Kd` {name}: the quotation mark is not closed at the name's end")
+        name = name[1:-1]
     if not name:
         raise ValueError(f"{where}: `map_Kd` names no image file")
     return name, options

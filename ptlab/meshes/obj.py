@@ -10,13 +10,14 @@ which spares it a second of start-up.
 
 trimesh's OBJ reader is fast because it is lenient, and some of its leniency goes wrong
 silently: it takes the number of values per vertex from the first ``v`` line, skips ``v``
-and ``f`` lines that do not begin with the keyword and a space, drops faces of fewer than
-three vertices, counts negative indices from the end of the file rather than from their
-line, and reads a face whose references mix forms (``1/2`` beside ``3``) as other
-vertices. ``read_obj`` refuses each of these and names the line, so that a malformed OBJ
-file, which other programs may misread, is an error instead of a wrong picture: the parse
-itself confirms that a file is written the common way (``ObjRecords.plain``), and only where
-it cannot does ``check_obj_lines`` look line by line.
+and ``f`` lines that do not begin with the keyword and a space (a tab, which the format
+allows there too, ``read_obj`` reads), drops faces of fewer than three vertices, counts
+negative indices from the end of the file rather than from their line, and reads a face
+whose references mix forms (``1/2`` beside ``3``) as other vertices. ``read_obj`` refuses
+each of these and names the line, so that a malformed OBJ file, which other programs may
+misread, is an error instead of a wrong picture: the parse itself confirms that a file is
+written the common way (``ObjRecords.plain``), and only where it cannot does
+``check_obj_lines`` look line by line.
 
 Beyond the triangles, ``read_obj_mesh`` reads what else a file says of its surface: vertex
 normals (``vn`` records, ``f v/vt/vn`` or ``f v//vn``), and materials: ``mtllib`` names
@@ -26,15 +27,17 @@ material files (``ptlab.meshes.mtl``), ``usemtl`` gives the faces after it a mat
 from __future__ import annotations
 
 import functools
+import itertools
 import re
 import warnings
+from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from ptlab.meshes.base import FileMaterial, IndexedMesh
+from ptlab.meshes.base import UV_LIMIT, FileMaterial, IndexedMesh
 from ptlab.meshes.mtl import read_mtl
 
 #: A number as trimesh's OBJ reader (NumPy's ``fromstring``) parses it: decimal, optional
@@ -61,16 +64,16 @@ def read_obj(data: bytes) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         vertices: (V, 3) float64, each ``v`` record's first three numbers;
         faces: (F, 3) int64 0-based vertex indices of each triangle;
         uv: (F, 3, 2) float64 texture coordinates of each triangle's vertices (a ``vt``
-        record's u and v; v = 0 where it gives u only), or None where some face gives none
-        or one that does not exist.
+        record's u and v; v = 0 where it gives u only), or None where some face gives none.
+        A face that refers to a ``vt`` record that does not exist, or one that is not a
+        finite float32 number, is an error.
     """
-    records = _checked_records(_obj_text(data), statements=False)
+    text = _obj_text(data)
+    records = _checked_records(text, statements=False)
     # (Where every face is a triangle, nothing is cut: each is its three references.)
     corners = None if (records.face_sizes == 3).all() else _fan_corners(records.face_sizes)
     faces = _by_triangle(records.vertex_references, corners)
-    if records.texture_references is None:
-        return records.vertices, faces, None
-    return records.vertices, faces, records.texture[_by_triangle(records.texture_references, corners)]
+    return records.vertices, faces, _triangle_uv(records, corners, text)
 
 
 def read_obj_mesh(data: bytes, folder: Path) -> IndexedMesh:
@@ -81,17 +84,23 @@ def read_obj_mesh(data: bytes, folder: Path) -> IndexedMesh:
     Vertex normals are read where every face gives them (``v//vn``, ``v/vt/vn``) and all of
     them exist; else they are left out, and ``unused`` says why.
     """
-    records = _checked_records(_obj_text(data))
+    text = _obj_text(data)
+    records = _checked_records(text)
     corners = None if (records.face_sizes == 3).all() else _fan_corners(records.face_sizes)
     mesh = IndexedMesh(records.vertices, _by_triangle(records.vertex_references, corners))
-    if records.texture_references is not None:
-        mesh.uv = records.texture[_by_triangle(records.texture_references, corners)]
+    mesh.uv = _triangle_uv(records, corners, text)
     if records.normal_references is not None:
         mesh.normals = records.normals[_by_triangle(records.normal_references, corners)]
     elif records.normal_problem:
         mesh.unused.append(f"vertex normals ({records.normal_problem})")
     if records.smoothing and len(records.normals) == 0:
         mesh.unused.append("smoothing groups (`s`): without `vn` normals the faces stay flat")
+    for keyword, what in ((b"l", "lines (`l`)"), (b"p", "points (`p`)")):
+        # (Byte searches, as fast as the text is long: no surface, nothing a ray can hit.)
+        if any(
+            text.startswith(keyword + blank) or b"\n" + keyword + blank in text for blank in (b" ", b"\t")
+        ):
+            mesh.unused.append(f"{what}: ptlab renders surfaces only")
     if records.libraries or records.face_materials is not None:
         mesh.materials, material_ids, unused = _obj_materials(records, folder)
         mesh.unused += unused
@@ -112,6 +121,34 @@ def _checked_records(text: bytes, statements: bool = True) -> ObjRecords:
     return records
 
 
+def _triangle_uv(records: ObjRecords, corners: np.ndarray | None, text: bytes) -> np.ndarray | None:
+    """(T, 3, 2) the texture coordinates of each triangle's corners (``read_obj``), or None;
+    ``ValueError`` naming the line of a ``vt`` record a face uses whose numbers are not
+    finite or lie beyond ``UV_LIMIT``."""
+    references = records.texture_references
+    if references is None:
+        return None
+    within = (np.abs(records.texture) <= UV_LIMIT).all(axis=1)
+    if not within.all():  # (the records are looked at first: there are fewer than references)
+        used = np.zeros(len(within), bool)
+        used[references] = True
+        wrong = np.flatnonzero(used & ~within)
+        if len(wrong):
+            number, line = _record_line(text, "vt", int(wrong[0]))
+            raise ValueError(
+                f"line {number}: `{line.strip()}`: texture coordinates must be finite numbers "
+                f"within +-{UV_LIMIT:.4g} (half of float32's largest)"
+            )
+    return records.texture[_by_triangle(references, corners)]
+
+
+def _record_line(text: bytes, keyword: str, index: int) -> tuple[int, str]:
+    """(line number, line) of record ``index`` (from 0) of kind ``keyword`` in OBJ text."""
+    lines = (record for record in _obj_records(text.decode("utf-8")) if record[1] == keyword)
+    number, _, line = next(itertools.islice(lines, index, None))
+    return number, line
+
+
 def _obj_materials(
     records: ObjRecords, folder: Path
 ) -> tuple[list[FileMaterial], np.ndarray | None, list[str]]:
@@ -122,8 +159,11 @@ def _obj_materials(
     unused_of: dict[str, list[str]] = {}
     unused: list[str] = []
     for line in records.libraries:
-        # (One name, which may hold spaces, or several: the specification allows a list.)
-        names = [line] if (folder / line).is_file() else line.split()
+        # (One name, which may hold spaces, or several: the specification allows a list. A
+        # line that is neither one file nor files that all exist is one name, not found.)
+        names = line.split()
+        if (folder / line).is_file() or not all((folder / name).is_file() for name in names):
+            names = [line]
         for name in names:
             _read_library(folder, name, library, unused_of, unused)
     if records.face_materials is None:
@@ -155,7 +195,7 @@ def _read_library(
     if not path.is_file() and "\\" in name:  # (written on Windows)
         path = folder / name.replace("\\", "/")
     if not path.is_file():
-        unused.append(f"material library {name} (not found)")
+        unused.append(f"material library '{name}' (not found in {folder})")
         return
     for material, ignored in read_mtl(path):
         library.setdefault(material.name, material)
@@ -199,7 +239,7 @@ class ObjRecords:
         vertex_references: (R,) int64 0-based vertex of every face's every reference, in
             the file's order.
         texture_references: (R,) int64 0-based ``vt`` record of every reference, or None
-            where some face gives none or one that does not exist.
+            where some face gives none (one that does not exist is an error).
         normals: (VN, 3) float64 ``vn`` records.
         normal_references: (R,) int64 0-based ``vn`` record of every reference, or None
             where some face gives none or one that does not exist (``normal_problem``).
@@ -357,14 +397,17 @@ def _byte_class(chars: bytes) -> np.ndarray:
 _NUMBER_BYTES = b"0123456789.+-eE \t\n"
 _REFERENCE_BYTES = b"0123456789-/ \t\n"
 #: Bytes that may be whitespace to Python's ``str.split`` (or end a line, or start a UTF-8
-#: character that may be whitespace): a keyword followed by one of these but a space is a
-#: misplaced record, as is a record after any of them.
+#: character that may be whitespace): a keyword followed by one of these but a space or a
+#: tab is a misplaced record, as is a record after any of them.
 _BLANK = _byte_class(bytes(range(0x21)) + bytes(range(0x80, 0x100)))
+#: What may follow a record's keyword: a space or a tab.
+_AFTER_KEYWORD = _byte_class(b" \t")
 
 
 def _line_kinds(data: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(L,) uint8 kind of each line (``_KINDS``, from its first three bytes), and (L,) bool:
-    which lines may be misplaced records (indented, or a keyword not followed by a space)."""
+    which lines may be misplaced records (indented, or a keyword followed by other
+    whitespace than a space or a tab)."""
 
     def byte(k: int) -> np.ndarray:
         """Byte k of every line; a line feed beyond a line's end."""
@@ -374,14 +417,13 @@ def _line_kinds(data: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> tuple
     v, f = b0 == ord("v"), b0 == ord("f")
     vt_or_vn = v & ((b1 == ord("t")) | (b1 == ord("n")))
     kind = np.zeros(len(starts), np.uint8)
-    kind[v & (b1 == _SPACE)] = _KINDS["v"]
-    kind[vt_or_vn & (b1 == ord("t")) & (b2 == _SPACE)] = _KINDS["vt"]
-    kind[vt_or_vn & (b1 == ord("n")) & (b2 == _SPACE)] = _KINDS["vn"]
-    kind[f & (b1 == _SPACE)] = _KINDS["f"]
+    after1, after2 = _AFTER_KEYWORD[b1], _AFTER_KEYWORD[b2]
+    kind[v & after1] = _KINDS["v"]
+    kind[vt_or_vn & (b1 == ord("t")) & after2] = _KINDS["vt"]
+    kind[vt_or_vn & (b1 == ord("n")) & after2] = _KINDS["vn"]
+    kind[f & after1] = _KINDS["f"]
     misplaced = (
-        (_BLANK[b0] & (b0 != _NEWLINE))
-        | ((v | f) & _BLANK[b1] & (b1 != _SPACE))
-        | (vt_or_vn & _BLANK[b2] & (b2 != _SPACE))
+        (_BLANK[b0] & (b0 != _NEWLINE)) | ((v | f) & _BLANK[b1] & ~after1) | (vt_or_vn & _BLANK[b2] & ~after2)
     )
     return kind, misplaced
 
@@ -511,6 +553,8 @@ def _face_records(
     texture = None
     if ((per >= 1) & (doubles == 0)).all():
         texture = _zero_based(numbers_at(1), lambda: before("vt"), sizes, counts["vt"])
+        if texture is None:  # (a `vt` that does not exist: check_obj_lines names the line)
+            return None
     normal, normal_problem = _normal_references(
         (per == 2) | (doubles > 0), last_numbers, lambda: before("vn"), sizes, counts["vn"]
     )
@@ -570,15 +614,15 @@ def _fan_corners(sizes: np.ndarray) -> np.ndarray:
 def check_obj_lines(text: str) -> None:
     """Raise ``ValueError("line N: ...")`` for the first record trimesh would misread."""
     records = list(_obj_records(text))
-    vertex_count = sum(keyword == "v" for _, keyword, _ in records)
+    count = Counter(keyword for _, keyword, _ in records)  # records of each kind in the file
+    so_far: Counter[str] = Counter()  # ... before the line
     sizes: dict[str, tuple[int, int]] = {}  # record keyword -> (size, first line with it)
     forms: dict[int, tuple[str, int]] = {}  # numbers in a face -> (its form, first line)
-    vertices_so_far = faces = 0
     for number, keyword, line in records:
         fields = line.split()[1:]
+        so_far[keyword] += 1
         if keyword == "f":
-            _check_face(number, line, fields, vertices_so_far, vertex_count, forms)
-            faces += 1
+            _check_face(number, line, fields, so_far, count, forms)
             continue
         if not _NUMBERS_RECORD.fullmatch(line):
             bad = next((f for f in fields if not re.fullmatch(_NUMBER, f)), None)
@@ -597,11 +641,10 @@ def check_obj_lines(text: str) -> None:
                 f"line {number}: `{keyword}` has {len(fields)} numbers but line "
                 f"{first}'s has {size}: write every `{keyword}` alike"
             )
-        vertices_so_far += keyword == "v"
-    if faces == 0:
+    if count["f"] == 0:
         raise ValueError(
             "has no faces (`f` lines)"
-            if vertex_count
+            if count["v"]
             else "has no vertices or faces (`v` and `f` lines): is it an OBJ file?"
         )
 
@@ -610,7 +653,8 @@ def _obj_records(text: str):
     """(line number, keyword, line) of each ``v``, ``vt``, ``vn`` and ``f`` line.
 
     trimesh joins lines ending in a backslash to the next one, and finds a record only at the
-    very start of a line, followed by a space; comments must be lines of their own.
+    very start of a line, followed by a space (here, or a tab); comments must be lines of their
+    own.
     """
     lines = text.split("\n")
     number = 0
@@ -627,16 +671,31 @@ def _obj_records(text: str):
         if not words or words[0] not in ("v", "vt", "vn", "f"):
             continue
         keyword = words[0]
-        if not line.startswith(keyword + " "):
+        if not line.startswith(keyword) or line[len(keyword) : len(keyword) + 1] not in (" ", "\t"):
             raise ValueError(
-                f"line {start}: write `{keyword}` at the very start of the line, "
-                f"with a space after it: trimesh skips the line otherwise"
+                f"line {start}: write `{keyword}` at the very start of the line, followed by a space or a tab"
             )
         if "#" in line:
             raise ValueError(
                 f"line {start}: a comment after the data; trimesh reads comments only on lines of their own"
             )
         yield start, keyword, line
+
+
+def _check_indices(number: int, indices: list[int], names: tuple[str, str], so_far: int, count: int) -> None:
+    """Raise ``ValueError`` unless the OBJ ``indices`` a face on line ``number`` gives (from
+    1, or negative: counted back from the last record before the line) refer to records that
+    exist, ``so_far`` before the line and ``count`` in the file (``names``: what one and
+    several records are called)."""
+    one, several = names
+    if 0 in indices:
+        raise ValueError(f"line {number}: {one} index 0 (OBJ counts {several} from 1)")
+    for index in (max(indices), min(indices)):
+        if index > count or -index > so_far:
+            raise ValueError(
+                f"line {number}: {one} {index} does not exist (the file has "
+                f"{count} {several}, {so_far} before this line)"
+            )
 
 
 def _form(reference: str) -> str:
@@ -648,11 +707,13 @@ def _check_face(
     number: int,
     line: str,
     references: list[str],
-    vertices_so_far: int,
-    vertex_count: int,
+    so_far: Counter[str],
+    count: Counter[str],
     forms: dict[int, tuple[str, int]],
 ) -> None:
-    """Raise ``ValueError`` for a face that trimesh would drop or misread."""
+    """Raise ``ValueError`` for a face that trimesh would drop or misread, or that refers to
+    records (``v``, ``vt``) that do not exist; ``so_far`` and ``count``: how many records of
+    each kind come before the line, and in the file."""
     if len(references) < 3:
         raise ValueError(
             f"line {number}: a face needs at least 3 vertices, got {len(references)} (`{line.strip()}`)"
@@ -672,17 +733,14 @@ def _check_face(
             f"line {number}: the face mixes reference forms "
             f"({', '.join(sorted(written))}): write its vertices alike"
         )
-    indices = [int(r.split("/", 1)[0]) for r in references] if slashes else list(map(int, references))
-    low, high = min(indices), max(indices)
-    if low <= 0 <= high and 0 in indices:
-        raise ValueError(f"line {number}: vertex index 0 (OBJ counts vertices from 1)")
-    for index in (high, low):
-        if index > vertex_count or -index > vertices_so_far:
-            raise ValueError(
-                f"line {number}: vertex {index} does not exist (the file has "
-                f"{vertex_count} vertices, {vertices_so_far} before this line)"
-            )
-    if low < 0 and vertices_so_far != vertex_count:
+    numbers = [r.split("/") for r in references]
+    indices = [int(n[0]) for n in numbers]
+    _check_indices(number, indices, ("vertex", "vertices"), so_far["v"], count["v"])
+    if slashes and not doubles:  # (v/vt or v/vt/vn)
+        textures = [int(n[1]) for n in numbers]
+        _check_indices(number, textures, ("`vt` record", "`vt` records"), so_far["vt"], count["vt"])
+    low = min(indices)
+    if low < 0 and so_far["v"] != count["v"]:
         raise ValueError(
             f"line {number}: negative vertex index {low} with vertices after "
             f"this line: trimesh would count it from the end of the file; use "

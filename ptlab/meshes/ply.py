@@ -1,152 +1,159 @@
-"""PLY files: read by trimesh, checked against their header, triangle strips read here.
+"""PLY files: the mesh their elements describe (``ptlab.meshes.ply_elements`` reads them).
 
-A PLY file is a header, which announces each element (vertices, faces, ...), how many of it
-and its properties, then the elements' data, as text or binary (Turk, "The PLY Polygon File
-Format", 1994). trimesh reads the data (``trimesh.exchange.ply.load_ply``, which also keeps
-it raw, element by element) but forgives too much: a text file cut short loses its last
-faces without a word, and a binary one fails with "list index out of range". Here the
-header is read too, and what trimesh found is held against it, so that such a file is an
-error that says what is missing.
-
-What the file says of its surface: vertex normals (``nx``, ``ny``, ``nz``; trimesh gives
-them only when the file has them), texture coordinates per vertex (``u``/``v``, ``s``/``t``)
-or per face corner (a face's ``texcoord`` list), a texture image (``comment TextureFile``),
-and faces given as triangle strips (an element ``tristrips``, strips of vertex indices
-separated by -1, as some scanners write), which trimesh does not read.
+ptlab reads of a PLY file: the ``vertex`` element's ``x y z``, vertex normals (``nx ny nz``),
+texture coordinates per vertex (``u v``, ``s t`` or ``texture_u texture_v``) or per face
+corner (a face's ``texcoord`` list: u and v of each of its vertices), a texture image
+(``comment TextureFile``), faces (a ``face`` element's ``vertex_indices`` or ``vertex_index``
+list), polygons cut into triangles as OBJ faces are (``ptlab.meshes.obj``), and faces given
+as triangle strips (an element ``tristrips``, strips of vertex indices separated by -1, as
+some scanners write). A face of fewer than 3 vertices has no area: it is skipped, as a
+triangle of zero area is.
 """
 
 from __future__ import annotations
 
-import io
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ptlab.meshes.base import FileMaterial, IndexedMesh
+from ptlab.meshes.obj import _by_triangle, _fan_corners
+from ptlab.meshes.ply_elements import PlyData, PlyList, Properties, read_ply_elements
 
-#: Bytes per value of each PLY property type.
-TYPE_SIZES = {
-    **dict.fromkeys(("char", "uchar", "int8", "uint8"), 1),
-    **dict.fromkeys(("short", "ushort", "int16", "uint16"), 2),
-    **dict.fromkeys(("int", "uint", "int32", "uint32", "float", "float32"), 4),
-    **dict.fromkeys(("double", "float64"), 8),
-}
 #: Vertex properties that colour a mesh, which ptlab does not use.
 COLOUR_PROPERTIES = {"red", "green", "blue", "r", "g", "b", "diffuse_red", "diffuse_green", "diffuse_blue"}
-
-
-@dataclass
-class PlyElement:
-    """An element the header announces: its name, how many, and its properties (name, and
-    for a list the size of its count's type, else None)."""
-
-    name: str
-    count: int
-    properties: list[tuple[str, str, int | None]]
-
-    def least_bytes(self) -> int:
-        """The fewest bytes this element's binary data can take (each list empty)."""
-        per = sum(
-            TYPE_SIZES.get(kind, 0) if counted is None else counted for _, kind, counted in self.properties
-        )
-        return self.count * per
-
-
-@dataclass
-class PlyHeader:
-    """A PLY file's header: its format, its elements, its texture images, where data starts."""
-
-    ascii: bool
-    elements: list[PlyElement]
-    texture_files: list[str]
-    data_start: int
-
-    def announces(self) -> str:
-        """The elements it announces, in words: "8 `vertex` and 12 `face` elements"."""
-        counts = [f"{element.count} `{element.name}`" for element in self.elements]
-        return " and ".join([", ".join(counts[:-1]), counts[-1]] if len(counts) > 1 else counts) + " elements"
+#: The names writers give a face's list of vertices, and a vertex's texture coordinates.
+INDEX_NAMES = ("vertex_indices", "vertex_index")
+UV_NAMES = (("u", "v"), ("s", "t"), ("texture_u", "texture_v"))
 
 
 def read_ply(data: bytes, folder: Path) -> IndexedMesh:
     """The mesh of a PLY file's bytes (a texture image looked for in ``folder``), or
-    ``ValueError`` for a file that is not PLY, is cut short or does not match its header."""
-    header = ply_header(data)
-    import trimesh
-
-    try:
-        # (No resolver: the texture image is ptlab's to read. fix_texture=False keeps the
-        # vertices as they are: per-corner texture coordinates are taken from the raw data.)
-        found = trimesh.exchange.ply.load_ply(io.BytesIO(data), resolver=None, fix_texture=False)
-    except Exception as error:  # trimesh raises many kinds for data that does not fit
-        raise ValueError(_misfit(header, len(data) - header.data_start, error)) from None
-    raw = found.get("metadata", {}).get("_ply_raw", {})
-    for element in header.elements:
-        read = _rows(raw.get(element.name, {}).get("data"))
-        if read < element.count:
-            raise ValueError(
-                f"truncated: its header announces {header.announces()}, but the file holds "
-                f"{read} `{element.name}`"
-            )
-    vertices = np.asarray(found.get("vertices", np.zeros((0, 3))), dtype=np.float64)
-    faces = found.get("faces")
-    unused = []
-    if "tristrips" in raw:
-        strips = strip_triangles(_lists(raw["tristrips"]["data"]))
-        faces = strips if faces is None or len(faces) == 0 else np.concatenate([faces, strips])
-    faces = np.zeros((0, 3), dtype=np.int64) if faces is None else np.asarray(faces)
-    normals = found.get("vertex_normals")
-    uv = _texture_coordinates(raw, found, faces)
-    vertex_properties = next((e.properties for e in header.elements if e.name == "vertex"), [])
-    if COLOUR_PROPERTIES & {name for name, _, _ in vertex_properties}:
-        unused.append("vertex colours")
-    materials, material_ids = [], None
-    if header.texture_files:
-        texture = folder / header.texture_files[0]
-        if uv is None:
-            unused.append(f"texture {header.texture_files[0]} (the file has no texture coordinates)")
+    ``ValueError`` for a file that is not PLY, or does not match its header, or whose faces
+    refer to vertices it does not have."""
+    ply = read_ply_elements(data)
+    if "vertex" not in ply.elements:
+        raise ValueError("has no `vertex` element")
+    vertex = ply.elements["vertex"]
+    vertices = _columns(vertex, ("x", "y", "z"))
+    if vertices is None:
+        raise ValueError("its `vertex` element needs the properties x, y and z (each one number)")
+    mesh = IndexedMesh(vertices, np.zeros((0, 3), np.int64))
+    mesh.normals = _given(vertex, ("nx", "ny", "nz"), "vertex normals", mesh.unused)
+    if COLOUR_PROPERTIES & vertex.keys():
+        mesh.unused.append("vertex colours")
+    mesh.faces, mesh.uv = _triangles(ply, len(vertices), mesh.unused)
+    if mesh.uv is None:
+        given = (_given(vertex, names, "texture coordinates", mesh.unused) for names in UV_NAMES)
+        mesh.uv = next((uv for uv in given if uv is not None), None)
+    if ply.header.texture_files:
+        name = ply.header.texture_files[0]
+        if mesh.uv is None:
+            mesh.unused.append(f"texture {name} (the file has no texture coordinates)")
         else:
-            materials = [FileMaterial(Path(texture).stem, None, texture, "its header (TextureFile)")]
-            material_ids = np.zeros(len(faces), dtype=np.intp)
-    return IndexedMesh(
-        vertices=vertices,
-        faces=faces,
-        uv=uv,
-        normals=None if normals is None else np.asarray(normals, dtype=np.float64),
-        material_ids=material_ids,
-        materials=materials,
-        unused=unused,
-    )
+            mesh.materials = [FileMaterial(Path(name).stem, None, folder / name, "its header (TextureFile)")]
+            mesh.material_ids = np.zeros(len(mesh.faces), dtype=np.intp)
+    return mesh
 
 
-def ply_header(data: bytes) -> PlyHeader:
-    """The header of a PLY file's bytes, or ``ValueError`` if it has none."""
-    end = data.find(b"end_header")
-    if not data.startswith(b"ply"):
-        raise ValueError("not a PLY file (it does not start with `ply`)")
-    if end < 0:
-        raise ValueError("truncated or malformed: its header has no `end_header` line")
-    data_start = data.index(b"\n", end) + 1 if b"\n" in data[end:] else len(data)
-    lines = data[:end].decode("ascii", errors="replace").splitlines()
-    elements: list[PlyElement] = []
-    texture_files = []
-    is_ascii = False
-    for line in lines:
-        words = line.split()
-        if not words:
-            continue
-        if words[0] == "format":
-            is_ascii = words[1:2] == ["ascii"]
-        elif words[0] == "element" and len(words) == 3 and words[2].isdigit():
-            elements.append(PlyElement(words[1], int(words[2]), []))
-        elif words[0] == "property" and elements:
-            if words[1:2] == ["list"] and len(words) == 5:
-                elements[-1].properties.append((words[4], words[3], TYPE_SIZES.get(words[2], 0)))
-            elif len(words) == 3:
-                elements[-1].properties.append((words[2], words[1], None))
-        elif words[0] in ("comment", "obj_info") and words[1:2] == ["TextureFile"]:
-            texture_files.append(line.split("TextureFile", 1)[1].strip())
-    return PlyHeader(is_ascii, elements, texture_files, data_start)
+def _triangles(ply: PlyData, vertex_count: int, unused: list[str]) -> tuple[np.ndarray, np.ndarray | None]:
+    """(T, 3) int64 the triangles of the faces, then of the strips, and (T, 3, 2) the texture
+    coordinates of their corners where the faces give them (``texcoord``), else None."""
+    faces, sizes, corners = _faces(ply, vertex_count)
+    uv = _corner_uv(ply, sizes, corners, unused)
+    strips = ply.elements.get("tristrips", {}).get(INDEX_NAMES[0])
+    if not isinstance(strips, PlyList) or not len(strips.counts):
+        return faces, uv
+    references = _references(ply, "tristrips", strips, vertex_count, "a strip")
+    faces = np.concatenate([faces, strip_triangles(np.split(references, np.cumsum(strips.counts)[:-1]))])
+    if uv is not None:
+        unused.append("texture coordinates of the faces (`texcoord`), which its strips lack")
+    return faces, None
+
+
+def _columns(element: Properties, names: tuple[str, ...]) -> np.ndarray | None:
+    """(n, len(names)) float64 the element's properties ``names`` side by side, or None
+    unless it has them all, each a single number."""
+    columns = [element.get(name) for name in names]
+    if not all(isinstance(column, np.ndarray) for column in columns):
+        return None
+    return np.stack([np.asarray(column, dtype=np.float64) for column in columns], axis=1)
+
+
+def _given(vertex: Properties, names: tuple[str, ...], what: str, unused: list[str]) -> np.ndarray | None:
+    """(V, len(names)) float64 the vertices' properties ``names``, or None where the file
+    does not give them all (``unused`` then names ``what`` and those it gives)."""
+    found = _columns(vertex, names)
+    if found is None and (given := [name for name in names if name in vertex]):
+        unused.append(f"{what} (the file gives only {', '.join(given)})")
+    return found
+
+
+def _faces(ply: PlyData, vertex_count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """(T, 3) int64 the triangles of the ``face`` element's polygons, in the faces' order; the
+    (F,) number of vertices of each face; which of all their references each triangle's
+    corners are (``_fan_corners``; None: the faces are all triangles, three by three)."""
+    face = ply.elements.get("face", {})
+    references = next((face[name] for name in INDEX_NAMES if name in face), None)
+    if not isinstance(references, PlyList):
+        if ply.count("face"):
+            raise ValueError("its `face` element has no list `vertex_indices` (nor `vertex_index`)")
+        return np.zeros((0, 3), np.int64), np.zeros(0, np.int64), None
+    sizes = references.counts
+    vertices = _references(ply, "face", references, vertex_count, "a face")
+    polygon = sizes >= 3
+    if len(sizes) and not polygon.any() and "tristrips" not in ply.elements:
+        each = "its face has" if len(sizes) == 1 else f"each of its {len(sizes)} faces has"
+        raise ValueError(f"has no triangles: {each} fewer than 3 vertices")
+    if not polygon.all():  # (faces of 0 to 2 vertices have no area: left out)
+        vertices = vertices[np.repeat(polygon, sizes)]
+    kept = sizes[polygon]
+    corners = None if (kept == 3).all() else _fan_corners(kept)
+    return _by_triangle(vertices, corners), sizes, corners
+
+
+def _corner_uv(
+    ply: PlyData, sizes: np.ndarray, corners: np.ndarray | None, unused: list[str]
+) -> np.ndarray | None:
+    """(T, 3, 2) the texture coordinates of each triangle's corners, from the faces'
+    ``texcoord`` lists (u, v of each of a face's vertices), or None: the faces have none, or
+    a list that does not give each vertex two numbers (``unused`` says so)."""
+    texcoord = ply.elements.get("face", {}).get("texcoord")
+    if not isinstance(texcoord, PlyList):
+        return None
+    wrong = np.flatnonzero(texcoord.counts != 2 * sizes)
+    if len(wrong):
+        row = int(wrong[0])
+        unused.append(
+            f"texture coordinates per face corner (`texcoord`; {ply.where('face', row)}: "
+            f"{texcoord.counts[row]} numbers for {sizes[row]} vertices)"
+        )
+        return None
+    uv = np.asarray(texcoord.values, dtype=np.float64).reshape(-1, 2)
+    polygon = sizes >= 3
+    if not polygon.all():
+        uv = uv[np.repeat(polygon, sizes)]
+    return uv[corners] if corners is not None else uv.reshape(-1, 3, 2)
+
+
+def _references(ply: PlyData, element: str, references: PlyList, vertex_count: int, what: str) -> np.ndarray:
+    """(R,) int64 the vertex indices of a list of every ``element``, or ``ValueError`` naming
+    the first that is not a vertex's (0 to vertex_count - 1; -1 separates a strip's runs)."""
+    values = references.values
+    lowest = -1 if element == "tristrips" else 0
+    # (Compared as stored: an unsigned 64-bit index beyond int64 stays itself.)
+    bad = ~((values >= lowest) & (values < vertex_count))
+    if values.dtype.kind == "f":
+        bad |= values != np.floor(values)
+    if bad.any():
+        k = int(np.argmax(bad))
+        row = references.row_of(k)
+        there = f"{vertex_count} vertices (0 to {vertex_count - 1})" if vertex_count else "no vertices"
+        raise ValueError(
+            f"{ply.where(element, row)}: {what} refers to vertex {ply.written(references, k)}, "
+            f"but there are {there}"
+        )
+    return values.astype(np.int64)
 
 
 def strip_triangles(strips: list[np.ndarray]) -> np.ndarray:
@@ -172,53 +179,3 @@ def strip_triangles(strips: list[np.ndarray]) -> np.ndarray:
             )
             triangles.append(triangle[distinct])
     return np.concatenate(triangles) if triangles else np.zeros((0, 3), dtype=np.int64)
-
-
-def _rows(data) -> int:
-    """How many rows trimesh read of an element (a structured array, or a dict of arrays)."""
-    if data is None:
-        return 0
-    if isinstance(data, dict):
-        return min((len(values) for values in data.values()), default=0)
-    return len(data)
-
-
-def _lists(data) -> list[np.ndarray]:
-    """The rows of an element's one list property, as trimesh keeps them raw: a dict of one
-    array (text files) or a structured array whose field holds (count, values) (binary)."""
-    values = next(iter(data.values())) if isinstance(data, dict) else data[data.dtype.names[0]]["f1"]
-    if isinstance(values, np.ndarray) and values.dtype != object:
-        return list(np.atleast_2d(values).astype(np.int64))
-    return [np.asarray(row, dtype=np.int64).ravel() for row in values]
-
-
-def _texture_coordinates(raw: dict, found: dict, faces: np.ndarray) -> np.ndarray | None:
-    """(T, 3, 2) per-corner texture coordinates from the faces' ``texcoord`` lists, or (V, 2)
-    per-vertex ones (``u``/``v``, ``s``/``t``) as trimesh found them, or None."""
-    face = raw.get("face", {}).get("data")
-    names = face.dtype.names if isinstance(face, np.ndarray) else tuple(face or ())
-    if face is not None and "texcoord" in names:
-        texcoord = face["texcoord"]["f1"] if isinstance(face, np.ndarray) else face["texcoord"]
-        texcoord = np.asarray(texcoord, dtype=np.float64)
-        if texcoord.ndim == 2 and texcoord.shape == (len(faces), 6):
-            return texcoord.reshape(-1, 3, 2)
-        return None
-    visual = found.get("visual")
-    uv = getattr(visual, "uv", None)
-    return None if uv is None else np.asarray(uv, dtype=np.float64)[:, :2]
-
-
-def _misfit(header: PlyHeader, data_bytes: int, error: Exception) -> str:
-    """Why trimesh could not read a PLY file's data, in words: cut short, or not as its header
-    says."""
-    if not header.ascii:
-        least = sum(element.least_bytes() for element in header.elements)
-        if data_bytes < least:
-            return (
-                f"truncated: its header announces {header.announces()}, which take at least "
-                f"{least} bytes, but the file holds {data_bytes} bytes of data"
-            )
-    return (
-        f"truncated or malformed: its data does not match its header, which announces "
-        f"{header.announces()} (trimesh: {error})"
-    )

@@ -94,7 +94,13 @@ def render_or_fail_cleanly(scene: Path, capsys) -> str:
         event("renders" if code == 0 else "fails")
     if code == 0:
         image, _ = read_image(out)
-        assert err == ("" if (image > 0).any() else BLACK), err
+        # (What a mesh file brought that ptlab ignores: one warning line each, naming the mesh.)
+        said = [
+            line
+            for line in err.splitlines(keepends=True)
+            if not line.startswith(f"ptlab: warning: {scene}: mesh[")
+        ]
+        assert "".join(said) == ("" if (image > 0).any() else BLACK), err
         assert image.shape == (4, 4, 3)
         assert np.isfinite(image).all()
         out.unlink()
@@ -520,8 +526,11 @@ def test_obj_files_ptlab_accepts_read_as_trimesh_reads_them(change):
         vertices, faces, _ = read_obj(data)
     except ValueError:
         return
+    # (trimesh skips a record whose keyword a tab follows, which the format allows and ptlab
+    # reads: it is given the line with a space there.)
+    spaced = re.sub(rb"(?m)^(v[tn]?|f)\t", rb"\1 ", data)
     try:
-        mesh = trimesh.load(trimesh.util.wrap_as_stream(data), file_type="obj", force="mesh", process=False)
+        mesh = trimesh.load(trimesh.util.wrap_as_stream(spaced), file_type="obj", force="mesh", process=False)
     except ValueError:
         # E.g. a line `f\x011 2 3`, whose keyword is `f\x01` to ptlab (which skips it, as an
         # unknown record) and `f` to trimesh, whose reading of the rest then fails.
@@ -1007,9 +1016,9 @@ REGRESSIONS = {
         {"floor.obj": FLOOR.replace("f 1 2 3\nf 1 3 4", "f 1/1 2/1 3/1\nf 1 3 4 5 6 7\nvt 0 0")},
         ["line 16", "have as many numbers"],
     ),
-    "tab after the keyword": (
+    "form feed after the keyword": (
         None,
-        {"floor.obj": FLOOR.replace("v 0 0 0", "v\t0 0 0")},
+        {"floor.obj": FLOOR.replace("v 0 0 0", "v\f0 0 0")},
         ["line 4", "write `v` at the very start of the line"],
     ),
     "indented face": (

@@ -11,7 +11,10 @@ from __future__ import annotations
 
 import base64
 import json
+import os
+import re
 import struct
+import zlib
 from pathlib import Path
 
 import colour
@@ -439,7 +442,7 @@ def test_8_and_16_bit_images_are_decoded_from_srgb_float_images_are_not(tmp_path
     ]:
         values = ImageTexture(write_image(path, pixels))(uv)[:, 0]
         np.testing.assert_allclose(values, colour.models.eotf_sRGB(pixels[0, :, 0] / scale), atol=2e-6)
-    linear = (np.arange(256, dtype=np.float32) / 100)[None, :, None].repeat(3, axis=2)
+    linear = (np.arange(256, dtype=np.float32) / 255)[None, :, None].repeat(3, axis=2)
     values = ImageTexture(write_image(tmp_path / "linear.exr", linear))(uv)[:, 0]
     np.testing.assert_allclose(values, linear[0, :, 0], rtol=1e-6)
 
@@ -524,7 +527,31 @@ def test_a_missing_material_file_is_named_and_the_faces_have_none(tmp_path):
     data = read_mesh_data(tmp_path / "m.obj")
     assert data.materials == []
     assert data.material_ids.tolist() == [-1]
-    assert "material library gone.mtl (not found)" in data.unused
+    assert f"material library 'gone.mtl' (not found in {tmp_path})" in data.unused
+    # A name with a space that is not there is one name, not two.
+    (tmp_path / "m.obj").write_text(
+        "mtllib my materials.mtl\nusemtl red\nv 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"
+    )
+    said = [u for u in read_mesh_data(tmp_path / "m.obj").unused if u.startswith("material library")]
+    assert said == [f"material library 'my materials.mtl' (not found in {tmp_path})"]
+
+
+def test_blenders_material_file_is_named_for_what_shows_and_no_more(tmp_path):
+    # Blender writes Ni (an index of refraction) for every material: it changes nothing on an
+    # opaque one, and is named only where the material lets light through.
+    (tmp_path / "m.mtl").write_text(
+        "newmtl X\nNs 250\nKa 1 1 1\nKd .8 .8 .8\nKs .5 .5 .5\nKe 0 0 0\nNi 1.45\nd 1\nillum 2\n"
+        "newmtl Glassy\nKd .8 .8 .8\nNi 1.5\nd 0.5\n"
+    )
+    (tmp_path / "m.obj").write_text(
+        "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nusemtl X\nf 1 2 3\nusemtl Glassy\nf 1 3 4\n"
+    )
+    from ptlab.meshes.mtl import read_mtl
+
+    (_, opaque_unused), (_, glassy_unused) = read_mtl(tmp_path / "m.mtl")
+    assert opaque_unused == ["specular exponent (Ns)", "specular colour (Ks)"]
+    assert "index of refraction (Ni)" in glassy_unused
+    assert "transparency (d)" in glassy_unused
 
 
 def test_a_malformed_material_file_names_its_line(tmp_path):
@@ -705,3 +732,545 @@ def test_the_command_says_what_a_mesh_brought_in_one_line(tmp_path, capsys):
     assert lines[0].startswith("ptlab: warning: ")
     assert "ignores its materials" in lines[0]
     assert out.exists()
+
+
+# -- glTF files that are malformed, or valid in ways first read wrong (issue 39 red team, part G) --
+
+
+def gltf_document(tmp_path: Path) -> dict:
+    """The JSON of a glTF quad: accessors 0 POSITION, 1 NORMAL, 2 TEXCOORD_0, 3 indices
+    (unsigned shorts), buffer views 0 to 3 likewise, material 0, node 0."""
+    path = gltf(
+        tmp_path / "m.gltf",
+        QUAD,
+        [[0, 1, 2], [0, 2, 3]],
+        normals=TILTED,
+        uv=QUAD[:, :2],
+        material={"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0}},
+    )
+    return json.loads(path.read_text())
+
+
+def read_gltf_document(tmp_path: Path, document: dict):
+    """``read_mesh_data`` of ``document`` written as a ``.gltf`` file."""
+    path = tmp_path / "m.gltf"
+    path.write_text(json.dumps(document))
+    return read_mesh_data(path)
+
+
+def _primitive(d: dict) -> dict:
+    return d["meshes"][0]["primitives"][0]
+
+
+def _sparse(d: dict, indices: dict, count: int = 1) -> None:
+    d["accessors"][0]["sparse"] = {"count": count, "indices": indices, "values": {"bufferView": 0}}
+
+
+@pytest.mark.parametrize(
+    ("change", "message"),
+    [
+        (lambda d: d["nodes"][0].update(children=1), "nodes[0].children is 1, not a list"),
+        (lambda d: d["meshes"][0].update(primitives=5), "meshes[0].primitives is 5, not a list"),
+        (lambda d: d.update(asset=5), "asset is 5, not an object"),
+        (lambda d: d.update(nodes={"mesh": 0}), 'nodes is {"mesh": 0}, not a list'),
+        (lambda d: d.update(extensionsUsed=5), "extensionsUsed is 5, not a list"),
+        (lambda d: d["buffers"][0].update(uri=5), "buffers[0].uri is 5, not a string"),
+        (lambda d: d["nodes"][0].update(rotation=["a", "b", "c", "d"]), 'nodes[0].rotation[0] is "a", not a'),
+        (lambda d: d["nodes"][0].update(matrix=[1, 0, 0]), "nodes[0].matrix has 3 numbers, not 16"),
+        (lambda d: d["nodes"][0].update(translation=[1, 2]), "nodes[0].translation has 2 numbers, not 3"),
+        (
+            lambda d: _primitive(d)["attributes"].update(POSITION=True),
+            "attributes.POSITION is true, not an integer",
+        ),
+        (lambda d: d["accessors"][2].update(type="SCALAR"), "TEXCOORD_0 is accessors[2], of type SCALAR"),
+        (
+            lambda d: d["accessors"][0].update(type="VEC2"),
+            "POSITION is accessors[0], of type VEC2: it must be VEC3",
+        ),
+        (lambda d: d["accessors"][1].update(type="SCALAR"), "NORMAL is accessors[1], of type SCALAR"),
+        (
+            lambda d: d["accessors"][3].update(componentType=5126),
+            "indices is accessors[3], of componentType 5126",
+        ),
+        (
+            lambda d: d["accessors"][0].update(byteOffset=-12),
+            "accessors[0].byteOffset is -12, not an integer of at",
+        ),
+        (
+            lambda d: d["accessors"][0].update(count=-1),
+            "accessors[0].count is -1, not an integer of at least 0",
+        ),
+        (lambda d: d["bufferViews"][0].update(byteStride=-12), "bufferViews[0].byteStride is -12"),
+        (
+            lambda d: d["materials"][0]["pbrMetallicRoughness"].update(
+                baseColorTexture={"index": 0, "texCoord": "one"}
+            ),
+            'baseColorTexture.texCoord is "one", not an integer',
+        ),
+        (
+            lambda d: d["buffers"][0].update(uri="data:application/octet-stream;base64,AAA"),
+            "buffers[0].uri is a data URI that is not valid base64",
+        ),
+        (
+            lambda d: _sparse(d, {"bufferView": 3, "componentType": 5123}, count=5),
+            "sparse.count is 5, more than",
+        ),
+        (
+            lambda d: d["accessors"][0].update(sparse={"count": 1, "values": {"bufferView": 0}}),
+            "sparse has no indices",
+        ),
+        (
+            lambda d: _sparse(d, {"bufferView": 3, "componentType": 5126}),
+            "sparse.indices.componentType is 5126",
+        ),
+        # (Bytes 12 to 15 of view 0 are the float 1.0, 0x3F800000 as an unsigned int.)
+        (
+            lambda d: _sparse(d, {"bufferView": 0, "byteOffset": 12, "componentType": 5125}),
+            "accessors[0].sparse.indices holds index 1065353216, but the accessor has 4 values",
+        ),
+    ],
+)
+def test_a_gltf_property_of_the_wrong_shape_is_named_by_its_json_path(tmp_path, capfd, change, message):
+    document = gltf_document(tmp_path)
+    change(document)
+    with pytest.raises(SceneError) as error:
+        read_gltf_document(tmp_path, document)
+    assert message in str(error.value)
+    assert str(error.value).startswith(f"{tmp_path / 'm.gltf'}: mesh m.gltf: ")
+    assert capfd.readouterr().err == ""
+
+
+@pytest.mark.parametrize(
+    ("accessor", "message"),
+    [
+        (0, "accessors[0] has no bufferView and a count of 3000000"),  # (POSITION, alone)
+        (1, "NORMAL has 3000000 values, POSITION 4"),
+        (3, "accessors[3] has no bufferView and a count of 3000000"),  # (the indices)
+    ],
+)
+def test_gltf_counts_that_the_file_does_not_bear_out_are_refused_before_memory_is_taken(
+    tmp_path, accessor, message
+):
+    # An accessor without a buffer view is zeros (section 3.6.2.3): a count of 3e8 took 3.5 GB.
+    import tracemalloc
+
+    document = gltf_document(tmp_path)
+    del document["accessors"][accessor]["bufferView"]
+    document["accessors"][accessor]["count"] = 3_000_000
+    if accessor == 0:
+        _primitive(document)["attributes"] = {"POSITION": 0}
+    tracemalloc.start()
+    try:
+        with pytest.raises(SceneError) as error:
+            read_gltf_document(tmp_path, document)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert message in str(error.value)
+    assert peak < 3_000_000  # (the zeros alone would be 6 MB as unsigned shorts, 72 MB as positions)
+
+
+def test_a_gltf_sparse_accessor_without_a_buffer_view_is_zeros_with_its_values_in_place(tmp_path):
+    # POSITION: zeros, its vertices 0, 1, 2 replaced by the quad's (view 3 begins 0, 1, 2);
+    # vertex 3 stays at the origin, so triangle (0, 2, 3) has no area and is dropped.
+    document = gltf_document(tmp_path)
+    del document["accessors"][0]["bufferView"]
+    _sparse(document, {"bufferView": 3, "componentType": 5123}, count=3)
+    mesh = read_gltf_document(tmp_path, document)
+    np.testing.assert_array_equal(mesh.triangles, QUAD[None, :3])
+
+
+def test_gltf_integers_may_be_written_as_whole_floats(tmp_path):
+    # Section 2.7 (JSON encoding), item 5: 4.0 is the integer 4 (but true is not 1, above).
+    document = gltf_document(tmp_path)
+    document["accessors"][0]["count"] = 4.0
+    _primitive(document)["indices"] = 3.0
+    assert len(read_gltf_document(tmp_path, document).triangles) == 2
+
+
+@pytest.mark.parametrize("scale", [[1, 1, 0], [-1, 2, 1]])
+def test_gltf_normals_under_a_scale_that_flattens_or_mirrors(tmp_path, scale):
+    # Flattened onto z = 0 (glTF allows a scale of 0), the quad, already there, keeps its
+    # triangles, and every normal becomes the plane's; mirrored, the normals go by the inverse
+    # transpose, not turned with the triangles.
+    gltf(tmp_path / "m.gltf", QUAD, [[0, 1, 2], [0, 2, 3]], normals=TILTED, node={"scale": scale})
+    mesh = read_mesh_data(tmp_path / "m.gltf")
+    if scale[2] == 0:
+        expected = np.tile([0.0, 0.0, 1.0], (4, 1))
+    else:
+        expected = TILTED / scale / np.linalg.norm(TILTED / scale, axis=1, keepdims=True)
+    corners = [[0, 2, 1], [0, 3, 2]] if scale[0] < 0 else [[0, 1, 2], [0, 2, 3]]  # (a mirror turns them)
+    np.testing.assert_allclose(mesh.triangles, (QUAD * scale)[corners], atol=1e-6)
+    np.testing.assert_allclose(mesh.normals, expected[corners], atol=1e-6)
+
+
+def test_a_gltf_rotation_is_normalised_and_a_zero_one_refused(tmp_path):
+    # [0, 0, 2, 0] is [0, 0, 1, 0] (half a turn about z) written at twice its length: taken as
+    # it stood, it would scale the quad by 4 (the rotation matrix grows with |q|^2).
+    gltf(tmp_path / "m.gltf", QUAD, [[0, 1, 2], [0, 2, 3]], node={"rotation": [0, 0, 2, 0]})
+    mesh = read_mesh_data(tmp_path / "m.gltf")
+    np.testing.assert_allclose(mesh.triangles, (QUAD * [-1, -1, 1])[[[0, 1, 2], [0, 2, 3]]], atol=1e-6)
+    gltf(tmp_path / "m.gltf", QUAD, [[0, 1, 2], [0, 2, 3]], node={"rotation": [0, 0, 0, 0]})
+    with pytest.raises(
+        SceneError, match=r"nodes\[0\]\.rotation is \[0\.0, 0\.0, 0\.0, 0\.0\], which is no rotation"
+    ):
+        read_mesh_data(tmp_path / "m.gltf")
+
+
+@pytest.mark.parametrize(
+    ("required", "refused"),
+    [(["KHR_texture_transform"], True), ([], False), (["KHR_mesh_quantization"], False)],
+)
+def test_gltf_extensions_required_that_ptlab_lacks_refuse_the_file_used_ones_are_named(
+    tmp_path, required, refused
+):
+    document = gltf_document(tmp_path)
+    document["extensionsUsed"] = ["KHR_texture_transform", "KHR_mesh_quantization"]
+    document["extensionsRequired"] = required
+    if refused:
+        with pytest.raises(SceneError, match="requires the glTF extension KHR_texture_transform"):
+            read_gltf_document(tmp_path, document)
+    else:
+        assert read_gltf_document(tmp_path, document).unused == ["the glTF extension KHR_texture_transform"]
+
+
+def test_a_gltf_mesh_placed_many_times_copies_only_the_vertices_its_indices_use(tmp_path):
+    # One quad (4 of 50,000 vertices in its accessor, as primitives sharing one vertex buffer
+    # have) placed by 100 nodes: each copy of all 50,000 would take 120 MB in all.
+    import tracemalloc
+
+    positions = np.random.default_rng(0).random((50_000, 3))
+    positions[:4] = QUAD
+    path = gltf(tmp_path / "m.gltf", positions, [[0, 1, 2], [0, 2, 3]])
+    document = json.loads(path.read_text())
+    document["nodes"] = [{"mesh": 0, "translation": [2 * k, 0, 0]} for k in range(100)]
+    document["scenes"] = [{"nodes": list(range(100))}]
+    tracemalloc.start()
+    try:
+        mesh = read_gltf_document(tmp_path, document)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    quad = QUAD[[[0, 1, 2], [0, 2, 3]]]
+    np.testing.assert_allclose(
+        mesh.triangles, np.concatenate([quad + np.array([2 * k, 0, 0]) for k in range(100)])
+    )
+    assert peak < 20_000_000  # (the file's own 0.6 MB of vertices, its JSON and buffer)
+
+
+# -- brief I (issue 39 red team): textures, OBJ and MTL files ------------------------------------
+
+#: A scene of one OBJ mesh, ``{obj}``, in front of the camera, under a sky.
+OBJ_SCENE = """
+[camera]
+position = [0, 0, 3]
+look_at = [0, 0, 0]
+[sky]
+radiance = 1
+[[mesh]]
+file = "{obj}"
+"""
+#: An OBJ square with texture coordinates, and material m of m.mtl.
+TEXTURED_SQUARE = (
+    "mtllib m.mtl\nusemtl m\nv -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\n"
+    "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nf 1/1 2/2 3/3 4/4\n"
+)
+
+
+def textured_square_scene(folder: Path, mtl: str) -> Path:
+    """A scene file in ``folder`` of the OBJ square, whose material m says ``mtl``."""
+    (folder / "m.mtl").write_text(f"newmtl m\n{mtl}\n")
+    (folder / "square.obj").write_text(TEXTURED_SQUARE)
+    (folder / "scene.toml").write_text(OBJ_SCENE.format(obj="square.obj"))
+    return folder / "scene.toml"
+
+
+@pytest.mark.parametrize(
+    ("texels", "found"),
+    [
+        (np.full((2, 2, 3), -0.5, np.float32), "found -0.5 to -0.5"),
+        (np.full((2, 2, 3), 50.0, np.float32), "found 50 to 50"),
+        (np.array([[[0, 0.5, 1]], [[0.25, 1.01, 0]]], np.float32), "found 0 to 1.01"),
+    ],
+)
+def test_an_albedo_image_beyond_0_to_1_is_refused_naming_it_and_the_range(tmp_path, texels, found):
+    # An albedo is a reflectance, as a constant one (refused above 1) is: a float image of 50
+    # rendered 50 times brighter than the light, one of -0.5 negative pixels. Every path
+    # meets ImageTexture: a file (a scene's, an OBJ's map_Kd), pixels (a GLB's embedded EXR).
+    path = write_image(tmp_path / "albedo.exr", texels)
+    for make in (lambda: ImageTexture(path), lambda: ImageTexture.from_array(texels, "albedo.exr")):
+        with pytest.raises(
+            PtlabError, match=rf"^image albedo\.exr: an albedo's texels must be from 0 to 1 .*{found}$"
+        ):
+            make()
+    scene = textured_square_scene(tmp_path, "map_Kd albedo.exr")
+    with pytest.raises(SceneError, match=rf"material 'm' \(m\.mtl, line 1\): image albedo\.exr: .*{found}$"):
+        ptlab.load_scene(scene)
+
+
+def test_an_albedo_image_within_0_to_1_is_read_and_a_tint_beyond_is_refused():
+    edges = np.array([[[0, 0, 0]], [[1, 1, 1]]], np.float32)  # (0 and 1 themselves are fine)
+    texture = ImageTexture.from_array(edges, "edges")
+    assert texture.tinted([0.5, 1, 1]).tint.tolist() == [0.5, 1, 1]
+    for tint, found in (([1, 2, 1], "found 0 to 2"), ([1, -1, 1], "found -1 to 1")):
+        with pytest.raises(PtlabError, match=rf"^image edges: .*{found} \(tinted by"):
+            texture.tinted(tint)
+    # An 8-bit image is within [0, 1] whatever its texels; tinted by more than 1, it is not.
+    with pytest.raises(PtlabError, match=r"found 0 to 1.5"):
+        ImageTexture.from_array(TEXELS, "2x2").tinted([1.5, 1, 1])
+
+
+@pytest.mark.filterwarnings("error")
+def test_a_lookup_at_any_float32_uv_gives_a_texel():
+    # uv * width in float64 was 9e38 (or inf), whose floor mod 9 gave the index 9 (or a
+    # negative one): every render of the scene crashed. Wrapped first, any uv has a texel.
+    row = ImageTexture.from_array(np.arange(27, dtype=np.uint8).reshape(1, 9, 3) * 9, "row")
+    big = float(np.finfo(np.float32).max)
+    uv = np.array([[big, 0.5], [-big, 0.5], [2.0**20 + 0.25, 0.5], [1e17, 3e38], [np.inf, np.nan]])
+    same = np.array([[0.0, 0.5], [0.0, 0.5], [0.25, 0.5], [0.0, 0.0], [0.0, 0.0]])
+    np.testing.assert_array_equal(row(uv), row(same))
+    np.testing.assert_array_equal(row(uv.astype(np.float32)), row(same))
+
+
+def test_texture_coordinates_beyond_float32_name_their_line(tmp_path):
+    (tmp_path / "m.mtl").write_text("newmtl m\nKd 1 1 1\n")
+    for vt, shown in (("vt 1e39 0", "1e39 0"), ("vt 0 -inf", "0 -inf"), ("vt nan 0", "nan 0")):
+        (tmp_path / "far.obj").write_text(TEXTURED_SQUARE.replace("vt 1 1", vt))
+        with pytest.raises(
+            SceneError, match=rf"far\.obj: line 9: `vt {shown}`: texture coordinates must be finite"
+        ):
+            read_mesh_data(tmp_path / "far.obj")
+    # One that no face uses is no part of the scene.
+    (tmp_path / "far.obj").write_text(TEXTURED_SQUARE + "vt 1e39 0\n")
+    assert np.abs(read_mesh_data(tmp_path / "far.obj").uv).max() == 1
+
+
+@pytest.mark.parametrize(
+    ("face", "problem"),
+    [
+        ("f 1/1 2/2 3/9 4/4", "line 11: `vt` record 9 does not exist (the file has 4 `vt` records, 4 before"),
+        ("f 1/1 2/2 3/-9 4/4", "line 11: `vt` record -9 does not exist"),
+        ("f 1/0 2/2 3/3 4/4", "line 11: `vt` record index 0 (OBJ counts `vt` records from 1)"),
+        ("f 1/1/1 2/2/1 3/5/1", "line 11: `vt` record 5 does not exist"),
+    ],
+)
+def test_a_face_with_a_vt_that_does_not_exist_names_its_line(tmp_path, face, problem):
+    # (It said the textured mesh had no texture coordinates, pointing at the scene.)
+    obj = TEXTURED_SQUARE.replace("mtllib m.mtl", "vn 0 0 1").replace("f 1/1 2/2 3/3 4/4", face)
+    (tmp_path / "bad.obj").write_text(obj)
+    with pytest.raises(SceneError, match=re.escape(f"bad.obj: {problem}")):
+        read_mesh_data(tmp_path / "bad.obj")
+
+
+def png_chunk(kind: bytes, data: bytes) -> bytes:
+    """One PNG chunk: length, kind, data and CRC (PNG specification, section 5.3)."""
+    return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+
+def test_an_image_that_cannot_be_read_is_one_line_and_libpng_prints_nothing(tmp_path, capfd):
+    # libpng printed "libpng error: ..." on standard error beside ptlab's message, which
+    # glued OpenImageIO's three lines with literal "\n".
+    full = write_image(tmp_path / "full.png", np.full((64, 64, 3), 77, np.uint8)).read_bytes()
+    (tmp_path / "cut.png").write_bytes(full[:60])
+    header = struct.pack(">IIBBBBB", 100000, 100000, 8, 2, 0, 0, 0)  # (28 GB of RGB)
+    (tmp_path / "huge.png").write_bytes(
+        b"\x89PNG\r\n\x1a\n" + png_chunk(b"IHDR", header) + png_chunk(b"IDAT", zlib.compress(b"\0" * 99))
+    )
+    for name, problem in (("cut.png", "hit end of file"), ("huge.png", "exceeds the")):
+        with pytest.raises(PtlabError, match=rf"^image .*{name}: cannot read it: [^\n\\]*{problem}[^\n\\]*$"):
+            ImageTexture(tmp_path / name)
+    assert capfd.readouterr().err == ""
+    # What else lands on standard error meanwhile is written on.
+    from ptlab.textures import _libpng_quiet
+
+    with _libpng_quiet():
+        os.write(2, b"libpng error: dropped\nkept\n")
+    assert capfd.readouterr().err == "kept\n"
+
+
+def test_a_map_kd_with_an_unclosed_quote_or_naming_a_folder_says_so(tmp_path):
+    (tmp_path / "folder").mkdir()
+    for statement, problem in (
+        (
+            'map_Kd "tex.png',
+            r"square\.obj: m\.mtl, line 2: `map_Kd` \"tex\.png: the quotation mark is not closed",
+        ),
+        ("map_Kd folder", r"folder: is a folder, not an image$"),
+    ):
+        with pytest.raises(SceneError, match=problem):
+            ptlab.load_scene(textured_square_scene(tmp_path, statement))
+
+
+def test_a_tab_after_a_records_keyword_is_read_as_a_space(tmp_path):
+    spaced = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\nf 1/1/1 2/2/1 3/3/1\n"
+    for name, text in (("spaced.obj", spaced), ("tabbed.obj", spaced.replace(" ", "\t"))):
+        (tmp_path / name).write_text(text)
+    spaced_data, tabbed_data = (read_mesh_data(tmp_path / n) for n in ("spaced.obj", "tabbed.obj"))
+    for field in ("triangles", "uv", "normals"):
+        np.testing.assert_array_equal(getattr(tabbed_data, field), getattr(spaced_data, field))
+
+
+@pytest.mark.filterwarnings("error")
+@pytest.mark.parametrize(
+    ("vn", "unit"),
+    [
+        ("1e200 1e200 1e200", [3**-0.5] * 3),
+        ("1e-170 1e-170 1e-170", [3**-0.5] * 3),
+        ("0 -5e-324 0", [0, -1, 0]),
+    ],
+)
+def test_huge_and_tiny_vertex_normals_are_made_unit_length(tmp_path, vn, unit):
+    # Their squares overflowed (a NumPy warning, and the face's normal instead) or underflowed
+    # to 0 (the face's normal: a tiny normal is a direction all the same).
+    (tmp_path / "n.obj").write_text(f"v 0 0 0\nv 1 0 0\nv 0 1 0\nvn {vn}\nf 1//1 2//1 3//1\n")
+    np.testing.assert_allclose(read_mesh_data(tmp_path / "n.obj").normals, [[unit] * 3])
+
+
+# -- brief H (issue 39 red team): PLY files read by ptlab itself ---------------------------------
+
+#: Squares side by side, facing +z, as PLY polygons: a quad, two triangles, a pentagon (the
+#: third square, a point in its top edge), and faces of 0 and 2 vertices, which have no area.
+PLY_POINTS = np.array(
+    [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [2, 0, 0], [2, 1, 0], [3, 0, 0], [3, 1, 0], [2.5, 1, 0]]
+)
+PLY_POLYGONS = [[0, 1, 2, 3], [1, 4, 5], [], [1, 5, 2], [0, 1], [4, 6, 7, 8, 5]]
+PLY_CODES = {"uchar": "B", "int": "i", "uint64": "Q", "float": "f"}
+
+
+def write_ply(
+    path: Path, encoding: str, faces: list, index: str = "int", texcoord: list | None = None
+) -> Path:
+    """A PLY file of ``PLY_POINTS`` and ``faces`` (lists of vertex indices of type ``index``),
+    with a ``texcoord`` list per face where given."""
+    header = (
+        f"ply\nformat {encoding} 1.0\ncomment TextureFile checker.png\nelement vertex {len(PLY_POINTS)}\n"
+        f"property float x\nproperty float y\nproperty float z\nelement face {len(faces)}\n"
+        f"property list uchar {index} vertex_indices\n"
+        + ("property list uchar float texcoord\n" if texcoord else "")
+        + "end_header\n"
+    )
+    lists = [[face] + ([texcoord[k]] if texcoord else []) for k, face in enumerate(faces)]
+    if encoding == "ascii":
+        rows = [" ".join(f"{x:g}" for x in point) for point in PLY_POINTS]
+        rows += [" ".join(" ".join(map(str, [len(a), *a])) for a in face) for face in lists]
+        data = (header + "\n".join(rows) + "\n").encode()
+    else:
+        order = "<" if encoding == "binary_little_endian" else ">"
+        data = header.encode() + PLY_POINTS.astype(order + "f4").tobytes()
+        for face in lists:
+            for values, kind in zip(face, [index, "float"], strict=False):
+                data += struct.pack(f"{order}B{len(values)}{PLY_CODES[kind]}", len(values), *values)
+    path.write_bytes(data)
+    return path
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian", "binary_big_endian"])
+def test_ply_polygons_are_cut_as_obj_faces_are_and_faces_without_area_skipped(tmp_path, encoding):
+    # trimesh refused quads ("faces of shape (1, 4)") and, in a binary file, lists of varying
+    # lengths ("PLY is unexpected length!").
+    triangles = read_mesh_data(write_ply(tmp_path / "m.ply", encoding, PLY_POLYGONS)).triangles
+    obj = tmp_path / "m.obj"
+    obj.write_text(
+        "".join(f"v {x} {y} {z}\n" for x, y, z in PLY_POINTS)
+        + "".join(f"f {' '.join(str(k + 1) for k in face)}\n" for face in PLY_POLYGONS if len(face) > 2)
+    )
+    np.testing.assert_array_equal(triangles, read_mesh_data(obj).triangles)
+    assert len(triangles) == 7
+    front = np.cross(triangles[:, 1] - triangles[:, 0], triangles[:, 2] - triangles[:, 0])
+    np.testing.assert_allclose(front[:, :2], 0)
+    assert (front[:, 2] > 0).all()
+    assert front[:, 2].sum() / 2 == pytest.approx(3)  # (no area lost)
+
+
+@pytest.mark.parametrize("encoding", ["ascii", "binary_little_endian"])
+def test_ply_texcoord_lists_give_each_corner_its_uv_and_its_texture_file_prints_nothing(
+    tmp_path, capfd, encoding
+):
+    # One face's list read as a number ("no len()"); trimesh printed a traceback for the
+    # TextureFile. uv here are the corners' x and y: each corner must get its own.
+    faces = [[0, 1, 2, 3], [1, 4, 5]]
+    texcoord = [PLY_POINTS[face, :2].ravel().tolist() for face in faces]
+    for chosen in ([0], [0, 1]):
+        path = write_ply(
+            tmp_path / "m.ply", encoding, [faces[k] for k in chosen], texcoord=[texcoord[k] for k in chosen]
+        )
+        mesh = read_mesh_data(path)
+        np.testing.assert_allclose(mesh.uv, mesh.triangles[..., :2])
+        assert [m.texture for m in mesh.materials] == [tmp_path / "checker.png"]
+    assert capfd.readouterr().err == ""
+
+
+SQUARE_PLY = (
+    "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+    "element face 2\nproperty list uchar int vertex_indices\nend_header\n"
+)
+SQUARE_LINES = "0 0 0\n1 0 0\n1 1 0\n0 1 0\n"
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        (SQUARE_PLY + SQUARE_LINES + "3 0 1 2\n3 0 2", r"truncated: line 15: `face` 2 of 2 has 3 numbers"),
+        (
+            SQUARE_PLY.replace("vertex 4", "vertex 3") + SQUARE_LINES + "3 0 1 2\n3 0 2 3\n",
+            "line 15: more data",
+        ),
+        (SQUARE_PLY + SQUARE_LINES + "3 0 1 2\n3 0 2 3\n3 0 1 3\n", "line 16: more data than its header"),
+        (
+            SQUARE_PLY + SQUARE_LINES.replace("1 0 0", "1 0 0 1") + "3 0 1 2\n3 0 2 3\n",
+            "line 11: `vertex` 2",
+        ),
+        (SQUARE_PLY + SQUARE_LINES + "3 0 1 2\n3 0 2 x\n", "line 15: `x` is not a number"),
+    ],
+)
+def test_ply_text_that_does_not_match_its_header_names_the_line(tmp_path, text, message):
+    # Each was read with a face missing (or wrong) and no word.
+    (tmp_path / "m.ply").write_text(text)
+    with pytest.raises(SceneError, match=message) as error:
+        read_mesh_data(tmp_path / "m.ply")
+    assert "\n" not in str(error.value)
+
+
+def test_ply_partial_normals_lone_edges_and_huge_indices_are_said_as_the_file_has_them(tmp_path):
+    path = tmp_path / "m.ply"
+    header = SQUARE_PLY.replace("z\n", "z\nproperty float nx\n").replace("face 2", "face 1")
+    path.write_text(header + SQUARE_LINES.replace("0\n", "0 1\n") + "3 0 1 2\n")
+    mesh = read_mesh_data(path)
+    assert mesh.normals is None
+    assert mesh.unused == ["vertex normals (the file gives only nx)"]
+    with pytest.raises(SceneError, match="has no triangles: its face has fewer than 3 vertices"):
+        read_mesh_data(write_ply(path, "ascii", [[0, 1]]))
+    for encoding in ("ascii", "binary_little_endian"):
+        with pytest.raises(SceneError, match="refers to vertex 18446744073709551615, but there are 9"):
+            read_mesh_data(write_ply(path, encoding, [[0, 1, 2**64 - 1]], index="uint64"))
+
+
+# -- integrator: a quad's uv ------------------------------------------------------------------------
+
+
+def test_a_quads_uv_beyond_what_the_renderer_keeps_is_one_line():
+    # uv 3e38 and -3e38 are each float32, but their difference, which the renderer keeps, is not.
+    scene = {
+        "camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fov": 30},
+        "materials": {"grey": {"type": "diffuse"}},
+        "mesh": [
+            {
+                "quad": {
+                    "corners": [[-1, -1, 0], [1, -1, 0], [1, 1, 0], [-1, 1, 0]],
+                    "uv": [[3e38, 0], [-3e38, 0], [0, 1], [0, 0]],
+                },
+                "material": "grey",
+            }
+        ],
+    }
+    with pytest.raises(SceneError, match=r"mesh\[0\]\.quad\.uv: must be finite, within \+-1\.701e\+38"):
+        ptlab.load_dict(scene)
+
+
+def test_an_objs_lines_and_points_are_named_not_dropped_without_a_word(tmp_path):
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\nl 1 2\np 3\n")
+    unused = read_mesh_data(tmp_path / "m.obj").unused
+    assert "lines (`l`): ptlab renders surfaces only" in unused
+    assert "points (`p`): ptlab renders surfaces only" in unused
+    (tmp_path / "m.obj").write_text("v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n")
+    assert read_mesh_data(tmp_path / "m.obj").unused == []
