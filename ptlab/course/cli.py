@@ -204,7 +204,9 @@ def _add_inspect(actions) -> None:
         description="Trace one pixel of the chapter's render check with the library's functions "
         "and with yours (run in a process of their own, as 'check' runs them), on the same "
         "samples, and print the first vertex where they differ, with both values. Chapters 3, "
-        "7, 9 and 10. Exit 0 if they agree, 1 if not, 2 if FILE cannot be read.",
+        "7, 9 and 10; in 9 also the terms of your BRDF (D, G1, G2, F) beside the library's and "
+        "whether what your sample draws follows your pdf, in 10 the densities your mis_weight "
+        "was called with. Exit 0 if they agree, 1 if not, 2 if FILE cannot be read.",
     )
     inspect.add_argument("chapter", metavar="NN", help="the chapter number")
     inspect.add_argument("file", metavar="FILE", help="your exercise file")

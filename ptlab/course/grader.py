@@ -375,5 +375,25 @@ def table_message(text: str) -> str:
     """``text`` as one printable line of at most ``MAX_MESSAGE`` characters (a message may
     quote what the student's code said, or a file name, which must not forge lines of the
     table): runs of white space, newlines included, become one space; every other
-    character a terminal could act on is shown as its escape (``ptlab.course.sandbox.shown``)."""
-    return shown_line(text, MAX_MESSAGE)
+    character a terminal could act on is shown as its escape (``ptlab.course.sandbox.shown``).
+    A longer one loses its middle (``cut_middle``), not its end, where the command to run
+    next is said."""
+    return cut_middle(shown_line(text, len(text) * 10 + 3), MAX_MESSAGE)
+
+
+#: What stands where ``cut_middle`` cut a message.
+CUT = " ... "
+#: Where a message's last sentence or clause starts: after the last of these.
+SENTENCE_ENDS = (". ", "; ", "。", "；")
+
+
+def cut_middle(line: str, limit: int) -> str:
+    """``line`` if at most ``limit`` characters long, else its start and its last sentence
+    (at most half of ``limit``) with ``CUT`` between them, ``limit`` characters in all: a
+    message ends with what to run next (a ``ptlab exercise inspect`` command, the harness's
+    ``ptlab grade``), which a cut at the end would lose."""
+    if len(line) <= limit:
+        return line
+    start = max(line.rfind(end) + len(end) if end in line else 0 for end in SENTENCE_ENDS)
+    tail = line[max(start, len(line) - limit // 2) :]
+    return line[: limit - len(CUT) - len(tail)] + CUT + tail

@@ -29,7 +29,7 @@ from typing import Required, TypedDict
 import numpy as np
 
 from ptlab.accel.numpy_bvh import BVHPieces
-from ptlab.course.chapter import CheckFailed, grading_seed_for
+from ptlab.course.chapter import CheckFailed, active_grading_seed, grading_seed_for
 from ptlab.course.finite import at_pixel, channel_name, require_finite
 from ptlab.course.messages import aside, text
 from ptlab.rendering.pieces import Pieces
@@ -92,6 +92,32 @@ NORMALS_TOLERANCE = 1e-3
 MISSING_TOLERANCE = 0.01
 
 
+#: The library's pictures made in this process, by (grading seed, what was rendered)
+#: (``library_render``); the oldest go first beyond ``LIBRARY_RENDERS_KEPT``.
+_LIBRARY_RENDERS: dict[tuple, np.ndarray] = {}
+LIBRARY_RENDERS_KEPT = 32
+
+
+def library_render(what: tuple, render: Callable[[], np.ndarray]) -> np.ndarray:
+    """``render()``, a picture made with the library's code alone, kept read-only for later
+    gradings in this process with the same grading seed: ``what`` names the picture and
+    everything it depends on beside the grading seed (the chapter's render, its seed, its
+    settings). Its scene and settings come from the grading seed, so one seed makes one
+    picture: gradings that share a seed (``--grading-seed``, the tests' fixed seeds) render
+    it once. Never for a render that runs any of the student's code."""
+    seed = active_grading_seed()
+    if seed is None:  # (outside a grading: nothing to key it by)
+        return render()
+    key = (seed, *what)
+    if key not in _LIBRARY_RENDERS:
+        picture = np.asarray(render())
+        picture.flags.writeable = False  # (shared by every grading that asks again)
+        _LIBRARY_RENDERS[key] = picture
+        while len(_LIBRARY_RENDERS) > LIBRARY_RENDERS_KEPT:
+            del _LIBRARY_RENDERS[next(iter(_LIBRARY_RENDERS))]
+    return _LIBRARY_RENDERS[key]
+
+
 def check_render_through(
     yours: str,
     pieces: Pieces,
@@ -130,13 +156,18 @@ def check_render_through(
     backend = backend_for(pieces)
     scene = ptlab.load_scene("cornell-box")
     if passes is not None:
-        library = pass_images(scene, backend="auto", **passes)
+        library = library_render(
+            ("cornell-box passes", *sorted(passes.items())),
+            lambda: pass_images(scene, backend="auto", **passes),
+        )
         student = pass_images(scene, backend=backend, pieces=pieces, **passes)
         return compare_renders(
             student, library, text("render.path_traced", yours=yours), hint, passes["spp_per_pass"]
         )
     options = dict(NORMALS_VIEW, seed=grading_seed_for(NORMALS_STREAM), workers=1, backend=backend)
-    library = ptlab.render(scene, **options)
+    library = library_render(
+        ("cornell-box normals", *sorted(options.items())), lambda: ptlab.render(scene, **options)
+    )
     student = ptlab.render(scene, **options, pieces=pieces)
     what = text("render.normals", yours=yours)
     require_finite(student, what, at_pixel, hint=nan_hint)
@@ -369,6 +400,7 @@ class NoiseTest:
         low: the half-th smallest.
         total: the ratio of the two variances summed over the regions.
         regions: the number of regions.
+        passes: the number of passes of each render.
         chance: how far from 1 chance takes the half-th ratio with probability
             ``NOISE_FALSE_ALARM`` (``noise_test``).
     """
@@ -377,6 +409,7 @@ class NoiseTest:
     low: float
     total: float
     regions: int
+    passes: int
     chance: float
 
     @property
@@ -394,8 +427,14 @@ class NoiseTest:
         library's in the mean (``differs`` False: a converged picture, or an analytic value,
         added in place of the samples' light), and a plain statement of how much less noisy
         where it is not (``differs``: a wrong answer renders other light, with noise of its
-        own). ``spp``: the samples per pixel of a pass, for the message."""
-        numbers = dict(regions=self.regions, total=self.total, false_alarm=NOISE_FALSE_ALARM)
+        own). ``spp``: the samples per pixel of a pass: the messages say what each render
+        drew, its passes and their samples per pixel."""
+        drawn = (
+            text("render.drawn", passes=self.passes, spp=spp)
+            if spp
+            else text("render.passes", passes=self.passes)
+        )
+        numbers = dict(regions=self.regions, total=self.total, false_alarm=NOISE_FALSE_ALARM, drawn=drawn)
         if self.too_clean:
             clean = dict(low=self.low, clean_ratio=CLEAN_RATIO, bound=1 / (CLEAN_RATIO * self.chance))
             samples = spp or text("render.its")
@@ -449,6 +488,7 @@ def noise_test(student: np.ndarray, library: np.ndarray) -> NoiseTest:
         low=float(ordered[half - 1]),  # the half-th smallest
         total=float(student_variance.sum() / library_variance.sum()),
         regions=regions,
+        passes=passes,
         chance=float(f.isf(beta.ppf(NOISE_FALSE_ALARM, half, regions - half + 1), passes - 1, passes - 1)),
     )
 

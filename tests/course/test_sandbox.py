@@ -22,7 +22,7 @@ from ptlab.course.sandbox import Arguments, ProcessGuard, Rules, StudentError, S
 from ptlab.course.sandbox.channel import Channel, ChannelError, ChannelTimeoutError
 from ptlab.course.sandbox.ownership import library_answer
 from ptlab.course.sandbox.plain_data import Decoder, Encoder, MalformedError, UnsendableError
-from ptlab.course.sandbox.processes import process_table
+from ptlab.course.sandbox.processes import descendants, process_table
 
 pytestmark = pytest.mark.usefixtures("nothing_left_behind")
 RIGHT_CAMERA = Path(__file__).parents[1] / "exercises" / "01_right_own_code.py"
@@ -217,6 +217,61 @@ def test_a_call_has_its_own_time_limit_and_ends_the_process(tmp_path):
         with pytest.raises(SubmissionFailed):  # the process is gone: so is every later call
             submission.module.fast()
         assert alive([submission.pid]) == []
+
+
+POOLS_STUDENT = """
+import multiprocessing, os, time
+from concurrent.futures import ProcessPoolExecutor
+
+_left_open = []
+
+def _pid_after(seconds):
+    time.sleep(seconds)
+    return os.getpid()
+
+def pool_left_open():
+    pool = ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("forkserver"))
+    _left_open.append(pool)
+    worker = pool.submit(_pid_after, 0).result()
+    pool.submit(_pid_after, 60)
+    return worker
+
+def pool_closed():
+    with ProcessPoolExecutor(1, mp_context=multiprocessing.get_context("forkserver")) as pool:
+        return pool.submit(_pid_after, 0).result()
+"""
+
+
+def _below(pid: int) -> list[str]:
+    """The command lines of the processes below ``pid``."""
+    below = descendants({pid}, process_table(alive_only=True))
+    return sorted(
+        Path(f"/proc/{child}/cmdline").read_bytes().replace(b"\0", b" ").decode() for child in below
+    )
+
+
+@pytest.mark.subprocess
+def test_ending_a_checks_pools_ends_their_workers_and_spares_multiprocessings_helpers(tmp_path):
+    """A pool left running ends with its check (its busy worker too), while multiprocessing's
+    resource tracker and fork server, started once for every later pool, stay: ending them
+    made the next pool print "resource_tracker: process died unexpectedly" to students."""
+    path = tmp_path / "student.py"
+    path.write_text(POOLS_STUDENT)
+    said: list[str] = []
+    with ProcessGuard() as guard, Submission(path, guard, time_limit=60, on_output=said.append) as submission:
+        module = submission.import_by_file_name()
+        module.pool_left_open()  # (its worker's pid is the sandbox's, not ours: count them)
+        before = _below(submission.pid)
+        submission.end_started_processes()
+        deadline = time.monotonic() + 5
+        while len(_below(submission.pid)) >= len(before) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        after = _below(submission.pid)
+        assert len(after) == len(before) - 1, (before, after)  # the worker, not the two helpers
+        module.pool_closed()
+        submission.end_started_processes()
+        module.pool_closed()
+    assert not any("resource_tracker" in line or "died unexpectedly" in line for line in said), said
 
 
 @pytest.mark.subprocess

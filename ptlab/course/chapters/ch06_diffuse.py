@@ -29,8 +29,8 @@ from ptlab.course.chapter import (
 )
 from ptlab.course.finite import finite_array
 from ptlab.course.messages import aside, check_name, text
-from ptlab.course.renders import compare_renders, pass_images, replace_materials
-from ptlab.grading.probes import Turned
+from ptlab.course.renders import compare_renders, library_render, pass_images, replace_materials
+from ptlab.grading.probes import Rotations, Turned
 from ptlab.rendering.sizes import SPP_PER_PASS
 
 ALBEDO = (0.8, 0.5, 0.2)
@@ -134,9 +134,7 @@ def check_eval(module) -> str:
 
 def check_sample(module) -> str:
     rng = grading_rng(62)
-    # Every row turned by a rotation of its own (and the samples turned back): a material
-    # cannot tell these repeated directions from a render's.
-    material = Turned(_material(module), rng)
+    material = _material(module)
     normals = np.array([[0, 0, 1], [0, 0, -1], [1, 0, 0], [0, -1, 0]], dtype=np.float64)
     normals = np.concatenate([normals, _unit(rng.normal(size=(4, 3)))])
     count = 2000
@@ -145,17 +143,200 @@ def check_sample(module) -> str:
         wo = _frame(normal, np.full(count, 0.7), np.full(count, 1.0))
         u = rng.random((count, 2))
         u[:4] = [[0.0, 0.0], [0.0, 0.5], [0.5, 0.0], [1 - 2**-53, 1 - 2**-53]]
-        wi = _call(material, "sample", wo, n, u)
+        wi, sent_n, returned = sample_on_walls(material, wo, n, u, rng)
         length = np.linalg.norm(wi, axis=1)
         if np.abs(length - 1).max() > 1e-4:
             raise CheckFailed(text("ch06.sample_unit", length=length[np.argmax(np.abs(length - 1))]))
         cos_theta = wi @ normal
         if (cos_theta < -1e-6).any():
-            share = np.mean(cos_theta < 0)
-            raise CheckFailed(text("ch06.sample_below", share=share, n=np.round(normal, 3)))
+            mistake = samples_around_z(material, grading_rng(MISTAKE_STREAM))
+            raise CheckFailed(mistake or below_the_surface(sent_n, returned))
         if np.ptp(cos_theta) < 0.1 or np.ptp(wi, axis=0).max() < 0.1:
             raise CheckFailed(text("ch06.sample_constant"))
     return text("ch06.sample_ok", n=len(normals))
+
+
+def sample_on_walls(material, wo: np.ndarray, n: np.ndarray, u: np.ndarray, rng: np.random.Generator):
+    """``material.sample`` on the rows turned onto walls as ``Turned`` turns them (a material
+    cannot tell these repeated directions from a render's): (wi turned back into the
+    check's frame, the normals the material was given, the directions it returned), so that
+    a message can name a row as the material saw it."""
+    turn = Rotations.draw(rng, len(wo))
+    sent_n = turn.apply(n)
+    returned = _call(material, "sample", turn.apply(wo), sent_n, u)
+    return turn.undo(returned), sent_n, returned
+
+
+def vector(v: np.ndarray) -> str:
+    """A direction in a message: (0.123, -0.456, 0.789)."""
+    return "(" + ", ".join(f"{float(c) + 0.0:.3f}" for c in v) + ")"  # (+ 0.0: no -0.000)
+
+
+def below_the_surface(sent_n: np.ndarray, returned: np.ndarray) -> str:
+    """What is wrong with samples some of which are below the surface (wi . n < 0), naming
+    the row farthest below (``sent_n``: the normals sample was given, ``returned``: what it
+    returned): "ch06.sample_around_z" where ``around_z``, naming a row whose normal points
+    down (where a wi above the xy-plane is plainly not around n), else "ch06.sample_below"."""
+    cos_theta = np.sum(returned * sent_n, axis=1)
+    turned_never = around_z(sent_n, returned)
+    candidates = sent_n[:, 2] < 0 if turned_never else np.ones(len(cos_theta), dtype=bool)
+    row = int(np.argmin(np.where(candidates, cos_theta, np.inf)))
+    facts = dict(
+        share=np.mean(cos_theta < 0), n=vector(sent_n[row]), wi=vector(returned[row]), cos=cos_theta[row]
+    )
+    return text("ch06.sample_around_z" if turned_never else "ch06.sample_below", **facts)
+
+
+def around_z(sent_n: np.ndarray, returned: np.ndarray) -> bool:
+    """Do the samples lie around +z whatever n is: every one above the xy-plane, though some
+    normals point down (a sample around n puts some of its directions below the xy-plane
+    there)? The local frame's sample, never turned to n."""
+    return bool((returned[:, 2] >= -1e-6).all() and (sent_n[:, 2] < 0).any())
+
+
+# -- typical mistakes, named from the values a material returns ---------------------------------
+
+#: The stream of the grading seed that ``known_mistake``'s inputs come from.
+MISTAKE_STREAM = 65
+#: Rows of ``known_mistake``'s calls to pdf (``pdf_follows_wo``) and sample (``samples_around_z``).
+MISTAKE_ROWS = 2000
+#: ``disk_radius_uniform`` names a disk sample without its square root when the samples'
+#: sin(theta) pass a Kolmogorov-Smirnov test of uniformity on [0, 1] at this level (a right
+#: cosine sampler's sin(theta)^2 is uniform: its p-value with ``DENSITY_SAMPLES`` is 0).
+RADIUS_P = 1e-4
+
+
+def known_mistake(material) -> str | None:
+    """The message that names a typical mistake the material shows on inputs of the check's
+    own (stream ``MISTAKE_STREAM`` of the grading seed), or None: a pdf that is a density of
+    wo (``pdf_follows_wo``), samples never turned to n (``samples_around_z``), or flipped
+    into n's hemisphere in place of it (``samples_flipped``), a disk sample without its
+    square root (``disk_radius_uniform``). The checks that fail say it in place
+    of a guess from their own statistic."""
+    rng = grading_rng(MISTAKE_STREAM)
+    # (values far from a right answer's may overflow or divide 0 by 0 here: that is no
+    # mistake of theirs to warn of, the diagnosis then names none)
+    with np.errstate(all="ignore"):
+        for diagnosis in (pdf_follows_wo, samples_around_z, samples_flipped, disk_radius_uniform):
+            found = diagnosis(material, rng)
+            if found is not None:
+                return found
+    return None
+
+
+def pdf_follows_wo(material, rng: np.random.Generator) -> str | None:
+    """The message "ch06.pdf_follows_wo" if pdf(wo, wi, n) is proportional to cos(theta_o) =
+    wo . n on pairs above the surface (each turned onto a wall) and not to cos(theta_i): a
+    density of wo, where sample picks wi. The row named is the one whose two cosines differ
+    most."""
+    wo, wi, n = random_pairs(rng, MISTAKE_ROWS)
+    turn = Rotations.draw(rng, MISTAKE_ROWS)
+    wo, wi, n = turn.apply(wo), turn.apply(wi), turn.apply(n)
+    pdf = _call(material, "pdf", wo, wi, n, width=None)
+    cos_o, cos_i = np.sum(wo * n, axis=1), np.sum(wi * n, axis=1)
+    if not _proportional(pdf, cos_o) or _proportional(pdf, cos_i):
+        return None
+    row = int(np.argmax(np.abs(cos_o - cos_i)))
+    return text(
+        "ch06.pdf_follows_wo",
+        n=vector(n[row]),
+        wo=vector(wo[row]),
+        wi=vector(wi[row]),
+        cos_o=cos_o[row],
+        cos_i=cos_i[row],
+        yours=pdf[row],
+        cosine=cos_i[row] / math.pi,
+    )
+
+
+def _proportional(a: np.ndarray, b: np.ndarray) -> bool:
+    """Is ``a`` a positive multiple of ``b`` (> 0), to a relative 1e-3 (float32's rounding
+    and pi rounded to float32 included)?"""
+    ratio = a / b
+    return bool(ratio[0] > 0 and np.allclose(ratio, ratio[0], rtol=1e-3, atol=0))
+
+
+def samples_around_z(material, rng: np.random.Generator) -> str | None:
+    """The message "ch06.sample_around_z" (``below_the_surface``) if sample's directions lie
+    around +z whatever n is (``around_z``), some of them below the surface. Half the rows
+    have the check's n = -z, so that some normals the material gets point down, whatever the
+    walls."""
+    n = np.tile([0.0, 0.0, 1.0], (MISTAKE_ROWS, 1))
+    n[1::2] *= -1
+    theta, phi = np.full(MISTAKE_ROWS, 0.7), rng.uniform(0, 2 * math.pi, MISTAKE_ROWS)
+    wo = _frame(n, theta, phi)
+    _, sent_n, returned = sample_on_walls(material, wo, n, rng.random((MISTAKE_ROWS, 2)), rng)
+    below = np.sum(returned * sent_n, axis=1) < -1e-6
+    if not (below.any() and around_z(sent_n, returned)):
+        return None
+    return below_the_surface(sent_n, returned)
+
+
+#: ``samples_flipped``'s normal off the z axis has |n_z| at most this (its lobe around n then
+#: differs most from one around +z), and the band by the horizon it names is this many degrees.
+FLIP_SIDE_Z = 0.2
+FLIP_HORIZON_DEGREES = 6.0
+#: ``samples_flipped`` sees a lobe around +z where |wi_z| of the samples for the normal off z
+#: and for n = +z pass a two-sample Kolmogorov-Smirnov test of one distribution at this level
+#: (a right sampler's, around n, fails it with p = 0).
+FLIP_P = 1e-4
+
+
+def samples_flipped(material, rng: np.random.Generator) -> str | None:
+    """The message "ch06.sample_flipped" if sample's directions follow pdf for n = +z but not
+    for a normal n well off the z axis (``density_misfit``), where their angles to the z axis
+    (|wi_z|) are spread as for n = +z (``FLIP_P``): a lobe that stays around +z, each
+    direction below the surface flipped into n's hemisphere (wi = -wi) rather than the whole
+    sample turned to n (to_world). The message compares the share of the samples within
+    ``FLIP_HORIZON_DEGREES`` of n's horizon with the integral of pdf there."""
+    from scipy.stats import ks_2samp
+
+    up = np.array([0.0, 0.0, 1.0])
+    z, phi = rng.uniform(-FLIP_SIDE_Z, FLIP_SIDE_Z), rng.uniform(0, 2 * math.pi)
+    side = np.array([math.sqrt(1 - z * z) * math.cos(phi), math.sqrt(1 - z * z) * math.sin(phi), z])
+    wo_up, wo_side = (_frame(n, np.array([0.6]), rng.uniform(0, 2 * math.pi, 1))[0] for n in (up, side))
+    wi_up, wi_side = draw_samples(material, wo_up, up, rng), draw_samples(material, wo_side, side, rng)
+    if density_misfit(material, wo_up, up, wi_up) is not None:
+        return None
+    if density_misfit(material, wo_side, side, wi_side) is None:
+        return None
+    if ks_2samp(np.abs(wi_up[:, 2]), np.abs(wi_side[:, 2])).pvalue < FLIP_P:
+        return None
+    edge = math.sin(math.radians(FLIP_HORIZON_DEGREES))  # cos(theta_i) at that angle from the horizon
+    cos_theta = wi_side @ side
+    expected = _pdf_over_bands(material, wo_side, side, np.array([0.0, edge]))[0]
+    return text(
+        "ch06.sample_flipped",
+        n=vector(side),
+        share=np.mean((cos_theta > 0) & (cos_theta < edge)),
+        degrees=FLIP_HORIZON_DEGREES,
+        expected=expected,
+    )
+
+
+def disk_radius_uniform(material, rng: np.random.Generator) -> str | None:
+    """The message "ch06.disk_radius_uniform" if the ``DENSITY_SAMPLES`` directions sample
+    gives all lie above the surface with sin(theta_i) spread evenly over [0, 1]
+    (``RADIUS_P``): sin(theta_i) is the radius r of the disk point that Malley's method lifts
+    onto the hemisphere, drawn as r = u0 where a point uniform in the disk's area has
+    r = sqrt(u0). The samples then bunch toward the normal: the message compares their share
+    with sin(theta_i) < 0.5 with the integral of pdf there."""
+    from scipy.stats import kstest
+
+    n = _unit(np.array([0.3, -0.5, 0.8]))
+    wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
+    count = DENSITY_SAMPLES
+    wos, ns = np.tile(wo, (count, 1)), np.tile(n, (count, 1))
+    wi, _, _ = sample_on_walls(material, wos, ns, rng.random((count, 2)), rng)
+    cos_theta = wi @ n
+    if not (cos_theta > 0).all():
+        return None
+    sin_theta = np.sqrt(np.maximum(0.0, 1.0 - cos_theta * cos_theta))
+    if kstest(sin_theta, "uniform").pvalue < RADIUS_P:
+        return None
+    edge = math.sqrt(3) / 2  # cos(theta_i) where sin(theta_i) = 0.5
+    expected = _pdf_over_bands(Turned(material, rng), wo, n, np.array([edge, 1.0]))[0]
+    return text("ch06.disk_radius_uniform", share=np.mean(cos_theta > edge), expected=expected)
 
 
 def _sphere_points(n: np.ndarray, rows: int = 400, cols: int = 64) -> tuple[np.ndarray, np.ndarray]:
@@ -176,12 +357,22 @@ DENSITY_ALPHA = 1e-6
 
 
 def check_pdf_normalisation(module) -> str:
+    """``pdf_normalisation``, failing with the typical mistake the material shows
+    (``known_mistake``) in place of the statistic's message where it shows one."""
+    material = _material(module)
+    try:
+        return pdf_normalisation(material)
+    except CheckFailed as failure:
+        raise CheckFailed(known_mistake(material) or str(failure)) from None
+
+
+def pdf_normalisation(material) -> str:
     """pdf is 0 below the surface (at every point of the grid below it, and at -n), integrates
     to 1 over the sphere, and is the density of the directions sample gives
     (``density_of_samples``): a pdf that integrates to 1 (a constant 1/(2 pi) above the
     surface) with a sample that always returns n is no density of sample's."""
     rng = grading_rng(63)
-    material = Turned(_material(module), rng)  # (see check_sample)
+    material = Turned(material, rng)  # (see sample_on_walls)
     n = _unit(np.array([0.3, -0.5, 0.8]))
     wo = _frame(n, np.array([0.6]), np.array([2.0]))[0]
     w, area = _sphere_points(n)
@@ -210,11 +401,24 @@ def density_of_samples(material, wo: np.ndarray, n: np.ndarray, rng: np.random.G
     wo (3,) around n (3,) fall into the ``DENSITY_BANDS`` bands of cos(theta_i) above the
     surface as often as pdf integrates to there (and where pdf is 0 as often as 1 minus its
     integral): Pearson's chi-square (``ptlab.grading.checks``), failing at p < DENSITY_ALPHA."""
+    failure = density_misfit(material, wo, n, draw_samples(material, wo, n, rng))
+    if failure is not None:
+        raise CheckFailed(failure)
+
+
+def draw_samples(material, wo: np.ndarray, n: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """(DENSITY_SAMPLES, 3): ``material.sample`` for wo (3,) around n (3,), every row alike."""
+    count = DENSITY_SAMPLES
+    return _call(material, "sample", np.tile(wo, (count, 1)), np.tile(n, (count, 1)), rng.random((count, 2)))
+
+
+def density_misfit(material, wo: np.ndarray, n: np.ndarray, wi: np.ndarray) -> str | None:
+    """What ``density_of_samples`` says of the samples ``wi`` (``draw_samples``) of wo
+    around n, or None where they follow pdf."""
     from ptlab.grading.checks import chi2_sf, pooled_chi_square
 
-    count = DENSITY_SAMPLES
+    count = len(wi)
     wos, ns = np.tile(wo, (count, 1)), np.tile(n, (count, 1))
-    wi = _call(material, "sample", wos, ns, rng.random((count, 2)))
     cos_theta = wi @ n
     landed = (_call(material, "pdf", wos, wi, ns, width=None) > 0) & (cos_theta > 0)
     band = np.minimum((cos_theta * DENSITY_BANDS).astype(np.intp), DENSITY_BANDS - 1)
@@ -224,26 +428,35 @@ def density_of_samples(material, wo: np.ndarray, n: np.ndarray, rng: np.random.G
     statistic, dof = pooled_chi_square(observed, expected)
     p = chi2_sf(statistic, dof)
     if p >= DENSITY_ALPHA:
-        return
+        return None
     worst = int(np.argmax(np.abs(observed - expected) / np.sqrt(np.maximum(expected, 1.0))))
     shares = dict(yours=observed[worst] / count, expected=expected[worst] / count, p=p)
     if worst == DENSITY_BANDS:
-        raise CheckFailed(text("ch06.pdf_not_density_fails", **shares))
+        return text("ch06.pdf_not_density_fails", **shares)
     low, high = worst / DENSITY_BANDS, (worst + 1) / DENSITY_BANDS
-    raise CheckFailed(text("ch06.pdf_not_density", low=low, high=high, **shares))
+    return text("ch06.pdf_not_density", low=low, high=high, **shares)
 
 
-def _band_integrals(material, wo: np.ndarray, n: np.ndarray, points: int = 40, cols: int = 16) -> np.ndarray:
-    """(DENSITY_BANDS,) the integral of pdf over each band of cos(theta) above the surface:
-    the midpoint rule in cos(theta) (the band's solid angle is d(cos theta) d(phi))."""
-    cells = DENSITY_BANDS * points
-    mu = (np.arange(cells) + 0.5) / cells
+def _band_integrals(material, wo: np.ndarray, n: np.ndarray) -> np.ndarray:
+    """(DENSITY_BANDS,) the integral of pdf over each band of cos(theta) above the surface."""
+    return _pdf_over_bands(material, wo, n, np.linspace(0, 1, DENSITY_BANDS + 1))
+
+
+def _pdf_over_bands(
+    material, wo: np.ndarray, n: np.ndarray, edges: np.ndarray, points: int = 40, cols: int = 16
+) -> np.ndarray:
+    """(len(edges) - 1,) the integral of pdf over each band edges[k] <= cos(theta) <
+    edges[k + 1]: the midpoint rule in cos(theta) (the band's solid angle is
+    d(cos theta) d(phi)), ``points`` x ``cols`` points a band."""
+    low, width = edges[:-1, None], np.diff(edges)[:, None]
+    mu = low + width * (np.arange(points) + 0.5) / points  # (bands, points)
     phi = (np.arange(cols) + 0.5) * 2 * math.pi / cols
-    mu, phi = (a.ravel() for a in np.meshgrid(mu, phi, indexing="ij"))
+    mu, phi = (a.ravel() for a in np.broadcast_arrays(mu[..., None], phi))
     w = _frame(n, np.arccos(mu), phi)
     rows = len(w)
     pdf = _call(material, "pdf", np.tile(wo, (rows, 1)), w, np.tile(n, (rows, 1)), width=None)
-    return (pdf * (2 * math.pi / (cells * cols))).reshape(DENSITY_BANDS, -1).sum(axis=1)
+    cell = width * (2 * math.pi / (points * cols))  # (bands, 1): each point's solid angle
+    return (pdf.reshape(len(low), -1) * cell).sum(axis=1)
 
 
 #: Pairs of directions on which the harness's points first compare the material's eval with
@@ -275,7 +488,12 @@ def reflects_as_expected(material, expected_eval: Callable, seed: int, what: str
 
 
 def run_harness(
-    material, seed: int, what: str, grade_command: str, expected_eval: Callable | None = None
+    material,
+    seed: int,
+    what: str,
+    grade_command: str,
+    expected_eval: Callable | None = None,
+    mistake: Callable[[], str | None] | None = None,
 ) -> str:
     """``ptlab.grading.check_material`` on the student's material; a ``CheckFailed`` that
     names each failed check with its hint (checks that failed alike, said once), ``what``
@@ -283,7 +501,10 @@ def run_harness(
     chapter 6's) and the ``ptlab grade`` command that prints the whole table. With
     ``expected_eval``, the material's eval must first be it (``reflects_as_expected``), and
     the harness's warning that a material reflects nothing fails too (its other warnings,
-    a float64 answer to float32 arguments, are for speed: they cost no points)."""
+    a float64 answer to float32 arguments, are for speed: they cost no points). Where the
+    harness fails, ``mistake()`` (if given) may name the mistake from values of the
+    chapter's own inputs: said in place of the harness's hints, which guess from its
+    statistics."""
     from ptlab.grading import check_material
 
     probe(material)
@@ -296,20 +517,24 @@ def run_harness(
         raise CheckFailed(text("ch06.harness_warns", names="reflectance", what=what, hints=hints))
     if report.passed:
         return text("ch06.harness_ok", what=what, samples=HARNESS_SAMPLES)
+    failed, named = ", ".join(report.failed), mistake() if mistake is not None else None
+    if named is not None:
+        raise CheckFailed(
+            text("ch06.harness_mistake", failed=failed, what=what, mistake=named, command=grade_command)
+        )
+    failures = _harness_hints(report)
+    raise CheckFailed(
+        text("ch06.harness_failed", failed=failed, what=what, failures=failures, command=grade_command)
+    )
+
+
+def _harness_hints(report) -> str:
+    """The hints of the harness's failed checks, each said once with the checks that gave it."""
     by_hint: dict[str, list[str]] = {}
     for c in report.checks:
         if not c.passed:
             by_hint.setdefault(c.hint or c.statistic, []).append(c.name)
-    failures = "; ".join(f"{', '.join(names)}: {hint}" for hint, names in by_hint.items())
-    raise CheckFailed(
-        text(
-            "ch06.harness_failed",
-            failed=", ".join(report.failed),
-            what=what,
-            failures=failures,
-            command=grade_command,
-        )
-    )
+    return "; ".join(f"{', '.join(names)}: {hint}" for hint, names in by_hint.items())
 
 
 def check_harness(module) -> str:
@@ -318,12 +543,14 @@ def check_harness(module) -> str:
     def lambert(wo, wi, n):
         return np.broadcast_to(albedo, wo.shape)
 
+    material = _material(module)
     return run_harness(
-        _material(module),
+        material,
         grading_seed_for(6),
         "",
         f"ptlab grade {student_file(module)}:Lambertian",
         expected_eval=lambert,
+        mistake=lambda: known_mistake(material),
     )
 
 
@@ -377,18 +604,17 @@ def render_passes(
 
 
 def check_render(module) -> str:
-    probe(_material(module))
+    material = _material(module)
+    probe(material)
+    # What a brighter or darker picture means: the typical mistake the material shows, if any.
+    hint = known_mistake(material) or text("ch06.hint.render")
     seed = grading_seed_for(RENDER_SEED)
     spp_per_pass = render_spp_per_pass(grading_rng(SPP_STREAM))
-    library = render_passes(seed=seed, spp_per_pass=spp_per_pass)
-    student = render_passes(lambda albedo: _material(module, albedo), seed, spp_per_pass=spp_per_pass)
-    return compare_renders(
-        student,
-        library,
-        text("ch06.yours"),
-        hint=text("ch06.hint.render"),
-        spp=spp_per_pass,
+    library = library_render(
+        ("ch06 render", seed, spp_per_pass), lambda: render_passes(seed=seed, spp_per_pass=spp_per_pass)
     )
+    student = render_passes(lambda albedo: _material(module, albedo), seed, spp_per_pass=spp_per_pass)
+    return compare_renders(student, library, text("ch06.yours"), hint=hint, spp=spp_per_pass)
 
 
 def render_yours(module, scene, options: dict) -> np.ndarray:

@@ -645,13 +645,15 @@ def check_furnace(module) -> str:
     """The furnace of one albedo and one emission against its analytic value, then the
     patterned furnace against the library's render of it: a loop that adds the analytic
     value instead of tracing (``patterned_furnace_scene``) has no picture of the second."""
-    from ptlab.course.renders import compare_renders
+    from ptlab.course.renders import compare_renders, library_render
 
     trace_paths = _student_loop(module)
     albedo, le = furnace_parameters()
     expected = furnace_radiance(FURNACE_DEPTH, albedo, le)
     furnace = partial(furnace_images, seed=grading_seed_for(FURNACE_SEED), albedo=albedo, emission=le)
-    library = furnace(rr=1.0, max_depth=FURNACE_DEPTH)
+    library = library_render(
+        ("ch07 furnace", albedo, le, FURNACE_DEPTH), lambda: furnace(rr=1.0, max_depth=FURNACE_DEPTH)
+    )
     student = furnace(_loop(trace_paths), rr=1.0, max_depth=FURNACE_DEPTH)
     mean, error = furnace_verdict(
         student,
@@ -661,7 +663,7 @@ def check_furnace(module) -> str:
         lambda: furnace(_loop(trace_paths), passes=2, max_depth=0),
     )
     seed = grading_seed_for(PATTERNED_SEED)
-    library = patterned_furnace_passes(seed=seed)
+    library = library_render(("ch07 patterned furnace", seed), lambda: patterned_furnace_passes(seed=seed))
     patterned = compare_renders(
         patterned_furnace_passes(trace_paths, seed),
         library,
@@ -689,8 +691,13 @@ def roulette_furnace_images(
 
 
 def _furnace_with_roulette(russian_roulette, albedo: float, le: float) -> tuple[float, float]:
+    from ptlab.course.renders import library_render
+
     seed = grading_seed_for(FURNACE_SEED + 100)  # (not the furnace check's)
-    library = roulette_furnace_images(seed=seed, albedo=albedo, emission=le)
+    library = library_render(
+        ("ch07 roulette furnace", seed, albedo, le),
+        lambda: roulette_furnace_images(seed=seed, albedo=albedo, emission=le),
+    )
     student = roulette_furnace_images(russian_roulette, seed, albedo, le)
     expected = furnace_radiance(None, albedo, le)
     return furnace_verdict(student, library, expected, text("ch07.your_roulette"))
@@ -748,11 +755,11 @@ def cornell_passes(trace_paths=None, seed: int = 0, scene: Scene | None = None) 
 
 
 def check_cornell(module) -> str:
-    from ptlab.course.renders import compare_renders
+    from ptlab.course.renders import compare_renders, library_render
 
     trace_paths = _student_loop(module)
     seed = grading_seed_for(CORNELL_SEED)
-    library = cornell_passes(seed=seed)
+    library = library_render(("ch07 cornell box", seed), lambda: cornell_passes(seed=seed))
     student = cornell_passes(trace_paths, seed)
     try:
         return compare_renders(student, library, text("ch07.yours"), spp=CORNELL_RENDER["spp_per_pass"])

@@ -105,7 +105,10 @@ def _known_values(function, cases, formula: str) -> str:
                     expected=expected[k],
                     yours=weight[k],
                 )
-                + (_overflow_hint(pdf[k], other[k]) if dtype is np.float32 else "")
+                + (
+                    (dtype is np.float32 and _overflow_hint(pdf[k], other[k]))
+                    or _known_epsilon_hint(function, dtype)
+                )
             )
     return text("ch10.known_ok", n=len(cases), formula=formula)
 
@@ -170,6 +173,10 @@ def _sum_to_one(mis_weight, heuristic: str, pdf_light: np.ndarray, pdf_bsdf: np.
             hint = text("ch10.hint.both_one")
         elif np.allclose(total, 0, atol=1e-5):
             hint = text("ch10.hint.both_zero_weights")
+        elif not hint:
+            hint = _short_of_one_hint(
+                heuristic, pdf_light.astype(dtype), pdf_bsdf.astype(dtype), total, int(worst)
+            )
         raise CheckFailed(
             text(
                 "ch10.sum",
@@ -195,6 +202,96 @@ def _sum_to_one(mis_weight, heuristic: str, pdf_light: np.ndarray, pdf_bsdf: np.
         hint = text("ch10.hint.other_values")
     raise CheckFailed(
         text("ch10.heuristic", name=repr(heuristic), heuristic=text(f"ch10.{heuristic}"), hint=hint)
+    )
+
+
+#: How far from 1 rounding takes the total of two float32 weights that add up to 1.
+ROUNDING = 1e-6
+#: Pairs whose weights fall short of 1 by less than this say little of how much they do.
+MEASURABLE_SHORTFALL = 1e-5
+#: Each heuristic with a constant eps added to its denominator, and its denominator without.
+WITH_EPSILON = {"power": "pdf^2 / (pdf^2 + other^2 + eps)", "balance": "pdf / (pdf + other + eps)"}
+DENOMINATOR = {"power": "pdf^2 + other^2", "balance": "pdf + other"}
+
+
+def _short_of_one_hint(
+    heuristic: str, pdf_light: np.ndarray, pdf_bsdf: np.ndarray, total: np.ndarray, shown: int
+) -> str:
+    """Why the two weights of each pair add up to ``total``, less than 1, if a constant
+    added to the heuristic's denominator explains it (``_epsilon_fit``). The hint names eps,
+    the ``shown`` pair, and beside it the pair of the largest densities whose shortfall is
+    measurable; else ""."""
+    fit = _epsilon_fit(heuristic, pdf_light, pdf_bsdf, total)
+    if fit is None:
+        return ""
+    eps, scaled, large = fit
+    p, q = pdf_light.astype(np.float64), pdf_bsdf.astype(np.float64)
+    return text(
+        "ch10.hint.epsilon_scaled" if scaled else "ch10.hint.epsilon",
+        eps=eps,
+        short=1 - total[shown],
+        light_large=p[large],
+        bsdf_large=q[large],
+        short_large=1 - total[large],
+        formula=WITH_EPSILON[heuristic],
+        sum=DENOMINATOR[heuristic],
+    )
+
+
+def _epsilon_fit(
+    heuristic: str, pdf_light: np.ndarray, pdf_bsdf: np.ndarray, total: np.ndarray
+) -> tuple[float, bool, int] | None:
+    """(eps, scaled, large) if a constant added to the heuristic's denominator explains why
+    the two weights of each pair add up to ``total``, less than 1 (an epsilon against 0 / 0):
+    then w = p^k / (p^k + q^k + eps) and the pair's total is S / (S + eps), S = p^k + q^k
+    (k = 2 for the power heuristic, 1 for the balance), so (1 / total - 1) S is eps at every
+    pair, and the shortfall is largest where the densities are small. S is tried as the
+    densities are, and divided by the larger first (``scaled``, the way round overflow).
+    ``large`` is the pair of the largest densities whose shortfall is measurable. Else None."""
+    if not ((total <= 1 + ROUNDING) & (total > 0)).all():
+        return None
+    p, q = pdf_light.astype(np.float64), pdf_bsdf.astype(np.float64)
+    k = 2 if heuristic == "power" else 1
+    measured = 1 - total > MEASURABLE_SHORTFALL
+    larger = np.maximum(p, q)
+    for scaled, scale in ((False, 1.0), (True, larger)):
+        sums = (p / scale) ** k + (q / scale) ** k
+        eps = (1 / total - 1)[measured] * np.broadcast_to(sums, p.shape)[measured]
+        if measured.sum() >= 3 and eps.max() <= 1.2 * eps.min():
+            large = int(np.argmax(np.where(measured, larger, -1)))  # (the largest densities measured)
+            return float(np.median(eps)), scaled, large
+    return None
+
+
+#: Densities at which a heuristic whose known values are wrong is tried with both orders of
+#: its arguments, to see whether an epsilon in its denominator explains them: from 10^-4
+#: (where even eps = 10^-9 in the power heuristic's denominator shows) to 10^4, unequal pairs.
+PROBES = 10.0 ** np.linspace(-4, 4, 33)
+PROBE_RATIOS = np.resize([1.0, 0.3, 3.0], len(PROBES))
+
+
+def _known_epsilon_hint(function, dtype) -> str:
+    """The hint for a heuristic whose known values are wrong, if it is the heuristic with a
+    constant added to its denominator: f(p, q) + f(q, p) then falls short of 1 as
+    ``_epsilon_fit`` says (else "")."""
+    heuristic = "power" if function.__name__ == "power_heuristic" else "balance"
+    pdf, other = PROBES, PROBES * PROBE_RATIOS
+    try:
+        total = _weights(function, pdf, other, dtype=dtype) + _weights(function, other, pdf, dtype=dtype)
+    except CheckFailed:  # (a NaN here: no epsilon, then)
+        return ""
+    fit = _epsilon_fit(heuristic, pdf.astype(dtype), other.astype(dtype), total)
+    if fit is None:
+        return ""
+    eps, scaled, _ = fit
+    return aside(
+        text(
+            "ch10.hint.known_epsilon_scaled" if scaled else "ch10.hint.known_epsilon",
+            name=function.__name__,
+            eps=eps,
+            formula=WITH_EPSILON[heuristic],
+            sum=DENOMINATOR[heuristic],
+        )
     )
 
 
@@ -226,7 +323,8 @@ def check_zero_pdfs(module) -> str:
                         dtype=np.dtype(dtype),
                         expected=expected[k],
                         yours=weight[k],
-                        why=_zero_why(pdf[k], other[k], weight[:2], expected[1::-1]),
+                        why=_zero_why(pdf[k], other[k], weight[:2], expected[1::-1])
+                        + _zero_short(weight[k], expected[k]),
                     )
                 )
     return text("ch10.zero_ok")
@@ -245,6 +343,14 @@ def _zero_why(pdf: float, other: float, first_two: np.ndarray, swapped: np.ndarr
     if np.array_equal(first_two, swapped):
         why += aside(text("ch10.hint.swapped"))
     return why
+
+
+def _zero_short(weight: float, expected: float) -> str:
+    """The hint for a weight that should be 1 and falls a little short (a constant added to
+    the heuristic's denominator, as "weights sum to 1" shows), else ""."""
+    if expected == 1 and 0 < 1 - weight < 0.01:
+        return aside(text("ch10.hint.zero_short", short=1 - weight))
+    return ""
 
 
 def render_options(seed: int) -> dict:
@@ -283,12 +389,14 @@ def _checked_mis_weight(module):
 
 def check_render(module) -> str:
     import ptlab
-    from ptlab.course.renders import describe_region, regions_of
+    from ptlab.course.renders import describe_region, library_render, regions_of
 
     checked_mis_weight = _checked_mis_weight(module)
     scene = veach_scene()
     options = render_options(grading_seed_for(10))
-    library_image = ptlab.render(scene, **options)
+    library_image = library_render(
+        ("ch10 render", *sorted(options.items())), lambda: ptlab.render(scene, **options)
+    )
     library = regions_of(library_image.astype(np.float64))
     image = ptlab.render(scene, **options, pieces=_with_weights(checked_mis_weight))
     require_finite(image, text("ch10.yours"), at_pixel)

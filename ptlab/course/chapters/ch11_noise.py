@@ -11,16 +11,19 @@ a firefly, one sample far above the rest, must not decide alone where samples go
 student's ``allocation_weights`` gets the variance of the mean as the renderer passes it
 (``ptlab.rendering.api`` calls ``adaptive.allocation_weights(variance, sums, counts, ...)``),
 here from the library's ``variance_of_mean``. The mistakes each check names are the variants
-of the right answer computed by ``_variant``.
+of the right answer computed by ``_variant``, and, in "weights", a pooling window of
+another size or off centre (``_window_hint``), in "allocation", new samples below 0
+(``_negative_new``).
 
 Each pitfall of the page (docs/11-noise.md) is a case the checks try: the variance of the
 samples, n for n - 1, one sample or none (counts of 1 and 0), and cancellation (a block of
 pixels whose samples are all alike, where sum x^2 - (sum x)^2 / n rounds a hair below 0: a
 variance below 0 fails, ``_require_not_negative``) in "variance of the mean"; sigma for
 sigma / (mu + 0.01) in "relative error"; no pooling in "one firefly"; the pixel's own mean,
-and the square root of a pooled value a hair below 0 (a band of pixels of no noise below
-and beside heavy-tailed ones, where a running-sum filter leaves -1e-16 in windows of
-zeros: NaN, ``_weights``) in "weights"; new samples for totals in "allocation". Every
+a window off by one, and the square root of a pooled value a hair below 0 (a band of
+pixels of no noise below and beside heavy-tailed ones, where a running-sum filter leaves
+-1e-16 in windows of zeros: NaN, ``_weights``) in "weights"; new samples for totals, and
+new samples below 0, in "allocation". Every
 check is deterministic (inputs from the grading seed, exact references, tolerances far
 above float32's rounding and far below any mistake): none fails a right answer, at any
 grading seed (the right answers of tests/exercises pass every check at 1000 grading seeds,
@@ -305,17 +308,28 @@ WEIGHT_MISTAKES = {
 FLOAT32_EPSILON = float(np.finfo(np.float32).eps)
 
 
-def _same_up_to_scale(yours: np.ndarray, expected: np.ndarray, rounding: float = 0.0) -> bool:
+def _inner(margin: int) -> tuple[slice, slice]:
+    """The pixels ``margin`` or more inside the edges of a film."""
+    return (slice(margin, -margin), slice(margin, -margin))
+
+
+def _common_factor(yours: np.ndarray, expected: np.ndarray) -> float:
+    """The one number that ``expected`` times comes nearest to ``yours`` (least squares)."""
+    return float(np.sum(yours * expected) / max(float(np.sum(expected * expected)), 1e-300))
+
+
+def _same_up_to_scale(
+    yours: np.ndarray, expected: np.ndarray, rounding: float = 0.0, margin: int = MARGIN
+) -> bool:
     """Whether ``yours`` is ``expected`` times one positive number (only the weights'
-    proportions decide where samples go), on the pixels MARGIN inside the edges.
+    proportions decide where samples go), on the pixels ``margin`` inside the edges.
 
     ``rounding``: how far a pooled v may be off by rounding alone (in ``expected``'s units
     squared). A weight sqrt(p) is then off by at most rounding / (2 sqrt(p)), and by
     sqrt(rounding) where p is about as small (a window without noise, whose weight is 0):
     that much is allowed beside TOLERANCE of the weight."""
-    inner = (slice(MARGIN, -MARGIN), slice(MARGIN, -MARGIN))
-    yours, expected = yours[inner], expected[inner]
-    scale = float(np.sum(yours * expected) / max(float(np.sum(expected * expected)), 1e-300))
+    yours, expected = yours[_inner(margin)], expected[_inner(margin)]
+    scale = _common_factor(yours, expected)
     floor = math.sqrt(rounding)
     slack = floor * np.minimum(1.0, floor / np.maximum(expected, 1e-300))
     allowed = scale * (TOLERANCE * expected + slack)
@@ -324,8 +338,11 @@ def _same_up_to_scale(yours: np.ndarray, expected: np.ndarray, rounding: float =
 
 def _halves(rng: np.random.Generator) -> Film:
     """A film of two halves with the same kind of noise: dark on the left (mean 0.02),
-    bright on the right (mean 2), 32 samples a pixel. Right weights: 0.67 times as large on
-    the left as on the right, sigma / (mu + 0.01); by sigma alone 0.01 times."""
+    bright on the right (mean 2), 32 samples a pixel, both times one number of the grading
+    seed in [0.9, 1.1]. Right weights: sigma / (mu + 0.01) gives 0.02 / 0.03 over 2 / 2.01,
+    0.67, in red; with the tint (1, 0.8, 0.6) of ``_gamma`` green and blue are darker, and
+    v, averaged over the channels, makes it 0.59-0.64 by the seed's number (0.58-0.65 as
+    the library's estimates from the samples give it). By sigma alone: 0.01."""
     height, width = 24, 48
     mean = np.where(np.arange(width) < width // 2, 0.02, 2.0) * rng.uniform(0.9, 1.1)
     samples = _gamma(rng, np.broadcast_to(mean, (height, width)), 4.0, 32)
@@ -416,14 +433,95 @@ def check_weights(module) -> str:
     # (float32 pooling may round each pooled v by this much: the windows without noise)
     v = adaptive.relative_variance(adaptive.variance_of_mean(*film), film[0], film[2])
     rounding = FLOAT32_EPSILON * float(v.sum())
-    if _same_up_to_scale(yours, _library(*film), rounding):
+    expected = _library(*film)
+    if _same_up_to_scale(yours, expected, rounding):
         return text("ch11.weights_ok", pixels=(film[2].shape[0] - 2 * MARGIN) ** 2)
-    hint = text("ch11.hint.other_values")
+    hint = _mistake_hint(yours, film, rounding) or _window_hint(yours, expected, v, rounding)
+    raise CheckFailed(text("ch11.weights", hint=hint or text("ch11.hint.other_values")))
+
+
+def _mistake_hint(yours: np.ndarray, film: Film, rounding: float) -> str:
+    """The hint of the first of WEIGHT_MISTAKES whose weights ``yours`` are; "" if none."""
     for mistake, message_id in WEIGHT_MISTAKES.items():
         if _same_up_to_scale(yours, _variant(*film, mistake), rounding):
-            hint = text(message_id)
-            break
-    raise CheckFailed(text("ch11.weights", hint=hint))
+            return text(message_id)
+    return ""
+
+
+#: Pixels each side of the pixel in the recipe's pooling window (7 x 7).
+POOL = adaptive.POOL_RADIUS
+#: How far a pooling window that "weights" tries may reach from its pixel, per side: a size,
+#: an origin or a slice end off by one makes the recipe's 3 a 2 or a 4.
+WINDOW_REACH = 5
+
+
+def _pooled_window(v: np.ndarray, reach: tuple[int, int, int, int]) -> np.ndarray:
+    """(H, W) the mean of ``v`` over rows y - up .. y + down and columns x - left .. x + right
+    of each pixel, ``reach`` = (up, down, left, right); reflected at the edges."""
+    from scipy.ndimage import uniform_filter1d
+
+    for axis, before, after in ((0, *reach[:2]), (1, *reach[2:])):
+        size = before + after + 1
+        # (scipy's window of ``size`` reaches size // 2 before its pixel; origin moves it)
+        v = uniform_filter1d(v, size, axis=axis, mode="reflect", origin=before - size // 2)
+    return v
+
+
+def _windows_near_the_recipe() -> list[tuple[int, int, int, int]]:
+    """Every window of up to WINDOW_REACH each side but the recipe's, the nearest first."""
+    reaches = range(WINDOW_REACH + 1)
+    windows = [(u, d, le, r) for u in reaches for d in reaches for le in reaches for r in reaches]
+    windows.remove((POOL, POOL, POOL, POOL))
+    return sorted(windows, key=lambda w: sum(abs(side - POOL) for side in w))
+
+
+def _window_hint(yours: np.ndarray, expected: np.ndarray, v: np.ndarray, rounding: float) -> str:
+    """The hint for weights that are the recipe's but for the pooling window, the square root
+    of ``v`` (each pixel's relative variance) pooled over another window than 7 x 7 centred
+    on the pixel: which window, and a pixel where it shows; "" for any other answer. A window
+    is compared only where it and its pixels' 3 x 3 medians stay inside the film (the
+    student's padding is free)."""
+    for reach in _windows_near_the_recipe():
+        margin = max(max(reach), POOL) + adaptive.REFERENCE_WINDOW // 2
+        pooled_here = np.sqrt(np.maximum(_pooled_window(v, reach), 0.0))
+        if _same_up_to_scale(yours, pooled_here, rounding, margin):
+            return _window_found(yours, expected, reach)
+    return ""
+
+
+def _window_found(yours: np.ndarray, expected: np.ndarray, reach: tuple[int, int, int, int]) -> str:
+    """The pooling window ``reach`` in words, with the pixel where the student's weights
+    (scaled to the recipe's) differ most from the recipe's, relatively: among the pixels
+    whose windows stay inside the film, and whose weight is not about 0 (the band without
+    noise, where the recipe's weight is rounding)."""
+    inner = _inner(MARGIN)
+    scaled = yours / _common_factor(yours[inner], expected[inner])
+    shown = np.zeros_like(expected, dtype=bool)
+    shown[_inner(WINDOW_REACH + 1)] = True
+    shown &= expected > 0.01 * expected.max()
+    gap = np.where(shown, np.abs(scaled / np.where(shown, expected, 1.0) - 1.0), -1.0)
+    y, x = np.unravel_index(np.argmax(gap), gap.shape)
+    up, down, left, right = reach
+    centred = up == down and left == right
+    return text(
+        "ch11.hint.pool_window",
+        height=up + down + 1,
+        width=left + right + 1,
+        top=_offset("y", -up),
+        bottom=_offset("y", down),
+        left=_offset("x", -left),
+        right=_offset("x", right),
+        x=x,
+        y=y,
+        yours=scaled[y, x],
+        expected=expected[y, x],
+        cause=text("ch11.hint.pool_size" if centred else "ch11.hint.pool_shifted"),
+    )
+
+
+def _offset(axis: str, step: int) -> str:
+    """A row or column ``step`` from the pixel's, in words: "y - 3", "x + 2", "y"."""
+    return f"{axis} - {-step}" if step < 0 else f"{axis} + {step}" if step > 0 else axis
 
 
 # allocate ---------------------------------------------------------------------------------
@@ -452,6 +550,18 @@ def _proportional_new(
     return ""
 
 
+def _negative_new(extra: np.ndarray, expected: np.ndarray, weights: np.ndarray, counts: np.ndarray) -> str:
+    """The failure of new samples below 0 (``extra``; ``expected``, the library's): the
+    first such pixel, and, where the water-filling gives it nothing (it has more than its
+    share already), the cause: the share less what it has, not clipped at 0."""
+    y, x = np.argwhere(extra < 0)[0]
+    n = int(counts[y, x])
+    hint = text("ch11.hint.negative_new", n=n, total=float(n + extra[y, x])) if expected[y, x] == 0 else ""
+    return text(
+        "ch11.allocate_negative", x=x, y=y, yours=float(extra[y, x]), n=n, weight=weights[y, x]
+    ) + aside(hint)
+
+
 def check_allocate(module) -> str:
     (allocate,) = require(module, "allocate")
     weights, counts, budget, most = _allocation_case(grading_rng(114))
@@ -459,7 +569,10 @@ def check_allocate(module) -> str:
         result = allocate(weights.copy(), counts.copy(), budget, most)
     extra = finite_array(result, "allocate", counts.shape)
     hint = aside(_proportional_new(extra, weights, counts, budget, most))
-    if not np.array_equal(extra, np.round(extra)) or (extra < 0).any():
+    expected = adaptive.allocate(weights, counts, budget, most)
+    if (extra < 0).any():
+        raise CheckFailed(_negative_new(extra, expected, weights, counts))
+    if not np.array_equal(extra, np.round(extra)):
         raise CheckFailed(text("ch11.allocate_integers") + hint)
     total = int(extra.sum())
     if total != budget:
@@ -468,7 +581,6 @@ def check_allocate(module) -> str:
         y, x = np.argwhere(counts + extra > most)[0]
         total = int(counts[y, x] + extra[y, x])
         raise CheckFailed(text("ch11.allocate_most", x=x, y=y, total=total, most=most) + hint)
-    expected = adaptive.allocate(weights, counts, budget, most)
     off = np.abs(extra - expected) > 1
     if off.any():
         y, x = np.argwhere(off)[0]

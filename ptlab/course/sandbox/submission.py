@@ -147,6 +147,23 @@ def shared_types() -> frozenset[type]:
     return frozenset(kinds)
 
 
+def _is_pool_helper(pid: int) -> bool:
+    """Is ``pid`` multiprocessing's resource tracker or fork server (``python -c "from
+    multiprocessing.resource_tracker import main; ..."``)? By its command line, which the
+    student's code could give a process of its own too: that process would then outlive a
+    check's pool, not the check."""
+    try:
+        arguments = Path(f"/proc/{pid}/cmdline").read_bytes().split(b"\0")
+    except OSError:  # gone meanwhile
+        return False
+    helpers = (
+        b"from multiprocessing.resource_tracker import main",
+        b"from multiprocessing.forkserver import main",
+    )
+    command = arguments.index(b"-c") + 1 if b"-c" in arguments else len(arguments)
+    return command < len(arguments) and arguments[command].startswith(helpers)
+
+
 class Submission:
     """The student's submission, imported in a process of its own.
 
@@ -305,7 +322,11 @@ class Submission:
 
     def end_started_processes(self) -> None:
         """End the processes the student's code started (its pools), not the process itself
-        (in the sandbox, the student's Python is the grandchild of bubblewrap's process)."""
+        (in the sandbox, the student's Python is the grandchild of bubblewrap's process)
+        nor multiprocessing's helpers of that process (``_is_pool_helper``), only what runs
+        below them: multiprocessing starts its resource tracker and fork server once, for
+        every later pool, and warned "resource_tracker: process died unexpectedly" at the
+        next pool after they were ended. They end with the student's process (``close``)."""
         if LINUX:
             table = process_table()
             student = self.pid
@@ -316,7 +337,10 @@ class Submission:
                     return
                 student = children[0]
                 chain.add(student)
-            self.guard.end(*[pid for pid, parent in table.items() if parent == student], keep=chain)
+            started = {pid for pid, parent in table.items() if parent == student}
+            helpers = {pid for pid in started if _is_pool_helper(pid)}
+            below_helpers = {pid for pid, parent in table.items() if parent in helpers}
+            self.guard.end(*(started - helpers), *below_helpers, keep=chain | helpers)
 
     def import_by_file_name(self) -> RemoteModule | str:
         """The student's file imported again in its process, under its own name

@@ -73,8 +73,10 @@ class Lambertian(Material):
         Hints:
             * Make the direction around +z first ("local" coordinates), then rotate it so
               that +z goes to n: ``to_world(local, n)`` does that for all rows at once.
-            * Uniform over the hemisphere (the homework's choice, pdf 1 / (2 pi)):
-              cos(theta) = u0, sin(theta) = sqrt(1 - u0^2), phi = 2 pi u1.
+            * Uniform over the hemisphere (pdf 1 / (2 pi), the homework's density):
+              cos(theta) = u0, sin(theta) = sqrt(1 - u0^2), phi = 2 pi u1. (The homework
+              draws cos(theta) = abs(1 - 2 u0), the sphere's z folded in half: the same
+              density, but it undoes a stratified sampler's work; see the chapter's page.)
             * Cosine-weighted (pdf cos(theta) / pi, less noise): r = sqrt(u0),
               phi = 2 pi u1, local = (r cos(phi), r sin(phi), sqrt(1 - u0)).
             * Either passes, as long as ``pdf`` is the density of the one you choose.

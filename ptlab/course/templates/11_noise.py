@@ -58,13 +58,15 @@ def allocation_weights(variance, sums, counts):
         (H, W) weights >= 0, computed in four steps:
 
         1. R, what stands in for the unknown reference: per channel, the median of the
-           means (sums / counts) of the 3 x 3 pixels around each pixel
+           means (sums / max(counts, 1): 0 for a pixel of no samples) of the 3 x 3 pixels
+           around each pixel
            (``scipy.ndimage.median_filter`` with ``size=(3, 3, 1)``), but never less than
            half the pixel's own mean;
         2. v, each pixel's relative variance per sample: n times the variance of its mean,
            over (R + 0.01)^2, averaged over the three channels;
-        3. v pooled: the mean of v over the 7 x 7 pixels around each pixel
-           (``scipy.ndimage.uniform_filter`` with ``size=7``);
+        3. v pooled: the mean of v over the 7 x 7 pixels centred on each pixel, rows
+           y - 3 to y + 3 and columns x - 3 to x + 3 (``scipy.ndimage.uniform_filter``
+           with ``size=7``);
         4. the square root of the pooled v.
 
     Hints:
@@ -101,8 +103,8 @@ def allocate(weights, counts, budget, most):
         are max(n_i, lambda w_i) for the lambda that spends the budget ("water-filling").
 
     Hints:
-        * A pixel that already has more than its share gets nothing: it cannot give
-          samples back.
+        * A pixel that already has more than its share gets nothing, never a number below
+          0: it cannot give samples back.
         * Find lambda by bisection: the samples wanted, sum of clip(lambda w - n, 0,
           most - n), grow with lambda.
         * Round down, then give the samples left, one each, to the pixels with the largest
