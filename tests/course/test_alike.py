@@ -171,3 +171,17 @@ def test_an_output_that_cannot_be_written_stops_grade_all_before_it_grades(tmp_p
         assert error.startswith(f"ptlab: error: --alike {alike}"), error
         assert "\n" not in error
         assert not grades.exists()  # (nothing graded)
+
+
+def test_a_default_moved_away_from_its_if_is_the_same_code():
+    """``x = None`` then ``if c: x = f()`` is one choice of a value, whatever independent
+    statement a copier puts between the two (found by a reordered copy of chapter 8's
+    library answer), but not past a statement that uses ``x`` or changes what the default
+    reads."""
+    together = "def f(a, b):\n    t = g(a)\n    x = None\n    if a > 0:\n        x = h(a)\n    return t, x\n"
+    apart = "def f(a, b):\n    x = None\n    t = g(a)\n    if a > 0:\n        x = h(a)\n    return t, x\n"
+    used_between = (
+        "def f(a, b):\n    x = None\n    t = g(x)\n    if a > 0:\n        x = h(a)\n    return t, x\n"
+    )
+    assert _prints(apart) == _prints(together)
+    assert _prints(used_between) != _prints(together)

@@ -55,6 +55,8 @@ def _block(statements: list[ast.stmt]) -> list[ast.stmt]:
         merged = _merged(out[-1], statement) if out else None
         if merged is not None:
             out[-1] = merged
+        elif (default := _default_before(out, statement)) is not None:
+            out.append(_merged(out.pop(default), statement) or statement)
         else:
             out.append(statement)
         if isinstance(statement, ast.Return | ast.Raise | ast.Continue | ast.Break):
@@ -97,6 +99,40 @@ def _choice(then: ast.stmt, otherwise: ast.stmt, test: ast.expr) -> ast.stmt | N
         value = ast.IfExp(test, then.value, otherwise.value)
         return ast.Assign([ast.Name(name, ast.Store())], value)
     return None
+
+
+def _default_before(out: list[ast.stmt], statement: ast.stmt) -> int | None:
+    """For ``if c: x = a`` (one assignment, no else), the place in ``out`` of an earlier
+    ``x = b`` that may as well come just before it (``_merged`` then makes them one): ``b``
+    calls nothing, and the statements between neither use nor assign ``x`` nor assign what
+    ``b`` reads. A copier moves such a default away from its ``if`` without changing the code;
+    else None."""
+    if not (isinstance(statement, ast.If) and not statement.orelse and len(statement.body) == 1):
+        return None
+    name = assigned_name(statement.body[0])
+    if name is None:
+        return None
+    for place in range(len(out) - 1, -1, -1):
+        default = out[place]
+        if isinstance(default, ast.Assign) and assigned_name(default) == name:
+            if any(isinstance(node, ast.Call) for node in ast.walk(default.value)):
+                return None
+            read = _names(default.value)
+            between = out[place + 1 :]
+            if all(name not in _names(s) and not (_assigned(s) & read) for s in between):
+                return place
+            return None
+    return None
+
+
+def _names(node: ast.AST) -> set[str]:
+    return {n.id for n in ast.walk(node) if isinstance(n, ast.Name)}
+
+
+def _assigned(node: ast.AST) -> set[str]:
+    return {
+        n.id for n in ast.walk(node) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Store | ast.Del)
+    }
 
 
 def _merged(previous: ast.stmt, statement: ast.stmt) -> ast.stmt | None:
