@@ -266,7 +266,7 @@ def compare_renders(
     student: np.ndarray,
     library: np.ndarray,
     what: str,
-    hint: str = "",
+    hint: str | Callable[[], str] = "",
     spp: int | None = None,
     false_alarm: float = FALSE_ALARM,
 ) -> str:
@@ -278,7 +278,8 @@ def compare_renders(
     ``NOISE_RATIO`` times the library's and no less noisy than 1 / ``CLEAN_RATIO`` times
     (``noise_test``, on the regions' sums of the three colours), and equal to the library's
     in the mean of every region and colour (``mean_verdict``). ``hint`` (what a brighter or
-    darker picture means) is added to a failure of the mean; ``spp`` (the samples per pixel
+    darker picture means; a function that finds it, called only then) is added to a
+    failure of the mean; ``spp`` (the samples per pixel
     of a pass) to a failure of the noise. ``false_alarm``: the mean test's (a check that
     looks for large differences only may take a smaller one than ``FALSE_ALARM``).
 
@@ -304,7 +305,8 @@ def compare_renders(
     else:  # (the difference first; a picture of other light, less noisy, after it)
         first, then = difference, said
     also = text("render.and", difference=then) if then else ""
-    raise CheckFailed(text("render.differs", what=what, difference=first) + also + aside(hint))
+    said = hint() if callable(hint) else hint
+    raise CheckFailed(text("render.differs", what=what, difference=first) + also + aside(said))
 
 
 def mean_threshold(passes: int, tests: int, false_alarm: float = FALSE_ALARM) -> float:

@@ -606,8 +606,10 @@ def render_passes(
 def check_render(module) -> str:
     material = _material(module)
     probe(material)
-    # What a brighter or darker picture means: the typical mistake the material shows, if any.
-    hint = known_mistake(material) or text("ch06.hint.render")
+
+    def hint() -> str:  # (what a brighter or darker picture means: asked only of one)
+        return known_mistake(material) or text("ch06.hint.render")
+
     seed = grading_seed_for(RENDER_SEED)
     spp_per_pass = render_spp_per_pass(grading_rng(SPP_STREAM))
     library = library_render(
