@@ -703,24 +703,18 @@ def _render(module, sampling: str) -> str:
     )
     hemisphere = sampling == "hemisphere"
     what = text("ch09.hemisphere_sampling" if hemisphere else "ch09.importance_sampling")
+
+    def hint() -> str:  # (asks the student's code thousands of rows: only for a failed mean)
+        return _render_hint(module) or (
+            text("ch09.hint.eval_angles") if hemisphere else _importance_render_hint(module)
+        )
+
     try:
-        return compare_renders(student, library, text("ch09.yours", what=what), HINT_SLOT, spp_per_pass)
+        return compare_renders(student, library, text("ch09.yours", what=what), hint, spp_per_pass)
     except CheckFailed as failure:
         from ptlab.course.inspect_command import suggestion
 
-        message = str(failure)
-        if aside(HINT_SLOT) in message:  # (only a failed mean has a hint: diagnose that now)
-            hint = _render_hint(module) or (
-                text("ch09.hint.eval_angles") if hemisphere else _importance_render_hint(module)
-            )
-            message = message.replace(aside(HINT_SLOT), aside(hint))
-        raise CheckFailed(message + suggestion(9, student, library, seed)) from None
-
-
-#: What ``_render`` passes to ``compare_renders`` as its hint, to replace by the hint once
-#: the render has failed: finding it asks the student's code thousands of rows, which a
-#: render that passes does not need.
-HINT_SLOT = "\x00ch09 hint\x00"
+        raise CheckFailed(str(failure) + suggestion(9, student, library, seed)) from None
 
 
 def _importance_render_hint(module) -> str:
