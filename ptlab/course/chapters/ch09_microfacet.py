@@ -28,7 +28,7 @@ from ptlab.course.chapter import (
     require,
     student_file,
 )
-from ptlab.course.chapters.ch06_diffuse import probe, random_pairs, render_spp_per_pass, run_harness
+from ptlab.course.chapters.ch06_diffuse import _frame, probe, random_pairs, render_spp_per_pass, run_harness
 from ptlab.course.finite import finite_array
 from ptlab.course.messages import aside, text
 from ptlab.course.renders import compare_renders, library_render, pass_images, replace_materials
@@ -561,7 +561,7 @@ def _lobe_hint(material, alpha: float, rng) -> tuple[str, str]:
     count = LOBE_SAMPLES
     normal = np.array([0.0, 0.0, 1.0])
     n = np.tile(normal, (count, 1))
-    wo = _around(normal, np.full(count, LOBE_WO_THETA), rng.uniform(0, 2 * math.pi, count))
+    wo = _frame(normal, np.full(count, LOBE_WO_THETA), rng.uniform(0, 2 * math.pi, count))
     wi = _values(material.sample, wo, n, rng.random((count, 2)), shape=(count, 3))
     if not np.allclose(np.linalg.norm(wi, axis=1), 1, rtol=0, atol=1e-3):
         return "", ""  # (not directions: the harness says so, "normalise them", better than a lobe)
@@ -608,12 +608,6 @@ def _lobe_slip(alpha: float, median: float, ninetieth: float) -> str:
     return ""
 
 
-def _around(n: np.ndarray, theta: np.ndarray, phi: np.ndarray) -> np.ndarray:
-    """(N, 3) unit directions at angles theta (N,) from the unit normal n (3,), azimuths phi (N,)."""
-    local = np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=1)
-    return np.asarray(to_world(local, np.broadcast_to(n, local.shape)))
-
-
 def _theta_h(wo: np.ndarray, wi: np.ndarray, n: np.ndarray) -> np.ndarray:
     """(N,) the angle from n of h = normalize(wo + wi): the microfacet normal that reflects
     wo to wi, whether wi landed above the surface or not (none where wi = -wo)."""
@@ -632,7 +626,7 @@ def _pdf_lobe(material, wo: np.ndarray, n: np.ndarray, angles: np.ndarray, rows:
     theta = (np.arange(rows) + 0.5) * (math.pi / 2) / rows
     phi = (np.arange(cols) + 0.5) * 2 * math.pi / cols
     theta_grid, phi_grid = (a.ravel() for a in np.meshgrid(theta, phi, indexing="ij"))
-    h = _around(n, theta_grid, phi_grid)
+    h = _frame(n, theta_grid, phi_grid)
     wos = np.tile(wo, (len(h), 1))
     cos_d = np.sum(wos * h, axis=1)
     wi = 2 * cos_d[:, None] * h - wos
